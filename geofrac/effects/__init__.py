@@ -1,0 +1,53 @@
+"""Effects registry: an effect's code is imported only when a scene declares it.
+
+An effect is a module named in :data:`REGISTRY` that provides
+
+- ``configure(table, ctx) -> config``: validate the scene's ``[<name>]`` table (may be
+  empty) against the already validated material and dimension; raise
+  :class:`~geofrac.scene.errors.SceneError` naming the key. Must be cheap and must not
+  import DOLFINx, PETSc, numba or cffi.
+- optionally ``linear_form(config, ctx) -> ufl.Form``: a right-hand-side term of the
+  elastic problem (see :class:`geofrac.fem.elastic.FormContext`).
+
+Later capabilities add hooks beside these (a driver that replaces the single solve for
+``cracking``, particle state for ``mpm``); see ``docs/architecture.md``. Nothing in
+:mod:`geofrac` imports an effect module except through :func:`load`.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from types import ModuleType
+
+__all__ = ["REGISTRY", "ConfigureContext", "available", "load"]
+
+#: effect name -> module implementing it.
+REGISTRY: dict[str, str] = {
+    "gravity": "geofrac.effects.gravity",
+}
+
+
+@dataclass(frozen=True)
+class ConfigureContext:
+    """What an effect may look at while validating its table.
+
+    Attributes:
+        file: the scene file (for error messages).
+        gdim: geometric dimension of the problem.
+        material: the validated material (:class:`geofrac.scene.model.Material`).
+    """
+
+    file: str
+    gdim: int
+    material: object
+
+
+def available() -> tuple[str, ...]:
+    """Names of all registered effects, sorted."""
+    return tuple(sorted(REGISTRY))
+
+
+def load(name: str) -> ModuleType:
+    """Import and return the module implementing effect ``name``."""
+    return importlib.import_module(REGISTRY[name])

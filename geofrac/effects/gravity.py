@@ -1,0 +1,60 @@
+"""Effect ``gravity``: self-weight ρ·g as a body force on the whole domain.
+
+Scene table ``[gravity]`` (optional): ``acceleration`` = vector of length gdim,
+default ``[0, -9.81]`` in 2D and ``[0, 0, -9.81]`` in 3D. Needs ``material.density``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from geofrac.effects import ConfigureContext
+from geofrac.scene.errors import SceneError, did_you_mean
+
+__all__ = ["GravityConfig", "configure", "linear_form"]
+
+
+@dataclass(frozen=True)
+class GravityConfig:
+    """Validated gravity settings.
+
+    Attributes:
+        acceleration: gravitational acceleration, shape=(gdim,).
+        density: mass density taken from the material.
+    """
+
+    acceleration: tuple[float, ...]
+    density: float
+
+
+def configure(table: dict[str, Any], ctx: ConfigureContext) -> GravityConfig:
+    """Validate ``[gravity]``; requires ``material.density``."""
+    for key in table:
+        if key != "acceleration":
+            raise SceneError(
+                ctx.file, f"gravity.{key}", "unknown key" + did_you_mean(key, ["acceleration"])
+            )
+    density = getattr(ctx.material, "density", None)
+    if density is None:
+        raise SceneError(ctx.file, "material.density", "effect 'gravity' needs the mass density")
+    default = [0.0] * (ctx.gdim - 1) + [-9.81]
+    g = table.get("acceleration", default)
+    if (
+        not isinstance(g, list)
+        or len(g) != ctx.gdim
+        or not all(isinstance(c, int | float) and not isinstance(c, bool) for c in g)
+    ):
+        raise SceneError(
+            ctx.file, "gravity.acceleration", f"must be a list of {ctx.gdim} numbers, got {g!r}"
+        )
+    return GravityConfig(acceleration=tuple(float(c) for c in g), density=float(density))
+
+
+def linear_form(config: GravityConfig, ctx: Any) -> Any:
+    """Right-hand side t·∫ ρ g·v dx (``ctx`` is a :class:`geofrac.fem.elastic.FormContext`)."""
+    from geofrac_forms.elasticity import body_force_form
+
+    return body_force_form(
+        ctx.v, ctx.constant(config.density) * ctx.vector(config.acceleration), ctx.thickness, ctx.dx
+    )

@@ -1,0 +1,38 @@
+"""Elastic constants: Lamé parameters and D matrices for plane stress, plane strain and 3D.
+
+Pure numpy. The D matrices use Voigt order (xx, yy, xy) in 2D and
+(xx, yy, zz, yz, xz, xy) in 3D with engineering shear strains, as in seed eq. (2.4).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["d_matrix", "lame"]
+
+
+def lame(E: float, nu: float, dim: int, plane: str = "stress") -> tuple[float, float]:
+    """Return (λ, μ) such that σ = 2μ ε + λ tr(ε) I holds in the analysis plane.
+
+    For 2D plane stress λ is the effective λ* = 2λμ/(λ + 2μ) = Eν/(1-ν²).
+    """
+    mu = E / (2.0 * (1.0 + nu))
+    lam = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+    if dim == 2 and plane == "stress":
+        lam = 2.0 * lam * mu / (lam + 2.0 * mu)
+    return lam, mu
+
+
+def d_matrix(E: float, nu: float, dim: int, plane: str = "stress") -> np.ndarray:
+    """Stress-strain matrix D in Voigt notation.
+
+    Returns:
+        D, shape=(3, 3) in 2D or (6, 6) in 3D.
+    """
+    lam, mu = lame(E, nu, dim, plane)
+    n = 3 if dim == 2 else 6
+    D = np.zeros((n, n))
+    D[:dim, :dim] = lam
+    D[np.arange(dim), np.arange(dim)] += 2.0 * mu
+    D[np.arange(dim, n), np.arange(dim, n)] = mu
+    return D

@@ -1,0 +1,458 @@
+"""Read a scene TOML file, apply ``--set`` overrides, validate everything, return a Scene.
+
+Runs on one process and touches neither MPI nor DOLFINx; the geometry file is opened in
+gmsh (no meshing) to learn its dimension and physical groups, so that every name a
+scene uses is checked before any mesh or solve. See ``docs/scenes.md`` for the schema.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from geofrac import analytic, effects, elements
+from geofrac.meshing.geo import define_constants, inspect_geometry
+from geofrac.scene.errors import SceneError, did_you_mean
+from geofrac.scene.model import (
+    SCHEMA_VERSION,
+    BoundaryCondition,
+    Discretization,
+    EffectSpec,
+    ExactSpec,
+    Geometry,
+    Load,
+    Material,
+    Output,
+    Scene,
+    Solver,
+)
+
+__all__ = ["OUTPUT_FIELDS", "TOP_LEVEL_KEYS", "apply_overrides", "load_scene"]
+
+#: Keys a scene may have at the top level (besides one table per declared effect).
+TOP_LEVEL_KEYS = (
+    "schema",
+    "name",
+    "description",
+    "effects",
+    "geometry",
+    "material",
+    "discretization",
+    "exact",
+    "bc",
+    "load",
+    "solver",
+    "output",
+)
+#: Field names ``output.fields`` may list.
+OUTPUT_FIELDS = ("displacement", "stress", "von_mises")
+_AXES = ("x", "y", "z")
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+class _Table:
+    """One TOML table under validation: typed getters that name ``file`` and ``key``."""
+
+    def __init__(self, file: Path, key: str, data: Any, allowed: Sequence[str]) -> None:
+        if not isinstance(data, dict):
+            raise SceneError(file, key, f"must be a table, got {type(data).__name__}")
+        self.file, self.key, self.data = file, key, data
+        for name in data:
+            if name not in allowed:
+                raise SceneError(file, self.path(name), "unknown key" + did_you_mean(name, allowed))
+
+    def path(self, name: str) -> str:
+        return f"{self.key}.{name}" if self.key else name
+
+    def error(self, name: str, message: str) -> SceneError:
+        return SceneError(self.file, self.path(name), message)
+
+    def has(self, name: str) -> bool:
+        return name in self.data
+
+    def number(
+        self,
+        name: str,
+        *,
+        default: float | None = None,
+        required: bool = False,
+        positive: bool = False,
+        integer: bool = False,
+    ) -> float | None:
+        if name not in self.data:
+            if required:
+                raise self.error(name, "missing (required)")
+            return default
+        value = self.data[name]
+        if not _is_number(value) or (integer and not isinstance(value, int)):
+            kind = "an integer" if integer else "a number"
+            raise self.error(name, f"must be {kind}, got {value!r}")
+        if not math.isfinite(value):
+            raise self.error(name, f"must be finite, got {value!r}")
+        if positive and value <= 0:
+            raise self.error(name, f"must be > 0, got {value!r}")
+        return value
+
+    def string(
+        self, name: str, *, default: str | None = None, choices: Sequence[str] | None = None
+    ) -> str:
+        if name not in self.data:
+            if default is None:
+                raise self.error(name, "missing (required)")
+            return default
+        value = self.data[name]
+        if not isinstance(value, str):
+            raise self.error(name, f"must be a string, got {value!r}")
+        if choices is not None and value not in choices:
+            raise self.error(name, f"unknown value '{value}'" + did_you_mean(value, choices))
+        return value
+
+    def vector(self, name: str, length: int, value: Any = None) -> tuple[float, ...]:
+        value = self.data[name] if value is None else value
+        if not isinstance(value, list) or len(value) != length or not all(map(_is_number, value)):
+            raise self.error(name, f"must be a list of {length} numbers, got {value!r}")
+        return tuple(float(c) for c in value)
+
+    def boolean(self, name: str, default: bool) -> bool:
+        value = self.data.get(name, default)
+        if not isinstance(value, bool):
+            raise self.error(name, f"must be true or false, got {value!r}")
+        return value
+
+
+def apply_overrides(data: dict[str, Any], overrides: Sequence[str], file: Path) -> None:
+    """Apply ``key.sub=value`` overrides in place; values are TOML (bare words are strings).
+
+    A list index is written as ``bc.0.group=...``.
+    """
+    for item in overrides:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise SceneError(file, key or item, f"--set expects KEY=VALUE, got {item!r}")
+        try:
+            value = tomllib.loads(f"v = {text.strip()}")["v"]
+        except tomllib.TOMLDecodeError:
+            value = text.strip()
+        node: Any = data
+        parts = key.split(".")
+        for depth, part in enumerate(parts[:-1]):
+            if isinstance(node, list):
+                if not part.isdigit() or int(part) >= len(node):
+                    raise SceneError(file, ".".join(parts[: depth + 1]), "no such list entry")
+                node = node[int(part)]
+            else:
+                node = node.setdefault(part, {})
+            if not isinstance(node, dict | list):
+                raise SceneError(file, ".".join(parts[: depth + 1]), "is not a table")
+        if isinstance(node, list):
+            raise SceneError(file, key, "cannot replace a whole list entry; set one of its keys")
+        node[parts[-1]] = value
+
+
+def _geometry(file: Path, raw: Any) -> Geometry:
+    t = _Table(file, "geometry", raw, ("file", "parameters", "mesh_size"))
+    name = t.string("file")
+    path = (file.parent / name).resolve()
+    if not path.is_file():
+        raise t.error("file", f"cannot read mesh file '{name}' (looked for {path})")
+    if path.suffix not in (".geo", ".msh"):
+        raise t.error("file", f"must be a gmsh .geo or .msh file, got '{path.name}'")
+    params_raw = t.data.get("parameters", {})
+    p = _Table(file, "geometry.parameters", params_raw, list(params_raw))
+    parameters = {k: float(p.number(k, required=True)) for k in params_raw}  # type: ignore[arg-type]
+    if parameters:
+        if path.suffix != ".geo":
+            raise t.error("parameters", "parameters apply only to .geo files")
+        declared = define_constants(path.read_text(errors="replace"))
+        for k in parameters:
+            if k not in declared:
+                raise p.error(
+                    k, f"'{path.name}' declares no DefineConstant '{k}'" + did_you_mean(k, declared)
+                )
+    mesh_size = t.number("mesh_size", positive=True)
+    try:
+        info = inspect_geometry(path, parameters)
+    except RuntimeError as exc:
+        raise t.error("file", f"gmsh cannot read '{path.name}': {exc}") from None
+    if info.dim not in (2, 3):
+        raise t.error("file", f"'{path.name}' has no 2D or 3D entity (dimension {info.dim})")
+    if info.dim not in info.groups.values():
+        raise t.error(
+            "file",
+            f"'{path.name}' has no physical group of dimension {info.dim}; "
+            "DOLFINx meshes only the cells of physical groups",
+        )
+    return Geometry(path, parameters, mesh_size, info.dim, info.groups)
+
+
+def _material(file: Path, raw: Any, dim: int) -> Material:
+    t = _Table(
+        file, "material", raw, ("E", "nu", "plane", "thickness", "density", "tensile_strength")
+    )
+    E = t.number("E", required=True, positive=True)
+    nu = t.number("nu", required=True)
+    assert E is not None and nu is not None
+    if not -1.0 < nu < 0.5:
+        raise t.error("nu", f"must lie in (-1, 0.5), got {nu!r}")
+    plane = t.string("plane", default="stress", choices=("stress", "strain"))
+    if dim == 3 and t.has("plane"):
+        raise t.error("plane", "applies to 2D geometries only")
+    return Material(
+        E=float(E),
+        nu=float(nu),
+        plane=plane,  # type: ignore[arg-type]
+        thickness=float(t.number("thickness", default=1.0, positive=True)),  # type: ignore[arg-type]
+        density=t.number("density", positive=True),
+        tensile_strength=t.number("tensile_strength", positive=True),
+    )
+
+
+def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
+    t = _Table(file, "discretization", raw, ("element", "quadrature_degree"))
+    element = t.string("element", choices=elements.available())
+    dims, _ = elements.describe(element)
+    if dim not in dims:
+        raise t.error("element", f"'{element}' supports dimensions {dims}, the geometry is {dim}D")
+    q = t.number("quadrature_degree", positive=True, integer=True)
+    return Discretization(element, None if q is None else int(q))
+
+
+def _exact(file: Path, raw: Any, geometry: Geometry) -> ExactSpec:
+    """Parameters missing from ``[exact]`` are taken from same-named geometry parameters."""
+    head = _Table(file, "exact", raw, list(raw) if isinstance(raw, dict) else ())
+    name = head.string("name", choices=tuple(analytic.EXACT_SOLUTIONS))
+    sol_dim, required, _ = analytic.EXACT_SOLUTIONS[name]
+    t = _Table(file, "exact", raw, ("name", *required))
+    if sol_dim != geometry.dim:
+        raise t.error("name", f"'{name}' is a {sol_dim}D solution, the geometry is {geometry.dim}D")
+    params = {}
+    for k in required:
+        if t.has(k):
+            params[k] = float(t.number(k))  # type: ignore[arg-type]
+        elif k in geometry.parameters:
+            params[k] = geometry.parameters[k]
+        else:
+            raise t.error(k, f"missing (required by '{name}'; not in geometry.parameters either)")
+    return ExactSpec(name, params)
+
+
+def _value(t: _Table, n: int, exact: ExactSpec | None) -> tuple[float, ...] | str:
+    if not t.has("value"):
+        raise t.error("value", "missing (required)")
+    value = t.data["value"]
+    if value == "exact":
+        if exact is None:
+            raise t.error("value", "'exact' needs an [exact] table naming the analytical solution")
+        return "exact"
+    return t.vector("value", n)
+
+
+def _groups(file: Path, key: str, group: str, geometry: Geometry, dims: Sequence[int]) -> None:
+    if group not in geometry.groups:
+        raise SceneError(
+            file,
+            key,
+            f"unknown physical group '{group}' in {geometry.file.name}"
+            + did_you_mean(group, geometry.groups),
+        )
+    if geometry.groups[group] not in dims:
+        raise SceneError(
+            file,
+            key,
+            f"group '{group}' has dimension {geometry.groups[group]}, "
+            f"expected one of {tuple(dims)}",
+        )
+
+
+def _bcs(
+    file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None
+) -> tuple[BoundaryCondition, ...]:
+    if not isinstance(raw, list):
+        raise SceneError(file, "bc", "must be an array of tables ([[bc]])")
+    out = []
+    for i, entry in enumerate(raw):
+        t = _Table(file, f"bc[{i}]", entry, ("group", "value", "components"))
+        group = t.string("group")
+        _groups(file, t.path("group"), group, geometry, range(geometry.dim))
+        axes = _AXES[: geometry.dim]
+        comps = t.data.get("components", list(axes))
+        if (
+            not isinstance(comps, list)
+            or not comps
+            or any(c not in axes for c in comps)
+            or len(set(comps)) != len(comps)
+        ):
+            raise t.error(
+                "components", f"must be a list of distinct axes from {list(axes)}, got {comps!r}"
+            )
+        value = _value(t, len(comps), exact)
+        if value == "exact" and len(comps) != geometry.dim:
+            raise t.error("components", "value 'exact' constrains all components")
+        out.append(BoundaryCondition(group, value, tuple(axes.index(c) for c in comps)))  # type: ignore[arg-type]
+    return tuple(out)
+
+
+def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) -> tuple[Load, ...]:
+    if not isinstance(raw, list):
+        raise SceneError(file, "load", "must be an array of tables ([[load]])")
+    out = []
+    for i, entry in enumerate(raw):
+        t = _Table(file, f"load[{i}]", entry, ("type", "group", "value"))
+        kind = t.string("type", choices=("traction", "body_force"))
+        group = None
+        if kind == "traction":
+            group = t.string("group")
+            _groups(file, t.path("group"), group, geometry, (geometry.dim - 1,))
+        elif t.has("group"):
+            raise t.error("group", "a body force acts on the whole domain; remove 'group'")
+        value = _value(t, geometry.dim, exact)
+        if value == "exact" and kind != "traction":
+            raise t.error("value", "'exact' is available for tractions only")
+        out.append(Load(kind, value, group))  # type: ignore[arg-type]
+    return tuple(out)
+
+
+def _solver(file: Path, raw: Any) -> Solver:
+    t = _Table(file, "solver", raw, ("preset", "options"))
+    preset = t.string("preset", default="auto", choices=("auto", "direct", "iterative"))
+    opts_raw = t.data.get("options", {})
+    o = _Table(file, "solver.options", opts_raw, list(opts_raw))
+    options: dict[str, str] = {}
+    for k, v in opts_raw.items():
+        if k.startswith("-"):
+            raise o.error(k, "write PETSc option names without the leading '-'")
+        if not isinstance(v, str | int | float):
+            raise o.error(k, f"must be a string, number or boolean, got {v!r}")
+        options[k] = ("true" if v else "false") if isinstance(v, bool) else str(v)
+    return Solver(preset, options)  # type: ignore[arg-type]
+
+
+def _output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> Output:
+    t = _Table(file, "output", raw, ("dir", "fields", "xdmf", "probes"))
+    directory = Path(t.string("dir", default=f"results/{name}")) if out is None else out
+    fields = t.data.get("fields", list(OUTPUT_FIELDS))
+    if not isinstance(fields, list) or len(set(fields)) != len(fields):
+        raise t.error("fields", f"must be a list of distinct names from {list(OUTPUT_FIELDS)}")
+    for f in fields:
+        if f not in OUTPUT_FIELDS:
+            raise t.error("fields", f"unknown field {f!r}" + did_you_mean(str(f), OUTPUT_FIELDS))
+    probes_raw = t.data.get("probes", {})
+    p = _Table(file, "output.probes", probes_raw, list(probes_raw))
+    probes = {k: p.vector(k, dim) for k in probes_raw}
+    return Output(directory.resolve(), tuple(fields), t.boolean("xdmf", True), probes)
+
+
+def _effects(
+    file: Path, data: dict[str, Any], dim: int, material: Material
+) -> tuple[EffectSpec, ...]:
+    declared = data.get("effects", [])
+    if not isinstance(declared, list) or not all(isinstance(e, str) for e in declared):
+        raise SceneError(file, "effects", f"must be a list of effect names, got {declared!r}")
+    if len(set(declared)) != len(declared):
+        raise SceneError(file, "effects", f"lists an effect twice: {declared}")
+    for name in declared:
+        if name not in effects.REGISTRY:
+            raise SceneError(
+                file,
+                "effects",
+                f"unknown effect '{name}'" + did_you_mean(name, effects.available()),
+            )
+    ctx = effects.ConfigureContext(str(file), dim, material)
+    specs = []
+    for name in declared:
+        table = data.get(name, {})
+        if not isinstance(table, dict):
+            raise SceneError(file, name, "must be a table")
+        specs.append(EffectSpec(name, effects.load(name).configure(table, ctx)))
+    return tuple(specs)
+
+
+def load_scene(
+    path: str | Path, overrides: Sequence[str] = (), out: str | Path | None = None
+) -> Scene:
+    """Read and validate a scene.
+
+    Args:
+        path: scene TOML file.
+        overrides: ``KEY=VALUE`` strings applied before validation.
+        out: output directory replacing ``output.dir``.
+
+    Raises:
+        SceneError: on the first problem found, naming the file and key.
+    """
+    file = Path(path)
+    try:
+        raw_bytes = file.read_bytes()
+    except OSError as exc:
+        raise SceneError(file, "", f"cannot read scene file: {exc.strerror}") from None
+    try:
+        data = tomllib.loads(raw_bytes.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise SceneError(file, "", f"not valid TOML: {exc}") from None
+    apply_overrides(data, overrides, file)
+    digest = hashlib.sha256(raw_bytes + json.dumps(list(overrides)).encode()).hexdigest()
+
+    declared = data.get("effects", [])
+    for key in data:
+        if key in TOP_LEVEL_KEYS:
+            continue
+        if key in effects.REGISTRY and isinstance(declared, list) and key not in declared:
+            raise SceneError(
+                file, key, f"configures effect '{key}', which 'effects' does not declare"
+            )
+        if key not in effects.REGISTRY:
+            raise SceneError(
+                file,
+                key,
+                "unknown key" + did_you_mean(key, [*TOP_LEVEL_KEYS, *effects.available()]),
+            )
+    top = _Table(file, "", {k: v for k, v in data.items() if k in TOP_LEVEL_KEYS}, TOP_LEVEL_KEYS)
+    schema = top.number("schema", default=SCHEMA_VERSION, integer=True)
+    if schema != SCHEMA_VERSION:
+        raise top.error("schema", f"this geofrac reads schema {SCHEMA_VERSION}, got {schema}")
+    name = top.string("name", default=file.stem)
+    description = top.string("description", default="")
+    for section in ("geometry", "material", "discretization"):
+        if section not in data:
+            raise SceneError(file, section, "missing (required table)")
+
+    geometry = _geometry(file, data["geometry"])
+    material = _material(file, data["material"], geometry.dim)
+    discretization = _discretization(file, data["discretization"], geometry.dim)
+    exact = _exact(file, data["exact"], geometry) if "exact" in data else None
+    bcs = _bcs(file, data.get("bc", []), geometry, exact)
+    if not bcs:
+        raise SceneError(
+            file, "bc", "no Dirichlet condition: the elastic problem would be singular"
+        )
+    loads = _loads(file, data.get("load", []), geometry, exact)
+    solver = _solver(file, data.get("solver", {}))
+    output = _output(
+        file, data.get("output", {}), name, geometry.dim, None if out is None else Path(out)
+    )
+    specs = _effects(file, data, geometry.dim, material)
+    return Scene(
+        path=file.resolve(),
+        sha256=digest,
+        name=name,
+        description=description,
+        effects=specs,
+        geometry=geometry,
+        material=material,
+        discretization=discretization,
+        bcs=bcs,
+        loads=loads,
+        exact=exact,
+        solver=solver,
+        output=output,
+        raw=data,
+    )

@@ -1,0 +1,207 @@
+"""Validated scene: frozen dataclasses that the rest of geofrac reads.
+
+A :class:`Scene` is what :func:`geofrac.scene.load_scene` returns after every check
+has passed; nothing downstream re-validates user input. All paths are absolute.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+__all__ = [
+    "BoundaryCondition",
+    "Discretization",
+    "EffectSpec",
+    "ExactSpec",
+    "Geometry",
+    "Load",
+    "Material",
+    "Output",
+    "Scene",
+    "Solver",
+]
+
+#: Scene schema version this code reads.
+SCHEMA_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """Where the mesh comes from.
+
+    Attributes:
+        file: gmsh ``.geo`` (or ``.msh``) file.
+        parameters: values for the ``DefineConstant`` entries of the ``.geo`` file.
+        mesh_size: upper bound on the element size (gmsh ``Mesh.MeshSizeMax``), or None.
+        dim: topological dimension of the meshed domain (2 or 3), read from the file.
+        groups: physical group name -> dimension, read from the file.
+    """
+
+    file: Path
+    parameters: dict[str, float]
+    mesh_size: float | None
+    dim: int
+    groups: dict[str, int]
+
+
+@dataclass(frozen=True)
+class Material:
+    """Isotropic linear elastic material with optional strength and density.
+
+    Attributes:
+        E: Young's modulus.
+        nu: Poisson's ratio in (-1, 0.5).
+        plane: ``"stress"`` or ``"strain"`` (2D only; ignored in 3D).
+        thickness: out-of-plane thickness t (2D), multiplies stiffness and loads.
+        density: mass density, or None when the scene needs none.
+        tensile_strength: f_t, or None when no effect needs it.
+    """
+
+    E: float
+    nu: float
+    plane: Literal["stress", "strain"] = "stress"
+    thickness: float = 1.0
+    density: float | None = None
+    tensile_strength: float | None = None
+
+
+@dataclass(frozen=True)
+class Discretization:
+    """Element choice.
+
+    Attributes:
+        element: registry name (see :mod:`geofrac.elements`).
+        quadrature_degree: forced quadrature degree for the stiffness, or None (exact).
+    """
+
+    element: str
+    quadrature_degree: int | None = None
+
+
+@dataclass(frozen=True)
+class ExactSpec:
+    """A named analytical solution with its parameters.
+
+    Attributes:
+        name: registry name (see :mod:`geofrac.analytic`).
+        parameters: its parameters (material constants come from the scene's material).
+    """
+
+    name: str
+    parameters: dict[str, float]
+
+
+@dataclass(frozen=True)
+class BoundaryCondition:
+    """Dirichlet condition on a physical group.
+
+    Attributes:
+        group: physical group name (dimension ``dim - 1`` or lower).
+        value: prescribed values, one per component, or ``"exact"``.
+        components: indices of the constrained components, shape=(len(value),).
+    """
+
+    group: str
+    value: tuple[float, ...] | Literal["exact"]
+    components: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class Load:
+    """A load term.
+
+    Attributes:
+        type: ``"traction"`` (on a boundary group) or ``"body_force"`` (per volume).
+        value: vector of length gdim, or ``"exact"`` (traction σ_exact·n).
+        group: physical group (traction), or None (body force on the whole domain).
+    """
+
+    type: Literal["traction", "body_force"]
+    value: tuple[float, ...] | Literal["exact"]
+    group: str | None = None
+
+
+@dataclass(frozen=True)
+class Solver:
+    """PETSc linear solver choice.
+
+    Attributes:
+        preset: ``"auto"``, ``"direct"`` (MUMPS LU) or ``"iterative"`` (CG + GAMG).
+        options: extra PETSc options, applied under the solver's own prefix.
+    """
+
+    preset: Literal["auto", "direct", "iterative"] = "auto"
+    options: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Output:
+    """What a run writes.
+
+    Attributes:
+        dir: output directory.
+        fields: field names written to XDMF.
+        xdmf: whether to write XDMF at all.
+        probes: name -> point, shape=(gdim,), where the displacement is reported.
+    """
+
+    dir: Path
+    fields: tuple[str, ...]
+    xdmf: bool
+    probes: dict[str, tuple[float, ...]]
+
+
+@dataclass(frozen=True)
+class EffectSpec:
+    """A declared effect and its validated configuration.
+
+    Attributes:
+        name: registry name (see :mod:`geofrac.effects`).
+        config: the effect's own validated settings object.
+    """
+
+    name: str
+    config: Any
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A fully validated scene.
+
+    Attributes:
+        path: the scene file.
+        sha256: hash of the file contents plus any ``--set`` overrides.
+        name: scene name.
+        description: free text.
+        effects: declared effects in declaration order.
+        geometry, material, discretization, bcs, loads, exact, solver, output: see the
+            classes of the same names.
+        raw: the input tables after overrides (for the run summary).
+    """
+
+    path: Path
+    sha256: str
+    name: str
+    description: str
+    effects: tuple[EffectSpec, ...]
+    geometry: Geometry
+    material: Material
+    discretization: Discretization
+    bcs: tuple[BoundaryCondition, ...]
+    loads: tuple[Load, ...]
+    exact: ExactSpec | None
+    solver: Solver
+    output: Output
+    raw: dict[str, Any]
+
+    @property
+    def effect_names(self) -> tuple[str, ...]:
+        """Names of the declared effects, shape=(num_effects,)."""
+        return tuple(e.name for e in self.effects)
+
+    @property
+    def gdim(self) -> int:
+        """Geometric dimension of the problem (2 or 3)."""
+        return self.geometry.dim
