@@ -1,0 +1,26 @@
+"""Accuracy-cost benchmarks: one module per ``geofrac bench NAME``.
+
+A bench module provides ``add_arguments(parser)`` (cheap: no DOLFINx import) and
+``run(args, comm)``. Its JSON output has at least ``bench``, ``records`` and ``rates``
+(see docs/benchmarks.md).
+"""
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+__all__ = ["BENCHES", "load_bench"]
+
+#: name -> (module, one-line description)
+BENCHES: dict[str, tuple[str, str]] = {
+    "cantilever": (
+        "geofrac.bench.cantilever",
+        "Timoshenko cantilever (seed 2.4.1): displacement/energy error against DOFs and wall time",
+    ),
+}
+
+
+def load_bench(name: str) -> ModuleType:
+    """Import the module of bench ``name``."""
+    return importlib.import_module(BENCHES[name][0])

@@ -1,0 +1,102 @@
+"""Benchmark reporting shared by all benches: convergence rates, tables, plots, JSON.
+
+Pure numpy and matplotlib (Agg); no MPI. Call from rank 0.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["fit_rate", "format_table", "plot_accuracy_cost", "write_json"]
+
+
+def fit_rate(nodes: Sequence[float], errors: Sequence[float]) -> float:
+    """Convergence rate R: minus the least-squares slope of log(error) against log(√nodes).
+
+    This is the rate of seed Fig. 2.8 and 3.10 (R = 2 for CST in the L2 norm), i.e. the
+    order in the mesh size h ∝ 1/√nodes.
+
+    Args:
+        nodes: node (vertex) counts, shape=(n,).
+        errors: error norms, shape=(n,).
+    """
+    x = 0.5 * np.log(np.asarray(nodes, dtype=float))
+    y = np.log(np.asarray(errors, dtype=float))
+    if len(x) < 2:
+        return float("nan")
+    slope = np.polyfit(x, y, 1)[0]
+    return float(-slope)
+
+
+def format_table(records: Sequence[dict[str, Any]], columns: Sequence[tuple[str, str, str]]) -> str:
+    """Fixed-width text table.
+
+    Args:
+        records: one dict per row.
+        columns: (key, header, format spec) per column, e.g. ``("dofs", "DOFs", "d")``.
+    """
+    cells = [
+        [format(r[k], f) if r.get(k) is not None else "-" for k, _, f in columns] for r in records
+    ]
+    heads = [h for _, h, _ in columns]
+    widths = [max(len(h), *(len(row[i]) for row in cells)) for i, h in enumerate(heads)]
+    lines = ["  ".join(h.rjust(w) for h, w in zip(heads, widths, strict=True))]
+    lines.append("  ".join("-" * w for w in widths))
+    lines += ["  ".join(c.rjust(w) for c, w in zip(row, widths, strict=True)) for row in cells]
+    return "\n".join(lines)
+
+
+def plot_accuracy_cost(
+    records: Sequence[dict[str, Any]],
+    path: Path,
+    title: str,
+    group: str = "element",
+    time_key: str = "time_total_s",
+    errors: Sequence[tuple[str, str]] = (
+        ("error_u", "displacement L2"),
+        ("error_energy", "energy"),
+    ),
+) -> None:
+    """Two log-log panels, error vs wall time and error vs DOFs, one line per ``group``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
+    names = list(dict.fromkeys(r[group] for r in records))
+    styles = ["-o", "--s"]
+    for color, name in zip(plt.rcParams["axes.prop_cycle"].by_key()["color"], names, strict=False):
+        rows = sorted((r for r in records if r[group] == name), key=lambda r: r["dofs"])
+        for (key, label), style in zip(errors, styles, strict=False):
+            err = [r[key] for r in rows]
+            axes[0].loglog(
+                [r[time_key] for r in rows], err, style, color=color, label=f"{name}: {label}"
+            )
+            axes[1].loglog(
+                [r["dofs"] for r in rows], err, style, color=color, label=f"{name}: {label}"
+            )
+    axes[0].set_xlabel("wall time, assemble + solve [s]")
+    axes[1].set_xlabel("degrees of freedom")
+    for ax in axes:
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_ylabel("error norm")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    """Write ``data`` as indented JSON, atomically."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, indent=2, default=str) + "\n")
+    tmp.replace(path)

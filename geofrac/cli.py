@@ -1,0 +1,143 @@
+"""Command line: ``geofrac run | check | bench``; works the same under ``mpiexec -n N``.
+
+Messages come from rank 0 only. Exit codes: 0 success, 1 the run failed
+(:class:`~geofrac.errors.RunError`), 2 the scene or the command line is wrong
+(:class:`~geofrac.scene.SceneError`). An unexpected exception on any rank under MPI
+aborts the whole job (``MPI_Abort``) instead of leaving the other ranks waiting.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import traceback
+from collections.abc import Sequence
+from typing import Any
+
+from geofrac import __version__
+from geofrac.bench import BENCHES, load_bench
+from geofrac.errors import RunError
+from geofrac.log import echo, format_seconds
+from geofrac.scene import SceneError, load_scene_collective
+
+__all__ = ["main"]
+
+
+def _scene_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scene", help="scene file (TOML), e.g. jobs/quickstart.toml")
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene entry, e.g. --set discretization.element=cst (repeatable)",
+    )
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="geofrac", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"geofrac {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser("run", help="validate and run a scene")
+    _scene_args(run)
+    run.add_argument(
+        "--out", metavar="DIR", help="output directory (default: the scene's output.dir)"
+    )
+    run.add_argument(
+        "-q", "--quiet", action="store_true", help="print only errors and the output path"
+    )
+    run.set_defaults(func=_run)
+
+    check = sub.add_parser("check", help="validate a scene without meshing or solving")
+    _scene_args(check)
+    check.set_defaults(func=_check)
+
+    bench = sub.add_parser("bench", help="accuracy-cost benchmarks")
+    benches = bench.add_subparsers(dest="bench", required=True, metavar="NAME")
+    for name, (_, text) in BENCHES.items():
+        p = benches.add_parser(name, help=text, description=text)
+        load_bench(name).add_arguments(p)
+        p.set_defaults(func=_bench)
+    return parser
+
+
+def _check(args: argparse.Namespace, comm: Any) -> int:
+    scene = load_scene_collective(comm, args.scene, args.overrides)
+    effects = ", ".join(scene.effect_names) or "none"
+    groups = ", ".join(f"{n} ({d}D)" for n, d in scene.geometry.groups.items())
+    echo(
+        comm,
+        f"ok: {args.scene}: {scene.gdim}D, element {scene.discretization.element}, "
+        f"effects: {effects}; groups: {groups}",
+    )
+    return 0
+
+
+def _run(args: argparse.Namespace, comm: Any) -> int:
+    from geofrac.runner import run_scene
+    from geofrac.timing import Timings
+
+    timings = Timings()
+    with timings.phase("load"):
+        scene = load_scene_collective(comm, args.scene, args.overrides, args.out)
+    echo(comm, f"geofrac {__version__}: scene '{scene.name}' ({args.scene}) on {comm.size} rank(s)")
+    summary = run_scene(scene, comm, timings, verbose=not args.quiet)
+    if not args.quiet:
+        _report(comm, summary)
+    echo(comm, f"output: {scene.output.dir}")
+    return 0
+
+
+def _report(comm: Any, summary: dict[str, Any]) -> None:
+    results = summary["results"]
+    exact = results.get("exact_probes", {})
+    for name, value in results["probes"].items():
+        line = f"probe {name}: u = [{', '.join(f'{v:.10g}' for v in value)}]"
+        if name in exact:
+            line += f"  (exact [{', '.join(f'{v:.10g}' for v in exact[name])}])"
+        echo(comm, line)
+    if "errors" in results:
+        e = results["errors"]
+        echo(
+            comm,
+            f"accuracy: ||u - u_exact||_L2 = {e['u']:.4e} (relative {e['u_relative']:.3e}), "
+            f"energy = {e['energy']:.4e} (relative {e['energy_relative']:.3e})",
+        )
+    t = summary["timings_s"]
+    echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
+
+
+def _bench(args: argparse.Namespace, comm: Any) -> int:
+    start = time.perf_counter()
+    load_bench(args.bench).run(args, comm)
+    echo(comm, f"bench {args.bench} done in {format_seconds(time.perf_counter() - start)}")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``geofrac`` console script."""
+    args = _parser().parse_args(argv)
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    try:
+        return int(args.func(args, comm))
+    except SceneError as exc:
+        echo(comm, f"error: {exc}", err=True)
+        return 2
+    except RunError as exc:
+        echo(comm, f"error: {exc}", err=True)
+        return 1
+    except BaseException:
+        if comm.size > 1:
+            traceback.print_exc()
+            sys.stderr.flush()
+            comm.Abort(1)
+        raise
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,51 @@
+"""Element registry: scene name -> module that builds the discretisation.
+
+The runner never names an element; it asks this registry. A later element (RGNT, GNT,
+RGNQ, EFMM) joins by adding one entry here and one module that provides
+``make_element(mesh) -> geofrac.elements.base.Element``.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+__all__ = ["REGISTRY", "available", "describe", "make_element"]
+
+#: name -> (module, factory, dimensions it supports, one-line description)
+REGISTRY: dict[str, tuple[str, str, tuple[int, ...], str]] = {
+    "cst": (
+        "geofrac.elements.lagrange",
+        "cst",
+        (2, 3),
+        "linear Lagrange (CST in 2D, linear tet in 3D)",
+    ),
+    "p2": (
+        "geofrac.elements.lagrange",
+        "p2",
+        (2, 3),
+        "quadratic Lagrange (6-node triangle, 10-node tet)",
+    ),
+    "p3": (
+        "geofrac.elements.lagrange",
+        "p3",
+        (2, 3),
+        "cubic Lagrange (10-node triangle), a high-order reference",
+    ),
+}
+
+
+def available() -> tuple[str, ...]:
+    """Names of the registered elements, sorted."""
+    return tuple(sorted(REGISTRY))
+
+
+def describe(name: str) -> tuple[tuple[int, ...], str]:
+    """Return (supported dimensions, description) of element ``name``."""
+    _, _, dims, text = REGISTRY[name]
+    return dims, text
+
+
+def make_element(name: str, mesh: object) -> object:
+    """Build element ``name`` on a DOLFINx ``mesh`` (imports the element module)."""
+    module, factory, _, _ = REGISTRY[name]
+    return getattr(importlib.import_module(module), factory)(mesh)

@@ -1,0 +1,8 @@
+"""Distributed finite element plumbing on DOLFINx/PETSc (thin by design).
+
+Every module in this package imports ``dolfinx_solver`` before DOLFINx or petsc4py.
+"""
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+__all__: list[str] = []

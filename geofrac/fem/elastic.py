@@ -1,0 +1,203 @@
+"""The linear elastic problem of a scene: forms, boundary conditions, assembly, solve."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+import dolfinx.fem.petsc
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from geofrac import effects as effect_registry
+from geofrac.analytic import ExactSolution, make_exact
+from geofrac.elements.base import Element
+from geofrac.errors import RunError
+from geofrac.materials import lame
+from geofrac.meshing.distribute import TaggedMesh
+from geofrac.scene.model import Scene
+from geofrac.solvers import LinearSolver
+from geofrac_forms import elasticity as forms
+
+__all__ = ["ElasticProblem", "FormContext", "exact_ufl"]
+
+#: options prefix of the elastic solver.
+PREFIX = "geofrac_elastic_"
+
+
+@dataclass(frozen=True)
+class FormContext:
+    """What an effect's ``linear_form`` hook may use.
+
+    Attributes:
+        mesh: the DOLFINx mesh.
+        v: test function.
+        dx: cell measure.
+        thickness: thickness constant t.
+    """
+
+    mesh: dolfinx.mesh.Mesh
+    v: Any
+    dx: Any
+    thickness: Any
+
+    def constant(self, value: float) -> dolfinx.fem.Constant:
+        """A scalar DOLFINx constant on the mesh."""
+        return dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(value))
+
+    def vector(self, values: tuple[float, ...]) -> dolfinx.fem.Constant:
+        """A vector DOLFINx constant on the mesh, shape=(gdim,)."""
+        return dolfinx.fem.Constant(self.mesh, np.asarray(values, dtype=PETSc.ScalarType))
+
+
+def exact_ufl(exact: ExactSolution, mesh: dolfinx.mesh.Mesh) -> tuple[Any, Any]:
+    """(displacement vector, stress tensor) of an exact solution as UFL expressions."""
+    x = ufl.SpatialCoordinate(mesh)
+    coords = [x[i] for i in range(mesh.geometry.dim)]
+    return ufl.as_vector(exact.displacement(*coords)), ufl.as_matrix(exact.stress(*coords))
+
+
+class ElasticProblem:
+    """Linear elasticity of a validated scene on a distributed mesh.
+
+    Phases are separate methods so that callers can time them: :meth:`compile` (JIT of
+    the forms), :meth:`assemble`, :meth:`solve`. Call :meth:`destroy` when done.
+
+    Args:
+        tagged: the distributed mesh with its physical groups.
+        element: the displacement discretisation.
+        scene: the validated scene (material, loads, bcs, effects, solver).
+    """
+
+    def __init__(self, tagged: TaggedMesh, element: Element, scene: Scene) -> None:
+        self.tagged, self.element, self.scene = tagged, element, scene
+        mesh = tagged.mesh
+        self.mesh = mesh
+        self.comm: MPI.Comm = mesh.comm
+        V = element.space
+        mat = scene.material
+        gdim = mesh.geometry.dim
+        lam, mu = lame(mat.E, mat.nu, gdim, mat.plane)
+        self.lam = dolfinx.fem.Constant(mesh, PETSc.ScalarType(lam))
+        self.mu = dolfinx.fem.Constant(mesh, PETSc.ScalarType(mu))
+        self.thickness = dolfinx.fem.Constant(
+            mesh, PETSc.ScalarType(mat.thickness if gdim == 2 else 1.0)
+        )
+        q = scene.discretization.quadrature_degree
+        self.dx = ufl.Measure(
+            "dx", domain=mesh, metadata={} if q is None else {"quadrature_degree": q}
+        )
+        fdim = mesh.topology.dim - 1
+        self.ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged.tags.get(fdim))
+        self.exact = (
+            make_exact(scene.exact.name, scene.exact.parameters, mat.E, mat.nu, mat.plane)
+            if scene.exact is not None
+            else None
+        )
+        u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+        self._a = forms.stiffness_form(u, v, self.lam, self.mu, self.thickness, self.dx)
+        self._L = self._linear_form(v)
+        self.bcs = self._boundary_conditions()
+        self.uh = dolfinx.fem.Function(V, name="displacement")
+        self.a: dolfinx.fem.Form | None = None
+        self.L: dolfinx.fem.Form | None = None
+        self.A: PETSc.Mat | None = None
+        self.b: PETSc.Vec | None = None
+        self.solver: LinearSolver | None = None
+        self.iterations = 0
+
+    def _linear_form(self, v: Any) -> Any:
+        mesh, gdim = self.mesh, self.mesh.geometry.dim
+        terms = []
+        for load in self.scene.loads:
+            if load.value == "exact":
+                assert self.exact is not None
+                _, sig = exact_ufl(self.exact, mesh)
+                value = sig * ufl.FacetNormal(mesh)
+            else:
+                value = dolfinx.fem.Constant(mesh, np.asarray(load.value, dtype=PETSc.ScalarType))
+            if load.type == "traction":
+                _, tag = self.tagged.groups[load.group]  # type: ignore[index]
+                terms.append(forms.traction_form(v, value, self.thickness, self.ds(tag)))
+            else:
+                terms.append(forms.body_force_form(v, value, self.thickness, self.dx))
+        ctx = FormContext(mesh, v, self.dx, self.thickness)
+        for spec in self.scene.effects:
+            module = effect_registry.load(spec.name)
+            if hasattr(module, "linear_form"):
+                terms.append(module.linear_form(spec.config, ctx))
+        if not terms:
+            zero = dolfinx.fem.Constant(mesh, np.zeros(gdim, dtype=PETSc.ScalarType))
+            terms.append(ufl.inner(zero, v) * self.dx)
+        return sum(terms[1:], terms[0])
+
+    def _boundary_conditions(self) -> list[dolfinx.fem.DirichletBC]:
+        V, mesh = self.element.space, self.mesh
+        tdim = mesh.topology.dim
+        bcs = []
+        for i, bc in enumerate(self.scene.bcs):
+            dim, entities = self.tagged.entities(bc.group)
+            mesh.topology.create_connectivity(dim, tdim)
+            found = self.comm.allreduce(len(entities), op=MPI.SUM)
+            if found == 0:
+                raise RunError(f"bc[{i}].group: physical group '{bc.group}' has no mesh entities")
+            if bc.value == "exact":
+                assert self.exact is not None
+                g = dolfinx.fem.Function(V)
+                g.interpolate(
+                    lambda x, ex=self.exact: np.stack(ex.displacement(*x[: mesh.geometry.dim]))
+                )
+                dofs = dolfinx.fem.locate_dofs_topological(V, dim, entities)
+                bcs.append(dolfinx.fem.dirichletbc(g, dofs))
+                continue
+            for comp, value in zip(bc.components, bc.value, strict=True):
+                Vc = V.sub(comp)
+                dofs = dolfinx.fem.locate_dofs_topological(Vc, dim, entities)
+                bcs.append(dolfinx.fem.dirichletbc(PETSc.ScalarType(value), dofs, Vc))
+        return bcs
+
+    def compile(self) -> None:
+        """JIT-compile the bilinear and linear forms."""
+        self.a = dolfinx.fem.form(self._a)
+        self.L = dolfinx.fem.form(self._L)
+
+    def assemble(self) -> None:
+        """Assemble the stiffness matrix and load vector with the Dirichlet conditions."""
+        if self.a is None or self.L is None:
+            self.compile()
+        assert self.a is not None and self.L is not None
+        self.destroy()  # a new operator needs a new factorisation/preconditioner
+        self.A = dolfinx.fem.petsc.assemble_matrix(self.a, bcs=self.bcs)
+        self.A.assemble()
+        self.b = dolfinx.fem.petsc.assemble_vector(self.L)
+        dolfinx.fem.petsc.apply_lifting(self.b, [self.a], bcs=[self.bcs])
+        self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dolfinx.fem.petsc.set_bc(self.b, self.bcs)
+
+    def solve(self) -> dolfinx.fem.Function:
+        """Factorise/precondition and solve; return the displacement function."""
+        if self.A is None:
+            self.assemble()
+        assert self.A is not None and self.b is not None
+        if self.solver is None:
+            s = self.scene.solver
+            self.solver = LinearSolver(
+                self.A, PREFIX, s.preset, s.options, self.element.num_dofs, self.element.space
+            )
+        self.iterations = self.solver.solve(self.b, self.uh.x.petsc_vec)
+        self.uh.x.scatter_forward()
+        return self.uh
+
+    def destroy(self) -> None:
+        """Free the PETSc objects this problem created."""
+        for obj in (self.A, self.b):
+            if obj is not None:
+                obj.destroy()
+        if self.solver is not None:
+            self.solver.destroy()
+        self.A = self.b = self.solver = None

@@ -1,0 +1,143 @@
+"""Post-processing in parallel: global integrals, point probes, stress fields, error norms."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+import numpy as np
+import ufl
+from mpi4py import MPI
+
+from geofrac.errors import RunError
+from geofrac_forms import elasticity as forms
+
+__all__ = ["error_norms", "integrate", "locate_points", "probe", "stress_fields"]
+
+
+def integrate(form: Any, comm: MPI.Comm) -> float:
+    """Integrate a UFL functional over the whole distributed mesh (sum of owned cells)."""
+    local = dolfinx.fem.assemble_scalar(dolfinx.fem.form(form))
+    return float(comm.allreduce(local, op=MPI.SUM))
+
+
+def locate_points(mesh: dolfinx.mesh.Mesh, points: np.ndarray) -> np.ndarray:
+    """Owning cell of each point on this rank, or -1; each point is owned by exactly one rank.
+
+    Args:
+        mesh: the mesh.
+        points: coordinates, shape=(num_points, 3).
+
+    Returns:
+        local cell indices, shape=(num_points,); -1 where another rank owns the point.
+
+    Raises:
+        RunError: a point lies outside the mesh (on every rank).
+    """
+    tdim = mesh.topology.dim
+    num_owned = mesh.topology.index_map(tdim).size_local
+    tree = dolfinx.geometry.bb_tree(mesh, tdim, entities=np.arange(num_owned, dtype=np.int32))
+    candidates = dolfinx.geometry.compute_collisions_points(tree, points)
+    colliding = dolfinx.geometry.compute_colliding_cells(mesh, candidates, points)
+    cells = np.full(len(points), -1, dtype=np.int32)
+    for i in range(len(points)):
+        links = colliding.links(i)
+        if len(links):
+            cells[i] = links[0]
+    comm = mesh.comm
+    big = comm.size
+    owner = np.where(cells >= 0, comm.rank, big).astype(np.int32)
+    first = np.empty_like(owner)
+    comm.Allreduce(owner, first, op=MPI.MIN)
+    missing = np.flatnonzero(first == big)
+    if len(missing):
+        raise RunError(
+            f"point(s) {points[missing, : mesh.geometry.dim].tolist()} lie outside the mesh"
+        )
+    cells[first != comm.rank] = -1
+    return cells
+
+
+def probe(
+    u: dolfinx.fem.Function, points: np.ndarray, cells: np.ndarray | None = None
+) -> np.ndarray:
+    """Values of ``u`` at points, identical on every rank.
+
+    Args:
+        u: a function.
+        points: coordinates, shape=(num_points, 3).
+        cells: result of :func:`locate_points` (computed when None).
+
+    Returns:
+        values, shape=(num_points, value_size).
+    """
+    mesh = u.function_space.mesh
+    if cells is None:
+        cells = locate_points(mesh, points)
+    size = int(np.prod(u.ufl_shape)) if u.ufl_shape else 1
+    local = np.zeros((len(points), size))
+    mine = np.flatnonzero(cells >= 0)
+    if len(mine):
+        local[mine] = u.eval(points[mine], cells[mine]).reshape(len(mine), size)
+    values = np.empty_like(local)
+    mesh.comm.Allreduce(local, values, op=MPI.SUM)
+    return values
+
+
+def error_norms(
+    uh: dolfinx.fem.Function, u_exact: Any, lam: Any, mu: Any, extra_degree: int = 4
+) -> dict[str, float]:
+    """Displacement L2 error (seed eq. 2.22) and energy error (seed eq. 3.30b), plus norms.
+
+    The exact field enters as a UFL expression, integrated with a quadrature degree of
+    ``2 * degree(uh) + extra_degree``, so the exact solution is not interpolated.
+
+    Returns:
+        ``u``: ||u - u_exact||_L2, ``energy``: sqrt(∫ ½ (ε-ε_ex):(σ-σ_ex)),
+        ``u_norm`` and ``energy_norm`` of the exact solution, and the relative errors.
+    """
+    mesh = uh.function_space.mesh
+    degree = uh.function_space.ufl_element().embedded_superdegree
+    dx = ufl.Measure(
+        "dx", domain=mesh, metadata={"quadrature_degree": 2 * max(degree, 3) + extra_degree}
+    )
+    zero = ufl.as_vector([0.0] * mesh.geometry.dim)
+    e_u = integrate(forms.l2_error_form(uh, u_exact, dx), mesh.comm)
+    e_en = integrate(forms.energy_error_form(uh, u_exact, lam, mu, dx), mesh.comm)
+    n_u = integrate(forms.l2_error_form(zero, u_exact, dx), mesh.comm)
+    n_en = integrate(forms.energy_error_form(zero, u_exact, lam, mu, dx), mesh.comm)
+    out = {
+        "u": float(np.sqrt(e_u)),
+        "energy": float(np.sqrt(e_en)),
+        "u_norm": float(np.sqrt(n_u)),
+        "energy_norm": float(np.sqrt(n_en)),
+    }
+    out["u_relative"] = out["u"] / out["u_norm"]
+    out["energy_relative"] = out["energy"] / out["energy_norm"]
+    return out
+
+
+def stress_fields(
+    uh: dolfinx.fem.Function, lam: Any, mu: Any, plane: str
+) -> dict[str, dolfinx.fem.Function]:
+    """Cell-wise (DG0, value at the cell midpoint) stress tensor and von Mises stress.
+
+    Returns:
+        ``stress`` (tensor, shape=(gdim, gdim) per cell) and ``von_mises`` (scalar).
+    """
+    mesh = uh.function_space.mesh
+    gdim = mesh.geometry.dim
+    sig = forms.sigma(uh, lam, mu)
+    szz = lam * ufl.tr(forms.epsilon(uh)) if (gdim == 2 and plane == "strain") else 0.0
+    out = {}
+    for name, expr, shape in (
+        ("stress", sig, (gdim, gdim)),
+        ("von_mises", forms.von_mises(sig, szz), ()),
+    ):
+        space = dolfinx.fem.functionspace(mesh, ("DG", 0, shape))
+        f = dolfinx.fem.Function(space, name=name)
+        f.interpolate(dolfinx.fem.Expression(expr, space.element.interpolation_points))
+        out[name] = f
+    return out

@@ -1,0 +1,83 @@
+"""XDMF + HDF5 output that ParaView, meshio and pyvista all read.
+
+DOLFINx's :class:`~dolfinx.io.XDMFFile` writes the heavy data in parallel, but it puts
+every function in its own temporal collection and shares the mesh through
+``xi:include``; meshio then sees only one function and VTK's XDMF reader (pyvista)
+crashes. After DOLFINx has written, rank 0 rewrites only the small XML part into one
+temporal collection whose steps carry every field, referring to the same HDF5
+datasets. See :func:`regroup_xdmf`.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+from pathlib import Path
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+from dolfinx.io import XDMFFile
+
+__all__ = ["regroup_xdmf", "write_fields"]
+
+
+def write_fields(
+    path: Path, mesh: dolfinx.mesh.Mesh, functions: Sequence[dolfinx.fem.Function], t: float = 0.0
+) -> Path:
+    """Write ``functions`` at time ``t`` to ``path`` (.xdmf) and its sibling ``.h5``.
+
+    Functions must be P1 Lagrange (node data) or DG0 (cell data) on ``mesh``; higher
+    order displacements are interpolated to P1 by the caller.
+
+    Returns:
+        ``path``.
+    """
+    with XDMFFile(mesh.comm, str(path), "w") as f:
+        f.write_mesh(mesh)
+        for fn in functions:
+            f.write_function(fn, t)
+    mesh.comm.barrier()
+    if mesh.comm.rank == 0:
+        regroup_xdmf(path)
+    mesh.comm.barrier()
+    return path
+
+
+def regroup_xdmf(path: Path) -> None:
+    """Rewrite a DOLFINx XDMF file as one temporal collection with all fields per step.
+
+    Only XML is touched; the HDF5 datasets stay where DOLFINx wrote them.
+    """
+    tree = ET.parse(path)
+    domain = tree.getroot().find("Domain")
+    assert domain is not None
+    grids = domain.findall("Grid")
+    mesh_grid = next(g for g in grids if g.get("GridType") == "Uniform")
+    topology, geometry = mesh_grid.find("Topology"), mesh_grid.find("Geometry")
+    steps: dict[str, list[ET.Element]] = {}
+    for collection in grids:
+        if collection.get("GridType") != "Collection":
+            continue
+        for step in collection.findall("Grid"):
+            time = step.find("Time")
+            key = time.get("Value", "0") if time is not None else "0"
+            steps.setdefault(key, []).extend(step.findall("Attribute"))
+    root = ET.Element("Xdmf", Version="3.0")
+    new_domain = ET.SubElement(root, "Domain")
+    series = ET.SubElement(
+        new_domain, "Grid", Name="results", GridType="Collection", CollectionType="Temporal"
+    )
+    for i, (time_value, attributes) in enumerate(
+        sorted(steps.items(), key=lambda kv: float(kv[0]))
+    ):
+        grid = ET.SubElement(series, "Grid", Name=f"step_{i}", GridType="Uniform")
+        grid.append(topology)  # type: ignore[arg-type]
+        grid.append(geometry)  # type: ignore[arg-type]
+        ET.SubElement(grid, "Time", Value=time_value)
+        for attribute in attributes:
+            grid.append(attribute)
+    ET.indent(root)
+    tmp = path.with_suffix(".xdmf.tmp")
+    ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8")
+    tmp.replace(path)

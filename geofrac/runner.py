@@ -1,0 +1,212 @@
+"""Run a validated scene: scene → mesh → discretisation → solve → output.
+
+Data flows one way. :func:`solve_scene` does the computation and returns everything a
+caller may want (the benchmarks call it directly); :func:`run_scene` adds the output
+directory, XDMF fields and ``summary.json``.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+from dataclasses import dataclass, field
+from typing import Any
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+import numpy as np
+from mpi4py import MPI
+
+from geofrac.elements import make_element
+from geofrac.errors import RunError
+from geofrac.fem.elastic import ElasticProblem, exact_ufl
+from geofrac.fem.post import error_norms, integrate, locate_points, probe, stress_fields
+from geofrac.io.summary import versions, write_summary
+from geofrac.io.xdmf import write_fields
+from geofrac.log import echo
+from geofrac.meshing.distribute import TaggedMesh, build_mesh
+from geofrac.scene.model import Scene
+from geofrac.timing import Timings
+from geofrac_forms.elasticity import strain_energy_form
+
+__all__ = ["OUTPUT_FILES", "Solution", "run_scene", "solve_scene"]
+
+#: Files a run writes into its output directory.
+OUTPUT_FILES = ("results.xdmf", "results.h5", "summary.json")
+
+
+@dataclass
+class Solution:
+    """Everything a solved scene produced.
+
+    Attributes:
+        scene: the scene.
+        tagged: distributed mesh and groups.
+        problem: the elastic problem (call ``problem.destroy()`` when done).
+        results: JSON-ready results (probes, errors, energy, solver).
+        timings: per-phase wall times of this rank.
+    """
+
+    scene: Scene
+    tagged: TaggedMesh
+    problem: ElasticProblem
+    results: dict[str, Any] = field(default_factory=dict)
+    timings: Timings = field(default_factory=Timings)
+
+    def mesh_counts(self) -> dict[str, int]:
+        """Global numbers of cells and vertices, and the topological dimension."""
+        tdim = self.tagged.mesh.topology.dim
+        return {
+            "cells": self.tagged.num_global(tdim),
+            "vertices": self.tagged.num_global(0),
+            "dim": tdim,
+        }
+
+
+def solve_scene(
+    scene: Scene, comm: MPI.Comm, timings: Timings | None = None, verbose: bool = True
+) -> Solution:
+    """Mesh, discretise, assemble and solve ``scene``; compute probes and error norms.
+
+    Raises:
+        RunError: collectively, when the run cannot continue.
+    """
+    timings = timings or Timings()
+    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
+    with timings.phase("mesh"):
+        tagged = build_mesh(scene.geometry, comm)
+    mesh = tagged.mesh
+    names = list(scene.output.probes)
+    points = np.zeros((len(names), 3))
+    for i, name in enumerate(names):
+        points[i, : scene.gdim] = scene.output.probes[name]
+    with timings.phase("setup"):
+        element = make_element(scene.discretization.element, mesh)
+        try:
+            cells = locate_points(mesh, points)
+        except RunError as exc:
+            raise RunError(f"output.probes: {exc}") from None
+        problem = ElasticProblem(tagged, element, scene)
+    solution = Solution(scene, tagged, problem, timings=timings)
+    counts = solution.mesh_counts()
+    say(
+        f"mesh: {counts['vertices']} vertices, {counts['cells']} cells; "
+        f"element {element.name}: {element.num_dofs} DOFs on {comm.size} rank(s)"
+    )
+    with timings.phase("compile"):
+        problem.compile()
+    with timings.phase("assemble"):
+        problem.assemble()
+    with timings.phase("solve"):
+        uh = problem.solve()
+    with timings.phase("postprocess"):
+        values = probe(uh, points, cells)
+        results: dict[str, Any] = {
+            "probes": {n: values[i].tolist() for i, n in enumerate(names)},
+            "strain_energy": integrate(
+                strain_energy_form(uh, problem.lam, problem.mu, problem.thickness, problem.dx), comm
+            ),
+            "solver": problem.solver.describe() | {"iterations": problem.iterations},  # type: ignore[union-attr]
+        }
+        if problem.exact is not None:
+            u_exact, _ = exact_ufl(problem.exact, mesh)
+            results["errors"] = error_norms(uh, u_exact, problem.lam, problem.mu)
+            results["exact_probes"] = {
+                n: [float(c) for c in problem.exact.displacement(*points[i, : scene.gdim])]
+                for i, n in enumerate(names)
+            }
+    solution.results = results
+    return solution
+
+
+def _write_xdmf(solution: Solution) -> None:
+    scene, problem = solution.scene, solution.problem
+    mesh = solution.tagged.mesh
+    functions = []
+    if "displacement" in scene.output.fields:
+        uh = problem.uh
+        if problem.element.degree != 1:  # XDMF stores node data on the P1 geometry
+            p1 = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (mesh.geometry.dim,)))
+            u1 = dolfinx.fem.Function(p1, name="displacement")
+            u1.interpolate(uh)
+            uh = u1
+        functions.append(uh)
+    wanted = [f for f in ("stress", "von_mises") if f in scene.output.fields]
+    if wanted:
+        fields = stress_fields(problem.uh, problem.lam, problem.mu, scene.material.plane)
+        functions += [fields[f] for f in wanted]
+    write_fields(scene.output.dir / "results.xdmf", mesh, functions)
+
+
+def _prepare_output(scene: Scene, comm: MPI.Comm) -> None:
+    """Create the output directory and remove a previous run's files (rank 0)."""
+    error = None
+    if comm.rank == 0:
+        try:
+            scene.output.dir.mkdir(parents=True, exist_ok=True)
+            for name in OUTPUT_FILES:
+                (scene.output.dir / name).unlink(missing_ok=True)
+        except OSError as exc:
+            error = f"output.dir: cannot prepare {scene.output.dir}: {exc.strerror}"
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise RunError(error)
+
+
+def run_scene(
+    scene: Scene, comm: MPI.Comm, timings: Timings | None = None, verbose: bool = True
+) -> dict[str, Any]:
+    """Solve ``scene`` and write its output directory; return the summary.
+
+    On a :class:`RunError` the XDMF files are removed and ``summary.json`` records
+    ``status`` = ``"error: ..."`` before the error propagates, so no directory looks
+    like a complete run when it is not.
+    """
+    timings = timings or Timings()
+    started = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+    _prepare_output(scene, comm)
+    summary: dict[str, Any] = {
+        "scene": {
+            "path": str(scene.path),
+            "sha256": scene.sha256,
+            "name": scene.name,
+            "effects": list(scene.effect_names),
+            "element": scene.discretization.element,
+            "input": scene.raw,
+        },
+        "versions": versions(),
+        "ranks": comm.size,
+        "started": started,
+    }
+    solution = None
+    try:
+        solution = solve_scene(scene, comm, timings, verbose)
+        if scene.output.xdmf:
+            with timings.phase("output"):
+                _write_xdmf(solution)
+        summary |= {
+            "mesh": solution.mesh_counts(),
+            "dofs": solution.problem.element.num_dofs,
+            "results": solution.results,
+            "status": "ok",
+        }
+    except RunError as exc:  # raised collectively, so the collective finish below is safe
+        summary["status"] = f"error: {exc}"
+        if comm.rank == 0:
+            for name in ("results.xdmf", "results.h5"):
+                (scene.output.dir / name).unlink(missing_ok=True)
+        _finish(summary, scene, comm, timings)
+        raise
+    finally:
+        if solution is not None:
+            solution.problem.destroy()
+    _finish(summary, scene, comm, timings)
+    return summary
+
+
+def _finish(summary: dict[str, Any], scene: Scene, comm: MPI.Comm, timings: Timings) -> None:
+    """Add timings and write summary.json (collective)."""
+    summary["timings_s"] = timings.reduced(comm)
+    summary["finished"] = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+    if comm.rank == 0:
+        write_summary(scene.output.dir / "summary.json", summary)
