@@ -20,7 +20,16 @@ from petsc4py import PETSc
 
 from geofrac.errors import RunError
 
-__all__ = ["AUTO_DIRECT_MAX_DOFS", "LinearSolver", "preset_options", "rigid_body_modes"]
+__all__ = [
+    "AUTO_DIRECT_MAX_DOFS",
+    "MAX_RELATIVE_RESIDUAL",
+    "LinearSolver",
+    "preset_options",
+    "rigid_body_modes",
+]
+
+#: A solution whose relative residual ||b - Ax|| / ||b|| exceeds this is rejected.
+MAX_RELATIVE_RESIDUAL = 1e-6
 
 #: Largest problem the ``auto`` preset solves with a direct factorisation.
 AUTO_DIRECT_MAX_DOFS = 300_000
@@ -35,6 +44,7 @@ def preset_options(preset: str, num_dofs: int) -> tuple[str, dict[str, str]]:
             "ksp_type": "preonly",
             "pc_type": "lu",
             "pc_factor_mat_solver_type": "mumps",
+            "mat_mumps_icntl_24": "1",  # detect null pivots: a singular system is an error
         }
     return preset, {
         "ksp_type": "cg",
@@ -71,7 +81,10 @@ def rigid_body_modes(space: object) -> PETSc.NullSpace:
         v = PETSc.Vec().createMPI((n_local * bs, None), comm=comm)
         v.setArray(m)
         vecs.append(v)
-    PETSc.Vec.orthonormalize(vecs)  # type: ignore[attr-defined]
+    for i, v in enumerate(vecs):  # modified Gram-Schmidt
+        for w in vecs[:i]:
+            v.axpy(-v.dot(w), w)
+        v.normalize()
     return PETSc.NullSpace().create(vectors=vecs, comm=comm)
 
 
@@ -85,6 +98,7 @@ class LinearSolver:
         options: user options (without prefix), applied after the preset's.
         num_dofs: global problem size (decides ``auto``).
         space: function space, used for GAMG's near-nullspace.
+        max_residual: largest accepted relative residual after the solve.
     """
 
     def __init__(
@@ -95,8 +109,11 @@ class LinearSolver:
         options: dict[str, str],
         num_dofs: int,
         space: object | None = None,
+        max_residual: float = MAX_RELATIVE_RESIDUAL,
     ) -> None:
         self.prefix = prefix
+        self.residual = float("nan")
+        self.max_residual = max_residual
         self.preset, self.options = preset_options(preset, num_dofs)
         self.options.update(options)
         self._nullspace = None
@@ -111,6 +128,9 @@ class LinearSolver:
             db[f"{prefix}{k}"] = v
         try:
             self.ksp.setFromOptions()
+            self.ksp.setUp()  # factor-matrix options (mat_mumps_*) are read here
+        except PETSc.Error as exc:
+            raise RunError(f"linear solver '{prefix}' set-up failed ({exc})") from None
         finally:
             for k in self.options:
                 db.delValue(f"{prefix}{k}")
@@ -134,10 +154,36 @@ class LinearSolver:
                 f"linear solver '{self.prefix}' did not converge (KSPConvergedReason {reason}, "
                 f"{self.ksp.getIterationNumber()} iterations)"
             )
+        pc = self.ksp.getPC()
+        if pc.getType() in ("lu", "cholesky") and pc.getFactorSolverType() == "mumps":
+            null_pivots = pc.getFactorMatrix().getMumpsInfog(28)
+            if null_pivots > 0:
+                raise RunError(
+                    f"linear solver '{self.prefix}': the system is singular ({null_pivots} null "
+                    "pivot(s)); a rigid body motion is free, check the Dirichlet conditions"
+                )
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         if not np.isfinite(x.norm()):
             raise RunError(f"linear solver '{self.prefix}' returned a non-finite solution")
+        self.residual = self._relative_residual(b, x)
+        if self.residual > self.max_residual:
+            raise RunError(
+                f"linear solver '{self.prefix}': relative residual {self.residual:.2e} exceeds "
+                f"{self.max_residual:.0e}; the system is singular or badly conditioned"
+            )
         return int(self.ksp.getIterationNumber())
+
+    def _relative_residual(self, b: PETSc.Vec, x: PETSc.Vec) -> float:
+        """||b - A x|| / ||b|| (or ||A x|| when b = 0)."""
+        A = self.ksp.getOperators()[0]
+        r = b.duplicate()
+        try:
+            A.mult(x, r)
+            r.aypx(-1.0, b)
+            scale = b.norm()
+            return float(r.norm() / scale) if scale > 0 else float(r.norm())
+        finally:
+            r.destroy()
 
     def describe(self) -> dict[str, object]:
         """Preset, KSP and PC types and the options used (for summary.json)."""
@@ -147,6 +193,7 @@ class LinearSolver:
             "ksp_type": self.ksp.getType(),
             "pc_type": self.ksp.getPC().getType(),
             "options": dict(self.options),
+            "relative_residual": self.residual,
         }
 
     def destroy(self) -> None:
