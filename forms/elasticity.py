@@ -19,6 +19,7 @@ __all__ = [
     "sigma",
     "stiffness_form",
     "strain_energy_form",
+    "stress_3d",
     "traction_form",
     "von_mises",
 ]
@@ -71,15 +72,23 @@ def energy_error_form(u: Any, u_exact: Any, lam: Any, mu: Any, dx: Any) -> Any:
     return 0.5 * ufl.inner(sigma(e, lam, mu), epsilon(e)) * dx
 
 
+def stress_3d(stress: Any, stress_zz: Any = 0.0) -> Any:
+    """Embed a 2×2 in-plane stress in 3×3 with out-of-plane ``stress_zz``; 3×3 passes through.
+
+    ``stress_zz`` is 0 in plane stress and λ tr(ε) in plane strain.
+    """
+    if stress.ufl_shape == (3, 3):
+        return stress
+    return ufl.as_matrix(
+        [
+            [stress[0, 0], stress[0, 1], 0.0],
+            [stress[1, 0], stress[1, 1], 0.0],
+            [0.0, 0.0, stress_zz],
+        ]
+    )
+
+
 def von_mises(stress: Any, stress_zz: Any = 0.0) -> Any:
     """Von Mises stress of a 2×2 (with out-of-plane ``stress_zz``) or 3×3 stress tensor."""
-    if stress.ufl_shape == (2, 2):
-        stress = ufl.as_matrix(
-            [
-                [stress[0, 0], stress[0, 1], 0.0],
-                [stress[1, 0], stress[1, 1], 0.0],
-                [0.0, 0.0, stress_zz],
-            ]
-        )
-    s = ufl.dev(stress)
+    s = ufl.dev(stress_3d(stress, stress_zz))
     return ufl.sqrt(1.5 * ufl.inner(s, s))

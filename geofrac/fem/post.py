@@ -124,8 +124,12 @@ def stress_fields(
 ) -> dict[str, dolfinx.fem.Function]:
     """Cell-wise (DG0, value at the cell midpoint) stress tensor and von Mises stress.
 
+    The stress is always a 3×3 tensor, in 2D with σzz = 0 (plane stress) or λ tr(ε)
+    (plane strain): DOLFINx's XDMF writer pads a 2×2 tensor as (xx, xy, yx, yy, 0, ...),
+    which ParaView would read as a wrong 3×3 tensor.
+
     Returns:
-        ``stress`` (tensor, shape=(gdim, gdim) per cell) and ``von_mises`` (scalar).
+        ``stress`` (tensor, shape=(3, 3) per cell) and ``von_mises`` (scalar).
     """
     mesh = uh.function_space.mesh
     gdim = mesh.geometry.dim
@@ -133,7 +137,7 @@ def stress_fields(
     szz = lam * ufl.tr(forms.epsilon(uh)) if (gdim == 2 and plane == "strain") else 0.0
     out = {}
     for name, expr, shape in (
-        ("stress", sig, (gdim, gdim)),
+        ("stress", forms.stress_3d(sig, szz), (3, 3)),
         ("von_mises", forms.von_mises(sig, szz), ()),
     ):
         space = dolfinx.fem.functionspace(mesh, ("DG", 0, shape))
