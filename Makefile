@@ -18,7 +18,7 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff format --check .
 
 test-serial: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest --with-mpi
 
 test-mpi: $(STAMP)
 	$(VENV)/bin/mpiexec -n $(NP) $(PY) -m mpi4py -m pytest --only-mpi -p no:cacheprovider
