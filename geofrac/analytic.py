@@ -11,7 +11,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["EXACT_SOLUTIONS", "ExactSolution", "TimoshenkoCantilever", "make_exact"]
+__all__ = [
+    "EXACT_SOLUTIONS",
+    "ExactSolution",
+    "TimoshenkoCantilever",
+    "UniformStrain",
+    "make_exact",
+]
 
 
 class ExactSolution:
@@ -86,10 +92,50 @@ class TimoshenkoCantilever(ExactSolution):
         return float(self.displacement(self.L, 0.0)[1])
 
 
+@dataclass(frozen=True)
+class UniformStrain(ExactSolution):
+    """Linear displacement with constant strain: the patch test (seed eq. 2.26-2.27).
+
+    u = exx·x + ½gxy·y, v = eyy·y + ½gxy·x; every conforming element must reproduce it
+    exactly on any mesh. The seed's patch test is exx = 0.002, eyy = -0.0006, gxy = 0.
+
+    Attributes:
+        exx, eyy, gxy: strain components (engineering shear gxy).
+        lam, mu: Lamé constants of the analysis plane (see :func:`geofrac.materials.lame`).
+    """
+
+    exx: float
+    eyy: float
+    gxy: float
+    lam: float
+    mu: float
+    dim: int = 2
+
+    def displacement(self, x: Any, y: Any, z: Any = None) -> tuple[Any, Any]:
+        """(u, v) at (x, y)."""
+        return (self.exx * x + 0.5 * self.gxy * y, self.eyy * y + 0.5 * self.gxy * x)
+
+    def stress(self, x: Any, y: Any, z: Any = None) -> tuple[tuple[Any, Any], tuple[Any, Any]]:
+        """Constant stress σ = 2μ ε + λ tr(ε) I, broadcast to the shape of x."""
+        tr = self.exx + self.eyy
+        one = 0.0 * x + 1.0
+        sxx = (2.0 * self.mu * self.exx + self.lam * tr) * one
+        syy = (2.0 * self.mu * self.eyy + self.lam * tr) * one
+        sxy = self.mu * self.gxy * one
+        return ((sxx, sxy), (sxy, syy))
+
+
 def _timoshenko(params: dict[str, float], E: float, nu: float, plane: str) -> TimoshenkoCantilever:
     if plane == "strain":
         E, nu = E / (1.0 - nu * nu), nu / (1.0 - nu)
     return TimoshenkoCantilever(P=params["P"], L=params["L"], D=params["D"], E=E, nu=nu)
+
+
+def _uniform_strain(params: dict[str, float], E: float, nu: float, plane: str) -> UniformStrain:
+    from geofrac.materials import lame
+
+    lam, mu = lame(E, nu, 2, plane)
+    return UniformStrain(params["exx"], params["eyy"], params["gxy"], lam, mu)
 
 
 #: name -> (dimension, required parameter names, factory(params, E, nu, plane)).
@@ -97,6 +143,7 @@ EXACT_SOLUTIONS: dict[
     str, tuple[int, tuple[str, ...], Callable[[dict[str, float], float, float, str], ExactSolution]]
 ] = {
     "timoshenko_cantilever": (2, ("P", "L", "D"), _timoshenko),
+    "uniform_strain": (2, ("exx", "eyy", "gxy"), _uniform_strain),
 }
 
 
