@@ -68,6 +68,8 @@ def _check(args: argparse.Namespace, comm: Any) -> int:
     scene = load_scene_collective(comm, args.scene, args.overrides)
     effects = ", ".join(scene.effect_names) or "none"
     groups = ", ".join(f"{n} ({d}D)" for n, d in scene.geometry.groups.items())
+    for warning in scene.warnings:
+        echo(comm, f"warning: {warning}", err=True)
     echo(
         comm,
         f"ok: {args.scene}: {scene.gdim}D, element {scene.discretization.element}, "
@@ -84,6 +86,8 @@ def _run(args: argparse.Namespace, comm: Any) -> int:
     with timings.phase("load"):
         scene = load_scene_collective(comm, args.scene, args.overrides, args.out)
     echo(comm, f"geofrac {__version__}: scene '{scene.name}' ({args.scene}) on {comm.size} rank(s)")
+    for warning in scene.warnings:
+        echo(comm, f"warning: {warning}", err=True)
     summary = run_scene(scene, comm, timings, verbose=not args.quiet)
     if not args.quiet:
         _report(comm, summary)

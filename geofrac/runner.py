@@ -174,6 +174,7 @@ def run_scene(
             "element": scene.discretization.element,
             "input": scene.raw,
         },
+        "warnings": list(scene.warnings),
         "versions": versions(),
         "ranks": comm.size,
         "started": started,

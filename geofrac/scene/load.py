@@ -376,6 +376,22 @@ def _effects(
     return tuple(specs)
 
 
+#: Poisson's ratio above which linear elements lock volumetrically (plane strain, 3D).
+LOCKING_NU = 0.45
+
+
+def _warnings(file: Path, material: Material, disc: Discretization, dim: int) -> tuple[str, ...]:
+    out = []
+    constrained = dim == 3 or material.plane == "strain"
+    if disc.element == "cst" and constrained and material.nu > LOCKING_NU:
+        out.append(
+            f"{file}: material.nu: {material.nu} with element 'cst' in "
+            f"{'3D' if dim == 3 else 'plane strain'} locks volumetrically (displacements far "
+            "too small); use element 'p2' or 'p3'"
+        )
+    return tuple(out)
+
+
 def load_scene(
     path: str | Path, overrides: Sequence[str] = (), out: str | Path | None = None
 ) -> Scene:
@@ -441,6 +457,7 @@ def load_scene(
     )
     specs = _effects(file, data, geometry.dim, material)
     return Scene(
+        warnings=_warnings(file, material, discretization, geometry.dim),
         path=file.resolve(),
         sha256=digest,
         name=name,

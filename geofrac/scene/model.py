@@ -179,6 +179,7 @@ class Scene:
         geometry, material, discretization, bcs, loads, exact, solver, output: see the
             classes of the same names.
         raw: the input tables after overrides (for the run summary).
+        warnings: valid but risky choices, each naming file and key (printed, recorded).
     """
 
     path: Path
@@ -195,6 +196,7 @@ class Scene:
     solver: Solver
     output: Output
     raw: dict[str, Any]
+    warnings: tuple[str, ...] = ()
 
     @property
     def effect_names(self) -> tuple[str, ...]:
