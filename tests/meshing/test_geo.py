@@ -1,0 +1,37 @@
+import pytest
+
+from geofrac.meshing.geo import define_constants, gmsh_session, inspect_geometry
+from tests.conftest import REPO
+
+
+def test_define_constants_reads_plain_and_named_entries():
+    text = 'DefineConstant[ L = {10, Name "Parameters/L", Min 1, Max 5}, nx = 40 ];\nx = 3;'
+    assert define_constants(text) == ["L", "nx"]
+    assert define_constants("Point(1) = {0, 0, 0};") == []
+
+
+def test_cantilever_geo_declares_its_parameters():
+    text = (REPO / "meshes" / "cantilever.geo").read_text()
+    assert define_constants(text) == ["L", "D", "nx", "ny"]
+
+
+def test_parameters_reach_the_geometry():
+    path = REPO / "meshes" / "cantilever.geo"
+    with gmsh_session(path, {"nx": 10, "ny": 2, "L": 4.0}) as gmsh:
+        gmsh.model.mesh.generate(2)
+        nodes = gmsh.model.mesh.getNodes()[1].reshape(-1, 3)
+    assert len(nodes) == 11 * 3
+    assert nodes[:, 0].max() == pytest.approx(4.0)
+
+
+def test_inspect_reports_dimension_and_groups():
+    info = inspect_geometry(REPO / "meshes" / "square.geo", {})
+    assert info.dim == 2
+    assert info.groups["domain"] == 2 and info.groups["boundary"] == 1
+
+
+def test_unreadable_geo_raises(tmp_path):
+    bad = tmp_path / "bad.geo"
+    bad.write_text("Point(1) = {0, 0, 0;\n")
+    with pytest.raises(RuntimeError, match="syntax error"):
+        inspect_geometry(bad, {})
