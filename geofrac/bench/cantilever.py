@@ -70,6 +70,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--json", type=Path, help="also write the JSON report to this file")
     p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a base-scene entry for every case, e.g. --set solver.preset=direct",
+    )
+    p.add_argument(
         "--repeat",
         type=int,
         default=3,
@@ -104,6 +112,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
             f"geometry.parameters.nx={10 * ny}",
             f"geometry.parameters.ny={ny}",
             "output.probes={}",
+            *args.overrides,
         ]
         scene = load_scene_collective(comm, args.scene, overrides)
         timings = Timings()
@@ -156,6 +165,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     report = {
         "bench": "cantilever",
         "scene": str(args.scene),
+        "overrides": list(args.overrides),
         "ranks": comm.size,
         "versions": versions(),
         "rate_definition": "R = -d log(error) / d log(sqrt(nodes)), least squares over the meshes",
