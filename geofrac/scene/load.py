@@ -32,7 +32,7 @@ from geofrac.scene.model import (
     Solver,
 )
 
-__all__ = ["OUTPUT_FIELDS", "TOP_LEVEL_KEYS", "apply_overrides", "load_scene"]
+__all__ = ["OUTPUT_FIELDS", "SECTION_KEYS", "TOP_LEVEL_KEYS", "apply_overrides", "load_scene"]
 
 #: Keys a scene may have at the top level (besides one table per declared effect).
 TOP_LEVEL_KEYS = (
@@ -49,6 +49,16 @@ TOP_LEVEL_KEYS = (
     "solver",
     "output",
 )
+#: Keys each table accepts (the single source for validation and for docs/scenes.md).
+SECTION_KEYS: dict[str, tuple[str, ...]] = {
+    "geometry": ("file", "parameters", "mesh_size"),
+    "material": ("E", "nu", "plane", "thickness", "density", "tensile_strength"),
+    "discretization": ("element", "quadrature_degree"),
+    "bc": ("group", "value", "components"),
+    "load": ("type", "group", "value"),
+    "solver": ("preset", "options"),
+    "output": ("dir", "fields", "xdmf", "probes"),
+}
 #: Field names ``output.fields`` may list.
 OUTPUT_FIELDS = ("displacement", "stress", "von_mises")
 _AXES = ("x", "y", "z")
@@ -159,7 +169,7 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str], file: Path) 
 
 
 def _geometry(file: Path, raw: Any) -> Geometry:
-    t = _Table(file, "geometry", raw, ("file", "parameters", "mesh_size"))
+    t = _Table(file, "geometry", raw, SECTION_KEYS["geometry"])
     name = t.string("file")
     path = (file.parent / name).resolve()
     if not path.is_file():
@@ -195,9 +205,7 @@ def _geometry(file: Path, raw: Any) -> Geometry:
 
 
 def _material(file: Path, raw: Any, dim: int) -> Material:
-    t = _Table(
-        file, "material", raw, ("E", "nu", "plane", "thickness", "density", "tensile_strength")
-    )
+    t = _Table(file, "material", raw, SECTION_KEYS["material"])
     E = t.number("E", required=True, positive=True)
     nu = t.number("nu", required=True)
     assert E is not None and nu is not None
@@ -217,7 +225,7 @@ def _material(file: Path, raw: Any, dim: int) -> Material:
 
 
 def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
-    t = _Table(file, "discretization", raw, ("element", "quadrature_degree"))
+    t = _Table(file, "discretization", raw, SECTION_KEYS["discretization"])
     element = t.string("element", choices=elements.available())
     dims, _ = elements.describe(element)
     if dim not in dims:
@@ -280,7 +288,7 @@ def _bcs(
         raise SceneError(file, "bc", "must be an array of tables ([[bc]])")
     out = []
     for i, entry in enumerate(raw):
-        t = _Table(file, f"bc[{i}]", entry, ("group", "value", "components"))
+        t = _Table(file, f"bc[{i}]", entry, SECTION_KEYS["bc"])
         group = t.string("group")
         _groups(file, t.path("group"), group, geometry, range(geometry.dim))
         axes = _AXES[: geometry.dim]
@@ -306,7 +314,7 @@ def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) ->
         raise SceneError(file, "load", "must be an array of tables ([[load]])")
     out = []
     for i, entry in enumerate(raw):
-        t = _Table(file, f"load[{i}]", entry, ("type", "group", "value"))
+        t = _Table(file, f"load[{i}]", entry, SECTION_KEYS["load"])
         kind = t.string("type", choices=("traction", "body_force"))
         group = None
         if kind == "traction":
@@ -322,7 +330,7 @@ def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) ->
 
 
 def _solver(file: Path, raw: Any) -> Solver:
-    t = _Table(file, "solver", raw, ("preset", "options"))
+    t = _Table(file, "solver", raw, SECTION_KEYS["solver"])
     preset = t.string("preset", default="auto", choices=("auto", "direct", "iterative"))
     opts_raw = t.data.get("options", {})
     o = _Table(file, "solver.options", opts_raw, list(opts_raw))
@@ -337,7 +345,7 @@ def _solver(file: Path, raw: Any) -> Solver:
 
 
 def _output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> Output:
-    t = _Table(file, "output", raw, ("dir", "fields", "xdmf", "probes"))
+    t = _Table(file, "output", raw, SECTION_KEYS["output"])
     directory = Path(t.string("dir", default=f"results/{name}")) if out is None else out
     fields = t.data.get("fields", list(OUTPUT_FIELDS))
     if not isinstance(fields, list) or len(set(fields)) != len(fields):

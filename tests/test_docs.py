@@ -1,0 +1,36 @@
+"""The scene reference documents every key the loader accepts."""
+
+import re
+
+from geofrac import analytic, effects, elements
+from geofrac.scene.load import OUTPUT_FIELDS, SECTION_KEYS, TOP_LEVEL_KEYS
+from tests.conftest import REPO
+
+TEXT = (REPO / "docs" / "scenes.md").read_text()
+
+
+def _section(title: str) -> str:
+    for heading in (f"## `[{title}]`", f"## `[[{title}]]`"):
+        if heading in TEXT:
+            start = TEXT.index(heading)
+            end = TEXT.find("\n## ", start + 1)
+            return TEXT[start : end if end > 0 else None]
+    raise AssertionError(f"docs/scenes.md has no section for [{title}]")
+
+
+def test_every_top_level_key_is_documented():
+    for key in TOP_LEVEL_KEYS:
+        assert f"`{key}`" in TEXT or f"[{key}]" in TEXT, key
+
+
+def test_every_table_key_has_a_row_in_its_section():
+    for section, keys in SECTION_KEYS.items():
+        body = _section(section)
+        for key in keys:
+            assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), f"{section}.{key}"
+
+
+def test_every_registered_name_is_documented():
+    names = [*elements.available(), *effects.available(), *analytic.EXACT_SOLUTIONS, *OUTPUT_FIELDS]
+    for name in names:
+        assert f"`{name}`" in TEXT or f'"{name}"' in TEXT, name
