@@ -99,9 +99,9 @@ def _report(comm: Any, summary: dict[str, Any]) -> None:
     results = summary["results"]
     exact = results.get("exact_probes", {})
     for name, value in results["probes"].items():
-        line = f"probe {name}: u = [{', '.join(f'{v:.10g}' for v in value)}]"
+        line = f"probe {name}: u = [{_numbers(value)}]"
         if name in exact:
-            line += f"  (exact [{', '.join(f'{v:.10g}' for v in exact[name])}])"
+            line += f"  (exact [{_numbers(exact[name])}])"
         echo(comm, line)
     if "errors" in results:
         e = results["errors"]
@@ -112,6 +112,10 @@ def _report(comm: Any, summary: dict[str, Any]) -> None:
         )
     t = summary["timings_s"]
     echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
+
+
+def _numbers(values: list[float]) -> str:
+    return ", ".join(f"{v + 0.0:.10g}" for v in values)  # + 0.0 turns -0 into 0
 
 
 def _bench(args: argparse.Namespace, comm: Any) -> int:

@@ -27,12 +27,14 @@ def echo(comm: _Comm | None, message: str, *, err: bool = False) -> None:
 
 
 def format_seconds(seconds: float) -> str:
-    """Format a duration as ``1h02m``, ``3m05s`` or ``4.2s``."""
+    """Format a duration as ``1h02m``, ``3m05s``, ``4.2s`` or ``12ms``."""
     if seconds >= 3600:
         return f"{int(seconds // 3600)}h{int(seconds % 3600 // 60):02d}m"
     if seconds >= 60:
         return f"{int(seconds // 60)}m{int(seconds % 60):02d}s"
-    return f"{seconds:.1f}s"
+    if seconds >= 1:
+        return f"{seconds:.1f}s"
+    return f"{seconds * 1000:.0f}ms"
 
 
 class Progress:

@@ -8,6 +8,7 @@ directory, XDMF fields and ``summary.json``.
 from __future__ import annotations
 
 import datetime as dt
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -23,7 +24,7 @@ from geofrac.fem.elastic import ElasticProblem, exact_ufl
 from geofrac.fem.post import error_norms, integrate, locate_points, probe, stress_fields
 from geofrac.io.summary import versions, write_summary
 from geofrac.io.xdmf import write_fields
-from geofrac.log import echo
+from geofrac.log import echo, format_seconds
 from geofrac.meshing.distribute import TaggedMesh, build_mesh
 from geofrac.scene.model import Scene
 from geofrac.timing import Timings
@@ -93,12 +94,12 @@ def solve_scene(
         f"mesh: {counts['vertices']} vertices, {counts['cells']} cells; "
         f"element {element.name}: {element.num_dofs} DOFs on {comm.size} rank(s)"
     )
-    with timings.phase("compile"):
-        problem.compile()
-    with timings.phase("assemble"):
-        problem.assemble()
-    with timings.phase("solve"):
-        uh = problem.solve()
+    try:
+        _solve_phases(problem, timings, say)
+    except BaseException:
+        problem.destroy()
+        raise
+    uh = problem.uh
     with timings.phase("postprocess"):
         values = probe(uh, points, cells)
         results: dict[str, Any] = {
@@ -117,6 +118,24 @@ def solve_scene(
             }
     solution.results = results
     return solution
+
+
+def _solve_phases(problem: ElasticProblem, timings: Timings, say: Callable[[str], None]) -> None:
+    """Compile, assemble and solve, reporting each phase as it ends (rank 0)."""
+    with timings.phase("compile"):
+        problem.compile()
+    say(f"compile: forms ready in {format_seconds(timings.local['compile'])}")
+    with timings.phase("assemble"):
+        problem.assemble()
+    say(f"assemble: {format_seconds(timings.local['assemble'])}")
+    with timings.phase("solve"):
+        problem.solve()
+    info = problem.solver.describe()  # type: ignore[union-attr]
+    say(
+        f"solve: {format_seconds(timings.local['solve'])} ({info['preset']}: {info['ksp_type']} + "
+        f"{info['pc_type']}, {problem.iterations} iterations, "
+        f"relative residual {info['relative_residual']:.1e})"
+    )
 
 
 def _write_xdmf(solution: Solution) -> None:
