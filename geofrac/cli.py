@@ -24,16 +24,20 @@ from geofrac.scene import SceneError, load_scene_collective
 __all__ = ["main"]
 
 
-def _scene_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("scene", help="scene file (TOML), e.g. jobs/quickstart.toml")
+def _set_option(p: argparse.ArgumentParser, example: str) -> None:
     p.add_argument(
         "--set",
         dest="overrides",
         action="append",
         default=[],
         metavar="KEY=VALUE",
-        help="override a scene entry, e.g. --set discretization.element=cst (repeatable)",
+        help=f"override a scene entry (TOML value), e.g. --set {example} (repeatable)",
     )
+
+
+def _scene_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scene", help="scene file (TOML), e.g. jobs/quickstart.toml")
+    _set_option(p, "discretization.element=cst")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -60,6 +64,7 @@ def _parser() -> argparse.ArgumentParser:
     for name, (_, text) in BENCHES.items():
         p = benches.add_parser(name, help=text, description=text)
         load_bench(name).add_arguments(p)
+        _set_option(p, "solver.preset=direct (applied to every case)")
         p.set_defaults(func=_bench)
     return parser
 

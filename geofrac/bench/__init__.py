@@ -1,8 +1,9 @@
 """Accuracy-cost benchmarks: one module per ``geofrac bench NAME``.
 
 A bench module provides ``add_arguments(parser)`` (cheap: no DOLFINx import) and
-``run(args, comm)``. Its JSON output has at least ``bench``, ``records`` and ``rates``
-(see docs/benchmarks.md).
+``run(args, comm)``; the CLI adds ``--set KEY=VALUE`` (``args.overrides``) to every
+bench. Its JSON output has at least ``bench``, ``records`` and ``rates`` (see
+docs/output.md).
 """
 
 from __future__ import annotations

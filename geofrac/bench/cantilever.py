@@ -70,14 +70,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--json", type=Path, help="also write the JSON report to this file")
     p.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a base-scene entry for every case, e.g. --set solver.preset=direct",
-    )
-    p.add_argument(
         "--repeat",
         type=int,
         default=3,
