@@ -64,7 +64,8 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
             gmsh = stack.enter_context(
                 gmsh_session(geometry.file, geometry.parameters, geometry.mesh_size, verbose)
             )
-            gmsh.model.mesh.generate(geometry.dim)  # type: ignore[attr-defined]
+            if geometry.file.suffix == ".geo":  # a .msh file is used as it is, never re-meshed
+                gmsh.model.mesh.generate(geometry.dim)  # type: ignore[attr-defined]
             if len(gmsh.model.mesh.getNodes()[0]) == 0:  # type: ignore[attr-defined]
                 raise RuntimeError("gmsh produced no nodes")
         except Exception as exc:  # gmsh raises bare Exceptions

@@ -1,9 +1,10 @@
 """gmsh sessions on one process: read a parametrised ``.geo``, inspect it, mesh it.
 
 No MPI here. :mod:`geofrac.meshing.distribute` hands the meshed model to DOLFINx.
-Parameters reach the ``.geo`` file through gmsh's ``-setnumber``, which overrides the
-defaults of its ``DefineConstant[...]`` block, so a specimen file stays runnable on its
-own in the gmsh GUI.
+Parameters reach the ``.geo`` file as parser variables set before the file is merged, so
+they override the defaults of its ``DefineConstant[...]`` block and a specimen file stays
+runnable on its own in the gmsh GUI. (gmsh's ``-setnumber`` does the same but its values
+outlive ``gmsh.finalize()``, so a later scene in the same process would inherit them.)
 """
 
 from __future__ import annotations
@@ -57,16 +58,15 @@ def gmsh_session(
     """
     import gmsh
 
-    argv = ["geofrac", "-nopopup"]
-    for name, value in parameters.items():
-        argv += ["-setnumber", name, repr(float(value))]
-    gmsh.initialize(argv, readConfigFiles=False)
+    gmsh.initialize(["geofrac", "-nopopup"], readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
         if mesh_size is not None:
             gmsh.option.setNumber("Mesh.MeshSizeMax", mesh_size)
+        for name, value in parameters.items():
+            gmsh.parser.setNumber(name, [float(value)])
         try:
-            gmsh.open(str(path))
+            gmsh.merge(str(path))
         except Exception as exc:  # gmsh raises a bare Exception with its parser message
             raise RuntimeError(str(exc)) from exc
         yield gmsh

@@ -24,6 +24,14 @@ def test_parameters_reach_the_geometry():
     assert nodes[:, 0].max() == pytest.approx(4.0)
 
 
+def test_parameters_do_not_leak_into_the_next_session():
+    path = REPO / "meshes" / "cantilever.geo"
+    with gmsh_session(path, {"L": 4.0}) as gmsh:
+        assert gmsh.parser.getNumber("L") == [4.0]
+    with gmsh_session(path, {}) as gmsh:
+        assert gmsh.parser.getNumber("L") == [10.0]  # the file's default again
+
+
 def test_inspect_reports_dimension_and_groups():
     info = inspect_geometry(REPO / "meshes" / "square.geo", {})
     assert info.dim == 2
@@ -35,3 +43,32 @@ def test_unreadable_geo_raises(tmp_path):
     bad.write_text("Point(1) = {0, 0, 0;\n")
     with pytest.raises(RuntimeError, match="syntax error"):
         inspect_geometry(bad, {})
+
+
+def test_msh_file_is_used_as_is(tmp_path):
+    """A mesh exported from gmsh runs unchanged: same cells and same answer as the .geo."""
+    from mpi4py import MPI
+
+    from geofrac.runner import solve_scene
+    from geofrac.scene import load_scene
+    from tests.conftest import JOBS
+
+    with gmsh_session(REPO / "meshes" / "cantilever.geo", {"nx": 20, "ny": 2}) as gmsh:
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(tmp_path / "beam.msh"))
+    results = []
+    for geometry in (
+        ["geometry.parameters.nx=20", "geometry.parameters.ny=2"],
+        [
+            f"geometry.file='{tmp_path / 'beam.msh'}'",
+            "geometry.parameters={}",
+            "exact.L=10.0",
+            "exact.D=1.0",
+        ],
+    ):
+        scene = load_scene(JOBS / "cantilever.toml", geometry)
+        sol = solve_scene(scene, MPI.COMM_SELF, verbose=False)
+        results.append((sol.mesh_counts()["cells"], sol.results["probes"]["tip"][1]))
+        sol.problem.destroy()
+    assert results[0][0] == results[1][0] == 80
+    assert results[1][1] == pytest.approx(results[0][1], rel=1e-12)
