@@ -135,3 +135,11 @@ def test_bench_records_match_serial(mpi_tmp_path):
         assert abs(p["error_u"] - s["error_u"]) < 1e-8
         assert abs(p["error_energy"] - s["error_energy"]) < 1e-8
         assert p["error_u"] == pytest.approx(s["error_u"], rel=1e-4)
+
+
+def test_group_outside_the_domain_is_an_error_not_an_abort(mpi_tmp_path):
+    scene = load_scene_collective(
+        WORLD, JOBS.parent / "tests" / "scenes" / "stray_curve.toml", out=mpi_tmp_path / "s"
+    )
+    with pytest.raises(RunError, match="physical group 'stray'"):
+        run_scene(scene, WORLD, verbose=False)

@@ -47,6 +47,35 @@ class TaggedMesh:
         return int(self.mesh.topology.index_map(dim).size_global)
 
 
+def _check_groups_on_cells(model: object, dim: int) -> None:
+    """Every node of a lower-dimensional physical group must belong to a meshed cell.
+
+    DOLFINx's ``model_to_mesh`` aborts the whole MPI job ("Invalid rank") on a tagged
+    curve or point outside the cells, e.g. a fracture line sticking out of the domain;
+    this turns that into an error naming the group.
+
+    Raises:
+        RuntimeError: naming the offending physical group.
+    """
+    cell_nodes = []
+    for d, tag in model.getPhysicalGroups(dim):  # type: ignore[attr-defined]
+        for entity in model.getEntitiesForPhysicalGroup(d, tag):  # type: ignore[attr-defined]
+            _, _, nodes = model.mesh.getElements(d, entity)  # type: ignore[attr-defined]
+            cell_nodes += [np.asarray(n) for n in nodes]
+    inside = np.unique(np.concatenate(cell_nodes)) if cell_nodes else np.empty(0)
+    for d, tag in model.getPhysicalGroups():  # type: ignore[attr-defined]
+        if d >= dim:
+            continue
+        nodes = model.mesh.getNodesForPhysicalGroup(d, tag)[0]  # type: ignore[attr-defined]
+        outside = np.setdiff1d(nodes, inside)
+        if len(outside):
+            name = model.getPhysicalName(d, tag)  # type: ignore[attr-defined]
+            raise RuntimeError(
+                f"physical group '{name}' has {len(outside)} node(s) outside the meshed domain; "
+                "clip it to the domain or embed it in the mesh"
+            )
+
+
 def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> TaggedMesh:
     """Mesh ``geometry`` with gmsh on rank 0 and distribute the mesh over ``comm``.
 
@@ -68,8 +97,9 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
                 gmsh.model.mesh.generate(geometry.dim)  # type: ignore[attr-defined]
             if len(gmsh.model.mesh.getNodes()[0]) == 0:  # type: ignore[attr-defined]
                 raise RuntimeError("gmsh produced no nodes")
+            _check_groups_on_cells(gmsh.model, geometry.dim)  # type: ignore[attr-defined]
         except Exception as exc:  # gmsh raises bare Exceptions
-            message = f"gmsh could not mesh {geometry.file.name}: {exc}"
+            message = f"meshing {geometry.file.name} failed: {exc}"
         comm.bcast(message, root=0)
         if message is not None:
             raise RunError(message)

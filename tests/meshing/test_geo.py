@@ -72,3 +72,16 @@ def test_msh_file_is_used_as_is(tmp_path):
         sol.problem.destroy()
     assert results[0][0] == results[1][0] == 80
     assert results[1][1] == pytest.approx(results[0][1], rel=1e-12)
+
+
+def test_group_outside_the_domain_is_an_error_not_an_abort(tmp_path):
+    from mpi4py import MPI
+
+    from geofrac.errors import RunError
+    from geofrac.runner import run_scene
+    from geofrac.scene import load_scene
+
+    scene = load_scene(REPO / "tests" / "scenes" / "stray_curve.toml", out=tmp_path / "out")
+    with pytest.raises(RunError, match=r"physical group 'stray' has \d+ node\(s\) outside"):
+        run_scene(scene, MPI.COMM_SELF, verbose=False)
+    assert not (tmp_path / "out" / "results.xdmf").exists()
