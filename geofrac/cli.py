@@ -19,7 +19,7 @@ from geofrac import __version__
 from geofrac.bench import BENCHES, load_bench
 from geofrac.errors import RunError
 from geofrac.log import echo, format_seconds
-from geofrac.scene import SceneError, load_scene_collective
+from geofrac.scene import Scene, SceneError, load_scene_collective
 
 __all__ = ["main"]
 
@@ -69,12 +69,18 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _check(args: argparse.Namespace, comm: Any) -> int:
-    scene = load_scene_collective(comm, args.scene, args.overrides)
-    effects = ", ".join(scene.effect_names) or "none"
-    groups = ", ".join(f"{n} ({d}D)" for n, d in scene.geometry.groups.items())
+def _load(args: argparse.Namespace, comm: Any, out: str | None = None) -> Scene:
+    """Validate the scene on every rank and print its warnings (rank 0)."""
+    scene = load_scene_collective(comm, args.scene, args.overrides, out)
     for warning in scene.warnings:
         echo(comm, f"warning: {warning}", err=True)
+    return scene
+
+
+def _check(args: argparse.Namespace, comm: Any) -> int:
+    scene = _load(args, comm)
+    effects = ", ".join(scene.effect_names) or "none"
+    groups = ", ".join(f"{n} ({d}D)" for n, d in scene.geometry.groups.items())
     echo(
         comm,
         f"ok: {args.scene}: {scene.gdim}D, element {scene.discretization.element}, "
@@ -89,10 +95,8 @@ def _run(args: argparse.Namespace, comm: Any) -> int:
 
     timings = Timings()
     with timings.phase("load"):
-        scene = load_scene_collective(comm, args.scene, args.overrides, args.out)
+        scene = _load(args, comm, args.out)
     echo(comm, f"geofrac {__version__}: scene '{scene.name}' ({args.scene}) on {comm.size} rank(s)")
-    for warning in scene.warnings:
-        echo(comm, f"warning: {warning}", err=True)
     summary = run_scene(scene, comm, timings, verbose=not args.quiet)
     if not args.quiet:
         _report(comm, summary)

@@ -22,7 +22,7 @@ from geofrac.elements import make_element
 from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem, exact_ufl
 from geofrac.fem.post import error_norms, integrate, locate_points, probe, stress_fields
-from geofrac.io.summary import versions, write_summary
+from geofrac.io.summary import versions, write_json
 from geofrac.io.xdmf import write_fields
 from geofrac.log import echo, format_seconds
 from geofrac.meshing.distribute import TaggedMesh, build_mesh
@@ -229,4 +229,4 @@ def _finish(summary: dict[str, Any], scene: Scene, comm: MPI.Comm, timings: Timi
     summary["timings_s"] = timings.reduced(comm)
     summary["finished"] = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
     if comm.rank == 0:
-        write_summary(scene.output.dir / "summary.json", summary)
+        write_json(scene.output.dir / "summary.json", summary)

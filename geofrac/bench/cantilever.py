@@ -79,9 +79,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
-    from geofrac.bench.report import fit_rate, format_table, plot_accuracy_cost, write_json
+    from geofrac.bench.report import fit_rate, format_table, plot_accuracy_cost
     from geofrac.elements import available
-    from geofrac.io.summary import versions
+    from geofrac.io.summary import versions, write_json
     from geofrac.log import Progress, echo
     from geofrac.runner import solve_scene
     from geofrac.scene import SceneError, load_scene_collective

@@ -1,18 +1,17 @@
-"""Benchmark reporting shared by all benches: convergence rates, tables, plots, JSON.
+"""Benchmark reporting shared by all benches: convergence rates, tables, plots.
 
 Pure numpy and matplotlib (Agg); no MPI. Call from rank 0.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["fit_rate", "format_table", "plot_accuracy_cost", "write_json"]
+__all__ = ["fit_rate", "format_table", "plot_accuracy_cost"]
 
 
 def fit_rate(nodes: Sequence[float], errors: Sequence[float]) -> float:
@@ -92,11 +91,3 @@ def plot_accuracy_cost(
     fig.suptitle(title)
     fig.savefig(path, dpi=120)
     plt.close(fig)
-
-
-def write_json(path: Path, data: dict[str, Any]) -> None:
-    """Write ``data`` as indented JSON, atomically."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=str) + "\n")
-    tmp.replace(path)

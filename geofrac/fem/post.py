@@ -92,7 +92,8 @@ def error_norms(
     """Displacement L2 error (seed eq. 2.22) and energy error (seed eq. 3.30b), plus norms.
 
     The exact field enters as a UFL expression, integrated with a quadrature degree of
-    ``2 * degree(uh) + extra_degree``, so the exact solution is not interpolated.
+    ``2 * max(degree(uh), 3) + extra_degree`` (exact fields here are up to cubic), so the
+    exact solution is never interpolated.
 
     Returns:
         ``u``: ||u - u_exact||_L2, ``energy``: sqrt(∫ ½ (ε-ε_ex):(σ-σ_ex)),

@@ -14,7 +14,7 @@ from typing import Any
 
 import geofrac
 
-__all__ = ["versions", "write_summary"]
+__all__ = ["versions", "write_json"]
 
 
 def versions() -> dict[str, str]:
@@ -41,8 +41,9 @@ def versions() -> dict[str, str]:
     return out
 
 
-def write_summary(path: Path, summary: dict[str, Any]) -> None:
-    """Write ``summary`` as JSON atomically (a reader never sees half a file)."""
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(summary, indent=2, sort_keys=False, default=str) + "\n")
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    """Write ``data`` as indented JSON atomically (a reader never sees half a file)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, indent=2, default=str) + "\n")
     tmp.replace(path)

@@ -3,7 +3,8 @@ import json
 import numpy as np
 import pytest
 
-from geofrac.bench.report import fit_rate, format_table, plot_accuracy_cost, write_json
+from geofrac.bench.report import fit_rate, format_table, plot_accuracy_cost
+from geofrac.io.summary import write_json
 
 
 def test_fit_rate_recovers_a_known_power_law():
