@@ -16,6 +16,7 @@ __all__ = [
     "ExactSolution",
     "TimoshenkoCantilever",
     "UniformStrain",
+    "displacement_gradient",
     "make_exact",
 ]
 
@@ -123,6 +124,34 @@ class UniformStrain(ExactSolution):
         syy = (2.0 * self.mu * self.eyy + self.lam * tr) * one
         sxy = self.mu * self.gxy * one
         return ((sxx, sxy), (sxy, syy))
+
+
+def displacement_gradient(exact: ExactSolution, x: Any) -> Any:
+    """∂u_r/∂x_s of an exact solution by complex-step differentiation (exact to round-off).
+
+    The formulas use only ``+ - * / **``, so they accept complex arrays; with a step
+    h = 1e-30, Im(u(x + i h e_s)) / h is the derivative without cancellation.
+
+    Args:
+        exact: the solution.
+        x: points, shape=(n, dim) (or more columns; the first ``dim`` are used).
+
+    Returns:
+        gradients, shape=(n, dim, dim).
+    """
+    import numpy as np
+
+    dim = exact.dim
+    pts = np.asarray(x, dtype=float)[:, :dim]
+    grad = np.empty((len(pts), dim, dim))
+    h = 1e-30
+    for s in range(dim):
+        z = pts.astype(complex)
+        z[:, s] += 1j * h
+        u = exact.displacement(*z.T)
+        for r in range(dim):
+            grad[:, r, s] = np.imag(np.broadcast_to(u[r], (len(pts),))) / h
+    return grad
 
 
 def _timoshenko(params: dict[str, float], E: float, nu: float, plane: str) -> TimoshenkoCantilever:

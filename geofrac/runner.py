@@ -20,7 +20,7 @@ from mpi4py import MPI
 
 from geofrac.elements import make_element
 from geofrac.errors import RunError
-from geofrac.fem.elastic import ElasticProblem, exact_ufl
+from geofrac.fem.elastic import ElasticProblem, exact_ufl, make_problem
 from geofrac.fem.post import error_norms, integrate, locate_points, probe, stress_fields
 from geofrac.io.summary import versions, write_json
 from geofrac.io.xdmf import write_fields
@@ -87,7 +87,7 @@ def solve_scene(
             cells = locate_points(mesh, points)
         except RunError as exc:
             raise RunError(f"output.probes: {exc}") from None
-        problem = ElasticProblem(tagged, element, scene)
+        problem = make_problem(tagged, element, scene)
     solution = Solution(scene, tagged, problem, timings=timings)
     counts = solution.mesh_counts()
     say(

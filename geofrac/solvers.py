@@ -13,6 +13,8 @@ solver has read them, so one solver's options never leak into the next.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import numpy as np
@@ -97,7 +99,8 @@ class LinearSolver:
         preset: ``auto``, ``direct`` or ``iterative``.
         options: user options (without prefix), applied after the preset's.
         num_dofs: global problem size (decides ``auto``).
-        space: function space, used for GAMG's near-nullspace.
+        near_nullspace: builds the rigid body modes for GAMG (called only when GAMG is
+            used); the solver destroys what it returns.
         max_residual: largest accepted relative residual after the solve.
     """
 
@@ -108,7 +111,7 @@ class LinearSolver:
         preset: str,
         options: dict[str, str],
         num_dofs: int,
-        space: object | None = None,
+        near_nullspace: Callable[[], PETSc.NullSpace] | None = None,
         max_residual: float = MAX_RELATIVE_RESIDUAL,
     ) -> None:
         self.prefix = prefix
@@ -117,8 +120,8 @@ class LinearSolver:
         self.preset, self.options = preset_options(preset, num_dofs)
         self.options.update(options)
         self._nullspace = None
-        if self.options.get("pc_type") == "gamg" and space is not None:
-            self._nullspace = rigid_body_modes(space)
+        if self.options.get("pc_type") == "gamg" and near_nullspace is not None:
+            self._nullspace = near_nullspace()
             A.setNearNullSpace(self._nullspace)
         self.ksp = PETSc.KSP().create(A.getComm())
         self.ksp.setOptionsPrefix(prefix)

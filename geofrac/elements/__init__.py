@@ -1,15 +1,15 @@
 """Element registry: scene name -> module that builds the discretisation.
 
-The runner never names an element; it asks this registry. A later element (RGNT, GNT,
-RGNQ, EFMM) joins by adding one entry here and one module that provides
-``make_element(mesh) -> geofrac.elements.base.Element``.
+The runner never names an element; it asks this registry. A later element (EFMM)
+joins by adding one entry here and one module that provides a factory
+``name(mesh) -> geofrac.elements.base.Element``.
 """
 
 from __future__ import annotations
 
 import importlib
 
-__all__ = ["REGISTRY", "available", "describe", "make_element"]
+__all__ = ["GRADIENT_DOF_ELEMENTS", "REGISTRY", "available", "describe", "make_element"]
 
 #: name -> (module, factory, dimensions it supports, one-line description)
 REGISTRY: dict[str, tuple[str, str, tuple[int, ...], str]] = {
@@ -31,7 +31,28 @@ REGISTRY: dict[str, tuple[str, str, tuple[int, ...], str]] = {
         (2, 3),
         "cubic Lagrange (10-node triangle), a high-order reference",
     ),
+    "rgnt": (
+        "geofrac.elements.gradient",
+        "rgnt",
+        (2,),
+        "triangle with a drilling DOF per vertex (u, v, θ), seed eq. 2.1",
+    ),
+    "gnt": (
+        "geofrac.elements.gradient",
+        "gnt",
+        (2,),
+        "triangle with drilling and strain DOFs (u, v, θ, εx, εy, γxy), seed eq. 2.29",
+    ),
+    "rgnq": (
+        "geofrac.elements.gradient",
+        "rgnq",
+        (3,),
+        "tetrahedron with three rotations per vertex (u, v, w, θx, θy, θz), seed eq. 2.5",
+    ),
 }
+
+#: Elements whose unknowns are vertex DOFs with extra gradient DOFs (RGNT, GNT, RGNQ).
+GRADIENT_DOF_ELEMENTS = ("rgnt", "gnt", "rgnq")
 
 
 def available() -> tuple[str, ...]:

@@ -14,7 +14,7 @@ class Element:
 
     Attributes:
         name: registry name.
-        space: the DOLFINx function space the displacement lives in.
+        space: the DOLFINx function space the displacement field lives in.
         degree: polynomial degree of the displacement field.
     """
 
@@ -23,7 +23,15 @@ class Element:
     degree: int
 
     @property
+    def unknowns(self) -> Any:
+        """The space of the unknowns (the displacement space for Lagrange elements)."""
+        return self.space
+
+    @property
     def num_dofs(self) -> int:
-        """Global number of degrees of freedom."""
-        imap = self.space.dofmap.index_map
-        return int(imap.size_global * self.space.dofmap.index_map_bs)
+        """Global number of degrees of freedom (unknowns)."""
+        dofmap = self.unknowns.dofmap
+        return int(dofmap.index_map.size_global * dofmap.index_map_bs)
+
+    def destroy(self) -> None:
+        """Free PETSc objects the element owns (none for Lagrange elements)."""

@@ -15,16 +15,19 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from geofrac import effects as effect_registry
-from geofrac.analytic import ExactSolution, make_exact
+from geofrac.analytic import ExactSolution, displacement_gradient, make_exact
 from geofrac.elements.base import Element
+from geofrac.elements.gradient import GradientDofElement
+from geofrac.elements.kinematics import dofs_from_gradient
 from geofrac.errors import RunError
 from geofrac.materials import lame
 from geofrac.meshing.distribute import TaggedMesh
 from geofrac.scene.model import Scene
-from geofrac.solvers import LinearSolver
+from geofrac.solvers import LinearSolver, rigid_body_modes
 from geofrac_forms import elasticity as forms
+from geofrac_forms.gradient_dofs import penalty_forms
 
-__all__ = ["ElasticProblem", "FormContext", "exact_ufl"]
+__all__ = ["ElasticProblem", "FormContext", "GradientDofProblem", "exact_ufl", "make_problem"]
 
 #: options prefix of the elastic solver.
 PREFIX = "geofrac_elastic_"
@@ -171,7 +174,7 @@ class ElasticProblem:
         if self.a is None or self.L is None:
             self.compile()
         assert self.a is not None and self.L is not None
-        self.destroy()  # a new operator needs a new factorisation/preconditioner
+        self._free_operators()  # a new operator needs a new factorisation/preconditioner
         self.A = dolfinx.fem.petsc.assemble_matrix(self.a, bcs=self.bcs)
         self.A.assemble()
         self.b = dolfinx.fem.petsc.assemble_vector(self.L)
@@ -187,17 +190,151 @@ class ElasticProblem:
         if self.solver is None:
             s = self.scene.solver
             self.solver = LinearSolver(
-                self.A, PREFIX, s.preset, s.options, self.element.num_dofs, self.element.space
+                self.A, PREFIX, s.preset, s.options, self.element.num_dofs, self._near_nullspace
             )
         self.iterations = self.solver.solve(self.b, self.uh.x.petsc_vec)
         self.uh.x.scatter_forward()
         return self.uh
 
+    def _near_nullspace(self) -> PETSc.NullSpace:
+        return rigid_body_modes(self.element.space)
+
     def destroy(self) -> None:
-        """Free the PETSc objects this problem created."""
+        """Free the PETSc objects this problem and its element created."""
+        self._free_operators()
+        self.element.destroy()
+
+    def _free_operators(self) -> None:
         for obj in (self.A, self.b):
             if obj is not None:
                 obj.destroy()
         if self.solver is not None:
             self.solver.destroy()
         self.A = self.b = self.solver = None
+
+
+class GradientDofProblem(ElasticProblem):
+    """Linear elasticity with RGNT, GNT or RGNQ: forms on P2, unknowns at the vertices.
+
+    The elastic form and the zero-mode penalty (:mod:`geofrac_forms.gradient_dofs`) are
+    assembled on the P2 space and the vertex space W, reduced to W by
+    :meth:`GradientDofElement.reduce`, and the Dirichlet conditions are applied to the
+    reduced matrix with ``MatZeroRowsColumns`` (symmetric, with lifting). The displacement
+    ``uh`` is the P2 field T w of the solution ``wh``.
+
+    Dirichlet conditions fix the translations of the vertices on the group; a condition
+    with ``value = "exact"`` also fixes the extra DOFs to the exact field's values when
+    ``discretization.gradient_bc = "exact"`` (see docs/elements.md).
+    """
+
+    def __init__(self, tagged: TaggedMesh, element: Element, scene: Scene) -> None:
+        super().__init__(tagged, element, scene)
+        W = element.unknowns
+        self.wh = dolfinx.fem.Function(W, name="vertex_dofs")
+        g, h = ufl.TrialFunction(W), ufl.TestFunction(W)
+        u, v = ufl.TrialFunction(element.space), ufl.TestFunction(element.space)
+        alpha = scene.discretization.zero_mode_penalty
+        self.penalty_scale = dolfinx.fem.Constant(
+            self.mesh, PETSc.ScalarType(alpha * float(self.mu.value))
+        )
+        pen_vv, self._a_wv, self._a_ww = penalty_forms(
+            u, v, g, h, element.kind.basis, self.penalty_scale * self.thickness, self.dx
+        )
+        self._a = self._a + pen_vv
+        self.a_wv: dolfinx.fem.Form | None = None
+        self.a_ww: dolfinx.fem.Form | None = None
+
+    def _boundary_conditions(self) -> list[tuple[np.ndarray, np.ndarray]]:  # type: ignore[override]
+        """(global DOF indices, values) per Dirichlet condition, owned DOFs only."""
+        element, mesh = self.element, self.mesh
+        kind = element.kind
+        gdim, bs = kind.gdim, kind.block_size
+        tdim = mesh.topology.dim
+        out = []
+        for i, bc in enumerate(self.scene.bcs):
+            dim, entities = self.tagged.entities(bc.group)
+            mesh.topology.create_connectivity(dim, tdim)
+            if self.comm.allreduce(len(entities), op=MPI.SUM) == 0:
+                raise RunError(f"bc[{i}].group: physical group '{bc.group}' has no mesh entities")
+            if bc.value == "exact":
+                exact = self.exact
+                assert exact is not None
+
+                def values(x: np.ndarray, ex: ExactSolution = exact) -> np.ndarray:
+                    u = np.stack(np.broadcast_arrays(*ex.displacement(*x[:, :gdim].T)), axis=1)
+                    g = dofs_from_gradient(kind, displacement_gradient(ex, x))
+                    return np.hstack([u, g])
+
+                comps = tuple(range(gdim))
+                if self.scene.discretization.gradient_bc == "exact":
+                    comps = tuple(range(bs))
+            else:
+                fixed = np.zeros(bs)
+                fixed[list(bc.components)] = bc.value
+
+                def values(x: np.ndarray, fixed: np.ndarray = fixed) -> np.ndarray:
+                    return np.tile(fixed, (len(x), 1))
+
+                comps = bc.components
+            out.append(element.vertex_constraints(dim, entities, values, comps))
+        return out  # type: ignore[return-value]
+
+    def compile(self) -> None:
+        """JIT-compile the P2 stiffness (with the penalty), the penalty couplings and loads."""
+        super().compile()
+        self.a_wv = dolfinx.fem.form(self._a_wv)
+        self.a_ww = dolfinx.fem.form(self._a_ww)
+
+    def assemble(self) -> None:
+        """Assemble on P2 and W, reduce to W, apply the Dirichlet conditions."""
+        if self.a is None:
+            self.compile()
+        assert self.a is not None and self.L is not None
+        self._free_operators()
+        mats = [dolfinx.fem.petsc.assemble_matrix(f) for f in (self.a, self.a_wv, self.a_ww)]
+        b_v = dolfinx.fem.petsc.assemble_vector(self.L)
+        try:
+            for M in mats:
+                M.assemble()
+            self.A = self.element.reduce(*mats)
+            b_v.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            self.b = self.A.createVecLeft()
+            self.element.prolongation().multTranspose(b_v, self.b)
+        finally:
+            for obj in (*mats, b_v):
+                obj.destroy()
+        rows = np.concatenate([r for r, _ in self.bcs]).astype(PETSc.IntType)
+        vals = np.concatenate([v for _, v in self.bcs])
+        g = self.A.createVecRight()
+        try:
+            g.setValues(rows, vals)
+            g.assemble()
+            self.A.zeroRowsColumns(rows, 1.0, g, self.b)
+        finally:
+            g.destroy()
+
+    def solve(self) -> dolfinx.fem.Function:
+        """Solve for the vertex DOFs ``wh`` and set the displacement ``uh`` = T wh."""
+        if self.A is None:
+            self.assemble()
+        assert self.A is not None and self.b is not None
+        if self.solver is None:
+            s = self.scene.solver
+            self.solver = LinearSolver(
+                self.A, PREFIX, s.preset, s.options, self.element.num_dofs, self._near_nullspace
+            )
+        self.iterations = self.solver.solve(self.b, self.wh.x.petsc_vec)
+        self.wh.x.scatter_forward()
+        self.element.prolongation().mult(self.wh.x.petsc_vec, self.uh.x.petsc_vec)
+        self.uh.x.scatter_forward()
+        return self.uh
+
+    def _near_nullspace(self) -> PETSc.NullSpace:
+        return self.element.rigid_body_modes()
+
+
+def make_problem(tagged: TaggedMesh, element: Element, scene: Scene) -> ElasticProblem:
+    """The elastic problem class that fits ``element``."""
+    if isinstance(element, GradientDofElement):
+        return GradientDofProblem(tagged, element, scene)
+    return ElasticProblem(tagged, element, scene)

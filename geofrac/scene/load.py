@@ -19,6 +19,7 @@ from geofrac import analytic, effects, elements
 from geofrac.meshing.geo import define_constants, inspect_geometry
 from geofrac.scene.errors import SceneError, did_you_mean
 from geofrac.scene.model import (
+    DEFAULT_ZERO_MODE_PENALTY,
     SCHEMA_VERSION,
     BoundaryCondition,
     Discretization,
@@ -53,7 +54,7 @@ TOP_LEVEL_KEYS = (
 SECTION_KEYS: dict[str, tuple[str, ...]] = {
     "geometry": ("file", "parameters", "mesh_size"),
     "material": ("E", "nu", "plane", "thickness", "density", "tensile_strength"),
-    "discretization": ("element", "quadrature_degree"),
+    "discretization": ("element", "quadrature_degree", "zero_mode_penalty", "gradient_bc"),
     "bc": ("group", "value", "components"),
     "load": ("type", "group", "value"),
     "solver": ("preset", "options"),
@@ -231,7 +232,18 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
     if dim not in dims:
         raise t.error("element", f"'{element}' supports dimensions {dims}, the geometry is {dim}D")
     q = t.number("quadrature_degree", positive=True, integer=True)
-    return Discretization(element, None if q is None else int(q))
+    for key in ("zero_mode_penalty", "gradient_bc"):
+        if t.has(key) and element not in elements.GRADIENT_DOF_ELEMENTS:
+            raise t.error(
+                key,
+                f"applies only to elements {', '.join(elements.GRADIENT_DOF_ELEMENTS)}, "
+                f"not '{element}'",
+            )
+    alpha = t.number("zero_mode_penalty", default=DEFAULT_ZERO_MODE_PENALTY, positive=True)
+    gradient_bc = t.string("gradient_bc", default="exact", choices=("exact", "free"))
+    return Discretization(
+        element, None if q is None else int(q), float(alpha), gradient_bc  # type: ignore[arg-type]
+    )
 
 
 def _exact(file: Path, raw: Any, geometry: Geometry) -> ExactSpec:
