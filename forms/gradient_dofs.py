@@ -49,9 +49,11 @@ def penalty_forms(
     """The three bilinear forms (a_VV, a_WV, a_WW) of the zero-mode penalty.
 
     Args:
-        u, v: trial and test functions of the P2 displacement space V.
-        g, h: trial and test functions of the vertex DOF space W (block size
-            gdim + k; components gdim... are the extra DOFs).
+        u: trial function of the P2 displacement space V.
+        v: test function of V.
+        g: trial function of the vertex DOF space W (block size gdim + k; components
+            gdim, ..., gdim + k - 1 are the extra DOFs).
+        h: test function of W.
         basis: the basis matrices E_c, shape=(k, gdim, gdim).
         scale: α μ t (a UFL constant).
         dx: cell measure.

@@ -83,7 +83,7 @@ class GradientDofElement(Element):
         cols = _owned_global(wimap, bs, cols_b[keep], cols_c[keep])
         vals = T_loc[keep]
         n_cols_global = wimap.size_global * bs
-        key, first = np.unique(rows * n_cols_global + cols, return_index=True)
+        _, first = np.unique(rows * n_cols_global + cols, return_index=True)
         rows, cols, vals = rows[first], cols[first], vals[first]  # sorted by (row, col)
         row0 = vimap.local_range[0] * gdim
         n_rows = vimap.size_local * gdim

@@ -93,7 +93,9 @@ KINDS: dict[str, GradientDofKind] = {
         "gnt",
         2,
         ("theta", "ex", "ey", "gxy"),
-        np.array([_J, [[1.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [0.0, 1.0]], [[0.0, 0.5], [0.5, 0.0]]]),
+        np.array(
+            [_J, [[1.0, 0.0], [0.0, 0.0]], [[0.0, 0.0], [0.0, 1.0]], [[0.0, 0.5], [0.5, 0.0]]]
+        ),
     ),
     "rgnq": GradientDofKind("rgnq", 3, ("theta_x", "theta_y", "theta_z"), _rgnq_basis()),
 }

@@ -242,7 +242,10 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
     alpha = t.number("zero_mode_penalty", default=DEFAULT_ZERO_MODE_PENALTY, positive=True)
     gradient_bc = t.string("gradient_bc", default="exact", choices=("exact", "free"))
     return Discretization(
-        element, None if q is None else int(q), float(alpha), gradient_bc  # type: ignore[arg-type]
+        element,
+        None if q is None else int(q),
+        float(alpha),
+        gradient_bc,  # type: ignore[arg-type]
     )
 
 
