@@ -19,6 +19,14 @@ BENCHES: dict[str, tuple[str, str]] = {
         "geofrac.bench.cantilever",
         "Timoshenko cantilever (seed 2.4.1): displacement/energy error against DOFs and wall time",
     ),
+    "mms3d": (
+        "geofrac.bench.mms3d",
+        "manufactured smooth 3D displacement on a box: error against DOFs and wall time",
+    ),
+    "stability": (
+        "geofrac.bench.stability",
+        "distorted meshes (minimum angle down to 5°) and ν up to 0.499: degradation and failures",
+    ),
 }
 
 

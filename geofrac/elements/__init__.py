@@ -9,7 +9,14 @@ from __future__ import annotations
 
 import importlib
 
-__all__ = ["GRADIENT_DOF_ELEMENTS", "REGISTRY", "available", "describe", "make_element"]
+__all__ = [
+    "GRADIENT_DOF_DEFAULTS",
+    "GRADIENT_DOF_ELEMENTS",
+    "REGISTRY",
+    "available",
+    "describe",
+    "make_element",
+]
 
 #: name -> (module, factory, dimensions it supports, one-line description)
 REGISTRY: dict[str, tuple[str, str, tuple[int, ...], str]] = {
@@ -53,6 +60,18 @@ REGISTRY: dict[str, tuple[str, str, tuple[int, ...], str]] = {
 
 #: Elements whose unknowns are vertex DOFs with extra gradient DOFs (RGNT, GNT, RGNQ).
 GRADIENT_DOF_ELEMENTS = ("rgnt", "gnt", "rgnq")
+
+#: Defaults of ``discretization.zero_mode_penalty`` and ``discretization.gradient_bc`` per
+#: element, chosen from the measurements in docs/elements.md: GNT reproduces every quadratic,
+#: so fixing its boundary strain DOFs to the exact field and a small penalty are best;
+#: RGNT and RGNQ do not, so the penalty (consistent only on reproduced fields) is kept at
+#: the Galerkin limit α → 0 (it then only pins the constant modes) and their boundary
+#: rotations are left free.
+GRADIENT_DOF_DEFAULTS: dict[str, tuple[float, str]] = {
+    "rgnt": (1e-6, "free"),
+    "gnt": (1e-3, "exact"),
+    "rgnq": (1e-6, "free"),
+}
 
 
 def available() -> tuple[str, ...]:

@@ -19,7 +19,6 @@ from geofrac import analytic, effects, elements
 from geofrac.meshing.geo import define_constants, inspect_geometry
 from geofrac.scene.errors import SceneError, did_you_mean
 from geofrac.scene.model import (
-    DEFAULT_ZERO_MODE_PENALTY,
     SCHEMA_VERSION,
     BoundaryCondition,
     Discretization,
@@ -239,8 +238,9 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
                 f"applies only to elements {', '.join(elements.GRADIENT_DOF_ELEMENTS)}, "
                 f"not '{element}'",
             )
-    alpha = t.number("zero_mode_penalty", default=DEFAULT_ZERO_MODE_PENALTY, positive=True)
-    gradient_bc = t.string("gradient_bc", default="exact", choices=("exact", "free"))
+    alpha_default, bc_default = elements.GRADIENT_DOF_DEFAULTS.get(element, (0.0, "free"))
+    alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True)
+    gradient_bc = t.string("gradient_bc", default=bc_default, choices=("exact", "free"))
     return Discretization(
         element,
         None if q is None else int(q),

@@ -26,9 +26,6 @@ __all__ = [
 #: Scene schema version this code reads.
 SCHEMA_VERSION = 1
 
-#: Default α of the zero-mode penalty of RGNT, GNT and RGNQ (docs/elements.md).
-DEFAULT_ZERO_MODE_PENALTY = 1.0
-
 
 @dataclass(frozen=True)
 class Geometry:
@@ -78,7 +75,9 @@ class Discretization:
         element: registry name (see :mod:`geofrac.elements`).
         quadrature_degree: forced quadrature degree for the stiffness, or None (exact).
         zero_mode_penalty: α of the Hughes–Brezzi-type penalty α μ t ∫ (g - d(u))² that
-            removes the zero-energy modes of RGNT, GNT and RGNQ (dimensionless).
+            removes the zero-energy modes of RGNT, GNT and RGNQ (dimensionless; the
+            per-element default is in :data:`geofrac.elements.GRADIENT_DOF_DEFAULTS`;
+            0 for the other elements, which have none).
         gradient_bc: how a Dirichlet condition with ``value = "exact"`` acts on the extra
             vertex DOFs of RGNT, GNT and RGNQ: ``"exact"`` also fixes them to the values
             that reproduce the exact field (½ its rotation/strain), ``"free"`` fixes only
@@ -87,8 +86,8 @@ class Discretization:
 
     element: str
     quadrature_degree: int | None = None
-    zero_mode_penalty: float = DEFAULT_ZERO_MODE_PENALTY
-    gradient_bc: Literal["exact", "free"] = "exact"
+    zero_mode_penalty: float = 0.0
+    gradient_bc: Literal["exact", "free"] = "free"
 
 
 @dataclass(frozen=True)
