@@ -14,6 +14,7 @@ from typing import Any
 __all__ = [
     "EXACT_SOLUTIONS",
     "ExactSolution",
+    "ManufacturedBox",
     "TimoshenkoCantilever",
     "UniformStrain",
     "displacement_gradient",
@@ -126,6 +127,60 @@ class UniformStrain(ExactSolution):
         return ((sxx, sxy), (sxy, syy))
 
 
+@dataclass(frozen=True)
+class ManufacturedBox(ExactSolution):
+    """A smooth 3D displacement for manufactured-solution convergence studies.
+
+    u = a (x³ + yz(1 + x²), y³z + xz(1 - y²), z⁴ + xy(1 + z²)): quartic, so no element
+    studied here reproduces it, with a non-zero rotation field (curl u ≠ 0) that the
+    rotational DOFs of RGNQ must follow. The body force is -div σ(u) (a scene's
+    ``[[load]] type = "body_force", value = "exact"``) and the boundary values are u.
+
+    Attributes:
+        a: amplitude.
+        lam, mu: Lamé constants.
+    """
+
+    a: float
+    lam: float
+    mu: float
+    dim: int = 3
+
+    def displacement(self, x: Any, y: Any, z: Any = None) -> tuple[Any, Any, Any]:
+        """(u, v, w) at (x, y, z)."""
+        a = self.a
+        return (
+            a * (x**3 + y * z * (1.0 + x * x)),
+            a * (y**3 * z + x * z * (1.0 - y * y)),
+            a * (z**4 + x * y * (1.0 + z * z)),
+        )
+
+    def gradient(self, x: Any, y: Any, z: Any) -> tuple[tuple[Any, Any, Any], ...]:
+        """Rows ∂u_r/∂(x, y, z), written out by hand."""
+        a = self.a
+        return (
+            (a * (3.0 * x * x + 2.0 * x * y * z), a * z * (1.0 + x * x), a * y * (1.0 + x * x)),
+            (
+                a * z * (1.0 - y * y),
+                a * (3.0 * y * y * z - 2.0 * x * y * z),
+                a * (y**3 + x * (1.0 - y * y)),
+            ),
+            (a * y * (1.0 + z * z), a * x * (1.0 + z * z), a * (4.0 * z**3 + 2.0 * x * y * z)),
+        )
+
+    def stress(self, x: Any, y: Any, z: Any = None) -> tuple[tuple[Any, Any, Any], ...]:
+        """σ = λ tr(∇u) I + μ (∇u + ∇uᵀ)."""
+        g = self.gradient(x, y, z)
+        tr = g[0][0] + g[1][1] + g[2][2]
+        return tuple(
+            tuple(
+                self.mu * (g[r][s] + g[s][r]) + (self.lam * tr if r == s else 0.0 * x)
+                for s in range(3)
+            )
+            for r in range(3)
+        )
+
+
 def displacement_gradient(exact: ExactSolution, x: Any) -> Any:
     """∂u_r/∂x_s of an exact solution by complex-step differentiation (exact to round-off).
 
@@ -167,12 +222,20 @@ def _uniform_strain(params: dict[str, float], E: float, nu: float, plane: str) -
     return UniformStrain(params["exx"], params["eyy"], params["gxy"], lam, mu)
 
 
+def _manufactured_box(params: dict[str, float], E: float, nu: float, plane: str) -> ManufacturedBox:
+    from geofrac.materials import lame
+
+    lam, mu = lame(E, nu, 3)
+    return ManufacturedBox(params["a"], lam, mu)
+
+
 #: name -> (dimension, required parameter names, factory(params, E, nu, plane)).
 EXACT_SOLUTIONS: dict[
     str, tuple[int, tuple[str, ...], Callable[[dict[str, float], float, float, str], ExactSolution]]
 ] = {
     "timoshenko_cantilever": (2, ("P", "L", "D"), _timoshenko),
     "uniform_strain": (2, ("exx", "eyy", "gxy"), _uniform_strain),
+    "manufactured_box": (3, ("a",), _manufactured_box),
 }
 
 

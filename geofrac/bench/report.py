@@ -14,17 +14,18 @@ import numpy as np
 __all__ = ["fit_rate", "format_table", "plot_accuracy_cost"]
 
 
-def fit_rate(nodes: Sequence[float], errors: Sequence[float]) -> float:
-    """Convergence rate R: minus the least-squares slope of log(error) against log(√nodes).
+def fit_rate(nodes: Sequence[float], errors: Sequence[float], dim: int = 2) -> float:
+    """Convergence rate R: minus the least-squares slope of log(error) against log(nodes^(1/dim)).
 
-    This is the rate of seed Fig. 2.8 and 3.10 (R = 2 for CST in the L2 norm), i.e. the
-    order in the mesh size h ∝ 1/√nodes.
+    In 2D this is the rate of seed Fig. 2.8 and 3.10 (R = 2 for CST in the L2 norm), i.e.
+    the order in the mesh size h ∝ 1/√nodes; in 3D h ∝ nodes^(-1/3).
 
     Args:
         nodes: node (vertex) counts, shape=(n,).
         errors: error norms, shape=(n,).
+        dim: spatial dimension.
     """
-    x = 0.5 * np.log(np.asarray(nodes, dtype=float))
+    x = np.log(np.asarray(nodes, dtype=float)) / dim
     y = np.log(np.asarray(errors, dtype=float))
     if len(x) < 2:
         return float("nan")

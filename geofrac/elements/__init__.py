@@ -26,6 +26,12 @@ REGISTRY: dict[str, tuple[str, str, tuple[int, ...], str]] = {
         (2, 3),
         "linear Lagrange (CST in 2D, linear tet in 3D)",
     ),
+    "p1": (
+        "geofrac.elements.lagrange",
+        "p1",
+        (2, 3),
+        "linear Lagrange under its 3D name (the same element as cst)",
+    ),
     "p2": (
         "geofrac.elements.lagrange",
         "p2",
@@ -63,14 +69,14 @@ GRADIENT_DOF_ELEMENTS = ("rgnt", "gnt", "rgnq")
 
 #: Defaults of ``discretization.zero_mode_penalty`` and ``discretization.gradient_bc`` per
 #: element, chosen from the measurements in docs/elements.md: GNT reproduces every quadratic,
-#: so fixing its boundary strain DOFs to the exact field and a small penalty are best;
-#: RGNT and RGNQ do not, so the penalty (consistent only on reproduced fields) is kept at
-#: the Galerkin limit α → 0 (it then only pins the constant modes) and their boundary
-#: rotations are left free.
+#: so fixing its boundary strain DOFs to the exact field and a small penalty are best.
+#: RGNT and RGNQ do not, so their penalty (consistent only on reproduced fields) is kept
+#: near the Galerkin limit α → 0, where it only pins the spurious modes; RGNT is more
+#: accurate with free boundary rotations, RGNQ with exact ones.
 GRADIENT_DOF_DEFAULTS: dict[str, tuple[float, str]] = {
     "rgnt": (1e-6, "free"),
     "gnt": (1e-3, "exact"),
-    "rgnq": (1e-6, "free"),
+    "rgnq": (1e-6, "exact"),
 }
 
 

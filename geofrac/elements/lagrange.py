@@ -1,4 +1,4 @@
-"""Lagrange reference elements: CST (P1), P2 and P3, defined directly through UFL/basix."""
+"""Lagrange reference elements: CST/P1, P2 and P3, defined directly through UFL/basix."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import dolfinx
 
 from geofrac.elements.base import Element
 
-__all__ = ["cst", "p2", "p3"]
+__all__ = ["cst", "p1", "p2", "p3"]
 
 
 def _lagrange(name: str, degree: int, mesh: dolfinx.mesh.Mesh) -> Element:
@@ -20,6 +20,11 @@ def _lagrange(name: str, degree: int, mesh: dolfinx.mesh.Mesh) -> Element:
 def cst(mesh: dolfinx.mesh.Mesh) -> Element:
     """Linear Lagrange: the constant strain triangle (seed 'FEM(CST)') or linear tet."""
     return _lagrange("cst", 1, mesh)
+
+
+def p1(mesh: dolfinx.mesh.Mesh) -> Element:
+    """Linear Lagrange, named as usual in 3D (linear tetrahedron); the same as :func:`cst`."""
+    return _lagrange("p1", 1, mesh)
 
 
 def p2(mesh: dolfinx.mesh.Mesh) -> Element:

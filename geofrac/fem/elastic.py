@@ -120,8 +120,11 @@ class ElasticProblem:
         for load in self.scene.loads:
             if load.value == "exact":
                 assert self.exact is not None
-                _, sig = exact_ufl(self.exact, mesh)
-                value = sig * ufl.FacetNormal(mesh)
+                u_ex, sig = exact_ufl(self.exact, mesh)
+                if load.type == "traction":
+                    value = sig * ufl.FacetNormal(mesh)
+                else:  # the body force that makes u_exact an equilibrium state
+                    value = -ufl.div(forms.sigma(u_ex, self.lam, self.mu))
             else:
                 value = dolfinx.fem.Constant(mesh, np.asarray(load.value, dtype=PETSc.ScalarType))
             if load.type == "traction":
@@ -280,8 +283,9 @@ class GradientDofProblem(ElasticProblem):
         return out  # type: ignore[return-value]
 
     def compile(self) -> None:
-        """JIT-compile the P2 stiffness (with the penalty), the penalty couplings and loads."""
+        """JIT-compile the forms and build the vertex-to-P2 map T (set-up, timed here)."""
         super().compile()
+        self.element.prolongation()
         self.a_wv = dolfinx.fem.form(self._a_wv)
         self.a_ww = dolfinx.fem.form(self._a_ww)
 

@@ -338,8 +338,6 @@ def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) ->
         elif t.has("group"):
             raise t.error("group", "a body force acts on the whole domain; remove 'group'")
         value = _value(t, geometry.dim, exact)
-        if value == "exact" and kind != "traction":
-            raise t.error("value", "'exact' is available for tractions only")
         out.append(Load(kind, value, group))  # type: ignore[arg-type]
     return tuple(out)
 
@@ -406,7 +404,7 @@ LOCKING_NU = 0.45
 def _warnings(file: Path, material: Material, disc: Discretization, dim: int) -> tuple[str, ...]:
     out = []
     constrained = dim == 3 or material.plane == "strain"
-    if disc.element == "cst" and constrained and material.nu > LOCKING_NU:
+    if disc.element in ("cst", "p1") and constrained and material.nu > LOCKING_NU:
         out.append(
             f"{file}: material.nu: {material.nu} with element 'cst' in "
             f"{'3D' if dim == 3 else 'plane strain'} locks volumetrically (displacements far "
