@@ -21,7 +21,14 @@ from mpi4py import MPI
 from geofrac.elements import make_element
 from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem, exact_ufl, make_problem
-from geofrac.fem.post import error_norms, integrate, locate_points, probe, stress_fields
+from geofrac.fem.post import (
+    TENSOR_FIELDS,
+    error_norms,
+    integrate,
+    locate_points,
+    probe,
+    tensor_fields,
+)
 from geofrac.io.summary import versions, write_json
 from geofrac.io.xdmf import write_fields
 from geofrac.log import echo, format_seconds
@@ -150,10 +157,9 @@ def _write_xdmf(solution: Solution) -> None:
             u1.interpolate(uh)
             uh = u1
         functions.append(uh)
-    wanted = [f for f in ("stress", "von_mises") if f in scene.output.fields]
-    if wanted:
-        fields = stress_fields(problem.uh, problem.lam, problem.mu, scene.material.plane)
-        functions += [fields[f] for f in wanted]
+    wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
+    fields = tensor_fields(problem.uh, problem.lam, problem.mu, scene.material.plane, wanted)
+    functions += [fields[f] for f in wanted]
     write_fields(scene.output.dir / "results.xdmf", mesh, functions)
 
 

@@ -31,8 +31,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--meshes",
         type=int_list,
         default=list(DEFAULT_MESHES),
-        help="comma-separated cubes per side n "
-        f"(default: {','.join(map(str, DEFAULT_MESHES))})",
+        help=f"comma-separated cubes per side n (default: {','.join(map(str, DEFAULT_MESHES))})",
     )
 
 

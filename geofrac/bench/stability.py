@@ -277,9 +277,8 @@ def _summary_lines(records: list[dict[str, Any]], worst_angle: float, nu_max: fl
 
     lines = []
     for element in dict.fromkeys(r["element"] for r in records):
-        parts = [
-            f"{worst_angle:g}° (plane stress): {find(element, 'angle', worst_angle, ANGLE_SWEEP_NU)}"
-        ]
+        stress = find(element, "angle", worst_angle, ANGLE_SWEEP_NU)
+        parts = [f"{worst_angle:g}° (plane stress): {stress}"]
         for angle in dict.fromkeys((UNDISTORTED, worst_angle)):
             parts.append(
                 f"ν={nu_max:g} plane strain, {angle:g}° mesh: {find(element, 'nu', angle, nu_max)}"
@@ -291,17 +290,12 @@ def _summary_lines(records: list[dict[str, Any]], worst_angle: float, nu_max: fl
 def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
     from geofrac.bench.report import format_table
-    from geofrac.elements import available
+    from geofrac.bench.study import parse_elements
     from geofrac.io.summary import versions, write_json
     from geofrac.log import Progress, echo
     from geofrac.scene import SceneError
 
-    elements = [e.strip() for e in args.elements.split(",") if e.strip()]
-    for e in elements:
-        if e not in available():
-            raise SceneError(
-                "--elements", e, f"unknown element (available: {', '.join(available())})"
-            )
+    elements = parse_elements(args.elements, 2)
     if not elements:
         raise SceneError("--elements", "", "no element given")
     if args.ny < 1:

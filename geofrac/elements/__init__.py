@@ -67,17 +67,12 @@ REGISTRY: dict[str, tuple[str, str, tuple[int, ...], str]] = {
 #: Elements whose unknowns are vertex DOFs with extra gradient DOFs (RGNT, GNT, RGNQ).
 GRADIENT_DOF_ELEMENTS = ("rgnt", "gnt", "rgnq")
 
-#: Defaults of ``discretization.zero_mode_penalty`` and ``discretization.gradient_bc`` per
-#: element, chosen from the measurements in docs/elements.md: GNT reproduces every quadratic,
-#: so fixing its boundary strain DOFs to the exact field and a small penalty are best.
-#: RGNT and RGNQ do not, so their penalty (consistent only on reproduced fields) is kept
-#: near the Galerkin limit α → 0, where it only pins the spurious modes; RGNT is more
-#: accurate with free boundary rotations, RGNQ with exact ones.
-GRADIENT_DOF_DEFAULTS: dict[str, tuple[float, str]] = {
-    "rgnt": (1e-6, "free"),
-    "gnt": (1e-3, "exact"),
-    "rgnq": (1e-6, "exact"),
-}
+#: Default α of ``discretization.zero_mode_penalty`` per element, chosen from the
+#: measurements in docs/elements.md. GNT reproduces every quadratic field and its penalty
+#: is consistent there, so a small α (1e-3) is best; RGNT and RGNQ reproduce few
+#: quadratics and their penalty pulls the rotations off the Galerkin solution, so α is kept
+#: near the limit α → 0, where it only pins the spurious zero-energy modes.
+GRADIENT_DOF_DEFAULTS: dict[str, float] = {"rgnt": 1e-6, "gnt": 1e-3, "rgnq": 1e-6}
 
 
 def available() -> tuple[str, ...]:

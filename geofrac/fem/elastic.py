@@ -225,9 +225,10 @@ class GradientDofProblem(ElasticProblem):
     reduced matrix with ``MatZeroRowsColumns`` (symmetric, with lifting). The displacement
     ``uh`` is the P2 field T w of the solution ``wh``.
 
-    Dirichlet conditions fix the translations of the vertices on the group; a condition
-    with ``value = "exact"`` also fixes the extra DOFs to the exact field's values when
-    ``discretization.gradient_bc = "exact"`` (see docs/elements.md).
+    Dirichlet conditions fix the translations of the vertices on the group and, with
+    ``discretization.gradient_bc = "fixed"`` (the default), their extra DOFs: to the
+    exact field's values for ``value = "exact"``, to 0 for a constant value, so the
+    boundary edges follow the data between the vertices (see docs/elements.md).
     """
 
     def __init__(self, tagged: TaggedMesh, element: Element, scene: Scene) -> None:
@@ -269,16 +270,16 @@ class GradientDofProblem(ElasticProblem):
                     return np.hstack([u, g])
 
                 comps = tuple(range(gdim))
-                if self.scene.discretization.gradient_bc == "exact":
-                    comps = tuple(range(bs))
             else:
-                fixed = np.zeros(bs)
+                fixed = np.zeros(bs)  # the extra DOFs of a constant boundary value are 0
                 fixed[list(bc.components)] = bc.value
 
                 def values(x: np.ndarray, fixed: np.ndarray = fixed) -> np.ndarray:
                     return np.tile(fixed, (len(x), 1))
 
                 comps = bc.components
+            if self.scene.discretization.gradient_bc == "fixed":
+                comps = (*comps, *range(gdim, bs))
             out.append(element.vertex_constraints(dim, entities, values, comps))
         return out  # type: ignore[return-value]
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -14,7 +15,14 @@ from mpi4py import MPI
 from geofrac.errors import RunError
 from geofrac_forms import elasticity as forms
 
-__all__ = ["error_norms", "integrate", "locate_points", "probe", "stress_fields"]
+__all__ = [
+    "TENSOR_FIELDS",
+    "error_norms",
+    "integrate",
+    "locate_points",
+    "probe",
+    "tensor_fields",
+]
 
 
 def integrate(form: Any, comm: MPI.Comm) -> float:
@@ -120,29 +128,97 @@ def error_norms(
     return out
 
 
-def stress_fields(
-    uh: dolfinx.fem.Function, lam: Any, mu: Any, plane: str
-) -> dict[str, dolfinx.fem.Function]:
-    """Cell-wise (DG0, value at the cell midpoint) stress tensor and von Mises stress.
+#: Tensor fields :func:`tensor_fields` can recover: name -> (quantity, recovery).
+TENSOR_FIELDS = {
+    "stress": ("stress", "cell"),
+    "strain": ("strain", "cell"),
+    "von_mises": ("von_mises", "cell"),
+    "stress_nodal": ("stress", "nodal"),
+    "strain_nodal": ("strain", "nodal"),
+}
 
-    The stress is always a 3×3 tensor, in 2D with σzz = 0 (plane stress) or λ tr(ε)
-    (plane strain): DOLFINx's XDMF writer pads a 2×2 tensor as (xx, xy, yx, yy, 0, ...),
-    which ParaView would read as a wrong 3×3 tensor.
+
+def _quantities(uh: dolfinx.fem.Function, lam: Any, mu: Any, plane: str) -> dict[str, Any]:
+    """UFL stress (3×3), strain (3×3) and von Mises stress of ``uh``.
+
+    In 2D the out-of-plane components are those of the analysis plane: plane strain
+    has εzz = 0 and σzz = λ tr(ε); plane stress has σzz = 0 and εzz = -λ*/(2μ) tr(ε)
+    = -ν/(1-ν) tr(ε) (λ* the plane-stress λ of :func:`geofrac.materials.lame`).
+    """
+    gdim = uh.function_space.mesh.geometry.dim
+    sig, eps = forms.sigma(uh, lam, mu), forms.epsilon(uh)
+    szz = ezz = 0.0
+    if gdim == 2 and plane == "strain":
+        szz = lam * ufl.tr(eps)
+    elif gdim == 2:
+        ezz = -lam / (2.0 * mu) * ufl.tr(eps)
+    return {
+        "stress": forms.stress_3d(sig, szz),
+        "strain": forms.stress_3d(eps, ezz),
+        "von_mises": forms.von_mises(sig, szz),
+    }
+
+
+def _nodal_average(expr: Any, mesh: dolfinx.mesh.Mesh, shape: tuple[int, ...], name: str) -> Any:
+    """Vertex values: the mean over the owned cells around each vertex of the cell's value there.
+
+    The expression is interpolated into discontinuous P1 (exact at the vertices for the
+    linear stress of P2, RGNT, GNT and RGNQ fields), summed per vertex over owned cells,
+    summed across ranks, and divided by the number of cells.
+    """
+    dg = dolfinx.fem.functionspace(mesh, ("DG", 1, shape))
+    cg = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, shape))
+    d = dolfinx.fem.Function(dg)
+    d.interpolate(dolfinx.fem.Expression(expr, dg.element.interpolation_points))
+    out = dolfinx.fem.Function(cg, name=name)
+    count = dolfinx.la.vector(cg.dofmap.index_map, 1)
+    num_owned = mesh.topology.index_map(mesh.topology.dim).size_local
+    bs = int(np.prod(shape)) if shape else 1
+    d_cells = dg.dofmap.list[:num_owned]  # shape=(num_owned, nv), same vertex order as cg
+    c_cells = cg.dofmap.list[:num_owned]
+    vals = d.x.array.reshape(-1, bs)[d_cells]  # shape=(num_owned, nv, bs)
+    acc = out.x.array.reshape(-1, bs)
+    np.add.at(acc, c_cells.ravel(), vals.reshape(-1, bs))
+    np.add.at(count.array, c_cells.ravel(), 1.0)
+    out.x.scatter_reverse(dolfinx.la.InsertMode.add)
+    count.scatter_reverse(dolfinx.la.InsertMode.add)
+    n = cg.dofmap.index_map.size_local
+    acc[:n] /= count.array[:n, None]
+    out.x.scatter_forward()
+    return out
+
+
+def tensor_fields(
+    uh: dolfinx.fem.Function, lam: Any, mu: Any, plane: str, names: Sequence[str]
+) -> dict[str, dolfinx.fem.Function]:
+    """Stress, strain and von Mises fields of ``uh`` for XDMF output.
+
+    Cell fields are DG0 (value at the cell midpoint); nodal fields (``*_nodal``) are P1,
+    the average over the cells around a vertex of each cell's value at that vertex.
+    Tensors are always 3×3 (see :func:`_quantities`): DOLFINx's XDMF writer pads a 2×2
+    tensor as (xx, xy, yx, yy, 0, ...), which ParaView would read as a wrong 3×3 tensor.
+
+    Args:
+        uh: displacement (any Lagrange degree).
+        lam: Lamé λ of the analysis plane.
+        mu: shear modulus μ.
+        plane: ``"stress"`` or ``"strain"`` (ignored in 3D).
+        names: keys of :data:`TENSOR_FIELDS` to compute.
 
     Returns:
-        ``stress`` (tensor, shape=(3, 3) per cell) and ``von_mises`` (scalar).
+        name -> function; tensors shape=(3, 3) per cell or vertex, von Mises scalar.
     """
     mesh = uh.function_space.mesh
-    gdim = mesh.geometry.dim
-    sig = forms.sigma(uh, lam, mu)
-    szz = lam * ufl.tr(forms.epsilon(uh)) if (gdim == 2 and plane == "strain") else 0.0
+    exprs = _quantities(uh, lam, mu, plane)
     out = {}
-    for name, expr, shape in (
-        ("stress", forms.stress_3d(sig, szz), (3, 3)),
-        ("von_mises", forms.von_mises(sig, szz), ()),
-    ):
+    for name in names:
+        quantity, recovery = TENSOR_FIELDS[name]
+        shape = () if quantity == "von_mises" else (3, 3)
+        if recovery == "nodal":
+            out[name] = _nodal_average(exprs[quantity], mesh, shape, name)
+            continue
         space = dolfinx.fem.functionspace(mesh, ("DG", 0, shape))
         f = dolfinx.fem.Function(space, name=name)
-        f.interpolate(dolfinx.fem.Expression(expr, space.element.interpolation_points))
+        f.interpolate(dolfinx.fem.Expression(exprs[quantity], space.element.interpolation_points))
         out[name] = f
     return out

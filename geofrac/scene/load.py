@@ -32,7 +32,14 @@ from geofrac.scene.model import (
     Solver,
 )
 
-__all__ = ["OUTPUT_FIELDS", "SECTION_KEYS", "TOP_LEVEL_KEYS", "apply_overrides", "load_scene"]
+__all__ = [
+    "DEFAULT_OUTPUT_FIELDS",
+    "OUTPUT_FIELDS",
+    "SECTION_KEYS",
+    "TOP_LEVEL_KEYS",
+    "apply_overrides",
+    "load_scene",
+]
 
 #: Keys a scene may have at the top level (besides one table per declared effect).
 TOP_LEVEL_KEYS = (
@@ -60,7 +67,9 @@ SECTION_KEYS: dict[str, tuple[str, ...]] = {
     "output": ("dir", "fields", "xdmf", "probes"),
 }
 #: Field names ``output.fields`` may list.
-OUTPUT_FIELDS = ("displacement", "stress", "von_mises")
+OUTPUT_FIELDS = ("displacement", "stress", "strain", "von_mises", "stress_nodal", "strain_nodal")
+#: Fields written when ``output.fields`` is not given.
+DEFAULT_OUTPUT_FIELDS = ("displacement", "stress", "von_mises")
 _AXES = ("x", "y", "z")
 
 
@@ -238,9 +247,9 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
                 f"applies only to elements {', '.join(elements.GRADIENT_DOF_ELEMENTS)}, "
                 f"not '{element}'",
             )
-    alpha_default, bc_default = elements.GRADIENT_DOF_DEFAULTS.get(element, (0.0, "free"))
+    alpha_default = elements.GRADIENT_DOF_DEFAULTS.get(element, 0.0)
     alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True)
-    gradient_bc = t.string("gradient_bc", default=bc_default, choices=("exact", "free"))
+    gradient_bc = t.string("gradient_bc", default="fixed", choices=("fixed", "free"))
     return Discretization(
         element,
         None if q is None else int(q),
@@ -360,7 +369,7 @@ def _solver(file: Path, raw: Any) -> Solver:
 def _output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> Output:
     t = _Table(file, "output", raw, SECTION_KEYS["output"])
     directory = Path(t.string("dir", default=f"results/{name}")) if out is None else out
-    fields = t.data.get("fields", list(OUTPUT_FIELDS))
+    fields = t.data.get("fields", list(DEFAULT_OUTPUT_FIELDS))
     if not isinstance(fields, list) or len(set(fields)) != len(fields):
         raise t.error("fields", f"must be a list of distinct names from {list(OUTPUT_FIELDS)}")
     for f in fields:

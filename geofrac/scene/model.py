@@ -78,16 +78,19 @@ class Discretization:
             removes the zero-energy modes of RGNT, GNT and RGNQ (dimensionless; the
             per-element default is in :data:`geofrac.elements.GRADIENT_DOF_DEFAULTS`;
             0 for the other elements, which have none).
-        gradient_bc: how a Dirichlet condition with ``value = "exact"`` acts on the extra
-            vertex DOFs of RGNT, GNT and RGNQ: ``"exact"`` also fixes them to the values
-            that reproduce the exact field (½ its rotation/strain), ``"free"`` fixes only
-            the translations.
+        gradient_bc: how a Dirichlet condition acts on the extra vertex DOFs of RGNT, GNT
+            and RGNQ. ``"fixed"``: they are fixed too, to the values that reproduce the
+            exact field (½ its rotation/strain) for ``value = "exact"`` and to 0 for a
+            constant value, so that the boundary edges follow the prescribed data between
+            the vertices (passes the patch test). ``"free"``: only the translations are
+            fixed; boundary edges may bulge between vertices (fails the patch test; kept
+            for comparison, docs/elements.md).
     """
 
     element: str
     quadrature_degree: int | None = None
     zero_mode_penalty: float = 0.0
-    gradient_bc: Literal["exact", "free"] = "free"
+    gradient_bc: Literal["fixed", "free"] = "fixed"
 
 
 @dataclass(frozen=True)
