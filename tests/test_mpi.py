@@ -21,18 +21,18 @@ WORLD = MPI.COMM_WORLD
 pytestmark = pytest.mark.mpi(min_size=2)
 
 
-def _serial_reference(overrides, key):
-    """Solve on COMM_SELF on rank 0; broadcast ``key(results)``."""
+def _serial_reference(overrides, key, job="quickstart"):
+    """Solve ``jobs/<job>.toml`` on COMM_SELF on rank 0; broadcast ``key(results)``."""
     value = None
     if WORLD.rank == 0:
-        scene = load_scene_collective(MPI.COMM_SELF, JOBS / "quickstart.toml", overrides)
+        scene = load_scene_collective(MPI.COMM_SELF, JOBS / f"{job}.toml", overrides)
         sol = solve_scene(scene, MPI.COMM_SELF, verbose=False)
         value = key(sol.results)
         sol.problem.destroy()
     return WORLD.bcast(value, root=0)
 
 
-@pytest.mark.parametrize("element", ["cst", "p2"])
+@pytest.mark.parametrize("element", ["cst", "p2", "rgnt", "gnt"])
 def test_quickstart_same_on_one_and_n_ranks(element):
     overrides = [f"discretization.element={element}"]
     serial = _serial_reference(overrides, _key_numbers)
@@ -51,6 +51,24 @@ def test_quickstart_same_on_one_and_n_ranks(element):
     # every rank holds the same numbers
     gathered = WORLD.allgather(parallel)
     assert all(g == gathered[0] for g in gathered)
+
+
+def test_rgnq_box_same_on_one_and_n_ranks():
+    overrides = ["geometry.parameters.n=3"]
+    serial = _serial_reference(overrides, _box_numbers, job="mms3d")
+    scene = load_scene_collective(WORLD, JOBS / "mms3d.toml", overrides)
+    sol = solve_scene(scene, WORLD, verbose=False)
+    assert sol.tagged.mesh.topology.index_map(3).size_local < sol.mesh_counts()["cells"]
+    parallel = _box_numbers(sol.results)
+    sol.problem.destroy()
+    assert parallel[0] == pytest.approx(serial[0], rel=1e-10, abs=1e-10 * abs(serial[0][2]))
+    assert parallel[1] == pytest.approx(serial[1], rel=1e-10)
+    assert abs(parallel[2] - serial[2]) < 1e-10 * parallel[3]
+
+
+def _box_numbers(results):
+    e = results["errors"]
+    return (results["probes"]["centre"], results["strain_energy"], e["u"], e["u_norm"])
 
 
 def _key_numbers(results):
