@@ -98,3 +98,43 @@ def test_rerun_replaces_previous_output(tmp_path):
     stale = load_scene(JOBS / "quickstart.toml", ["output.xdmf=false"], out=tmp_path)
     run_scene(stale, MPI.COMM_WORLD, verbose=False)
     assert not (tmp_path / "results.xdmf").exists()
+
+
+@pytest.mark.mpi
+@pytest.mark.parametrize("element", ["rgnt", "gnt", "p2"])
+def test_nodal_and_cell_stress_and_strain_of_the_patch_test_are_exact(tmp_path_factory, element):
+    """Cell and nodal recovery reproduce the uniform state (nodal sums cross ranks)."""
+    comm = MPI.COMM_WORLD
+    out = comm.bcast(str(tmp_path_factory.mktemp("patch")) if comm.rank == 0 else None, root=0)
+    fields = '["displacement", "stress", "strain", "stress_nodal", "strain_nodal"]'
+    scene = load_scene(
+        JOBS / "patch_test.toml",
+        [f"discretization.element={element}", f"output.fields={fields}"],
+        out=out,
+    )
+    summary = run_scene(scene, comm, verbose=False)
+    assert summary["status"] == "ok"
+    if comm.rank != 0:
+        return
+    with meshio.xdmf.TimeSeriesReader(f"{out}/results.xdmf") as reader:
+        points, _ = reader.read_points_cells()
+        _, point_data, cell_data = reader.read_data(0)
+    E, nu = 97.0, 0.25  # jobs/patch_test.toml, plane stress
+    exx, eyy = 0.002, -0.0006
+    sxx = E / (1 - nu**2) * (exx + nu * eyy)
+    syy = E / (1 - nu**2) * (eyy + nu * exx)
+    stress = np.array([[sxx, 0, 0], [0, syy, 0], [0, 0, 0]]).ravel()
+    strain = np.array([[exx, 0, 0], [0, eyy, 0], [0, 0, -nu / (1 - nu) * (exx + eyy)]]).ravel()
+    assert point_data["stress_nodal"].shape == (len(points), 9)
+    np.testing.assert_allclose(
+        point_data["stress_nodal"], np.tile(stress, (len(points), 1)), atol=1e-12
+    )
+    np.testing.assert_allclose(
+        point_data["strain_nodal"], np.tile(strain, (len(points), 1)), atol=1e-14
+    )
+    np.testing.assert_allclose(
+        cell_data["stress"][0], np.tile(stress, (len(cell_data["stress"][0]), 1)), atol=1e-12
+    )
+    np.testing.assert_allclose(
+        cell_data["strain"][0], np.tile(strain, (len(cell_data["strain"][0]), 1)), atol=1e-14
+    )
