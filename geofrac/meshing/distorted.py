@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = [
+    "GROUPS",
     "DistortedMesh",
     "build_distorted_cantilever",
     "distort_to_angle",
