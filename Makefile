@@ -24,7 +24,7 @@ test-mpi: $(STAMP)
 	$(VENV)/bin/mpiexec -n $(NP) $(PY) -m mpi4py -m pytest --only-mpi -p no:cacheprovider
 
 bench: $(STAMP)
-	$(VENV)/bin/geofrac bench cantilever --elements cst,p2 --out results/bench-cantilever
+	$(VENV)/bin/geofrac bench cantilever --elements cst,p2,rgnt,gnt --out results/bench-cantilever
 
 $(STAMP): pyproject.toml scripts/bootstrap.sh
 	bash scripts/bootstrap.sh $(VENV)
