@@ -26,6 +26,7 @@ __all__ = [
     "AUTO_DIRECT_MAX_DOFS",
     "MAX_RELATIVE_RESIDUAL",
     "LinearSolver",
+    "orthonormal_nullspace",
     "preset_options",
     "rigid_body_modes",
 ]
@@ -77,13 +78,22 @@ def rigid_body_modes(space: object) -> PETSc.NullSpace:
         modes[3][0::bs], modes[3][1::bs] = -x[:, 1], x[:, 0]
         modes[4][1::bs], modes[4][2::bs] = -x[:, 2], x[:, 1]
         modes[5][0::bs], modes[5][2::bs] = x[:, 2], -x[:, 0]
-    comm = dofmap.index_map.comm
+    return orthonormal_nullspace(modes, dofmap.index_map.comm)
+
+
+def orthonormal_nullspace(modes: list[np.ndarray], comm: object) -> PETSc.NullSpace:
+    """A PETSc null space spanned by ``modes``, orthonormalised (modified Gram–Schmidt).
+
+    Args:
+        modes: owned entries of each mode, each shape=(num_owned_dofs,).
+        comm: MPI communicator of the vectors.
+    """
     vecs = []
     for m in modes:
-        v = PETSc.Vec().createMPI((n_local * bs, None), comm=comm)
+        v = PETSc.Vec().createMPI((len(m), None), comm=comm)
         v.setArray(m)
         vecs.append(v)
-    for i, v in enumerate(vecs):  # modified Gram-Schmidt
+    for i, v in enumerate(vecs):
         for w in vecs[:i]:
             v.axpy(-v.dot(w), w)
         v.normalize()

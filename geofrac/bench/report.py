@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["fit_rate", "format_table", "plot_accuracy_cost"]
+__all__ = ["fit_rate", "format_table", "plot_accuracy_cost", "save_figure"]
 
 
 def fit_rate(nodes: Sequence[float], errors: Sequence[float], dim: int = 2) -> float:
@@ -86,7 +86,15 @@ def plot_accuracy_cost(
     axes[1].set_xlabel("degrees of freedom")
     for ax in axes:
         ax.xaxis.set_minor_formatter(NullFormatter())
-        ax.set_ylabel("error norm")
+    save_figure(fig, axes, path, title, "error norm")
+
+
+def save_figure(fig: Any, axes: Sequence[Any], path: Path, title: str, ylabel: str) -> None:
+    """Label, grid and legend every panel, set the title, write ``path`` and close."""
+    import matplotlib.pyplot as plt
+
+    for ax in axes:
+        ax.set_ylabel(ylabel)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
     fig.suptitle(title)

@@ -209,6 +209,8 @@ def _plot(records: list[dict[str, Any]], path: Path, title: str) -> None:
     import matplotlib.pyplot as plt
     import numpy as np
 
+    from geofrac.bench.report import save_figure
+
     def forward(nu: np.ndarray) -> np.ndarray:
         return -np.log10(np.clip(0.5 - np.asarray(nu, dtype=float), 1e-9, None))
 
@@ -247,13 +249,7 @@ def _plot(records: list[dict[str, Any]], path: Path, title: str) -> None:
     axes[1].set_xscale("function", functions=(forward, inverse))
     axes[1].set_xticks(nus, [f"{nu:g}" for nu in nus])
     axes[1].set_xlabel("Poisson's ratio ν (plane strain; axis: -log10(0.5 - ν))")
-    for ax in axes:
-        ax.set_ylabel("relative displacement L2 error")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
-    fig.suptitle(title)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, axes, path, title, "relative displacement L2 error")
 
 
 def _summary_lines(records: list[dict[str, Any]], worst_angle: float, nu_max: float) -> list[str]:

@@ -24,6 +24,7 @@ from petsc4py import PETSc
 from geofrac.elements.base import Element
 from geofrac.elements.kinematics import KINDS, GradientDofKind, dofs_from_gradient
 from geofrac.elements.kinematics import local_prolongation as _local_prolongation
+from geofrac.solvers import orthonormal_nullspace
 
 __all__ = ["GradientDofElement", "gnt", "rgnq", "rgnt"]
 
@@ -167,17 +168,7 @@ class GradientDofElement(Element):
             grad[0, b, a], grad[0, a, b] = 1.0, -1.0
             m[:, gdim:] = dofs_from_gradient(kind, grad)[0]
             modes.append(m)
-        comm = W.mesh.comm
-        vecs = []
-        for m in modes:
-            v = PETSc.Vec().createMPI((n * bs, None), comm=comm)
-            v.setArray(m.ravel())
-            vecs.append(v)
-        for i, v in enumerate(vecs):  # modified Gram-Schmidt
-            for w in vecs[:i]:
-                v.axpy(-v.dot(w), w)
-            v.normalize()
-        return PETSc.NullSpace().create(vectors=vecs, comm=comm)
+        return orthonormal_nullspace([m.ravel() for m in modes], W.mesh.comm)
 
     def destroy(self) -> None:
         """Free T."""

@@ -195,9 +195,18 @@ class ElasticProblem:
             self.solver = LinearSolver(
                 self.A, PREFIX, s.preset, s.options, self.element.num_dofs, self._near_nullspace
             )
-        self.iterations = self.solver.solve(self.b, self.uh.x.petsc_vec)
-        self.uh.x.scatter_forward()
+        unknown = self._unknown()
+        self.iterations = self.solver.solve(self.b, unknown.x.petsc_vec)
+        unknown.x.scatter_forward()
+        self._to_field()
         return self.uh
+
+    def _unknown(self) -> dolfinx.fem.Function:
+        """The function the linear system is solved for."""
+        return self.uh
+
+    def _to_field(self) -> None:
+        """Set the displacement ``uh`` from the solved unknowns (nothing to do here)."""
 
     def _near_nullspace(self) -> PETSc.NullSpace:
         return rigid_body_modes(self.element.space)
@@ -318,21 +327,14 @@ class GradientDofProblem(ElasticProblem):
         finally:
             g.destroy()
 
-    def solve(self) -> dolfinx.fem.Function:
-        """Solve for the vertex DOFs ``wh`` and set the displacement ``uh`` = T wh."""
-        if self.A is None:
-            self.assemble()
-        assert self.A is not None and self.b is not None
-        if self.solver is None:
-            s = self.scene.solver
-            self.solver = LinearSolver(
-                self.A, PREFIX, s.preset, s.options, self.element.num_dofs, self._near_nullspace
-            )
-        self.iterations = self.solver.solve(self.b, self.wh.x.petsc_vec)
-        self.wh.x.scatter_forward()
+    def _unknown(self) -> dolfinx.fem.Function:
+        """The vertex DOFs ``wh``."""
+        return self.wh
+
+    def _to_field(self) -> None:
+        """The displacement ``uh`` = T wh."""
         self.element.prolongation().mult(self.wh.x.petsc_vec, self.uh.x.petsc_vec)
         self.uh.x.scatter_forward()
-        return self.uh
 
     def _near_nullspace(self) -> PETSc.NullSpace:
         return self.element.rigid_body_modes()
