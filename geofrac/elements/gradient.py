@@ -70,15 +70,14 @@ class GradientDofElement(Element):
         v_dofs = V.dofmap.list.astype(np.int64)  # shape=(num_cells, nv + ne), blocks
         w_dofs = W.dofmap.list.astype(np.int64)  # shape=(num_cells, nv), blocks
         nv = w_dofs.shape[1]
+        assert v_dofs.shape[1] == nv + len(edges)  # P2 nodes: vertices, then edges (basix)
         coords = W.tabulate_dof_coordinates()[:, :gdim][w_dofs]  # shape=(nc, nv, gdim)
         T_loc = _local_prolongation(kind, coords, edges)  # shape=(nc, nodes, gdim, nv, bs)
-        nodes = v_dofs.shape[1]
         rows_b = np.broadcast_to(v_dofs[:, :, None, None, None], T_loc.shape)
         rows_c = np.broadcast_to(np.arange(gdim)[None, None, :, None, None], T_loc.shape)
         cols_b = np.broadcast_to(w_dofs[:, None, None, :, None], T_loc.shape)
         cols_c = np.broadcast_to(np.arange(bs)[None, None, None, None, :], T_loc.shape)
         keep = (T_loc != 0.0) & (rows_b < V.dofmap.index_map.size_local)
-        assert nodes == nv + len(edges)
         vimap, wimap = V.dofmap.index_map, W.dofmap.index_map
         rows = _owned_global(vimap, gdim, rows_b[keep], rows_c[keep])
         cols = _owned_global(wimap, bs, cols_b[keep], cols_c[keep])

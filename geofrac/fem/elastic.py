@@ -142,16 +142,24 @@ class ElasticProblem:
             terms.append(ufl.inner(zero, v) * self.dx)
         return sum(terms[1:], terms[0])
 
+    def _bc_entities(self, i: int) -> tuple[int, np.ndarray]:
+        """(dimension, local entities, shape=(n,)) of Dirichlet condition ``i``.
+
+        Raises:
+            RunError: collectively, when the group has no entities on any rank.
+        """
+        group = self.scene.bcs[i].group
+        dim, entities = self.tagged.entities(group)
+        self.mesh.topology.create_connectivity(dim, self.mesh.topology.dim)
+        if self.comm.allreduce(len(entities), op=MPI.SUM) == 0:
+            raise RunError(f"bc[{i}].group: physical group '{group}' has no mesh entities")
+        return dim, entities
+
     def _boundary_conditions(self) -> list[dolfinx.fem.DirichletBC]:
         V, mesh = self.element.space, self.mesh
-        tdim = mesh.topology.dim
         bcs = []
         for i, bc in enumerate(self.scene.bcs):
-            dim, entities = self.tagged.entities(bc.group)
-            mesh.topology.create_connectivity(dim, tdim)
-            found = self.comm.allreduce(len(entities), op=MPI.SUM)
-            if found == 0:
-                raise RunError(f"bc[{i}].group: physical group '{bc.group}' has no mesh entities")
+            dim, entities = self._bc_entities(i)
             if bc.value == "exact":
                 assert self.exact is not None
                 g = dolfinx.fem.Function(V)
@@ -259,16 +267,12 @@ class GradientDofProblem(ElasticProblem):
 
     def _boundary_conditions(self) -> list[tuple[np.ndarray, np.ndarray]]:  # type: ignore[override]
         """(global DOF indices, values) per Dirichlet condition, owned DOFs only."""
-        element, mesh = self.element, self.mesh
+        element = self.element
         kind = element.kind
         gdim, bs = kind.gdim, kind.block_size
-        tdim = mesh.topology.dim
         out = []
         for i, bc in enumerate(self.scene.bcs):
-            dim, entities = self.tagged.entities(bc.group)
-            mesh.topology.create_connectivity(dim, tdim)
-            if self.comm.allreduce(len(entities), op=MPI.SUM) == 0:
-                raise RunError(f"bc[{i}].group: physical group '{bc.group}' has no mesh entities")
+            dim, entities = self._bc_entities(i)
             if bc.value == "exact":
                 exact = self.exact
                 assert exact is not None
