@@ -30,9 +30,9 @@ from geofrac.fem.post import (
     tensor_fields,
 )
 from geofrac.io.summary import versions, write_json
-from geofrac.io.xdmf import write_fields
+from geofrac.io.xdmf import write_fields, write_meshtags
 from geofrac.log import echo, format_seconds
-from geofrac.meshing.distribute import TaggedMesh, build_mesh
+from geofrac.meshing.distribute import TaggedMesh, build_mesh, check_fracture_cover
 from geofrac.scene.model import Scene
 from geofrac.timing import Timings
 from geofrac_forms.elasticity import strain_energy_form
@@ -40,7 +40,14 @@ from geofrac_forms.elasticity import strain_energy_form
 __all__ = ["OUTPUT_FILES", "Solution", "run_scene", "solve_scene"]
 
 #: Files a run writes into its output directory.
-OUTPUT_FILES = ("results.xdmf", "results.h5", "summary.json")
+OUTPUT_FILES = (
+    "results.xdmf",
+    "results.h5",
+    "summary.json",
+    "fractures.xdmf",
+    "fractures.h5",
+    "network.csv",
+)
 
 
 @dataclass
@@ -83,6 +90,11 @@ def solve_scene(
     say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
     with timings.phase("mesh"):
         tagged = build_mesh(scene.geometry, comm)
+        geometry_report = dict(tagged.report)
+        if tagged.fractures is not None:
+            geometry_report |= check_fracture_cover(tagged)
+    if geometry_report and scene.geometry.builder is not None:
+        say(scene.geometry.builder.describe(geometry_report))
     mesh = tagged.mesh
     names = list(scene.output.probes)
     points = np.zeros((len(names), 3))
@@ -116,6 +128,8 @@ def solve_scene(
             ),
             "solver": problem.solver.describe() | {"iterations": problem.iterations},  # type: ignore[union-attr]
         }
+        if geometry_report:
+            results["geometry"] = geometry_report
         if problem.exact is not None:
             u_exact, _ = exact_ufl(problem.exact, mesh)
             results["errors"] = error_norms(uh, u_exact, problem.lam, problem.mu)
@@ -161,6 +175,37 @@ def _write_xdmf(solution: Solution) -> None:
     fields = tensor_fields(problem.uh, problem.lam, problem.mu, scene.material.plane, wanted)
     functions += [fields[f] for f in wanted]
     write_fields(scene.output.dir / "results.xdmf", mesh, functions)
+
+
+def _write_fractures(solution: Solution) -> None:
+    """Write ``network.csv`` and ``fractures.xdmf``.
+
+    ``network.csv`` is the network as generated or read; ``fractures.xdmf`` holds the
+    fracture facets tagged with their fracture number and set (both 1-based).
+    """
+    from dolfinx.mesh import meshtags
+
+    from geofrac.dfn.check import match_facets
+    from geofrac.dfn.io import save_network
+
+    tagged, out = solution.tagged, solution.scene.output.dir
+    clean = tagged.fractures
+    if tagged.mesh.comm.rank == 0:
+        save_network(clean.network, out / "network.csv")
+    dim, facets = tagged.entities("fractures") if "fractures" in tagged.groups else (1, None)
+    if facets is None:
+        facets = np.empty(0, dtype=np.int32)
+    facets = np.sort(facets).astype(np.int32)
+    edge = match_facets(tagged.vertex_coordinates(dim, facets), clean)
+    fracture = clean.edge_fracture[edge]
+    tags = [
+        meshtags(tagged.mesh, dim, facets, (fracture + 1).astype(np.int32)),
+        meshtags(
+            tagged.mesh, dim, facets, (clean.network.set_index[fracture] + 1).astype(np.int32)
+        ),
+    ]
+    tags[0].name, tags[1].name = "fracture", "fracture_set"
+    write_meshtags(out / "fractures.xdmf", tagged.mesh, tags)
 
 
 def _prepare_output(scene: Scene, comm: MPI.Comm) -> None:
@@ -210,6 +255,8 @@ def run_scene(
         if scene.output.xdmf:
             with timings.phase("output"):
                 _write_xdmf(solution)
+                if solution.tagged.fractures is not None:
+                    _write_fractures(solution)
         summary |= {
             "mesh": solution.mesh_counts(),
             "dofs": solution.problem.element.num_dofs,
@@ -219,7 +266,7 @@ def run_scene(
     except RunError as exc:  # raised collectively, so the collective finish below is safe
         summary["status"] = f"error: {exc}"
         if comm.rank == 0:
-            for name in ("results.xdmf", "results.h5"):
+            for name in ("results.xdmf", "results.h5", "fractures.xdmf", "fractures.h5"):
                 (scene.output.dir / name).unlink(missing_ok=True)
         _finish(summary, scene, comm, timings)
         raise

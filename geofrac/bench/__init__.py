@@ -19,6 +19,10 @@ BENCHES: dict[str, tuple[str, str]] = {
         "geofrac.bench.cantilever",
         "Timoshenko cantilever (seed 2.4.1): displacement/energy error against DOFs and wall time",
     ),
+    "dfn": (
+        "geofrac.bench.dfn",
+        "DFN Models 1 and 2 (seed 2.5.1): generation and meshing wall times, mesh statistics",
+    ),
     "mms3d": (
         "geofrac.bench.mms3d",
         "manufactured smooth 3D displacement on a box: error against DOFs and wall time",

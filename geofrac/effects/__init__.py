@@ -8,6 +8,11 @@ An effect is a module named in :data:`REGISTRY` that provides
   import DOLFINx, PETSc, numba or cffi.
 - optionally ``linear_form(config, ctx) -> ufl.Form``: a right-hand-side term of the
   elastic problem (see :class:`geofrac.fem.elastic.FormContext`).
+- optionally ``geometry(table, file) -> (config, Geometry)``: the effect builds the
+  scene's geometry (``dfn``); the scene then has no ``[geometry]`` table and the loader
+  calls this instead of ``configure``. The returned
+  :class:`~geofrac.scene.model.Geometry` carries a builder that makes the gmsh model on
+  one rank.
 
 Later capabilities add hooks beside these (a driver that replaces the single solve for
 ``cracking``, particle state for ``mpm``); see ``docs/architecture.md``. Nothing in
@@ -24,6 +29,7 @@ __all__ = ["REGISTRY", "ConfigureContext", "available", "load"]
 
 #: effect name -> module implementing it.
 REGISTRY: dict[str, str] = {
+    "dfn": "geofrac.effects.dfn",
     "gravity": "geofrac.effects.gravity",
 }
 

@@ -19,7 +19,7 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 import dolfinx
 from dolfinx.io import XDMFFile
 
-__all__ = ["regroup_xdmf", "write_fields"]
+__all__ = ["regroup_xdmf", "write_fields", "write_meshtags"]
 
 
 def write_fields(
@@ -42,6 +42,66 @@ def write_fields(
         regroup_xdmf(path)
     mesh.comm.barrier()
     return path
+
+
+def write_meshtags(
+    path: Path, mesh: dolfinx.mesh.Mesh, tags: Sequence[dolfinx.mesh.MeshTags]
+) -> Path:
+    """Write the entities of ``tags`` as one grid with one cell field per tag set.
+
+    All ``tags`` must tag the same entities in the same order (e.g. the fracture facets,
+    once with their fracture number and once with their set); each is named by its
+    ``name``. DOLFINx writes the mesh and one grid per tag set; rank 0 then rewrites the
+    XML as a single-step temporal collection of the tagged entities carrying every tag
+    as a cell field, which ParaView, pyvista and meshio all read (see
+    :func:`regroup_xdmf` for why). The triangle mesh stays in the HDF5 file.
+
+    Returns:
+        ``path``.
+    """
+    tdim = mesh.topology.dim
+    with XDMFFile(mesh.comm, str(path), "w") as f:
+        f.write_mesh(mesh)
+        for t in tags:
+            mesh.topology.create_connectivity(t.dim, tdim)
+            f.write_meshtags(
+                t, mesh.geometry, geometry_xpath=f"/Xdmf/Domain/Grid[@Name='{mesh.name}']/Geometry"
+            )
+    mesh.comm.barrier()
+    if mesh.comm.rank == 0:
+        _tags_as_collection(path, mesh.name, [t.name for t in tags])
+    mesh.comm.barrier()
+    return path
+
+
+def _tags_as_collection(path: Path, mesh_name: str, names: Sequence[str]) -> None:
+    tree = ET.parse(path)
+    domain = tree.getroot().find("Domain")
+    assert domain is not None
+    grids = {g.get("Name"): g for g in domain.findall("Grid")}
+    geometry = grids[mesh_name].find("Geometry")
+    topology = grids[names[0]].find("Topology")
+    assert topology is not None
+    if topology.get("TopologyType") == "PolyLine":  # XDMF readers uppercase; meshio wants this
+        topology.set("TopologyType", "Polyline")
+    root = ET.Element("Xdmf", Version="3.0")
+    series = ET.SubElement(
+        ET.SubElement(root, "Domain"),
+        "Grid",
+        Name=names[0],
+        GridType="Collection",
+        CollectionType="Temporal",
+    )
+    grid = ET.SubElement(series, "Grid", Name=f"{names[0]}_step_0", GridType="Uniform")
+    grid.append(topology)  # type: ignore[arg-type]
+    grid.append(geometry)  # type: ignore[arg-type]
+    ET.SubElement(grid, "Time", Value="0")
+    for name in names:
+        grid.append(grids[name].find("Attribute"))  # type: ignore[arg-type]
+    ET.indent(root)
+    tmp = path.with_suffix(".xdmf.tmp")
+    ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8")
+    tmp.replace(path)
 
 
 def regroup_xdmf(path: Path) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from contextlib import ExitStack
+from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -14,7 +15,7 @@ from geofrac.errors import RunError
 from geofrac.meshing.geo import gmsh_session
 from geofrac.scene.model import Geometry
 
-__all__ = ["TaggedMesh", "build_mesh"]
+__all__ = ["TaggedMesh", "build_mesh", "check_fracture_cover"]
 
 
 class TaggedMesh:
@@ -24,10 +25,17 @@ class TaggedMesh:
         mesh: the DOLFINx mesh.
         groups: physical group name -> (dimension, tag).
         tags: dimension -> ``dolfinx.mesh.MeshTags`` for that dimension (or None).
+        report: what the geometry builder reported (JSON-ready; empty for a file).
+        fractures: the builder's payload, the same on every rank (the ``dfn`` effect's
+            :class:`~geofrac.dfn.clean.CleanNetwork`), or None.
     """
 
-    def __init__(self, data: gmshio.MeshData) -> None:
+    def __init__(
+        self, data: gmshio.MeshData, report: dict[str, Any] | None = None, fractures: Any = None
+    ) -> None:
         self.mesh = data.mesh
+        self.report = report or {}
+        self.fractures = fractures
         self.groups = {name: (g.dim, g.tag) for name, g in data.physical_groups.items()}
         tdim = self.mesh.topology.dim
         by_codim = [data.cell_tags, data.facet_tags, data.ridge_tags, data.peak_tags]
@@ -40,6 +48,18 @@ class TaggedMesh:
         if tags is None:
             return dim, np.empty(0, dtype=np.int32)
         return dim, tags.find(tag)
+
+    def owned(self, dim: int, entities: np.ndarray) -> np.ndarray:
+        """The entities of ``entities`` (local indices, shape=(n,)) this rank owns."""
+        self.mesh.topology.create_entities(dim)
+        return entities[entities < self.mesh.topology.index_map(dim).size_local]
+
+    def vertex_coordinates(self, dim: int, entities: np.ndarray) -> np.ndarray:
+        """Coordinates of the vertices of entities, shape=(n, num_vertices, 3)."""
+        from dolfinx.mesh import entities_to_geometry
+
+        nodes = entities_to_geometry(self.mesh, dim, entities.astype(np.int32))
+        return self.mesh.geometry.x[nodes]
 
     def num_global(self, dim: int) -> int:
         """Global number of entities of dimension ``dim``."""
@@ -79,28 +99,88 @@ def _check_groups_on_cells(model: object, dim: int) -> None:
 def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> TaggedMesh:
     """Mesh ``geometry`` with gmsh on rank 0 and distribute the mesh over ``comm``.
 
+    A ``geometry.builder`` creates and meshes the model itself; its report and payload
+    reach every rank (:attr:`TaggedMesh.report`, :attr:`TaggedMesh.fractures`).
+
     Raises:
-        RunError: gmsh failed to mesh the geometry (raised on every rank).
+        RunError: gmsh (or the builder) failed (raised on every rank).
     """
     if comm.rank != 0:
-        message = comm.bcast(None, root=0)
+        message, report, payload = comm.bcast(None, root=0)
         if message is not None:
             raise RunError(message)
-        return TaggedMesh(gmshio.model_to_mesh(None, comm, 0, gdim=geometry.dim))
+        data = gmshio.model_to_mesh(None, comm, 0, gdim=geometry.dim)
+        return TaggedMesh(data, report, payload)
+    builder = geometry.builder
     with ExitStack() as stack:
-        message = None
+        message, report, payload = None, None, None
         try:
             gmsh = stack.enter_context(
-                gmsh_session(geometry.file, geometry.parameters, geometry.mesh_size, verbose)
+                gmsh_session(
+                    None if builder else geometry.file,
+                    geometry.parameters,
+                    geometry.mesh_size,
+                    verbose,
+                )
             )
-            if geometry.file.suffix == ".geo":  # a .msh file is used as it is, never re-meshed
+            if builder is not None:
+                report, payload = builder.build(gmsh)
+            elif geometry.file.suffix == ".geo":  # type: ignore[union-attr]  # .msh: as it is
                 gmsh.model.mesh.generate(geometry.dim)  # type: ignore[attr-defined]
             if len(gmsh.model.mesh.getNodes()[0]) == 0:  # type: ignore[attr-defined]
                 raise RuntimeError("gmsh produced no nodes")
             _check_groups_on_cells(gmsh.model, geometry.dim)  # type: ignore[attr-defined]
         except Exception as exc:  # gmsh raises bare Exceptions
-            message = f"meshing {geometry.file.name} failed: {exc}"
-        comm.bcast(message, root=0)
+            source = builder.name if builder else geometry.file.name  # type: ignore[union-attr]
+            message = f"meshing {source} failed: {exc}"
+        comm.bcast((message, report, payload), root=0)
         if message is not None:
             raise RunError(message)
-        return TaggedMesh(gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=geometry.dim))  # type: ignore[attr-defined]
+        data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=geometry.dim)  # type: ignore[attr-defined]
+        return TaggedMesh(data, report, payload)
+
+
+def check_fracture_cover(tagged: TaggedMesh, group: str = "fractures") -> dict[str, Any]:
+    """Check that the facets tagged ``group`` cover the network exactly (collective).
+
+    Each rank matches the facets it owns to the network edges
+    (:func:`geofrac.dfn.check.match_facets`); lengths are summed over ranks. Every
+    tagged facet must lie on a network edge and every fracture's tagged length must
+    equal its length in the cleaned network within 1e-9 relative.
+
+    Returns:
+        ``fracture_facets`` (global count), ``max_length_error`` (relative, over
+        fractures), ``fractures_covered``.
+
+    Raises:
+        RunError: a facet off the network or a fracture not covered (on every rank).
+    """
+    from geofrac.dfn.check import covered_length, match_facets
+
+    clean = tagged.fractures
+    comm = tagged.mesh.comm
+    if group in tagged.groups:
+        dim, facets = tagged.entities(group)
+        facets = tagged.owned(dim, facets)
+    else:
+        facets = np.empty(0, dtype=np.int32)
+        dim = tagged.mesh.topology.dim - 1
+    xy = tagged.vertex_coordinates(dim, facets)[:, :, :2]
+    off = int(np.count_nonzero(match_facets(xy, clean) < 0))
+    covered = comm.allreduce(covered_length(xy, clean), op=MPI.SUM)
+    count = comm.allreduce(len(facets), op=MPI.SUM)
+    off = comm.allreduce(off, op=MPI.SUM)
+    expected = clean.length
+    present = expected > 0
+    error = np.abs(covered - expected)[present] / expected[present]
+    worst = float(error.max(initial=0.0))
+    if off or worst > 1e-9 or np.any(covered[~present] > 0):
+        raise RunError(
+            f"the mesh does not follow the fracture network: {off} tagged facet(s) off the "
+            f"network, largest relative length error {worst:.2e}"
+        )
+    return {
+        "fracture_facets": int(count),
+        "max_length_error": worst,
+        "fractures_covered": int(np.count_nonzero(present)),
+    }

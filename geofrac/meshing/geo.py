@@ -49,9 +49,14 @@ def define_constants(text: str) -> list[str]:
 
 @contextmanager
 def gmsh_session(
-    path: Path, parameters: dict[str, float], mesh_size: float | None = None, verbose: bool = False
+    path: Path | None,
+    parameters: dict[str, float],
+    mesh_size: float | None = None,
+    verbose: bool = False,
 ) -> Iterator[object]:
     """Initialise gmsh, open ``path`` with ``parameters`` set, yield the gmsh module, finalise.
+
+    With ``path`` None the session starts empty (a builder adds the model).
 
     Raises:
         RuntimeError: gmsh could not read the file (message from gmsh).
@@ -66,7 +71,8 @@ def gmsh_session(
         for name, value in parameters.items():
             gmsh.parser.setNumber(name, [float(value)])
         try:
-            gmsh.merge(str(path))
+            if path is not None:
+                gmsh.merge(str(path))
         except Exception as exc:  # gmsh raises a bare Exception with its parser message
             raise RuntimeError(str(exc)) from exc
         yield gmsh

@@ -381,9 +381,8 @@ def _output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> Outp
     return Output(directory.resolve(), tuple(fields), t.boolean("xdmf", True), probes)
 
 
-def _effects(
-    file: Path, data: dict[str, Any], dim: int, material: Material
-) -> tuple[EffectSpec, ...]:
+def _declared(file: Path, data: dict[str, Any]) -> list[str]:
+    """The validated ``effects`` list."""
     declared = data.get("effects", [])
     if not isinstance(declared, list) or not all(isinstance(e, str) for e in declared):
         raise SceneError(file, "effects", f"must be a list of effect names, got {declared!r}")
@@ -396,14 +395,52 @@ def _effects(
                 "effects",
                 f"unknown effect '{name}'" + did_you_mean(name, effects.available()),
             )
+    return declared
+
+
+def _effect_table(file: Path, data: dict[str, Any], name: str) -> dict[str, Any]:
+    table = data.get(name, {})
+    if not isinstance(table, dict):
+        raise SceneError(file, name, "must be a table")
+    return table
+
+
+def _effects(
+    file: Path,
+    data: dict[str, Any],
+    declared: list[str],
+    dim: int,
+    material: Material,
+    configured: dict[str, Any],
+) -> tuple[EffectSpec, ...]:
+    """Configure each declared effect (``configured``: those already done, by name)."""
     ctx = effects.ConfigureContext(str(file), dim, material)
     specs = []
     for name in declared:
-        table = data.get(name, {})
-        if not isinstance(table, dict):
-            raise SceneError(file, name, "must be a table")
-        specs.append(EffectSpec(name, effects.load(name).configure(table, ctx)))
+        if name in configured:
+            specs.append(EffectSpec(name, configured[name]))
+            continue
+        config = effects.load(name).configure(_effect_table(file, data, name), ctx)
+        specs.append(EffectSpec(name, config))
     return tuple(specs)
+
+
+def _geometry_from_effect(
+    file: Path, data: dict[str, Any], declared: list[str]
+) -> tuple[Geometry, dict[str, Any]] | None:
+    """The geometry built by a declared effect (one with a ``geometry`` hook), if any."""
+    providers = [n for n in declared if hasattr(effects.load(n), "geometry")]
+    if not providers:
+        return None
+    if len(providers) > 1:
+        raise SceneError(file, "effects", f"effects {providers} both build the geometry")
+    name = providers[0]
+    if "geometry" in data:
+        raise SceneError(
+            file, "geometry", f"effect '{name}' builds the geometry; remove the [geometry] table"
+        )
+    config, geometry = effects.load(name).geometry(_effect_table(file, data, name), str(file))
+    return geometry, {name: config}
 
 
 #: Poisson's ratio above which linear elements lock volumetrically (plane strain, 3D).
@@ -467,11 +504,13 @@ def load_scene(
         raise top.error("schema", f"this geofrac reads schema {SCHEMA_VERSION}, got {schema}")
     name = top.string("name", default=file.stem)
     description = top.string("description", default="")
+    declared = _declared(file, data)
+    provided = _geometry_from_effect(file, data, declared)
     for section in ("geometry", "material", "discretization"):
-        if section not in data:
+        if section not in data and not (section == "geometry" and provided):
             raise SceneError(file, section, "missing (required table)")
 
-    geometry = _geometry(file, data["geometry"])
+    geometry, configured = provided or (_geometry(file, data["geometry"]), {})
     material = _material(file, data["material"], geometry.dim)
     discretization = _discretization(file, data["discretization"], geometry.dim)
     exact = _exact(file, data["exact"], geometry) if "exact" in data else None
@@ -485,7 +524,7 @@ def load_scene(
     output = _output(
         file, data.get("output", {}), name, geometry.dim, None if out is None else Path(out)
     )
-    specs = _effects(file, data, geometry.dim, material)
+    specs = _effects(file, data, declared, geometry.dim, material, configured)
     return Scene(
         warnings=_warnings(file, material, discretization, geometry.dim),
         path=file.resolve(),

@@ -29,21 +29,27 @@ SCHEMA_VERSION = 1
 
 @dataclass(frozen=True)
 class Geometry:
-    """Where the mesh comes from.
+    """Where the mesh comes from: a gmsh file, or a builder provided by an effect.
 
     Attributes:
-        file: gmsh ``.geo`` (or ``.msh``) file.
+        file: gmsh ``.geo`` (or ``.msh``) file, or None when ``builder`` makes the model.
         parameters: values for the ``DefineConstant`` entries of the ``.geo`` file.
         mesh_size: upper bound on the element size (gmsh ``Mesh.MeshSizeMax``), or None.
         dim: topological dimension of the meshed domain (2 or 3), read from the file.
-        groups: physical group name -> dimension, read from the file.
+        groups: physical group name -> dimension, read from the file (or declared by the
+            builder).
+        builder: None, or an object with ``name`` and ``build(gmsh) -> (report, payload)``
+            that creates and meshes the gmsh model on one rank (the ``dfn`` effect's
+            :class:`~geofrac.effects.dfn.DfnGeometry`): ``report`` is a JSON-ready dict,
+            ``payload`` is broadcast to every rank as ``TaggedMesh.fractures``.
     """
 
-    file: Path
+    file: Path | None
     parameters: dict[str, float]
     mesh_size: float | None
     dim: int
     groups: dict[str, int]
+    builder: Any = None
 
 
 @dataclass(frozen=True)

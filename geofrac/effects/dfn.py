@@ -1,0 +1,384 @@
+"""Effect ``dfn``: a discrete fracture network embedded in a meshed 2D rock mass.
+
+The effect builds the scene's geometry (a scene with ``dfn`` has no ``[geometry]``
+table): a rectangle or polygon, fracture sets generated from seeded statistical laws (or
+a network read from a CSV/JSON file), cleaned by the tolerance rules of
+:mod:`geofrac.dfn.clean` and meshed by gmsh so that every fracture is a chain of element
+edges (:mod:`geofrac.meshing.dfn`). Seed §2.5, eq. (2.28), Table 2.1. The full table
+reference is in docs/dfn.md and docs/scenes.md.
+
+Validation (:func:`configure`) is cheap and imports no gmsh; a network file is read and
+checked then, so a malformed file fails before any heavy work.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from geofrac.dfn.errors import DfnError
+from geofrac.dfn.io import load_network
+from geofrac.dfn.polygon import as_polygon, polygon_area, rectangle
+from geofrac.dfn.sampling import FractureSet, Network, generate_network
+from geofrac.meshing.dfn import ALGORITHMS, DOMAIN_GROUP, FRACTURE_GROUP, MeshSpec
+from geofrac.scene.errors import SceneError, did_you_mean
+
+__all__ = [
+    "RECTANGLE_CORNERS",
+    "RECTANGLE_SIDES",
+    "SET_KEYS",
+    "TABLE_KEYS",
+    "DfnConfig",
+    "DfnGeometry",
+    "configure",
+    "geometry",
+]
+
+#: Keys of the ``[dfn]`` table and of each ``[[dfn.sets]]`` entry.
+TABLE_KEYS = (
+    "domain",
+    "polygon",
+    "region",
+    "seed",
+    "sets",
+    "file",
+    "mesh_size",
+    "fracture_mesh_size",
+    "transition",
+    "tolerance",
+    "algorithm",
+)
+SET_KEYS = (
+    "name",
+    "mean",
+    "variance",
+    "std",
+    "kappa",
+    "distribution",
+    "lmin",
+    "lmax",
+    "exponent",
+    "count",
+    "p21",
+)
+#: Physical group names of a rectangular domain's sides and corners (counter-clockwise
+#: from the lower-left corner); a polygon's are ``side_<k>`` and ``corner_<k>``.
+RECTANGLE_SIDES = ("bottom", "right", "top", "left")
+RECTANGLE_CORNERS = ("lower_left", "lower_right", "upper_right", "upper_left")
+
+
+@dataclass(frozen=True)
+class DfnConfig:
+    """Validated ``[dfn]`` settings.
+
+    Attributes:
+        domain: rock mass polygon, counter-clockwise, shape=(m, 2).
+        region: polygon in which fracture centres are drawn, shape=(k, 2).
+        sides: physical group name of each domain side, shape=(m,).
+        corners: physical group name of each domain corner, shape=(m,).
+        sets: fracture sets to generate (empty when ``network`` is given).
+        seed: random seed.
+        network: a network read from ``file``, or None.
+        file: the network file, or None.
+        mesh: element sizes and algorithm.
+        tolerance: cleaning tolerance (length).
+    """
+
+    domain: np.ndarray
+    region: np.ndarray
+    sides: tuple[str, ...]
+    corners: tuple[str, ...]
+    sets: tuple[FractureSet, ...]
+    seed: int
+    network: Network | None
+    file: Path | None
+    mesh: MeshSpec
+    tolerance: float
+
+    def make_network(self) -> Network:
+        """The network: read from the file, or generated (seeded, deterministic)."""
+        if self.network is not None:
+            return self.network
+        return generate_network(self.sets, self.region, self.seed, domain=self.domain)
+
+
+@dataclass(frozen=True)
+class DfnGeometry:
+    """Builds the gmsh model of a ``dfn`` scene (called on one rank by the mesher).
+
+    Attributes:
+        config: the validated settings.
+    """
+
+    config: DfnConfig
+
+    @property
+    def name(self) -> str:
+        """Name used in messages."""
+        return "dfn"
+
+    def describe(self, report: dict[str, Any]) -> str:
+        """One progress line from a :meth:`build` report (plus the cover check)."""
+        cleaning = ", ".join(
+            f"{k} {v}" for k, v in report["cleaning"].items() if v and k != "passes"
+        )
+        return (
+            f"dfn: {report['fractures']} fractures ({report['fractures_meshed']} meshed), "
+            f"P21 {report['p21']:.4g}; cleaning: {cleaning or 'nothing'}; "
+            f"gmsh: {report['nodes']} nodes, {report['cells']} triangles, "
+            f"{report.get('fracture_facets', report['fracture_edges'])} fracture edges, "
+            f"min angle {report['min_angle_deg']:.1f}°, shortest edge "
+            f"{report['shortest_edge']:.3g} ({report['time_mesh_s']:.1f} s)"
+        )
+
+    def build(self, gmsh: Any) -> tuple[dict[str, Any], Any]:
+        """Generate, clean and mesh the network in an initialised gmsh session.
+
+        Returns:
+            (report, clean network): mesh counts and quality, network statistics and
+            cleaning events (JSON-ready), and the :class:`~geofrac.dfn.clean.CleanNetwork`.
+
+        Raises:
+            DfnError: the network cannot be cleaned.
+            RuntimeError: gmsh failed.
+        """
+        import time
+
+        from geofrac.dfn.clean import clean_network
+        from geofrac.meshing.dfn import mesh_network
+
+        cfg = self.config
+        t0 = time.perf_counter()
+        network = cfg.make_network()
+        t1 = time.perf_counter()
+        clean = clean_network(network, cfg.domain, cfg.tolerance)
+        t2 = time.perf_counter()
+        quality = mesh_network(gmsh, clean, cfg.sides, cfg.corners, cfg.mesh)
+        t3 = time.perf_counter()
+        area = polygon_area(cfg.domain)
+        report = {
+            "fractures": len(network),
+            "fractures_meshed": int(np.count_nonzero(clean.length > 0)),
+            "p21": float(clean.clipped_length.sum() / area),
+            "p21_meshed": float(clean.length.sum() / area),
+            "cleaning": clean.report.counts(),
+            "max_moved": float(clean.moved[np.isfinite(clean.moved)].max(initial=0.0)),
+            "min_junction_angle_deg": clean.min_junction_angle(),
+            "time_generate_s": t1 - t0,
+            "time_clean_s": t2 - t1,
+            "time_mesh_s": t3 - t2,
+            **quality,
+        }
+        return report, clean
+
+
+def _error(file: str, key: str, message: str) -> SceneError:
+    return SceneError(file, f"dfn.{key}" if key else "dfn", message)
+
+
+def _check_keys(file: str, prefix: str, table: Any, allowed: tuple[str, ...]) -> dict[str, Any]:
+    if not isinstance(table, dict):
+        raise _error(file, prefix, f"must be a table, got {type(table).__name__}")
+    for key in table:
+        if key not in allowed:
+            where = f"{prefix}.{key}" if prefix else key
+            raise _error(file, where, "unknown key" + did_you_mean(key, allowed))
+    return table
+
+
+def _number(file: str, key: str, value: Any, positive: bool = False) -> float:
+    if not isinstance(value, int | float) or isinstance(value, bool) or not math.isfinite(value):
+        raise _error(file, key, f"must be a finite number, got {value!r}")
+    if positive and value <= 0:
+        raise _error(file, key, f"must be > 0, got {value!r}")
+    return float(value)
+
+
+def _polygon(file: str, key: str, value: Any, kinds: tuple[str, ...]) -> np.ndarray:
+    """A rectangle ``[x0, y0, x1, y1]`` and/or a polygon ``[[x, y], ...]`` (``kinds``)."""
+    four_numbers = (
+        isinstance(value, list)
+        and len(value) == 4
+        and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+    )
+    expected = " or ".join(
+        {"rectangle": "a rectangle [x0, y0, x1, y1]", "polygon": "a list of [x, y] corners"}[k]
+        for k in kinds
+    )
+    try:
+        if four_numbers and "rectangle" in kinds:
+            return rectangle(*(float(v) for v in value))
+        if "polygon" in kinds and not four_numbers:
+            return as_polygon(np.asarray(value, dtype=float))
+    except (DfnError, ValueError, TypeError) as exc:
+        raise _error(file, key, f"must be {expected}: {exc}") from None
+    raise _error(file, key, f"must be {expected}, got {value!r}")
+
+
+def _fracture_set(file: str, i: int, raw: Any) -> FractureSet:
+    key = f"sets[{i}]"
+    t = _check_keys(file, key, raw, SET_KEYS)
+    for required in ("mean", "lmin", "lmax", "exponent"):
+        if required not in t:
+            raise _error(file, f"{key}.{required}", "missing (required)")
+    distribution = t.get("distribution", "normal")
+    if distribution not in ("normal", "von_mises"):
+        raise _error(
+            file,
+            f"{key}.distribution",
+            f"unknown value {distribution!r}"
+            + did_you_mean(str(distribution), ["normal", "von_mises"]),
+        )
+    spread_keys = ("variance", "std") if distribution == "normal" else ("kappa",)
+    given = [k for k in ("variance", "std", "kappa") if k in t]
+    if len(given) != 1 or given[0] not in spread_keys:
+        raise _error(
+            file,
+            key,
+            f"a {distribution} set needs exactly one of {', '.join(spread_keys)}, got {given}",
+        )
+    spread = _number(file, f"{key}.{given[0]}", t[given[0]])
+    if spread < 0:
+        raise _error(file, f"{key}.{given[0]}", f"must be >= 0, got {spread!r}")
+    if given[0] == "variance":
+        spread = math.sqrt(spread)
+    density = [k for k in ("count", "p21") if k in t]
+    if len(density) != 1:
+        raise _error(file, key, f"give exactly one density, 'count' or 'p21', got {density}")
+    count = t.get("count")
+    if count is not None and (not isinstance(count, int) or isinstance(count, bool)):
+        raise _error(file, f"{key}.count", f"must be an integer, got {count!r}")
+    p21 = None if "p21" not in t else _number(file, f"{key}.p21", t["p21"])
+    name = t.get("name", f"set{i + 1}")
+    if not isinstance(name, str) or not name or "," in name:
+        raise _error(
+            file, f"{key}.name", f"must be a non-empty string without commas, got {name!r}"
+        )
+    try:
+        return FractureSet(
+            name=name,
+            mean_deg=_number(file, f"{key}.mean", t["mean"]),
+            spread=spread,
+            lmin=_number(file, f"{key}.lmin", t["lmin"]),
+            lmax=_number(file, f"{key}.lmax", t["lmax"]),
+            exponent=_number(file, f"{key}.exponent", t["exponent"]),
+            distribution=distribution,
+            count=count,
+            p21=p21,
+        )
+    except DfnError as exc:
+        raise _error(file, key, str(exc)) from None
+
+
+def _configure(table: dict[str, Any], file: str) -> DfnConfig:
+    t = _check_keys(file, "", table, TABLE_KEYS)
+    shapes = [k for k in ("domain", "polygon") if k in t]
+    if len(shapes) != 1:
+        raise _error(file, "domain", "give exactly one of 'domain' (rectangle) or 'polygon'")
+    if shapes[0] == "domain":
+        domain = _polygon(file, "domain", t["domain"], ("rectangle",))
+        sides, corners = RECTANGLE_SIDES, RECTANGLE_CORNERS
+    else:
+        domain = _polygon(file, "polygon", t["polygon"], ("polygon",))
+        m = len(domain)
+        sides = tuple(f"side_{k + 1}" for k in range(m))
+        corners = tuple(f"corner_{k + 1}" for k in range(m))
+    region = (
+        _polygon(file, "region", t["region"], ("rectangle", "polygon")) if "region" in t else domain
+    )
+    if "mesh_size" not in t:
+        raise _error(file, "mesh_size", "missing (required)")
+    size = _number(file, "mesh_size", t["mesh_size"], positive=True)
+    fracture_size = _number(
+        file, "fracture_mesh_size", t.get("fracture_mesh_size", size), positive=True
+    )
+    if fracture_size > size:
+        raise _error(
+            file, "fracture_mesh_size", f"must not exceed mesh_size ({size}), got {fracture_size}"
+        )
+    transition = _number(file, "transition", t.get("transition", 10.0 * size), positive=True)
+    tolerance = _number(file, "tolerance", t.get("tolerance", fracture_size / 4), positive=True)
+    if tolerance >= fracture_size:
+        raise _error(
+            file,
+            "tolerance",
+            f"must be smaller than the element size on fractures ({fracture_size}), got "
+            f"{tolerance}",
+        )
+    algorithm = t.get("algorithm", "frontal-delaunay")
+    if algorithm not in ALGORITHMS:
+        raise _error(
+            file, "algorithm", f"unknown {algorithm!r}" + did_you_mean(str(algorithm), ALGORITHMS)
+        )
+    diameter = float(np.hypot(*np.ptp(domain, axis=0)))
+    if diameter / size > 5000:
+        raise _error(
+            file, "mesh_size", f"{size} gives over 5000 elements across the domain; too fine"
+        )
+    network, path, sets = None, None, ()
+    if "file" in t:
+        if "sets" in t:
+            raise _error(file, "file", "give either 'file' (a saved network) or 'sets', not both")
+        if not isinstance(t["file"], str):
+            raise _error(file, "file", f"must be a path string, got {t['file']!r}")
+        path = (Path(file).parent / t["file"]).resolve()
+        try:
+            network = load_network(path)
+        except DfnError as exc:
+            raise _error(file, "file", str(exc)) from None
+    else:
+        raw_sets = t.get("sets")
+        if not isinstance(raw_sets, list) or not raw_sets:
+            raise _error(file, "sets", "missing: give at least one [[dfn.sets]] or a 'file'")
+        sets = tuple(_fracture_set(file, i, s) for i, s in enumerate(raw_sets))
+        names = [s.name for s in sets]
+        if len(set(names)) != len(names):
+            raise _error(file, "sets", f"set names must differ, got {names}")
+    seed = t.get("seed", 0)
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        raise _error(file, "seed", f"must be a non-negative integer, got {seed!r}")
+    return DfnConfig(
+        domain=domain,
+        region=region,
+        sides=sides,
+        corners=corners,
+        sets=sets,
+        seed=seed,
+        network=network,
+        file=path,
+        mesh=MeshSpec(size, fracture_size, transition, algorithm),
+        tolerance=tolerance,
+    )
+
+
+def geometry(table: dict[str, Any], file: str) -> tuple[DfnConfig, Any]:
+    """Validate ``[dfn]`` and return (config, :class:`~geofrac.scene.model.Geometry`).
+
+    The geometry is 2D with physical groups ``domain``, the sides, the corners and
+    ``fractures``; its builder is a :class:`DfnGeometry`.
+
+    Raises:
+        SceneError: naming the offending ``dfn.*`` key.
+    """
+    from geofrac.scene.model import Geometry
+
+    config = _configure(table, file)
+    groups = {DOMAIN_GROUP: 2, FRACTURE_GROUP: 1}
+    groups |= dict.fromkeys(config.sides, 1) | dict.fromkeys(config.corners, 0)
+    return config, Geometry(
+        file=None,
+        parameters={},
+        mesh_size=config.mesh.size,
+        dim=2,
+        groups=groups,
+        builder=DfnGeometry(config),
+    )
+
+
+def configure(table: dict[str, Any], ctx: Any) -> DfnConfig:
+    """Validate ``[dfn]`` (the scene loader calls :func:`geometry` instead)."""
+    return _configure(table, ctx.file)
