@@ -161,3 +161,31 @@ def test_group_outside_the_domain_is_an_error_not_an_abort(mpi_tmp_path):
     )
     with pytest.raises(RunError, match="physical group 'stray'"):
         run_scene(scene, WORLD, verbose=False)
+
+
+def _fracture_cover(comm):
+    from geofrac.meshing.distribute import build_mesh, check_fracture_cover
+
+    overrides = ["dfn.mesh_size=3.0", "dfn.tolerance=0.21"]
+    scene = load_scene_collective(comm, JOBS / "dfn_model2.toml", overrides)
+    tagged = build_mesh(scene.geometry, comm)
+    cover = check_fracture_cover(tagged)
+    dim, facets = tagged.entities("fractures")
+    xy = tagged.vertex_coordinates(dim, tagged.owned(dim, facets))[:, :, :2]
+    from geofrac.dfn.check import covered_length
+
+    lengths = comm.allreduce(covered_length(xy, tagged.fractures), op=MPI.SUM)
+    owned_cells = tagged.mesh.topology.index_map(2).size_local
+    return cover["fracture_facets"], lengths, owned_cells, tagged.num_global(2)
+
+
+def test_dfn_fracture_facets_same_on_one_and_n_ranks():
+    serial = None
+    if WORLD.rank == 0:
+        serial = _fracture_cover(MPI.COMM_SELF)[:2]
+    serial = WORLD.bcast(serial, root=0)
+    count, lengths, owned_cells, cells = _fracture_cover(WORLD)
+    assert owned_cells < cells  # the mesh really is split
+    assert count == serial[0] > 500
+    np.testing.assert_allclose(lengths, serial[1], rtol=1e-12)
+    assert WORLD.allgather(count) == [count] * WORLD.size

@@ -577,8 +577,11 @@ class _Pass:
         for k in range(2 * m):
             self.move(self.fid[k // 2], float(step[base + k]), "vertex_merge")
         for s, refs in self.on_seg.items():
-            for ref in refs:
-                self.move(self.fid[s], float(step[vid(ref)]), "vertex_merge")
+            # a junction that moved off the segment's line bends the segment
+            p0, p1 = self.segs[s]
+            d = (p1 - p0) / np.hypot(*(p1 - p0))
+            off = np.abs(_cross(d[None], points[rep[[vid(r) for r in refs]]] - p0))
+            self.move(self.fid[s], float(off.max()), "vertex_merge")
         edges: list[tuple[int, int]] = []
         edge_fid: list[int] = []
         for s in range(m):

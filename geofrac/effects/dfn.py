@@ -22,7 +22,13 @@ import numpy as np
 
 from geofrac.dfn.errors import DfnError
 from geofrac.dfn.io import load_network
-from geofrac.dfn.polygon import as_polygon, polygon_area, rectangle
+from geofrac.dfn.polygon import (
+    as_polygon,
+    clip_segments,
+    points_in_polygon,
+    polygon_area,
+    rectangle,
+)
 from geofrac.dfn.sampling import FractureSet, Network, generate_network
 from geofrac.meshing.dfn import ALGORITHMS, DOMAIN_GROUP, FRACTURE_GROUP, MeshSpec
 from geofrac.scene.errors import SceneError, did_you_mean
@@ -157,6 +163,12 @@ class DfnGeometry:
         t1 = time.perf_counter()
         clean = clean_network(network, cfg.domain, cfg.tolerance)
         t2 = time.perf_counter()
+        if len(clean.edges) == 0:
+            raise DfnError(
+                f"no fracture of the network ({len(network)} fractures) is left inside the "
+                f"domain after cleaning ({clean.report.summary()}); check the domain, region "
+                "and density"
+            )
         quality = mesh_network(gmsh, clean, cfg.sides, cfg.corners, cfg.mesh)
         t3 = time.perf_counter()
         area = polygon_area(cfg.domain)
@@ -217,6 +229,21 @@ def _polygon(file: str, key: str, value: Any, kinds: tuple[str, ...]) -> np.ndar
     except (DfnError, ValueError, TypeError) as exc:
         raise _error(file, key, f"must be {expected}: {exc}") from None
     raise _error(file, key, f"must be {expected}, got {value!r}")
+
+
+def _distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Distance between polygons ``a`` and ``b`` (each shape=(m, 2)); 0 when they meet."""
+    from geofrac.dfn.clean import point_segment_distance
+
+    edges_a = np.stack([a, np.roll(a, -1, axis=0)], axis=1)
+    edges_b = np.stack([b, np.roll(b, -1, axis=0)], axis=1)
+    if points_in_polygon(a, b).any() or points_in_polygon(b, a).any():
+        return 0.0
+    if len(clip_segments(edges_a, b)[0]):
+        return 0.0
+    d_ab, _ = point_segment_distance(a[:, None, :], edges_b[None, :, 0], edges_b[None, :, 1])
+    d_ba, _ = point_segment_distance(b[:, None, :], edges_a[None, :, 0], edges_a[None, :, 1])
+    return float(min(d_ab.min(), d_ba.min()))
 
 
 def _fracture_set(file: str, i: int, raw: Any) -> FractureSet:
@@ -338,6 +365,14 @@ def _configure(table: dict[str, Any], file: str) -> DfnConfig:
         names = [s.name for s in sets]
         if len(set(names)) != len(names):
             raise _error(file, "sets", f"set names must differ, got {names}")
+        gap = _distance(region, domain)
+        if gap >= max(s.lmax for s in sets) / 2:
+            raise _error(
+                file,
+                "region",
+                f"lies {gap:g} from the domain, farther than half the longest fracture: "
+                "no fracture centred in it can reach the domain",
+            )
     seed = t.get("seed", 0)
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise _error(file, "seed", f"must be a non-negative integer, got {seed!r}")
