@@ -34,3 +34,14 @@ def test_every_registered_name_is_documented():
     names = [*elements.available(), *effects.available(), *analytic.EXACT_SOLUTIONS, *OUTPUT_FIELDS]
     for name in names:
         assert f"`{name}`" in TEXT or f'"{name}"' in TEXT, name
+
+
+def test_every_dfn_key_has_a_row():
+    from geofrac.effects.dfn import SET_KEYS, TABLE_KEYS
+
+    start = TEXT.index("### `[dfn]`")
+    body = TEXT[start:]
+    rows = re.findall(r"^\| (`[^|]*`) \|", body, re.MULTILINE)  # first cells, e.g. `a`, `b`
+    documented = {name for row in rows for name in re.findall(r"`(\w+)`", row)}
+    for key in (*TABLE_KEYS, *SET_KEYS):
+        assert key in documented, key

@@ -195,10 +195,11 @@ def _plot(tagged: Any, path: Path, title: str) -> None:
     mesh = tagged.mesh
     x = mesh.geometry.x[:, :2]
     cells = mesh.geometry.dofmap
-    degree = np.bincount(clean.edges.ravel(), minlength=len(clean.vertices))
-    degree[clean.on_boundary] = 0
-    centre = clean.vertices[np.argmax(degree)]  # the busiest interior junction
     half = 6.0 * float(tagged.report.get("longest_edge", 1.0))
+    degree = np.bincount(clean.edges.ravel(), minlength=len(clean.vertices))
+    lo, hi = clean.domain.min(axis=0) + half, clean.domain.max(axis=0) - half
+    degree[~np.all((clean.vertices > lo) & (clean.vertices < hi), axis=1)] = 0
+    centre = clean.vertices[np.argmax(degree)]  # the busiest junction away from the sides
     near = np.all(np.abs(x[cells].mean(axis=1) - centre) < half, axis=1)
     tri = x[cells[near]]
     axes[1].add_collection(
