@@ -78,6 +78,8 @@ RULES = (
 
 # Vertex kinds, most constrained first: a merged cluster sits at its lowest kind.
 _CORNER, _BOUNDARY, _CROSSING, _ENDPOINT = 0, 1, 2, 3
+#: ``moved`` value of a fracture whose extent changed but whose points did not move.
+_TOUCHED = 1e-300
 
 
 @dataclass
@@ -465,6 +467,16 @@ class _Pass:
         self.on_seg: dict[int, list[tuple[str, int]]] = defaultdict(list)
         self.tee_pairs: set[tuple[int, int]] = set()  # (segment of the endpoint, target)
 
+    def run(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+        """The pass: returns (vertices, edges, edge fracture, whether anything changed)."""
+        self.snap_to_boundary()
+        i, j = box_pairs(_boxes(self.segs), pad=self.tol)
+        if len(i):
+            self.snap_tees(i, j)
+            self.split_crossings(i, j)
+        vertices, edges, fids = self.build()
+        return vertices, edges, fids, self.changed
+
     def move(self, f: int, distance: float, rule: str, other: int = -1) -> None:
         if distance > self.exact:
             self.report.add(rule, f, other, distance)
@@ -621,30 +633,6 @@ class _Pass:
         return points[used], inverse.reshape(-1, 2), np.array(edge_fid, dtype=np.int64)[chosen]
 
 
-#: ``moved`` value of a fracture whose extent changed but whose points did not move.
-_TOUCHED = 1e-300
-
-
-def _arrange_pass(
-    segs: np.ndarray,
-    fid: np.ndarray,
-    domain: np.ndarray,
-    tol: float,
-    report: CleanReport,
-    moved: np.ndarray,
-    first: bool,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
-    """One arrangement pass. Returns (vertices, edges, edge fracture, changed)."""
-    state = _Pass(segs, fid, domain, tol, report, moved, first)
-    state.snap_to_boundary()
-    i, j = box_pairs(_boxes(segs), pad=tol)
-    if len(i):
-        state.snap_tees(i, j)
-        state.split_crossings(i, j)
-    vertices, edges, fids = state.build()
-    return vertices, edges, fids, state.changed
-
-
 def clean_network(
     network: Network, domain: np.ndarray, tol: float, max_passes: int = 8
 ) -> CleanNetwork:
@@ -688,9 +676,9 @@ def clean_network(
                 f"the fracture network did not settle after {max_passes} cleaning passes "
                 f"with tolerance {tol:g}; try a larger tolerance"
             )
-        vertices, edges, fids, changed = _arrange_pass(
+        vertices, edges, fids, changed = _Pass(
             segs, fid, domain, tol, report, moved, report.passes == 0
-        )
+        ).run()
         report.passes += 1
         segs, fid = vertices[edges], fids
     scale = float(np.ptp(domain, axis=0).max())
