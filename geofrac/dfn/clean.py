@@ -132,7 +132,9 @@ class CleanNetwork:
         clipped_length: length of each input fracture inside the domain,
             shape=(num_fractures,).
         moved: largest distance a rule moved a point of each fracture (0 when untouched;
-            inf when dropped or merged away), shape=(num_fractures,).
+            inf when dropped or merged away; 1e-300 when only its extent changed: it
+            absorbed a merged fracture or lost an edge to ``overlap`` or ``on_boundary``),
+            shape=(num_fractures,).
         tol: the tolerance used.
         report: the events.
     """
