@@ -178,34 +178,27 @@ def _write_xdmf(solution: Solution) -> None:
 
 
 def _write_fractures(solution: Solution) -> None:
-    """Write ``network.csv`` and ``fractures.xdmf``.
+    """Write ``fractures.xdmf``: the fracture facets with their fracture and set numbers.
 
-    ``network.csv`` is the network as generated or read; ``fractures.xdmf`` holds the
-    fracture facets tagged with their fracture number and set (both 1-based).
+    Both are 1-based: ``fracture`` is the row of ``network.csv``, ``fracture_set`` the
+    set in declaration order.
     """
     from dolfinx.mesh import meshtags
 
     from geofrac.dfn.check import match_facets
-    from geofrac.dfn.io import save_network
 
-    tagged, out = solution.tagged, solution.scene.output.dir
+    tagged = solution.tagged
     clean = tagged.fractures
-    if tagged.mesh.comm.rank == 0:
-        save_network(clean.network, out / "network.csv")
-    dim, facets = tagged.entities("fractures") if "fractures" in tagged.groups else (1, None)
-    if facets is None:
-        facets = np.empty(0, dtype=np.int32)
+    dim, facets = tagged.entities("fractures")
     facets = np.sort(facets).astype(np.int32)
-    edge = match_facets(tagged.vertex_coordinates(dim, facets), clean)
-    fracture = clean.edge_fracture[edge]
-    tags = [
-        meshtags(tagged.mesh, dim, facets, (fracture + 1).astype(np.int32)),
-        meshtags(
-            tagged.mesh, dim, facets, (clean.network.set_index[fracture] + 1).astype(np.int32)
-        ),
-    ]
-    tags[0].name, tags[1].name = "fracture", "fracture_set"
-    write_meshtags(out / "fractures.xdmf", tagged.mesh, tags)
+    fracture = clean.edge_fracture[match_facets(tagged.vertex_coordinates(dim, facets), clean)]
+    values = {"fracture": fracture + 1, "fracture_set": clean.network.set_index[fracture] + 1}
+    tags = []
+    for name, value in values.items():
+        tag = meshtags(tagged.mesh, dim, facets, value.astype(np.int32))
+        tag.name = name
+        tags.append(tag)
+    write_meshtags(solution.scene.output.dir / "fractures.xdmf", tagged.mesh, tags)
 
 
 def _prepare_output(scene: Scene, comm: MPI.Comm) -> None:
@@ -257,6 +250,10 @@ def run_scene(
                 _write_xdmf(solution)
                 if solution.tagged.fractures is not None:
                     _write_fractures(solution)
+        if solution.tagged.fractures is not None and comm.rank == 0:
+            from geofrac.dfn.io import save_network
+
+            save_network(solution.tagged.fractures.network, scene.output.dir / "network.csv")
         summary |= {
             "mesh": solution.mesh_counts(),
             "dofs": solution.problem.element.num_dofs,

@@ -182,6 +182,8 @@ def test_dfn_scene_imports_dfn_and_no_other_effect(tmp_path):
     )
     assert "geofrac.effects.dfn" in modules and "geofrac.meshing.dfn" in modules
     assert "geofrac.effects.gravity" not in modules
+    written = {p.name for p in (tmp_path / "out").iterdir()}
+    assert written == {"summary.json", "network.csv"}  # output.xdmf = false: no XDMF
 
 
 def test_elastic_scene_imports_no_dfn_code(tmp_path):
