@@ -209,7 +209,7 @@ def _plot(tagged: Any, path: Path, title: str) -> None:
     axes[1].set_xlim(centre[0] - half, centre[0] + half)
     axes[1].set_ylim(centre[1] - half, centre[1] + half)
     axes[1].set_title("mesh close-up: fractures (red) are chains of element edges", fontsize=10)
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=90)
     plt.close(fig)
 
 
