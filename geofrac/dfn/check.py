@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from geofrac.dfn.clean import CleanNetwork, box_pairs, point_segment_distance
+from geofrac.dfn.clean import CleanNetwork, box_pairs
+from geofrac.dfn.polygon import point_segment_distance
 
 __all__ = ["covered_length", "match_facets"]
 

@@ -50,7 +50,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from geofrac.dfn.errors import DfnError
-from geofrac.dfn.polygon import clip_segments
+from geofrac.dfn.polygon import clip_segments, nearest_boundary_point, point_segment_distance
 from geofrac.dfn.sampling import Network
 
 __all__ = [
@@ -59,7 +59,6 @@ __all__ = [
     "CleanReport",
     "box_pairs",
     "clean_network",
-    "point_segment_distance",
 ]
 
 #: Rule names in the order they are applied (docs/dfn.md explains each).
@@ -189,7 +188,7 @@ class CleanNetwork:
         theta = np.concatenate([np.arctan2(d[:, 1], d[:, 0]), np.arctan2(-d[:, 1], -d[:, 0])])
         on = np.flatnonzero(self.on_boundary)
         if len(on):
-            _, side, _ = _Boundary(self.domain).nearest(self.vertices[on])
+            _, side, _, _ = nearest_boundary_point(self.vertices[on], self.domain)
             t = self.domain[(side + 1) % len(self.domain)] - self.domain[side]
             along = np.arctan2(t[:, 1], t[:, 0])
             vert = np.concatenate([vert, on, on])
@@ -210,27 +209,6 @@ class CleanNetwork:
 
 
 # ----------------------------------------------------------------------------- geometry
-
-
-def point_segment_distance(
-    p: np.ndarray, a: np.ndarray, b: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Distance from points to segments and the parameter of the closest point.
-
-    Args:
-        p: points, shape=(n, 2) (broadcastable with ``a`` and ``b``).
-        a: segment starts, shape=(n, 2).
-        b: segment ends, shape=(n, 2).
-
-    Returns:
-        (distance shape=(n,), t shape=(n,) in [0, 1]) with closest point a + t (b - a).
-    """
-    ab = b - a
-    den = np.einsum("...i,...i", ab, ab)
-    t = np.einsum("...i,...i", p - a, ab) / np.where(den > 0, den, 1.0)
-    t = np.clip(t, 0.0, 1.0)
-    q = a + t[..., None] * ab
-    return np.hypot(*np.moveaxis(p - q, -1, 0)), t
 
 
 def box_pairs(
@@ -281,24 +259,6 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
-class _Boundary:
-    """Distance to and projection onto the domain boundary."""
-
-    def __init__(self, polygon: np.ndarray) -> None:
-        self.corners = polygon
-        self.a = polygon
-        self.b = np.roll(polygon, -1, axis=0)
-
-    def nearest(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """For points shape=(n, 2): (distance, side index, closest point shape=(n, 2))."""
-        d, t = point_segment_distance(p[:, None, :], self.a[None], self.b[None])
-        side = np.argmin(d, axis=1)
-        rows = np.arange(len(p))
-        ts = t[rows, side]
-        q = self.a[side] + ts[:, None] * (self.b[side] - self.a[side])
-        return d[rows, side], side, q
-
-
 # ----------------------------------------------------------------------- piece rules
 
 
@@ -319,14 +279,13 @@ def _initial_pieces(
     for k in np.flatnonzero(~keep):
         report.add("short", parent[k], amount=float(lengths[k]))
     pieces, parent = pieces[keep], parent[keep]
-    boundary = _Boundary(domain)
     if len(pieces):
         samples = np.linspace(0.0, 1.0, 5)
         pts = (
             pieces[:, 0, None, :]
             + samples[None, :, None] * (pieces[:, 1] - pieces[:, 0])[:, None, :]
         )
-        d, side, _ = boundary.nearest(pts.reshape(-1, 2))
+        d, side, _, _ = nearest_boundary_point(pts.reshape(-1, 2), domain)
         d, side = d.reshape(-1, 5), side.reshape(-1, 5)
         along = (d.max(axis=1) < tol) & (side == side[:, :1]).all(axis=1)
         for k in np.flatnonzero(along):
@@ -487,7 +446,7 @@ class _Pass:
 
     def snap_to_boundary(self) -> None:
         """boundary_snap: endpoints within tol of the boundary move onto it."""
-        dist, _, proj = _Boundary(self.domain).nearest(self.ends)
+        dist, _, _, proj = nearest_boundary_point(self.ends, self.domain)
         to_corner = np.hypot(*(self.ends[:, None, :] - self.domain[None]).transpose(2, 0, 1))
         for k in np.flatnonzero(dist < self.tol):
             corner = np.flatnonzero(to_corner[k] < self.tol)
@@ -576,7 +535,7 @@ class _Pass:
         orig = points.copy()
         if ncr:  # boundary_snap for crossings: a junction within tol of the boundary
             crossing = slice(nc, nc + ncr)
-            dist, _, proj = _Boundary(self.domain).nearest(points[crossing])
+            dist, _, _, proj = nearest_boundary_point(points[crossing], self.domain)
             near = dist < self.tol
             points[crossing][near] = proj[near]
             kinds[crossing][near] = _BOUNDARY
@@ -609,7 +568,7 @@ class _Pass:
                     continue
                 if kinds[a] <= _BOUNDARY and kinds[b] <= _BOUNDARY:
                     mid = 0.5 * (points[a] + points[b])
-                    if _Boundary(self.domain).nearest(mid[None])[0][0] < self.tol:
+                    if nearest_boundary_point(mid[None], self.domain)[0][0] < self.tol:
                         f = int(self.fid[s])  # on_boundary: the edge runs along the boundary
                         self.report.add(
                             "on_boundary", f, amount=float(np.hypot(*(points[b] - points[a])))
@@ -685,7 +644,7 @@ def clean_network(
         segs, fid = vertices[edges], fids
     scale = float(np.ptp(domain, axis=0).max())
     on_boundary = (
-        _Boundary(domain).nearest(vertices)[0] <= 1e-12 * scale
+        nearest_boundary_point(vertices, domain)[0] <= 1e-12 * scale
         if len(vertices)
         else np.zeros(0, dtype=bool)
     )

@@ -18,6 +18,8 @@ __all__ = [
     "as_polygon",
     "boundary_tolerance",
     "clip_segments",
+    "nearest_boundary_point",
+    "point_segment_distance",
     "points_in_polygon",
     "polygon_area",
     "rectangle",
@@ -50,7 +52,9 @@ def boundary_tolerance(poly: np.ndarray) -> float:
     return BOUNDARY_RTOL * _size(np.asarray(poly, dtype=float))
 
 
-def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def point_segment_distance(
+    p: np.ndarray, a: np.ndarray, b: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Distance from points p to the closed segments [a, b], broadcast over leading axes.
 
     Args:
@@ -59,7 +63,8 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray
         b: segment ends, shape=(..., 2).
 
     Returns:
-        Distances, the broadcast leading shape.
+        (distances, t), both of the broadcast leading shape; the closest point is
+        a + t (b − a) with t in [0, 1].
     """
     ab = b - a
     ap = p - a
@@ -67,7 +72,29 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray
     t = np.sum(ap * ab, axis=-1) / np.where(den > 0.0, den, 1.0)
     t = np.clip(t, 0.0, 1.0)
     d = ap - t[..., None] * ab
-    return np.hypot(d[..., 0], d[..., 1])
+    return np.hypot(d[..., 0], d[..., 1]), t
+
+
+def nearest_boundary_point(
+    points: np.ndarray, poly: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Closest point of the boundary of ``poly`` to each point.
+
+    Args:
+        points: shape=(n, 2).
+        poly: polygon vertices, shape=(m, 2); side k runs from vertex k to vertex k + 1.
+
+    Returns:
+        (distance shape=(n,), side shape=(n,), t shape=(n,) the parameter along that
+        side, closest point shape=(n, 2)).
+    """
+    a, b = poly, np.roll(poly, -1, axis=0)
+    d, t = point_segment_distance(points[:, None, :], a[None], b[None])
+    side = np.argmin(d, axis=1)
+    rows = np.arange(len(points))
+    ts = t[rows, side]
+    closest = a[side] + ts[:, None] * (b[side] - a[side])
+    return d[rows, side], side, ts, closest
 
 
 def as_polygon(points: ArrayLike) -> np.ndarray:
@@ -128,10 +155,10 @@ def as_polygon(points: ArrayLike) -> np.ndarray:
         o3, o4 = orient(aj, bj, ai), orient(aj, bj, bi)
         crossing = (np.sign(o1) * np.sign(o2) < 0) & (np.sign(o3) * np.sign(o4) < 0)
         touching = (
-            (_segment_distance(aj, ai, bi) <= tol)
-            | (_segment_distance(bj, ai, bi) <= tol)
-            | (_segment_distance(ai, aj, bj) <= tol)
-            | (_segment_distance(bi, aj, bj) <= tol)
+            (point_segment_distance(aj, ai, bi)[0] <= tol)
+            | (point_segment_distance(bj, ai, bi)[0] <= tol)
+            | (point_segment_distance(ai, aj, bj)[0] <= tol)
+            | (point_segment_distance(bi, aj, bj)[0] <= tol)
         )
         hit = crossing | touching
         if np.any(hit):
@@ -142,8 +169,8 @@ def as_polygon(points: ArrayLike) -> np.ndarray:
             )
     # adjacent edges share one vertex; they overlap when the boundary folds back on itself
     prev = np.roll(poly, 1, axis=0)
-    spike = (_segment_distance(prev, poly, nxt) <= tol) | (
-        _segment_distance(nxt, prev, poly) <= tol
+    spike = (point_segment_distance(prev, poly, nxt)[0] <= tol) | (
+        point_segment_distance(nxt, prev, poly)[0] <= tol
     )
     if np.any(spike):
         k = int(np.nonzero(spike)[0][0])
@@ -187,7 +214,7 @@ def _on_boundary(points: np.ndarray, poly: np.ndarray, tol: float) -> np.ndarray
     for a, b in zip(poly, nxt, strict=True):
         (x0, y0), (x1, y1) = np.minimum(a, b) - tol, np.maximum(a, b) + tol
         near = np.nonzero((px >= x0) & (px <= x1) & (py >= y0) & (py <= y1))[0]
-        on[near] |= _segment_distance(points[near], a, b) <= tol
+        on[near] |= point_segment_distance(points[near], a, b)[0] <= tol
     return on
 
 
@@ -304,7 +331,7 @@ def clip_segments(segments: ArrayLike, poly: ArrayLike) -> tuple[np.ndarray, np.
             hit_rows.append(near[cross])
             hit_ts.append(t[cross])
             # the vertex a lying on the segment (this also covers collinear overlaps)
-            on = (_segment_distance(a, pn, qn) <= tol) & (rrn > 0.0)
+            on = (point_segment_distance(a, pn, qn)[0] <= tol) & (rrn > 0.0)
             tv = (w[on, 0] * rn[on, 0] + w[on, 1] * rn[on, 1]) / rrn[on]
             hit_rows.append(near[on])
             hit_ts.append(np.clip(tv, 0.0, 1.0))

@@ -25,6 +25,7 @@ from geofrac.dfn.io import load_network
 from geofrac.dfn.polygon import (
     as_polygon,
     clip_segments,
+    point_segment_distance,
     points_in_polygon,
     polygon_area,
     rectangle,
@@ -233,8 +234,6 @@ def _polygon(file: str, key: str, value: Any, kinds: tuple[str, ...]) -> np.ndar
 
 def _distance(a: np.ndarray, b: np.ndarray) -> float:
     """Distance between polygons ``a`` and ``b`` (each shape=(m, 2)); 0 when they meet."""
-    from geofrac.dfn.clean import point_segment_distance
-
     edges_a = np.stack([a, np.roll(a, -1, axis=0)], axis=1)
     edges_b = np.stack([b, np.roll(b, -1, axis=0)], axis=1)
     if points_in_polygon(a, b).any() or points_in_polygon(b, a).any():

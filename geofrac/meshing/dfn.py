@@ -22,7 +22,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from geofrac.dfn.clean import CleanNetwork, point_segment_distance
+from geofrac.dfn.clean import CleanNetwork
+from geofrac.dfn.polygon import nearest_boundary_point
 from geofrac.meshing.quality import triangle_quality
 
 __all__ = ["ALGORITHMS", "DOMAIN_GROUP", "FRACTURE_GROUP", "MeshSpec", "mesh_network"]
@@ -64,16 +65,13 @@ def _boundary_chains(clean: CleanNetwork) -> list[list[int]]:
     on = np.flatnonzero(clean.on_boundary)
     side_of: dict[int, list[tuple[float, int]]] = {k: [] for k in range(m)}
     if len(on):
-        a = domain[None, :, :]
-        b = np.roll(domain, -1, axis=0)[None, :, :]
-        d, t = point_segment_distance(vertices[on][:, None, :], a, b)
+        _, side, t, _ = nearest_boundary_point(vertices[on], domain)
         for row, v in enumerate(on):
             at_corner = np.flatnonzero(np.hypot(*(domain - vertices[v]).T) <= 1e-12 * scale)
             if len(at_corner):
                 corner_ids[int(at_corner[0])] = int(v)
                 continue
-            k = int(np.argmin(d[row]))
-            side_of[k].append((float(t[row, k]), int(v)))
+            side_of[int(side[row])].append((float(t[row]), int(v)))
     return [
         [corner_ids[k]] + [v for _, v in sorted(side_of[k])] + [corner_ids[(k + 1) % m]]
         for k in range(m)

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from geofrac.dfn.check import covered_length, match_facets
-from geofrac.dfn.clean import box_pairs, clean_network, point_segment_distance
+from geofrac.dfn.clean import box_pairs, clean_network
 from geofrac.dfn.errors import DfnError
-from geofrac.dfn.polygon import as_polygon, rectangle
+from geofrac.dfn.polygon import as_polygon, point_segment_distance, rectangle
 from geofrac.dfn.sampling import FractureSet, Network, generate_network
 
 TOL = 0.1
