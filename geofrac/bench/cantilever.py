@@ -14,6 +14,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from geofrac.bench.args import number_list
+
 __all__ = ["SEED_MESHES", "add_arguments", "int_list", "run"]
 
 #: Seed meshes: ny (depth) values; nx = 10 ny.
@@ -21,17 +23,8 @@ SEED_MESHES = (4, 5, 6, 7, 8, 9, 10, 11)
 _DEFAULT_SCENE = Path(__file__).resolve().parents[2] / "jobs" / "cantilever.toml"
 
 
-def int_list(text: str) -> list[int]:
-    """Positive integers from a comma-separated list (an argparse type)."""
-    try:
-        values = [int(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected comma-separated integers, got {text!r}"
-        ) from None
-    if not values or min(values) < 1:
-        raise argparse.ArgumentTypeError(f"expected positive integers, got {text!r}")
-    return values
+#: Positive integers from a comma-separated list (an argparse type).
+int_list = number_list(int, lambda v: v >= 1, "positive")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -14,9 +14,12 @@ standard deviation against Table 2.1. Writes ``dfn.json`` and one picture per mo
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from pathlib import Path
 from typing import Any
+
+from geofrac.bench.args import number_list
 
 __all__ = ["add_arguments", "network_statistics", "run"]
 
@@ -41,29 +44,17 @@ COLUMNS = (
 )
 
 
-def _list(text: str, kind: type) -> list[Any]:
-    try:
-        values = [kind(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a comma-separated list, got {text!r}") from None
-    if not values:
-        raise argparse.ArgumentTypeError("expected at least one value")
-    return values
-
-
 def _models(text: str) -> list[str]:
-    names = _list(text, str)
+    names = [v.strip() for v in text.split(",") if v.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError("expected at least one model")
     for name in names:
         if name not in MODELS:
             raise argparse.ArgumentTypeError(f"unknown model {name!r}; choose from {list(MODELS)}")
     return names
 
 
-def _scales(text: str) -> list[float]:
-    values = _list(text, float)
-    if any(not v > 0 for v in values):
-        raise argparse.ArgumentTypeError(f"scales must be > 0, got {text!r}")
-    return values
+_scales = number_list(float, lambda v: math.isfinite(v) and v > 0, "finite positive")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

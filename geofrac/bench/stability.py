@@ -20,6 +20,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+from geofrac.bench.args import number_list
+
 __all__ = ["add_arguments", "run"]
 
 _SCENE = Path(__file__).resolve().parents[2] / "jobs" / "cantilever.toml"
@@ -46,16 +48,7 @@ COLUMNS = (
 )
 
 
-def _float_list(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected comma-separated numbers, got {text!r}"
-        ) from None
-    if not values or not all(map(math.isfinite, values)):
-        raise argparse.ArgumentTypeError(f"expected finite numbers, got {text!r}")
-    return values
+_float_list = number_list(float, math.isfinite, "finite")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
