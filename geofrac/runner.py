@@ -18,6 +18,7 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
+from geofrac import effects as effect_registry
 from geofrac.elements import make_element
 from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem, exact_ufl, make_problem
@@ -47,6 +48,13 @@ OUTPUT_FILES = (
     "fractures.xdmf",
     "fractures.h5",
     "network.csv",
+    "events.csv",
+    "load_displacement.png",
+    "cracks.png",
+    "cracks.xdmf",
+    "cracks.h5",
+    "damage.xdmf",
+    "damage.h5",
 )
 
 
@@ -79,9 +87,16 @@ class Solution:
 
 
 def solve_scene(
-    scene: Scene, comm: MPI.Comm, timings: Timings | None = None, verbose: bool = True
+    scene: Scene,
+    comm: MPI.Comm,
+    timings: Timings | None = None,
+    verbose: bool = True,
+    write: bool = False,
 ) -> Solution:
     """Mesh, discretise, assemble and solve ``scene``; compute probes and error norms.
+
+    ``write``: an effect's driver may write its own files into ``output.dir`` (the
+    cracking event log and series); :func:`run_scene` sets it, benchmarks do not.
 
     Raises:
         RunError: collectively, when the run cannot continue.
@@ -113,21 +128,31 @@ def solve_scene(
         f"mesh: {counts['vertices']} vertices, {counts['cells']} cells; "
         f"element {element.name}: {element.num_dofs} DOFs on {comm.size} rank(s)"
     )
+    driven = [s for s in scene.effects if hasattr(effect_registry.load(s.name), "driver")]
     try:
-        _solve_phases(problem, timings, say)
+        if driven:  # the effect's loop replaces the single solve (cracking)
+            with timings.phase("compile"):
+                problem.compile()
+            with timings.phase("events"):
+                loop = effect_registry.load(driven[0].name).driver(
+                    driven[0].config, solution, say, write
+                )
+        else:
+            _solve_phases(problem, timings, say)
     except BaseException:
         problem.destroy()
         raise
     uh = problem.uh
     with timings.phase("postprocess"):
         values = probe(uh, points, cells)
-        results: dict[str, Any] = {
-            "probes": {n: values[i].tolist() for i, n in enumerate(names)},
-            "strain_energy": integrate(
+        results: dict[str, Any] = {"probes": {n: values[i].tolist() for i, n in enumerate(names)}}
+        if driven:
+            results[driven[0].name] = loop
+        else:
+            results["strain_energy"] = integrate(
                 strain_energy_form(uh, problem.lam, problem.mu, problem.thickness, problem.dx), comm
-            ),
-            "solver": problem.solver.describe() | {"iterations": problem.iterations},  # type: ignore[union-attr]
-        }
+            )
+            results["solver"] = problem.solver.describe() | {"iterations": problem.iterations}  # type: ignore[union-attr]
         if geometry_report:
             results["geometry"] = geometry_report
         if problem.exact is not None:
@@ -244,7 +269,7 @@ def run_scene(
     }
     solution = None
     try:
-        solution = solve_scene(scene, comm, timings, verbose)
+        solution = solve_scene(scene, comm, timings, verbose, write=True)
         if scene.output.xdmf:
             with timings.phase("output"):
                 _write_xdmf(solution)
@@ -263,7 +288,9 @@ def run_scene(
     except RunError as exc:  # raised collectively, so the collective finish below is safe
         summary["status"] = f"error: {exc}"
         if comm.rank == 0:
-            for name in ("results.xdmf", "results.h5", "fractures.xdmf", "fractures.h5"):
+            for name in OUTPUT_FILES:
+                if name == "summary.json":
+                    continue
                 (scene.output.dir / name).unlink(missing_ok=True)
         _finish(summary, scene, comm, timings)
         raise

@@ -14,21 +14,25 @@ An effect is a module named in :data:`REGISTRY` that provides
   :class:`~geofrac.scene.model.Geometry` carries a builder that makes the gmsh model on
   one rank.
 
-Later capabilities add hooks beside these (a driver that replaces the single solve for
-``cracking``, particle state for ``mpm``); see ``docs/architecture.md``. Nothing in
+- optionally ``driver(config, solution, say, write)``: the effect replaces the single
+  elastic solve by its own loop (``cracking``: the sequentially linear event loop); see
+  :func:`geofrac.effects.cracking.driver`.
+
+Later capabilities add hooks beside these (particle state for ``mpm``); see ``docs/architecture.md``. Nothing in
 :mod:`geofrac` imports an effect module except through :func:`load`.
 """
 
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import ModuleType
 
 __all__ = ["REGISTRY", "ConfigureContext", "available", "load"]
 
 #: effect name -> module implementing it.
 REGISTRY: dict[str, str] = {
+    "cracking": "geofrac.effects.cracking",
     "dfn": "geofrac.effects.dfn",
     "gravity": "geofrac.effects.gravity",
 }
@@ -42,11 +46,18 @@ class ConfigureContext:
         file: the scene file (for error messages).
         gdim: geometric dimension of the problem.
         material: the validated material (:class:`geofrac.scene.model.Material`).
+        element: the scene's element name.
+        groups: physical group name -> dimension of the scene's geometry.
+        bcs: the validated Dirichlet conditions
+            (:class:`geofrac.scene.model.BoundaryCondition`).
     """
 
     file: str
     gdim: int
     material: object
+    element: str = ""
+    groups: dict[str, int] = field(default_factory=dict)
+    bcs: tuple = ()
 
 
 def available() -> tuple[str, ...]:

@@ -193,6 +193,29 @@ class ElasticProblem:
         self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(self.b, self.bcs)
 
+    def load_vector(self) -> PETSc.Vec:
+        """The assembled load vector on the unknowns, without Dirichlet conditions."""
+        if self.L is None:
+            self.compile()
+        b = dolfinx.fem.petsc.assemble_vector(self.L)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return b
+
+    def dirichlet(self) -> tuple[np.ndarray, np.ndarray]:
+        """(global unknown indices, shape=(p,); values, shape=(p,)) fixed by the
+        Dirichlet conditions, owned entries only (a DOF in two conditions takes the
+        value of the last, as in the assembly).
+        """
+        V = self.element.space
+        imap, bs = V.dofmap.index_map, V.dofmap.index_map_bs
+        n = imap.size_local * bs
+        x = np.full((imap.size_local + imap.num_ghosts) * bs, np.nan)
+        for bc in self.bcs:
+            bc.set(x)
+        local = np.flatnonzero(~np.isnan(x[:n]))
+        blocks = imap.local_to_global((local // bs).astype(np.int32)).astype(np.int64)
+        return blocks * bs + local % bs, x[local]
+
     def solve(self) -> dolfinx.fem.Function:
         """Factorise/precondition and solve; return the displacement function."""
         if self.A is None:
@@ -310,19 +333,16 @@ class GradientDofProblem(ElasticProblem):
         assert self.a is not None and self.L is not None
         self._free_operators()
         mats = [dolfinx.fem.petsc.assemble_matrix(f) for f in (self.a, self.a_wv, self.a_ww)]
-        b_v = dolfinx.fem.petsc.assemble_vector(self.L)
         try:
             for M in mats:
                 M.assemble()
             self.A = self.element.reduce(*mats)
-            b_v.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            self.b = self.A.createVecLeft()
-            self.element.prolongation().multTranspose(b_v, self.b)
         finally:
-            for obj in (*mats, b_v):
-                obj.destroy()
-        rows = np.concatenate([r for r, _ in self.bcs]).astype(PETSc.IntType)
-        vals = np.concatenate([v for _, v in self.bcs])
+            for M in mats:
+                M.destroy()
+        self.b = self.load_vector()
+        rows, vals = self.dirichlet()
+        rows = rows.astype(PETSc.IntType)
         g = self.A.createVecRight()
         try:
             g.setValues(rows, vals)
@@ -330,6 +350,21 @@ class GradientDofProblem(ElasticProblem):
             self.A.zeroRowsColumns(rows, 1.0, g, self.b)
         finally:
             g.destroy()
+
+    def load_vector(self) -> PETSc.Vec:
+        """Tᵀ b_P2: the load vector on the vertex DOFs, without Dirichlet conditions."""
+        b_v = super().load_vector()
+        try:
+            b = self.element.prolongation().createVecRight()
+            self.element.prolongation().multTranspose(b_v, b)
+        finally:
+            b_v.destroy()
+        return b
+
+    def dirichlet(self) -> tuple[np.ndarray, np.ndarray]:
+        """(global vertex-DOF indices, values) fixed by the Dirichlet conditions (owned)."""
+        rows = np.concatenate([r for r, _ in self.bcs]).astype(np.int64)
+        return rows, np.concatenate([v for _, v in self.bcs])
 
     def _unknown(self) -> dolfinx.fem.Function:
         """The vertex DOFs ``wh``."""

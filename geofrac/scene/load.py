@@ -409,12 +409,16 @@ def _effects(
     file: Path,
     data: dict[str, Any],
     declared: list[str],
-    dim: int,
+    geometry: Geometry,
     material: Material,
+    discretization: Discretization,
+    bcs: tuple[BoundaryCondition, ...],
     configured: dict[str, Any],
 ) -> tuple[EffectSpec, ...]:
     """Configure each declared effect (``configured``: those already done, by name)."""
-    ctx = effects.ConfigureContext(str(file), dim, material)
+    ctx = effects.ConfigureContext(
+        str(file), geometry.dim, material, discretization.element, dict(geometry.groups), bcs
+    )
     specs = []
     for name in declared:
         if name in configured:
@@ -524,7 +528,7 @@ def load_scene(
     output = _output(
         file, data.get("output", {}), name, geometry.dim, None if out is None else Path(out)
     )
-    specs = _effects(file, data, declared, geometry.dim, material, configured)
+    specs = _effects(file, data, declared, geometry, material, discretization, bcs, configured)
     return Scene(
         warnings=_warnings(file, material, discretization, geometry.dim),
         path=file.resolve(),

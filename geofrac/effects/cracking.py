@@ -1,0 +1,219 @@
+"""Effect ``cracking``: crack propagation on element edges, sequentially linear (seed ch. 2).
+
+Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference):
+
+- ``method``: ``"sequentially-linear"`` (the only one): seed Fig. 2.6.
+- ``max_events`` (100): the run ends after this many crack events; 0 solves once with
+  the initial crack state (the patch test) and reports the displacement error (2.22)
+  when the scene has an ``[exact]`` solution.
+- ``energy_drop``: end when the strain energy falls below (1 - energy_drop) times its
+  peak so far (seed: "until the strain energy of the whole body decreases"); off if absent.
+- ``neighbours`` (10), ``margin`` (1.1), ``max_radius_factor`` (8): MLS neighbourhood
+  (docs/cracking.md).
+- ``precracked`` ([]): facet groups cracked before loading (a notch, DFN ``fractures``).
+- ``mls_region``: ``[x0, y0, x1, y1]``: cells whose centroid is inside use MLS from the
+  start (the patch test's core).
+- ``control``: the Dirichlet group whose prescribed displacement is the load (default:
+  the first ``[[bc]]`` with a non-zero value).
+- ``edges_per_event`` (1), ``batch_tolerance`` (0): crack up to ``edges_per_event`` edges
+  with r ≤ (1 + batch_tolerance) r_min in one event.
+- ``solver`` (``"reuse"``): ``"reuse"`` keeps one factorisation as preconditioner of CG
+  for later events and refactorises when CG needs more than ``reuse_iterations`` (30);
+  ``"refactor"`` factorises every event (the reference).
+- ``output_every``: write a frame of the XDMF series every this many events (default
+  max_events / 50).
+- ``face``, ``face_origin`` (0): report where the crack first reaches the facet group
+  ``face``, as x minus ``face_origin`` (the notched beam's ``crack_top_x_mm``).
+
+The event loop is :class:`geofrac.fracture.driver.CrackDriver`; this module only
+validates, and is cheap to import.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from geofrac.effects import ConfigureContext
+from geofrac.scene.errors import SceneError, did_you_mean
+
+__all__ = ["ELEMENTS", "KEYS", "CrackingConfig", "configure", "driver"]
+
+#: Elements the crack driver supports.
+ELEMENTS = ("cst", "p1", "rgnt", "gnt")
+
+#: Keys of the ``[cracking]`` table.
+KEYS = (
+    "method",
+    "max_events",
+    "energy_drop",
+    "neighbours",
+    "margin",
+    "max_radius_factor",
+    "precracked",
+    "mls_region",
+    "control",
+    "edges_per_event",
+    "batch_tolerance",
+    "solver",
+    "reuse_iterations",
+    "output_every",
+    "face",
+    "face_origin",
+)
+
+
+@dataclass(frozen=True)
+class CrackingConfig:
+    """Validated ``[cracking]`` settings (see the module docstring for each key)."""
+
+    method: str
+    max_events: int
+    energy_drop: float | None
+    neighbours: int
+    margin: float
+    max_radius_factor: float
+    precracked: tuple[str, ...]
+    mls_region: tuple[float, float, float, float] | None
+    control: str
+    edges_per_event: int
+    batch_tolerance: float
+    solver: str
+    reuse_iterations: int
+    output_every: int
+    face: str | None
+    face_origin: float
+    tensile_strength: float
+
+
+def _number(
+    table: dict[str, Any],
+    file: str,
+    key: str,
+    default: Any,
+    kind: type,
+    lo: float,
+    hi: float = float("inf"),
+    closed: bool = True,
+) -> Any:
+    value = table.get(key, default)
+    if value is None:
+        return None
+    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    if kind is int:
+        ok = ok and isinstance(value, int)
+    if not ok or not (lo <= value if closed else lo < value) or not value <= hi:
+        span = f"{'≥' if closed else '>'} {lo}" + (f" and ≤ {hi}" if hi != float("inf") else "")
+        what = "an integer" if kind is int else "a number"
+        raise SceneError(file, f"cracking.{key}", f"must be {what} {span}, got {value!r}")
+    return kind(value)
+
+
+def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
+    """Validate ``[cracking]`` against the material, element, groups and conditions."""
+    file = ctx.file
+    for key in table:
+        if key not in KEYS:
+            raise SceneError(file, f"cracking.{key}", "unknown key" + did_you_mean(key, KEYS))
+    if ctx.gdim != 2:
+        raise SceneError(file, "effects", "effect 'cracking' is 2D (triangles); the mesh is 3D")
+    if ctx.element not in ELEMENTS:
+        raise SceneError(
+            file,
+            "discretization.element",
+            f"effect 'cracking' supports {', '.join(ELEMENTS)}, not '{ctx.element}'",
+        )
+    ft = getattr(ctx.material, "tensile_strength", None)
+    if ft is None:
+        raise SceneError(
+            file, "material.tensile_strength", "effect 'cracking' needs the tensile strength f_t"
+        )
+    method = table.get("method", "sequentially-linear")
+    if method != "sequentially-linear":
+        raise SceneError(
+            file, "cracking.method", f"unknown method {method!r}; use 'sequentially-linear'"
+        )
+    max_events = _number(table, file, "max_events", 100, int, 0)
+    energy_drop = _number(table, file, "energy_drop", None, float, 0.0, 1.0, closed=False)
+    precracked = table.get("precracked", [])
+    if not isinstance(precracked, list) or not all(isinstance(g, str) for g in precracked):
+        raise SceneError(
+            file, "cracking.precracked", f"must be a list of group names, got {precracked!r}"
+        )
+    for g in precracked:
+        if ctx.groups.get(g) != 1:
+            raise SceneError(
+                file,
+                "cracking.precracked",
+                f"'{g}' is not a curve group of the geometry"
+                + did_you_mean(g, [k for k, d in ctx.groups.items() if d == 1]),
+            )
+    region = table.get("mls_region")
+    if region is not None:
+        if (
+            not isinstance(region, list)
+            or len(region) != 4
+            or not all(isinstance(c, int | float) and not isinstance(c, bool) for c in region)
+            or region[0] >= region[2]
+            or region[1] >= region[3]
+        ):
+            raise SceneError(
+                file,
+                "cracking.mls_region",
+                f"must be [x0, y0, x1, y1] with x0 < x1, y0 < y1, got {region!r}",
+            )
+        region = tuple(float(c) for c in region)
+    nonzero = [bc.group for bc in ctx.bcs if bc.value != "exact" and any(v != 0 for v in bc.value)]
+    bc_groups = [bc.group for bc in ctx.bcs]
+    control = table.get("control", nonzero[0] if nonzero else None)
+    if control is None:
+        raise SceneError(
+            file,
+            "cracking.control",
+            "no [[bc]] prescribes a non-zero displacement; name the control group",
+        )
+    if not isinstance(control, str) or control not in bc_groups:
+        raise SceneError(
+            file,
+            "cracking.control",
+            "must name a [[bc]] group" + did_you_mean(str(control), bc_groups),
+        )
+    face = table.get("face")
+    if face is not None and (not isinstance(face, str) or face not in ctx.groups):
+        raise SceneError(
+            file,
+            "cracking.face",
+            f"unknown group {face!r}" + did_you_mean(str(face), list(ctx.groups)),
+        )
+    solver = table.get("solver", "reuse")
+    if solver not in ("reuse", "refactor"):
+        raise SceneError(file, "cracking.solver", f"must be 'reuse' or 'refactor', got {solver!r}")
+    return CrackingConfig(
+        method=method,
+        max_events=max_events,
+        energy_drop=energy_drop,
+        neighbours=_number(table, file, "neighbours", 10, int, 3),
+        margin=_number(table, file, "margin", 1.1, float, 1.0, closed=False),
+        max_radius_factor=_number(table, file, "max_radius_factor", 8.0, float, 1.0),
+        precracked=tuple(precracked),
+        mls_region=region,
+        control=control,
+        edges_per_event=_number(table, file, "edges_per_event", 1, int, 1),
+        batch_tolerance=_number(table, file, "batch_tolerance", 0.0, float, 0.0),
+        solver=solver,
+        reuse_iterations=_number(table, file, "reuse_iterations", 30, int, 1),
+        output_every=_number(table, file, "output_every", max(1, max_events // 50), int, 1),
+        face=face,
+        face_origin=_number(table, file, "face_origin", 0.0, float, -float("inf")),
+        tensile_strength=float(ft),
+    )
+
+
+def driver(config: CrackingConfig, solution: Any, say: Any, write: bool) -> dict[str, Any]:
+    """Run the event loop on a set-up problem; return the results (see the driver).
+
+    ``write``: write the event log, pictures and XDMF series into ``output.dir``.
+    """
+    from geofrac.fracture.driver import CrackDriver
+
+    return CrackDriver(config, solution, say, write).run()

@@ -1,0 +1,178 @@
+"""Cell stiffness matrices and stresses of intact and cracked triangles (pure numpy).
+
+Intact cells use their element's field: CST (P1), or the RGNT/GNT vertex-DOF field of
+:mod:`geofrac.elements.kinematics`, whose stiffness is Tᵀ K_P2 T plus the zero-mode
+penalty of :mod:`geofrac_forms.gradient_dofs` (seed eqs. 2.4, 2.29). The integrands are
+quadratic on an affine triangle, so the three-point edge-midpoint rule is exact and these
+matrices equal the UFL-assembled ones to round-off (``tests/fracture/test_cells.py``
+checks this against DOLFINx). Cracked cells use the MLS field (2.19):
+k = t · area · Bᵀ D B on the translations of their satellite nodes.
+
+DOFs of a cell are ordered vertex by vertex, ``block_size`` per vertex (translations
+first). The driver needs the matrices one cell at a time for the changed cells of an
+event, which is why they are computed here rather than by a global assembly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geofrac.elements.kinematics import KINDS, local_prolongation
+from geofrac.mls.shape import LinearFit, strain_matrix
+
+__all__ = [
+    "BLOCK_SIZES",
+    "P2_EDGES",
+    "fe_matrices",
+    "fe_stresses",
+    "mls_matrix",
+    "mls_stress",
+    "principal_max",
+]
+
+#: DOFs per vertex of the elements the crack driver supports.
+BLOCK_SIZES = {"cst": 2, "p1": 2, "rgnt": 3, "gnt": 6}
+
+#: P2 edge nodes in basix order: edge e joins local vertices P2_EDGES[e].
+P2_EDGES = np.array([[1, 2], [0, 2], [0, 1]])
+
+
+def _barycentric_gradients(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(∇λ_i, shape=(nc, 3, 2); areas, shape=(nc,)) of triangles x, shape=(nc, 3, 2)."""
+    d1, d2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
+    det = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    inv = np.empty((len(x), 2, 2))  # inverse Jacobian of the map from the reference cell
+    inv[:, 0, 0], inv[:, 0, 1] = d2[:, 1] / det, -d2[:, 0] / det
+    inv[:, 1, 0], inv[:, 1, 1] = -d1[:, 1] / det, d1[:, 0] / det
+    g1, g2 = inv[:, 0], inv[:, 1]
+    grads = np.stack([-g1 - g2, g1, g2], axis=1)
+    return grads, 0.5 * np.abs(det)
+
+
+def _voigt(grad: np.ndarray) -> np.ndarray:
+    """Strain rows (ε_xx, ε_yy, γ_xy) from basis gradients, for vector DOFs.
+
+    Args:
+        grad: gradients of scalar basis functions, shape=(..., nb, 2).
+
+    Returns:
+        B with DOFs (u_0, v_0, u_1, ...), shape=(..., 3, 2 nb).
+    """
+    *lead, nb, _ = grad.shape
+    B = np.zeros((*lead, 3, 2 * nb))
+    B[..., 0, 0::2] = grad[..., 0]
+    B[..., 1, 1::2] = grad[..., 1]
+    B[..., 2, 0::2] = grad[..., 1]
+    B[..., 2, 1::2] = grad[..., 0]
+    return B
+
+
+def _p2_gradients(lam_grad: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """Gradients of the six P2 basis functions at barycentric points.
+
+    Args:
+        lam_grad: ∇λ_i, shape=(nc, 3, 2).
+        bary: barycentric coordinates of the points, shape=(nq, 3).
+
+    Returns:
+        shape=(nc, nq, 6, 2), P2 nodes in basix order (vertices, then P2_EDGES).
+    """
+    nc, nq = len(lam_grad), len(bary)
+    out = np.empty((nc, nq, 6, 2))
+    for i in range(3):  # λ_i (2 λ_i - 1)
+        out[:, :, i] = (4.0 * bary[:, i] - 1.0)[None, :, None] * lam_grad[:, None, i]
+    for e, (a, b) in enumerate(P2_EDGES):  # 4 λ_a λ_b
+        out[:, :, 3 + e] = 4.0 * (
+            bary[None, :, b, None] * lam_grad[:, None, a]
+            + bary[None, :, a, None] * lam_grad[:, None, b]
+        )
+    return out
+
+
+#: Edge midpoints in barycentric coordinates, with equal weights 1/3: exact for quadratics.
+MIDPOINTS = np.array([[0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [0.5, 0.5, 0.0]])
+
+
+def _cell_operator(element: str, x: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """Strain operator at points: ε = B d for the cell DOFs d, shape=(nc, nq, 3, nv * bs)."""
+    lam_grad, _ = _barycentric_gradients(x)
+    if element in ("cst", "p1"):
+        B = _voigt(lam_grad)[:, None]
+        return np.broadcast_to(B, (len(x), len(bary), 3, 6))
+    kind = KINDS[element]
+    T = local_prolongation(kind, x, P2_EDGES)  # shape=(nc, 6, 2, 3, bs)
+    T = T.reshape(len(x), 12, 3 * kind.block_size)  # rows (node, comp), cols (vertex, dof)
+    return _voigt(_p2_gradients(lam_grad, bary)) @ T[:, None]
+
+
+def fe_matrices(
+    element: str, x: np.ndarray, D: np.ndarray, thickness: float, penalty: float = 0.0
+) -> np.ndarray:
+    """Stiffness matrices of intact cells.
+
+    Args:
+        element: ``cst``, ``rgnt`` or ``gnt``.
+        x: vertex coordinates, shape=(nc, 3, 2).
+        D: stress-strain matrix (Voigt, engineering shear), shape=(3, 3).
+        thickness: t.
+        penalty: α μ of the zero-mode penalty (RGNT, GNT; ignored for CST).
+
+    Returns:
+        K_e with DOFs vertex by vertex, shape=(nc, 3 bs, 3 bs).
+    """
+    _, area = _barycentric_gradients(x)
+    B = _cell_operator(element, x, MIDPOINTS)  # shape=(nc, 3, 3, n)
+    w = thickness * area / 3.0
+    K = np.einsum("c,cqip,ij,cqjr->cpr", w, B, D, B)
+    if element in ("cst", "p1") or penalty == 0.0:
+        return K
+    kind = KINDS[element]
+    gdim, bs = 2, kind.block_size
+    lam_grad, _ = _barycentric_gradients(x)
+    T = local_prolongation(kind, x, P2_EDGES).reshape(len(x), 12, 3 * bs)
+    grad_u = _p2_gradients(lam_grad, MIDPOINTS)  # shape=(nc, nq, 6, 2)
+    for c, E in enumerate(kind.basis):
+        norm2 = float(np.sum(E * E))
+        # d_c(u) = ½ <E, ∇u> / |E|² as a row acting on P2 DOFs (node, comp)
+        dcu = 0.5 / norm2 * np.einsum("rs,cqns->cqnr", E, grad_u).reshape(len(x), 3, 12)
+        d = dcu @ T  # shape=(nc, nq, 3 bs)
+        g = np.zeros((len(x), 3, 3 * bs))  # g_c at the midpoints: P1 interpolation
+        for v in range(3):
+            g[:, :, v * bs + gdim + c] = MIDPOINTS[:, v]
+        r = g - d
+        K += penalty * thickness * norm2 * np.einsum("c,cqp,cqr->cpr", area / 3.0, r, r)
+    return K
+
+
+def fe_stresses(element: str, x: np.ndarray, dofs: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """Stress (σ_xx, σ_yy, σ_xy) of intact cells at their three edge midpoints.
+
+    Args:
+        element: ``cst``, ``rgnt`` or ``gnt``.
+        x: vertex coordinates, shape=(nc, 3, 2).
+        dofs: cell DOFs vertex by vertex, shape=(nc, 3 bs).
+        D: stress-strain matrix, shape=(3, 3).
+
+    Returns:
+        shape=(nc, 3, 3): [cell, local edge j (opposite vertex j), component].
+    """
+    B = _cell_operator(element, x, MIDPOINTS)  # point q is the midpoint of edge q
+    return np.einsum("ij,cqjp,cp->cqi", D, B, dofs)
+
+
+def mls_matrix(fit: LinearFit, D: np.ndarray, thickness: float, area: float) -> np.ndarray:
+    """Stiffness (2.19) of a cracked cell on its satellites' translations, shape=(2n, 2n)."""
+    B = strain_matrix(fit)
+    return thickness * area * B.T @ D @ B
+
+
+def mls_stress(fit: LinearFit, D: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Constant stress of a cracked cell from its satellites' translations u, shape=(n, 2)."""
+    return D @ (strain_matrix(fit) @ np.asarray(u).ravel())
+
+
+def principal_max(s: np.ndarray) -> np.ndarray:
+    """Largest in-plane principal stress of (σ_xx, σ_yy, σ_xy), shape=(..., 3) -> (...)."""
+    c = 0.5 * (s[..., 0] + s[..., 1])
+    r = np.hypot(0.5 * (s[..., 0] - s[..., 1]), s[..., 2])
+    return c + r

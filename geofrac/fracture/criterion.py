@@ -1,0 +1,76 @@
+"""Sequentially linear crack criterion, seed eqs. (2.20)-(2.21) (pure numpy).
+
+For a solution under the unit load, each edge's maximum principal stress σ1 is the mean
+of the largest principal stresses of its (one or two) cells at the edge midpoint (seed
+2.3.2: "the mean of the two maximum principal stresses at the middle of the edge"). The
+edge with the least r = f_t / σ1 over the uncracked, crackable edges with σ1 > 0 cracks,
+and the solution is scaled by r.
+
+Ties: r values within a relative :data:`TIE_TOLERANCE` of the minimum are equal, and the
+lowest edge id wins (edge ids follow the mesh file's node order, so the choice does not
+depend on the number of ranks).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geofrac.fracture.topology import EdgeMesh
+
+__all__ = ["TIE_TOLERANCE", "edge_principal", "select_edges"]
+
+#: Relative difference of r below which two edges count as tied.
+TIE_TOLERANCE = 1e-9
+
+
+def edge_principal(mesh: EdgeMesh, s1: np.ndarray) -> np.ndarray:
+    """σ1 per edge: mean over its cells of the largest principal stress at the midpoint.
+
+    Args:
+        mesh: the triangle mesh with edges.
+        s1: largest principal stress of each cell at the midpoint of its local edge j
+            (:func:`geofrac.fracture.cells.principal_max`), shape=(num_cells, 3).
+
+    Returns:
+        shape=(num_edges,).
+    """
+    total = np.bincount(mesh.cell_edges.ravel(), weights=s1.ravel(), minlength=len(mesh.edges))
+    count = np.bincount(mesh.cell_edges.ravel(), minlength=len(mesh.edges))
+    return total / np.maximum(count, 1)
+
+
+def select_edges(
+    sigma1: np.ndarray,
+    candidates: np.ndarray,
+    tensile_strength: float,
+    batch_tolerance: float = 0.0,
+    max_edges: int = 1,
+) -> tuple[np.ndarray, float]:
+    """Edges that crack in this event and the scale factor r (2.20).
+
+    Args:
+        sigma1: σ1 per edge under the unit load, shape=(num_edges,).
+        candidates: whether each edge may crack, shape=(num_edges,).
+        tensile_strength: f_t.
+        batch_tolerance: also crack edges with r ≤ (1 + batch_tolerance) r_min (several
+            near-critical edges per event); 0 cracks one edge (plus exact ties only when
+            ``max_edges`` > 1).
+        max_edges: at most this many edges per event.
+
+    Returns:
+        (edge ids in order of r then id, shape=(k,); r_min). k = 0 (and r = inf) when no
+        candidate is in tension.
+    """
+    ok = candidates & (sigma1 > 0.0) & np.isfinite(sigma1)
+    ids = np.flatnonzero(ok)
+    if len(ids) == 0:
+        return ids, float("inf")
+    r = tensile_strength / sigma1[ids]
+    r_min = float(r.min())
+    limit = r_min * (1.0 + max(batch_tolerance, TIE_TOLERANCE))
+    close = r <= limit
+    ids, r = ids[close], r[close]
+    tied = r <= r_min * (1.0 + TIE_TOLERANCE)  # ties sort by id, the rest by r
+    key = np.where(tied, r_min, r)
+    order = np.lexsort((ids, key))
+    return ids[order][:max_edges], r_min

@@ -1,0 +1,783 @@
+"""The sequentially linear event loop (seed Fig. 2.6) on a distributed mesh.
+
+Division of work:
+
+- the crack state (:class:`~geofrac.fracture.state.CrackState`: edges, visibility, MLS
+  fits) is pure numpy on the *global* mesh and replicated on every rank, in the mesh
+  file's numbering; the event sequence therefore does not depend on the number of ranks;
+- each rank computes the matrices, stresses, energy and reactions of the cells it owns in
+  DOLFINx's partition; the stiffness is assembled through PETSc's COO interface (entries
+  of other ranks' rows travel with PETSc's own assembly), because an MLS cell couples
+  nodes that are not its vertices and so falls outside any finite element sparsity
+  pattern; the per-cell σ1 values are gathered to every rank for the criterion;
+- the solve is PETSc's: a MUMPS factorisation, reused across events as the
+  preconditioner of CG (``solver = "reuse"``) and renewed when CG needs more than
+  ``reuse_iterations`` iterations, or renewed every event (``"refactor"``).
+
+Each event: unit load (the scene's prescribed displacements as given) → solve → σ1 per
+edge → the edge with least r = f_t/σ1 cracks → the solution scaled by r is the state of
+the event (2.21) → record → refit the changed cells → repeat.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from geofrac.errors import RunError
+from geofrac.fracture.cells import BLOCK_SIZES, MIDPOINTS, fe_matrices, mls_matrix, principal_max
+from geofrac.fracture.cells import _cell_operator as cell_operator
+from geofrac.fracture.criterion import edge_principal, select_edges
+from geofrac.fracture.state import CrackState, MlsSettings
+from geofrac.fracture.topology import edge_mesh
+from geofrac.log import format_seconds
+from geofrac.materials import d_matrix, lame
+from geofrac.solvers import LinearSolver
+
+__all__ = ["END_REASONS", "CrackDriver", "GlobalMesh", "gather_mesh"]
+
+#: Why an event loop ends.
+END_REASONS = ("max_events", "energy_drop", "no_tensile_edge", "separated", "singular")
+
+#: The body is *separated* when the unit-load strain energy falls below this fraction of
+#: its value at the first event: no load path is left between the control group and the
+#: supports (the seed's "unstable" end, reached without a singular matrix because both
+#: pieces are held by Dirichlet conditions).
+SEPARATED = 1e-9
+
+#: Options prefix of the crack solver.
+PREFIX = "geofrac_crack_"
+
+EVENT_COLUMNS = (
+    "event",
+    "edge",
+    "node_a",
+    "node_b",
+    "x",
+    "y",
+    "r",
+    "load_factor",
+    "control_displacement",
+    "reaction",
+    "strain_energy",
+    "edges_cracked",
+    "iterations",
+)
+
+
+@dataclass
+class GlobalMesh:
+    """The distributed mesh gathered on every rank in a rank-independent numbering.
+
+    Attributes:
+        coords: node coordinates, shape=(num_nodes, 2).
+        cells: node ids per cell, ordered by the mesh file's cell order, shape=(nc, 3).
+        input_ids: the mesh file's node index of each node (sorted), shape=(num_nodes,).
+        node_block: PETSc global block (vertex) index of each node, shape=(num_nodes,).
+        owned: whether this rank owns each cell, shape=(nc,).
+        local_cell: global cell id of each local (owned + ghost) DOLFINx cell,
+            shape=(num_local_cells,).
+    """
+
+    coords: np.ndarray
+    cells: np.ndarray
+    input_ids: np.ndarray
+    node_block: np.ndarray
+    owned: np.ndarray
+    local_cell: np.ndarray
+
+    def nodes_of(self, input_ids: np.ndarray) -> np.ndarray:
+        """Node ids of mesh-file node indices, same shape."""
+        return np.searchsorted(self.input_ids, input_ids)
+
+
+def gather_mesh(mesh: dolfinx.mesh.Mesh, space: dolfinx.fem.FunctionSpace) -> GlobalMesh:
+    """Gather cells, coordinates and DOF blocks of a P1-geometry triangle mesh (collective).
+
+    ``space`` is a vertex (P1) space whose blocks follow the cell vertices.
+    """
+    comm = mesh.comm
+    n_own = mesh.topology.index_map(2).size_local
+    geo = mesh.geometry.dofmaps[0]  # shape=(num_local_cells, 3): geometry nodes
+    inp = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    orig = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)
+    imap = space.dofmap.index_map
+    blocks = imap.local_to_global(space.dofmap.list[:n_own].ravel().astype(np.int32))
+    parts = comm.allgather(
+        (
+            orig[:n_own],
+            inp[geo[:n_own]],
+            np.asarray(blocks, dtype=np.int64).reshape(-1, 3),
+            mesh.geometry.x[geo[:n_own]][:, :, :2],
+        )
+    )
+    orig_all = np.concatenate([p[0] for p in parts])
+    rank_of = np.concatenate([np.full(len(p[0]), r) for r, p in enumerate(parts)])
+    order = np.argsort(orig_all)
+    cell_inp = np.concatenate([p[1] for p in parts])[order]
+    cell_blocks = np.concatenate([p[2] for p in parts])[order]
+    cell_x = np.concatenate([p[3] for p in parts])[order]
+    ids, inverse = np.unique(cell_inp, return_inverse=True)
+    inverse = inverse.reshape(-1, 3)
+    coords = np.zeros((len(ids), 2))
+    coords[inverse.ravel()] = cell_x.reshape(-1, 2)
+    node_block = np.zeros(len(ids), dtype=np.int64)
+    node_block[inverse.ravel()] = cell_blocks.ravel()
+    sorted_orig = orig_all[order]
+    local = np.searchsorted(sorted_orig, orig[: len(geo)])
+    return GlobalMesh(coords, inverse, ids, node_block, rank_of[order] == comm.rank, local)
+
+
+def _facet_nodes(
+    mesh: dolfinx.mesh.Mesh, gm: GlobalMesh, dim: int, entities: np.ndarray
+) -> np.ndarray:
+    """Global node ids of local mesh entities, gathered from all ranks, shape=(n, dim + 1)."""
+    if dim == 0:
+        nodes = dolfinx.mesh.entities_to_geometry(mesh, 0, entities.astype(np.int32)).reshape(-1, 1)
+    else:
+        nodes = dolfinx.mesh.entities_to_geometry(mesh, dim, entities.astype(np.int32))
+    inp = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)[nodes]
+    parts = mesh.comm.allgather(inp.reshape(-1, dim + 1))
+    out = np.concatenate(parts) if parts else np.zeros((0, dim + 1), dtype=np.int64)
+    return gm.nodes_of(out)
+
+
+def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Connected-component label (smallest node id) of n nodes joined by pairs a–b."""
+    labels = np.arange(n)
+    while True:
+        m = np.minimum(labels[a], labels[b])
+        new = labels.copy()
+        np.minimum.at(new, a, m)
+        np.minimum.at(new, b, m)
+        new = new[new]  # pointer jumping
+        if np.array_equal(new, labels):
+            return labels
+        labels = new
+
+
+class _ReferencePC:
+    """PCSHELL context: apply a reference factorisation (a :class:`LinearSolver`)."""
+
+    def __init__(self, solver: LinearSolver) -> None:
+        self.solver = solver
+
+    def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        self.solver.ksp.solve(x, y)
+
+
+@dataclass
+class _Timing:
+    """Seconds per phase of the event loop on this rank."""
+
+    seconds: dict[str, float] = field(
+        default_factory=lambda: dict.fromkeys(("assemble", "solve", "criterion", "update"), 0.0)
+    )
+    factorizations: int = 0
+    iterations: int = 0
+
+    def add(self, phase: str, t0: float) -> float:
+        t1 = time.perf_counter()
+        self.seconds[phase] += t1 - t0
+        return t1
+
+
+class CrackDriver:
+    """Sequentially linear crack propagation for one scene.
+
+    Args:
+        config: the validated ``[cracking]`` settings.
+        solution: the runner's :class:`~geofrac.runner.Solution` with the problem set up
+            and compiled (its load vector and Dirichlet data are used; its matrix is not).
+        say: progress printer (rank 0).
+        write: write ``events.csv``, the pictures and the XDMF series into
+            ``output.dir`` (the results are returned either way; the rows of the event
+            log stay in :attr:`rows`).
+    """
+
+    def __init__(self, config: Any, solution: Any, say: Any, write: bool = False) -> None:
+        self.config, self.say, self.write = config, say, write
+        self.scene, self.problem, self.tagged = solution.scene, solution.problem, solution.tagged
+        self.out_dir = self.scene.output.dir
+        mesh = self.tagged.mesh
+        self.mesh, self.comm = mesh, mesh.comm
+        self.element = self.scene.discretization.element
+        self.bs = BLOCK_SIZES[self.element]
+        self.unknown = self.problem._unknown()
+        space = self.unknown.function_space
+        self.gm = gather_mesh(mesh, space)
+        mat = self.scene.material
+        self.D = d_matrix(mat.E, mat.nu, 2, mat.plane)
+        self.t = mat.thickness
+        _, mu = lame(mat.E, mat.nu, 2, mat.plane)
+        self.penalty = self.scene.discretization.zero_mode_penalty * mu
+        imap = space.dofmap.index_map
+        self.n_local = imap.size_local * self.bs
+        self.n_global = imap.size_global * self.bs
+        self.row0 = imap.local_range[0] * self.bs
+        self._setup_crack_state()
+        self._setup_cells()
+        self.timing = _Timing()
+        self.solver: LinearSolver | None = None
+        self.ksp: PETSc.KSP | None = None
+        self.A: PETSc.Mat | None = None
+        self._b0: PETSc.Vec | None = None
+        #: nodes of pieces cut free by cracks (no Dirichlet node), held like a node whose
+        #: every edge is cracked, shape=(k,).
+        self.fragment_nodes = np.zeros(0, dtype=np.int64)
+        self.rows: list[dict[str, Any]] = []
+
+    # -- set-up ----------------------------------------------------------------------
+    def _setup_crack_state(self) -> None:
+        gm, cfg, bs = self.gm, self.config, self.bs
+        rows, vals = self.problem.dirichlet()
+        parts = self.comm.allgather((rows, vals))
+        self.bc_rows = np.concatenate([p[0] for p in parts]).astype(np.int64)
+        self.bc_vals = np.concatenate([p[1] for p in parts])
+        block_node = {int(b): n for n, b in enumerate(gm.node_block)}
+        self.dof_node = lambda dofs: np.array(
+            [block_node[int(d) // bs] for d in dofs], dtype=np.int64
+        )
+        bc_nodes = np.unique(self.dof_node(self.bc_rows))
+        mesh_e = edge_mesh(gm.coords, gm.cells)
+        frozen = np.isin(gm.cells, bc_nodes).any(axis=1)
+        forced = np.zeros(len(gm.cells), dtype=bool)
+        if cfg.mls_region is not None:
+            x0, y0, x1, y1 = cfg.mls_region
+            c = mesh_e.centroids()
+            forced = (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
+        settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
+        self.state = CrackState(mesh_e, frozen, forced, settings)
+        keys = mesh_e.edges[:, 0] * len(gm.coords) + mesh_e.edges[:, 1]
+        self._edge_keys = keys
+        pre = []
+        for group in cfg.precracked:
+            dim, ents = self.tagged.entities(group)
+            pairs = np.sort(_facet_nodes(self.mesh, gm, dim, ents), axis=1)
+            pre.append(self.edges_of(pairs))
+        self.precracked = np.unique(np.concatenate(pre)) if pre else np.zeros(0, dtype=np.int64)
+        # control group: its prescribed, non-zero DOFs
+        dim, ents = self.tagged.entities(cfg.control)
+        control_nodes = np.unique(_facet_nodes(self.mesh, gm, dim, ents))
+        on = np.isin(self.dof_node(self.bc_rows), control_nodes) & (self.bc_vals != 0)
+        self.control_rows, self.control_vals = self.bc_rows[on], self.bc_vals[on]
+        self.control_unit = float(np.mean(np.abs(self.control_vals)))
+        self.face_nodes = None
+        if cfg.face is not None:
+            dim, ents = self.tagged.entities(cfg.face)
+            self.face_nodes = np.unique(_facet_nodes(self.mesh, gm, dim, ents))
+
+    def edges_of(self, pairs: np.ndarray) -> np.ndarray:
+        """Edge ids of sorted node pairs, shape=(n, 2); error if a pair is no edge."""
+        keys = pairs[:, 0] * len(self.gm.coords) + pairs[:, 1]
+        idx = np.searchsorted(self._edge_keys, keys)
+        idx = np.minimum(idx, len(self._edge_keys) - 1)
+        if len(keys) and not np.all(self._edge_keys[idx] == keys):
+            raise RunError("cracking.precracked: a tagged facet is not an edge of the mesh")
+        return idx
+
+    def _setup_cells(self) -> None:
+        gm, bs = self.gm, self.bs
+        own = np.flatnonzero(gm.owned)
+        self.own_cells = own
+        x = gm.coords[gm.cells[own]]
+        self.K_fe = fe_matrices(self.element, x, self.D, self.t, self.penalty)
+        dofs = gm.node_block[gm.cells[own]][:, :, None] * bs + np.arange(bs)
+        self.fe_dofs = dofs.reshape(len(own), 3 * bs)
+        self.fe_stress_op = np.einsum(
+            "ij,cqjp->cqip", self.D, cell_operator(self.element, x, MIDPOINTS)
+        )
+        self.owned_flag = np.zeros(len(gm.cells), dtype=bool)
+        self.owned_flag[own] = True
+
+    # -- per-event pieces ------------------------------------------------------------
+    def _mls_dofs(self, nodes: np.ndarray) -> np.ndarray:
+        return (self.gm.node_block[nodes][:, None] * self.bs + np.arange(2)).ravel()
+
+    def _used_dofs(self, is_mls: np.ndarray) -> np.ndarray:
+        """Whether each global DOF has stiffness from some cell (replicated)."""
+        gm, bs = self.gm, self.bs
+        used = np.zeros(self.n_global, dtype=bool)
+        fe = gm.node_block[gm.cells[~is_mls]].ravel()
+        used[(fe[:, None] * bs + np.arange(bs)).ravel()] = True
+        for fit in self.state.fits.values():
+            if fit is not None:
+                used[self._mls_dofs(fit.nodes)] = True
+        return used
+
+    def assemble(self, held_values: np.ndarray) -> tuple[PETSc.Mat, PETSc.Vec, np.ndarray]:
+        """Stiffness and load vector of the current crack state, with the Dirichlet and
+        held DOFs applied; returns (A, b, held DOF ids).
+        """
+        state = self.state
+        is_mls = state.is_mls()
+        keep = ~is_mls[self.own_cells]
+        nd = self.fe_dofs.shape[1]
+        rows = [np.repeat(self.fe_dofs[keep], nd, axis=1).ravel()]
+        cols = [np.tile(self.fe_dofs[keep], (1, nd)).ravel()]
+        vals = [self.K_fe[keep].ravel()]
+        for c, fit in state.fits.items():
+            if fit is None or not self.owned_flag[c]:
+                continue
+            d = self._mls_dofs(fit.nodes)
+            rows.append(np.repeat(d, len(d)))
+            cols.append(np.tile(d, len(d)))
+            vals.append(mls_matrix(fit, self.D, self.t, state.areas[c]).ravel())
+        diag = np.arange(self.row0, self.row0 + self.n_local, dtype=np.int64)
+        rows.append(diag)
+        cols.append(diag)
+        vals.append(np.zeros(len(diag)))
+        A = PETSc.Mat().create(self.comm)
+        A.setSizes(((self.n_local, self.n_global), (self.n_local, self.n_global)))
+        A.setType(PETSc.Mat.Type.AIJ)
+        A.setPreallocationCOO(
+            np.concatenate(rows).astype(PETSc.IntType), np.concatenate(cols).astype(PETSc.IntType)
+        )
+        A.setValuesCOO(np.concatenate(vals), addv=PETSc.InsertMode.ADD_VALUES)
+        A.assemble()
+        used = self._used_dofs(is_mls)
+        if len(self.fragment_nodes):
+            used[
+                (
+                    self.gm.node_block[self.fragment_nodes][:, None] * self.bs + np.arange(self.bs)
+                ).ravel()
+            ] = False
+        used[self.bc_rows] = True
+        held = np.flatnonzero(~used)
+        fixed = np.concatenate([self.bc_rows, held])
+        values = np.concatenate([self.bc_vals, held_values[held]])
+        mine = (fixed >= self.row0) & (fixed < self.row0 + self.n_local)
+        if self._b0 is None:
+            self._b0 = self.problem.load_vector()
+        b = self._b0.copy()
+        g = A.createVecRight()
+        g.setValues(fixed[mine].astype(PETSc.IntType), values[mine])
+        g.assemble()
+        A.zeroRowsColumns(fixed[mine].astype(PETSc.IntType), 1.0, g, b)
+        g.destroy()
+        return A, b, held
+
+    def _find_fragments(self) -> bool:
+        """Hold the nodes of pieces that no longer touch a Dirichlet node; True if new."""
+        gm, state = self.gm, self.state
+        is_mls = state.is_mls()
+        a, b = [], []
+        for cell in gm.cells[~is_mls]:
+            a += [cell[0], cell[0]]
+            b += [cell[1], cell[2]]
+        for fit in state.fits.values():
+            if fit is not None and len(fit.nodes) > 1:
+                a += [fit.nodes[0]] * (len(fit.nodes) - 1)
+                b += list(fit.nodes[1:])
+        labels = _components(
+            len(gm.coords), np.array(a, dtype=np.int64), np.array(b, dtype=np.int64)
+        )
+        anchored = np.unique(labels[np.unique(self.dof_node(self.bc_rows))])
+        touched = np.zeros(len(gm.coords), dtype=bool)
+        touched[np.array(a + b, dtype=np.int64)] = True
+        loose = np.flatnonzero(touched & ~np.isin(labels, anchored))
+        new = np.setdiff1d(loose, self.fragment_nodes)
+        if len(new):
+            self.fragment_nodes = np.union1d(self.fragment_nodes, new)
+            self.say(f"cracking: {len(new)} nodes of cut-free fragments are held")
+        return len(new) > 0
+
+    def solve(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> int:
+        """Solve with reuse of the reference factorisation; returns CG iterations (0 = direct)."""
+        cfg = self.config
+        if cfg.solver == "reuse" and self.solver is not None:
+            if self.ksp is None:
+                self.ksp = PETSc.KSP().create(self.comm)
+                self.ksp.setOptionsPrefix(PREFIX + "cg_")
+                self.ksp.setType("cg")
+                pc = self.ksp.getPC()
+                pc.setType("python")
+                pc.setPythonContext(_ReferencePC(self.solver))
+                self.ksp.setTolerances(rtol=1e-10, atol=0.0, max_it=cfg.reuse_iterations)
+                self.ksp.setInitialGuessNonzero(True)
+                self.ksp.setFromOptions()
+            self.ksp.setOperators(A)
+            self.ksp.solve(b, x)
+            if self.ksp.getConvergedReason() > 0 and np.isfinite(x.norm()):
+                return int(self.ksp.getIterationNumber())
+        self._refactor(A)
+        assert self.solver is not None
+        self.solver.solve(b, x)
+        return 0
+
+    def _refactor(self, A: PETSc.Mat) -> None:
+        if self.solver is not None:
+            self.solver.destroy()
+        if self.ksp is not None:
+            self.ksp.destroy()
+            self.ksp = None
+        self.solver = None
+        s = self.scene.solver
+        options = dict(s.options)
+        self.solver = LinearSolver(A, PREFIX, "direct", options, self.n_global)
+        self.timing.factorizations += 1
+
+    def _gather(self, x: PETSc.Vec) -> np.ndarray:
+        """The whole solution vector on every rank, shape=(n_global,)."""
+        scatter, full = PETSc.Scatter.toAll(x)
+        try:
+            scatter.scatter(x, full, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+            return full.getArray().copy()
+        finally:
+            scatter.destroy()
+            full.destroy()
+
+    def measures(self, u: np.ndarray) -> tuple[np.ndarray, float, float]:
+        """(σ1 per edge, strain energy, control reaction) of a global solution u."""
+        state, own = self.state, self.own_cells
+        is_mls = state.is_mls()
+        s1 = np.zeros((len(self.gm.cells), 3))
+        ud = u[self.fe_dofs]  # shape=(n_own, nd)
+        fe = ~is_mls[own]
+        stress = np.einsum("cqip,cp->cqi", self.fe_stress_op[fe], ud[fe])
+        s1[own[fe]] = principal_max(stress)
+        energy = 0.5 * float(np.einsum("cp,cpr,cr->", ud[fe], self.K_fe[fe], ud[fe]))
+        force = np.zeros(self.n_global)
+        np.add.at(force, self.fe_dofs[fe], np.einsum("cpr,cr->cp", self.K_fe[fe], ud[fe]))
+        for c, fit in state.fits.items():
+            if fit is None or not self.owned_flag[c]:
+                continue
+            d = self._mls_dofs(fit.nodes)
+            k = mls_matrix(fit, self.D, self.t, state.areas[c])
+            f = k @ u[d]
+            energy += 0.5 * float(u[d] @ f)
+            force[d] += f
+            sig = self.D @ (self._strain(fit) @ u[d])
+            s1[c] = principal_max(sig)
+        s1 = self.comm.allreduce(s1, op=MPI.SUM)
+        energy = self.comm.allreduce(energy, op=MPI.SUM)
+        reaction = self.comm.allreduce(
+            float(force[self.control_rows] @ np.sign(self.control_vals)), op=MPI.SUM
+        )
+        return edge_principal(state.mesh, s1), energy, reaction
+
+    def l2_error(self, u: np.ndarray) -> float:
+        """||u_h - u_exact||_L2 of eq. (2.22), each cell with its own field (collective).
+
+        A 6-point Gauss rule of degree 4 is exact for the squared error of the linear
+        (CST, MLS) and quadratic (RGNT, GNT) fields against a linear exact solution.
+        """
+        from geofrac.elements.kinematics import KINDS, vertex_field
+
+        exact = self.problem.exact
+        gm, state, bs = self.gm, self.state, self.bs
+        a, b = 0.445948490915965, 0.091576213509771
+        bary = np.array(
+            [
+                [a, a, 1 - 2 * a],
+                [a, 1 - 2 * a, a],
+                [1 - 2 * a, a, a],
+                [b, b, 1 - 2 * b],
+                [b, 1 - 2 * b, b],
+                [1 - 2 * b, b, b],
+            ]
+        )
+        w = np.array([0.223381589678011] * 3 + [0.109951743655322] * 3)
+        total = 0.0
+        for c in self.own_cells:
+            x = gm.coords[gm.cells[c]]
+            pts = bary @ x
+            fit = state.fits.get(int(c), "fe")
+            if fit == "fe":
+                d = u[gm.node_block[gm.cells[c]][:, None] * bs + np.arange(bs)]
+                if self.element in ("cst", "p1"):
+                    uh = bary @ d
+                else:
+                    uh = vertex_field(KINDS[self.element], x, d, pts)
+            elif fit is None:
+                uh = np.zeros((len(pts), 2))
+            else:
+                nodal = u[self._mls_dofs(fit.nodes)].reshape(-1, 2)
+                uh = fit.shape_functions(pts) @ nodal
+            ue = np.stack(np.broadcast_arrays(*exact.displacement(pts[:, 0], pts[:, 1])), axis=1)
+            total += state.areas[c] * float(w @ np.sum((uh - ue) ** 2, axis=1))
+        return math.sqrt(self.comm.allreduce(total, op=MPI.SUM))
+
+    @staticmethod
+    def _strain(fit: Any) -> np.ndarray:
+        from geofrac.mls.shape import strain_matrix
+
+        return strain_matrix(fit)
+
+    # -- the loop --------------------------------------------------------------------
+    def run(self) -> dict[str, Any]:
+        """Run events until an end condition; write the outputs; return the results."""
+        cfg, state, _comm = self.config, self.state, self.comm
+        t0 = time.perf_counter()
+        state.start(self.precracked)
+        self.say(
+            f"cracking: {len(state.mesh.edges)} edges, {len(self.precracked)} pre-cracked, "
+            f"{len(state.fits)} MLS cells ({len(state.void_cells())} void), "
+            f"{int((~state.crackable).sum())} edges frozen next to Dirichlet nodes; "
+            f"set-up {format_seconds(time.perf_counter() - t0)}"
+        )
+        writer = self._open_outputs()
+        work = dolfinx.fem.Function(self.unknown.function_space)  # a ghosted vector
+        x = work.x.petsc_vec
+        u_unit = np.zeros(self.n_global)
+        rows: list[dict[str, Any]] = []
+        end, peak, face_hit, first_energy = "max_events", 0.0, None, 0.0
+        timing = self.timing
+        started = time.perf_counter()
+        A = b = None
+        error = None
+        if cfg.max_events == 0:
+            A, b, _ = self.assemble(u_unit)
+            self.solve(A, b, x)
+            u_unit = self._gather(x)
+            if self.problem.exact is not None:
+                error = self.l2_error(u_unit)
+                self.say(f"cracking: displacement error (2.22) {error:.4e}")
+            end = "max_events"
+        try:
+            for event in range(1, cfg.max_events + 1):
+                t = time.perf_counter()
+                if A is None:
+                    A, b, held = self.assemble(u_unit)
+                t = timing.add("assemble", t)
+                try:
+                    its = self.solve(A, b, x)
+                except RunError:
+                    A.destroy()
+                    b.destroy()
+                    A = b = None
+                    if self._find_fragments():
+                        A, b, _held = self.assemble(u_unit)
+                        try:
+                            its = self.solve(A, b, x)
+                        except RunError:
+                            pass
+                        else:
+                            exc = None
+                    if exc is not None:
+                        end = "singular"
+                        self.say(
+                            f"cracking: event {event}: the system is singular, the run ends ({exc})"
+                        )
+                        break
+                u_unit = self._gather(x)
+                timing.iterations += its
+                t = timing.add("solve", t)
+                sigma1, energy_unit, reaction_unit = self.measures(u_unit)
+                first_energy = energy_unit if event == 1 else first_energy
+                if energy_unit <= SEPARATED * first_energy:
+                    end = "separated"
+                    break
+                candidates = ~state.cracked & state.crackable
+                edges, r = select_edges(
+                    sigma1,
+                    candidates,
+                    cfg.tensile_strength,
+                    cfg.batch_tolerance,
+                    cfg.edges_per_event,
+                )
+                t = timing.add("criterion", t)
+                if len(edges) == 0:
+                    end = "no_tensile_edge"
+                    break
+                energy = r * r * energy_unit
+                mid = state.mesh.midpoints()[edges[0]]
+                a, bnode = state.mesh.edges[edges[0]]
+                rows.append(
+                    {
+                        "event": event,
+                        "edge": int(edges[0]),
+                        "node_a": int(self.gm.input_ids[a]),
+                        "node_b": int(self.gm.input_ids[bnode]),
+                        "x": float(mid[0]),
+                        "y": float(mid[1]),
+                        "r": r,
+                        "load_factor": r,
+                        "control_displacement": r * self.control_unit,
+                        "reaction": r * reaction_unit,
+                        "strain_energy": energy,
+                        "edges_cracked": len(edges),
+                        "iterations": its,
+                    }
+                )
+                state.crack_many([int(e) for e in edges])
+                if face_hit is None and self.face_nodes is not None:
+                    ends = state.mesh.edges[edges].ravel()
+                    hit = ends[np.isin(ends, self.face_nodes)]
+                    if len(hit):
+                        face_hit = (event, float(state.mesh.coords[hit[0], 0]))
+                if writer is not None and (event % cfg.output_every == 0 or event == 1):
+                    self._write_frame(writer, event, r * u_unit)
+                peak = max(peak, energy)
+                A.destroy()  # a KSP that still uses it holds its own reference
+                b.destroy()
+                A = b = None
+                timing.add("update", t)
+                if event % max(1, cfg.max_events // 20) == 0:
+                    rate = event / (time.perf_counter() - started)
+                    self.say(
+                        f"cracking: event {event}/{cfg.max_events}, r = {r:.4g}, energy "
+                        f"{energy:.4g}, {rate:.2f} events/s, {timing.factorizations} factorisations"
+                    )
+                if cfg.energy_drop is not None and energy < (1.0 - cfg.energy_drop) * peak:
+                    end = "energy_drop"
+                    break
+        finally:
+            for obj in (A, b):
+                if obj is not None:
+                    obj.destroy()
+        elapsed = time.perf_counter() - started
+        if writer is not None and rows:
+            self._write_frame(
+                writer, rows[-1]["event"], rows[-1]["load_factor"] * u_unit, final=True
+            )
+        self._finish_field(rows[-1]["load_factor"] * u_unit if rows else u_unit)
+        self._write_log(rows)
+        self.destroy()
+        results = self._results(rows, end, elapsed, face_hit)
+        if error is not None:
+            results["displacement_error_l2"] = error
+        self.say(
+            f"cracking: {len(rows)} events in {format_seconds(elapsed)} "
+            f"({results['events_per_s']:.2f} events/s), end: {end}"
+        )
+        return results
+
+    # -- output ----------------------------------------------------------------------
+    def _open_outputs(self) -> Any:
+        if not (self.write and self.scene.output.xdmf) or self.comm.rank != 0:
+            return None
+        from geofrac.io.series import XdmfSeries
+
+        gm, m = self.gm, self.state.mesh
+        return (
+            XdmfSeries(self.out_dir / "cracks.xdmf", gm.coords, m.edges),
+            XdmfSeries(self.out_dir / "damage.xdmf", gm.coords, gm.cells),
+        )
+
+    def _write_frame(self, writer: Any, event: int, u: np.ndarray, final: bool = False) -> None:
+        state = self.state
+        cracks, damage = writer
+        crack = state.cracked.astype(float)
+        cracks.write(float(event), cell_data={"crack": crack})
+        dmg = crack[state.mesh.cell_edges].mean(axis=1)
+        disp = u[(self.gm.node_block[:, None] * self.bs + np.arange(2))]
+        damage.write(
+            float(event),
+            point_data={"displacement": disp},
+            cell_data={"damage": dmg, "mls": state.is_mls().astype(float)},
+        )
+
+    def _finish_field(self, u: np.ndarray) -> None:
+        """Put the last event's state into the problem's displacement (results.xdmf)."""
+        v = self.unknown.x.petsc_vec
+        v.setArray(u[self.row0 : self.row0 + self.n_local])
+        self.unknown.x.scatter_forward()
+        self.problem._to_field()
+
+    def _write_log(self, rows: list[dict[str, Any]]) -> None:
+        self.rows = rows
+        if self.comm.rank != 0 or not self.write:
+            return
+        with open(self.out_dir / "events.csv", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=EVENT_COLUMNS)
+            w.writeheader()
+            w.writerows(rows)
+        if rows:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+
+            fig, ax = plt.subplots(figsize=(5, 3.6))
+            ax.plot(
+                [r["control_displacement"] for r in rows], [r["reaction"] for r in rows], lw=0.8
+            )
+            ax.set_xlabel(f"control displacement ({self.config.control})")
+            ax.set_ylabel("reaction")
+            ax.set_title(f"{self.scene.name}: {len(rows)} events")
+            fig.tight_layout()
+            fig.savefig(self.out_dir / "load_displacement.png", dpi=90)
+            plt.close(fig)
+            self._plot_cracks(plt)
+
+    def _plot_cracks(self, plt: Any) -> None:
+        """``cracks.png``: the mesh outline, pre-existing (grey) and new (red) cracks."""
+        from matplotlib.collections import LineCollection
+
+        m, state = self.state.mesh, self.state
+        seg = m.coords[m.edges]
+        pre = np.zeros(len(m.edges), dtype=bool)
+        pre[self.precracked] = True
+        new = state.cracked & ~pre
+        x0, y0 = m.coords.min(axis=0)
+        x1, y1 = m.coords.max(axis=0)
+        width = 7.0
+        fig, ax = plt.subplots(figsize=(width, max(2.0, width * (y1 - y0) / (x1 - x0))))
+        ax.add_collection(LineCollection(seg[m.boundary_edges], colors="k", linewidths=0.6))
+        ax.add_collection(LineCollection(seg[pre], colors="0.6", linewidths=0.5))
+        ax.add_collection(LineCollection(seg[new], colors="tab:red", linewidths=1.0))
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
+        ax.set_aspect("equal")
+        ax.set_axis_off()
+        fig.tight_layout()
+        fig.savefig(self.out_dir / "cracks.png", dpi=110)
+        plt.close(fig)
+
+    def _results(
+        self, rows: list[dict[str, Any]], end: str, elapsed: float, face_hit: Any
+    ) -> dict[str, Any]:
+        state, t = self.state, self.timing
+        new = int(state.cracked.sum()) - len(self.precracked)
+        out: dict[str, Any] = {
+            "events": len(rows),
+            "end_reason": end,
+            "cracked_edges": int(state.cracked.sum()),
+            "new_cracked_edges": new,
+            "precracked_edges": len(self.precracked),
+            "mls_cells": len(state.fits),
+            "void_cells": len(state.void_cells()),
+            "fragment_nodes": len(self.fragment_nodes),
+            "edges": len(state.mesh.edges),
+            "dofs": self.n_global,
+            "events_per_s": len(rows) / elapsed if elapsed > 0 else float("nan"),
+            "phase_s": {k: self.comm.allreduce(v, op=MPI.MAX) for k, v in t.seconds.items()},
+            "factorizations": t.factorizations,
+            "cg_iterations": t.iterations,
+            "solver": self.config.solver,
+        }
+        if rows:
+            peak = max(rows, key=lambda r: r["reaction"])
+            out |= {
+                "peak_reaction": peak["reaction"],
+                "peak_event": peak["event"],
+                "final_strain_energy": rows[-1]["strain_energy"],
+            }
+        if self.config.face is not None:
+            x = None if face_hit is None else face_hit[1] - self.config.face_origin
+            out["crack_face"] = {
+                "group": self.config.face,
+                "event": None if face_hit is None else face_hit[0],
+                "x_from_origin": x,
+            }
+            if self.config.face == "top":
+                out["crack_top_x_mm"] = x
+        return out
+
+    def destroy(self) -> None:
+        """Free the solvers."""
+        for obj in (self.ksp, self.solver, self._b0):
+            if obj is not None:
+                obj.destroy()
+        self.ksp = self.solver = self._b0 = None

@@ -1,0 +1,157 @@
+"""Crack state of a triangle mesh: cracked edges and the MLS fits of cracked cells.
+
+Pure numpy and identical on every rank: the driver replicates it, so that the crack
+sequence does not depend on the number of ranks. A cell *uses MLS* when it owns a
+cracked edge (seed 2.3.1) or lies in a forced region (the patch test's core); its field
+is the linear fit of :mod:`geofrac.mls.shape` through its visible satellite nodes
+(:mod:`geofrac.fracture.visibility`). A cracked cell that sees fewer than 3
+non-collinear nodes is *void*: it carries no stiffness, as the seed does for a fragment
+(Fig. 2.4(d)).
+
+:meth:`CrackState.crack` returns the cells whose field changed (the cells of the edge and
+every MLS cell whose influence circle the edge crosses); only those are refitted.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from geofrac.fracture.topology import EdgeMesh
+from geofrac.fracture.visibility import Bins, visible_nodes
+from geofrac.mls.shape import LinearFit, linear_fit
+
+__all__ = ["CrackState", "MlsSettings", "segment_distance"]
+
+
+@dataclass(frozen=True)
+class MlsSettings:
+    """Neighbourhood settings of the MLS fits.
+
+    Attributes:
+        neighbours: visible satellite nodes wanted (seed: about 10).
+        margin: h / distance of the ``neighbours``-th node.
+        max_radius_factor: largest search radius in units of the cell's longest edge.
+    """
+
+    neighbours: int = 10
+    margin: float = 1.1
+    max_radius_factor: float = 8.0
+
+
+def segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from points, shape=(n, 2), to the segment a–b."""
+    d = b - a
+    t = np.clip(((points - a) @ d) / max(float(d @ d), 1e-300), 0.0, 1.0)
+    return np.hypot(*(points - (a + t[:, None] * d)).T)
+
+
+@dataclass
+class CrackState:
+    """Cracked edges, frozen cells and MLS fits.
+
+    Args:
+        mesh: the triangle mesh with edges.
+        frozen: cells that may not crack (touching a Dirichlet node), shape=(num_cells,).
+        forced: cells that use MLS from the start, shape=(num_cells,).
+        settings: neighbourhood settings.
+    """
+
+    mesh: EdgeMesh
+    frozen: np.ndarray
+    forced: np.ndarray
+    settings: MlsSettings = field(default_factory=MlsSettings)
+
+    def __post_init__(self) -> None:
+        m = self.mesh
+        self.cracked = np.zeros(len(m.edges), dtype=bool)
+        self.fits: dict[int, LinearFit | None] = {}
+        self.centroids = m.centroids()
+        self.areas = m.areas()
+        seg = m.coords[m.edges]  # shape=(ne, 2, 2)
+        self.segments = seg
+        lengths = np.hypot(*(seg[:, 1] - seg[:, 0]).T)
+        self.cell_size = lengths[m.cell_edges].max(axis=1)  # longest edge per cell
+        size = 3.0 * float(np.median(lengths))
+        self.node_bins = Bins(size)
+        self.node_bins.add_points(m.coords)
+        self.crack_bins = Bins(size)
+        #: edges no cell may crack: those of frozen cells (shape=(num_edges,)).
+        self.crackable = np.ones(len(m.edges), dtype=bool)
+        self.crackable[np.unique(m.cell_edges[self.frozen])] = False
+        self._h = np.zeros(m.num_cells)
+
+    # -- queries ---------------------------------------------------------------------
+    @property
+    def mls_cells(self) -> np.ndarray:
+        """Ids of the cells that use MLS, sorted, shape=(k,)."""
+        return np.array(sorted(self.fits), dtype=np.int64)
+
+    def is_mls(self) -> np.ndarray:
+        """Whether each cell uses MLS, shape=(num_cells,)."""
+        out = np.zeros(self.mesh.num_cells, dtype=bool)
+        out[list(self.fits)] = True
+        return out
+
+    def void_cells(self) -> np.ndarray:
+        """Cracked cells without a fit (no stiffness), sorted, shape=(k,)."""
+        return np.array(sorted(c for c, f in self.fits.items() if f is None), dtype=np.int64)
+
+    # -- updates ---------------------------------------------------------------------
+    def start(self, precracked: np.ndarray) -> np.ndarray:
+        """Crack ``precracked`` edges and fit every MLS cell; return the MLS cells."""
+        for e in np.asarray(precracked, dtype=np.int64):
+            self._mark(int(e))
+        cells = set(np.flatnonzero(self.forced).tolist())
+        for e in np.flatnonzero(self.cracked):
+            cells.update(c for c in self.mesh.edge_cells[e] if c >= 0)
+        changed = np.array(sorted(cells), dtype=np.int64)
+        self.refit(changed)
+        return changed
+
+    def crack(self, edge: int) -> np.ndarray:
+        """Crack one edge; refit and return the changed cells, sorted, shape=(k,)."""
+        return self.crack_many([edge])
+
+    def crack_many(self, edges: list[int]) -> np.ndarray:
+        """Crack several edges at once; refit and return the changed cells."""
+        changed: set[int] = set()
+        mls = self.mls_cells
+        for e in edges:
+            if self.cracked[e]:
+                raise ValueError(f"edge {e} is already cracked")
+            self._mark(e)
+            changed.update(int(c) for c in self.mesh.edge_cells[e] if c >= 0)
+            if len(mls):
+                a, b = self.segments[e]
+                d = segment_distance(self.centroids[mls], a, b)
+                changed.update(mls[d < self._h[mls]].tolist())
+        out = np.array(sorted(changed), dtype=np.int64)
+        self.refit(out)
+        return out
+
+    def _mark(self, e: int) -> None:
+        self.cracked[e] = True
+        a, b = self.segments[e]
+        self.crack_bins.add(e, np.minimum(a, b), np.maximum(a, b))
+
+    def refit(self, cells: np.ndarray) -> None:
+        """(Re)compute the MLS fits of ``cells`` (pure function of the crack state)."""
+        s, coords = self.settings, self.mesh.coords
+        for c in np.asarray(cells, dtype=np.int64):
+            c = int(c)
+            size = self.cell_size[c]
+            ids, h = visible_nodes(
+                self.centroids[c],
+                coords,
+                self.node_bins,
+                self.crack_bins,
+                self.segments,
+                start=1.5 * size,
+                target=s.neighbours,
+                max_radius=s.max_radius_factor * size,
+                margin=s.margin,
+            )
+            self._h[c] = h
+            self.fits[c] = linear_fit(self.centroids[c], h, ids, coords[ids]) if len(ids) else None

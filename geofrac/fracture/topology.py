@@ -1,0 +1,95 @@
+"""Edges of a triangle mesh in a numbering that does not depend on the number of ranks.
+
+Every array is built from node ids and cells given in the mesh file's order (gmsh input
+order), so the same mesh gives the same edge numbering on any number of ranks; the
+crack driver breaks ties by these numbers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["EdgeMesh", "edge_mesh"]
+
+#: Local vertex pairs of the three edges of a triangle; edge j is opposite vertex j.
+LOCAL_EDGES = np.array([[1, 2], [2, 0], [0, 1]])
+
+
+@dataclass(frozen=True)
+class EdgeMesh:
+    """A triangle mesh with its edges.
+
+    Attributes:
+        coords: node coordinates, shape=(num_nodes, 2).
+        cells: node ids of each triangle, shape=(num_cells, 3).
+        edges: node ids of each edge, sorted (a < b), rows sorted, shape=(num_edges, 2).
+        cell_edges: edge id of local edge j (opposite vertex j), shape=(num_cells, 3).
+        edge_cells: the one or two cells of each edge, -1 when absent; the first is the
+            lower cell id, shape=(num_edges, 2).
+    """
+
+    coords: np.ndarray
+    cells: np.ndarray
+    edges: np.ndarray
+    cell_edges: np.ndarray
+    edge_cells: np.ndarray
+
+    @property
+    def num_cells(self) -> int:
+        """Number of triangles."""
+        return len(self.cells)
+
+    @property
+    def boundary_edges(self) -> np.ndarray:
+        """Whether each edge has one cell only, shape=(num_edges,)."""
+        return self.edge_cells[:, 1] < 0
+
+    def centroids(self) -> np.ndarray:
+        """Cell centroids, shape=(num_cells, 2)."""
+        return self.coords[self.cells].mean(axis=1)
+
+    def midpoints(self) -> np.ndarray:
+        """Edge midpoints, shape=(num_edges, 2)."""
+        return self.coords[self.edges].mean(axis=1)
+
+    def areas(self) -> np.ndarray:
+        """Cell areas (positive), shape=(num_cells,)."""
+        x = self.coords[self.cells]
+        d1, d2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
+        return 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+
+    def node_cells(self) -> tuple[np.ndarray, np.ndarray]:
+        """Cells around each node as CSR (offsets, shape=(num_nodes + 1,); cells)."""
+        n = len(self.coords)
+        flat = self.cells.ravel()
+        order = np.argsort(flat, kind="stable")
+        offsets = np.searchsorted(flat[order], np.arange(n + 1))
+        return offsets, order // 3
+
+
+def edge_mesh(coords: np.ndarray, cells: np.ndarray) -> EdgeMesh:
+    """Build the edge arrays of a triangle mesh.
+
+    Args:
+        coords: node coordinates, shape=(num_nodes, 2) (or (num_nodes, 3); z is dropped).
+        cells: node ids per triangle, shape=(num_cells, 3).
+    """
+    coords = np.ascontiguousarray(np.asarray(coords, dtype=float)[:, :2])
+    cells = np.asarray(cells, dtype=np.int64)
+    pairs = np.sort(cells[:, LOCAL_EDGES].reshape(-1, 2), axis=1)  # shape=(3 nc, 2)
+    edges, inverse = np.unique(pairs, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    cell_edges = inverse.reshape(-1, 3)
+    edge_cells = np.full((len(edges), 2), -1, dtype=np.int64)
+    owner = np.repeat(np.arange(len(cells)), 3)
+    order = np.lexsort((owner, inverse))
+    e_sorted, c_sorted = inverse[order], owner[order]
+    first = np.r_[True, e_sorted[1:] != e_sorted[:-1]]
+    edge_cells[e_sorted[first], 0] = c_sorted[first]
+    edge_cells[e_sorted[~first], 1] = c_sorted[~first]
+    counts = np.bincount(inverse, minlength=len(edges))
+    if counts.max() > 2:
+        raise ValueError("an edge is shared by more than two triangles (non-manifold mesh)")
+    return EdgeMesh(coords, cells, edges, cell_edges, edge_cells)

@@ -1,0 +1,113 @@
+"""Visibility of nodes across cracks (the fan of seed Fig. 2.3)."""
+
+import numpy as np
+
+from geofrac.fracture.state import CrackState, MlsSettings
+from geofrac.fracture.topology import edge_mesh
+from geofrac.fracture.visibility import Bins, blocked, visible_nodes
+
+
+def grid_mesh(n=8):
+    """Structured triangles on [0, n]^2, shape=(nodes, 2), (cells, 3)."""
+    x, y = np.meshgrid(np.arange(n + 1.0), np.arange(n + 1.0))
+    coords = np.column_stack([x.ravel(), y.ravel()])
+    cells = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            cells += [[a, a + 1, a + n + 2], [a, a + n + 2, a + n + 1]]
+    return coords, np.array(cells)
+
+
+def test_blocked_touching_and_crossing():
+    p = np.zeros(2)
+    a, b = np.array([[1.0, -1.0]]), np.array([[1.0, 1.0]])
+    q = np.array([[2.0, 0.0], [0.5, 0.0], [1.0, 0.0], [1.0, 1.0], [2.0, 3.0]])
+    np.testing.assert_array_equal(blocked(p, q, a, b), [True, False, True, True, False])
+    # collinear: overlapping blocks, disjoint does not
+    a2, b2 = np.array([[1.0, 0.0]]), np.array([[2.0, 0.0]])
+    q2 = np.array([[3.0, 0.0], [0.5, 0.0]])
+    np.testing.assert_array_equal(blocked(p, q2, a2, b2), [True, False])
+
+
+def test_edge_mesh_counts():
+    coords, cells = grid_mesh(4)
+    m = edge_mesh(coords, cells)
+    assert len(m.edges) == 4 * 5 * 2 + 16  # horizontal + vertical + diagonals
+    assert m.boundary_edges.sum() == 16
+    for c, edges in enumerate(m.cell_edges):
+        for e in edges:
+            assert c in m.edge_cells[e]
+
+
+def _crack_line(m, y, x0, x1):
+    """Edges on the horizontal line y between x0 and x1."""
+    seg = m.coords[m.edges]
+    on = (seg[:, 0, 1] == y) & (seg[:, 1, 1] == y)
+    lo, hi = seg[:, :, 0].min(axis=1), seg[:, :, 0].max(axis=1)
+    return np.flatnonzero(on & (lo >= x0) & (hi <= x1))
+
+
+def test_nodes_across_a_crack_are_hidden():
+    coords, cells = grid_mesh(8)
+    m = edge_mesh(coords, cells)
+    state = CrackState(m, np.zeros(len(cells), bool), np.zeros(len(cells), bool), MlsSettings())
+    crack = _crack_line(m, 4.0, 0.0, 8.0)  # a through crack along y = 4
+    state.start(crack)
+    for c, fit in state.fits.items():
+        assert fit is not None
+        above = m.centroids()[c, 1] > 4.0
+        ys = coords[fit.nodes, 1]
+        assert np.all(ys > 4.0) if above else np.all(ys < 4.0)
+        assert len(fit.nodes) >= 10
+
+
+def test_node_with_every_edge_cracked_is_seen_by_no_cell():
+    coords, cells = grid_mesh(6)
+    m = edge_mesh(coords, cells)
+    node = 3 * 7 + 3  # the centre (3, 3)
+    star = np.flatnonzero((m.edges == node).any(axis=1))
+    state = CrackState(m, np.zeros(len(cells), bool), np.zeros(len(cells), bool), MlsSettings())
+    state.start(star)
+    for fit in state.fits.values():
+        assert fit is None or node not in fit.nodes
+
+
+def test_fragment_cell_is_void():
+    coords, cells = grid_mesh(4)
+    m = edge_mesh(coords, cells)
+    state = CrackState(m, np.zeros(len(cells), bool), np.zeros(len(cells), bool), MlsSettings())
+    state.start(m.cell_edges[9])  # all three edges of one cell
+    assert 9 in state.void_cells()
+
+
+def test_crack_refits_only_nearby_cells():
+    coords, cells = grid_mesh(12)
+    m = edge_mesh(coords, cells)
+    state = CrackState(m, np.zeros(len(cells), bool), np.zeros(len(cells), bool), MlsSettings())
+    state.start(np.concatenate([_crack_line(m, 6.0, 0.0, 5.0), _crack_line(m, 6.0, 7.0, 12.0)]))
+    before = {c: f.nodes.copy() for c, f in state.fits.items()}
+    nxt = _crack_line(m, 6.0, 5.0, 6.0)
+    changed = state.crack(int(nxt[0]))
+    far = [c for c in before if np.hypot(*(m.centroids()[c] - [5.5, 6.0])) > 5.0]
+    assert far and not set(far) & set(changed.tolist())
+    for c in far:
+        np.testing.assert_array_equal(state.fits[c].nodes, before[c])
+
+
+def test_visible_nodes_grow_to_target():
+    coords, _cells = grid_mesh(10)
+    bins = Bins(2.0)
+    bins.add_points(coords)
+    ids, h = visible_nodes(
+        np.array([5.2, 5.3]),
+        coords,
+        bins,
+        Bins(2.0),
+        np.zeros((0, 2, 2)),
+        start=0.5,
+        target=10,
+        max_radius=20.0,
+    )
+    assert len(ids) >= 10
+    assert np.all(np.hypot(*(coords[ids] - [5.2, 5.3]).T) < h)
