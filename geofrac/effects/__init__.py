@@ -18,8 +18,9 @@ An effect is a module named in :data:`REGISTRY` that provides
   elastic solve by its own loop (``cracking``: the sequentially linear event loop); see
   :func:`geofrac.effects.cracking.driver`.
 
-Later capabilities add hooks beside these (particle state for ``mpm``); see ``docs/architecture.md``. Nothing in
-:mod:`geofrac` imports an effect module except through :func:`load`.
+Later capabilities add hooks beside these (particle state for ``mpm``); see
+``docs/architecture.md``. Nothing in :mod:`geofrac` imports an effect module except
+through :func:`load`.
 """
 
 from __future__ import annotations

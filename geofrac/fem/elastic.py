@@ -202,9 +202,10 @@ class ElasticProblem:
         return b
 
     def dirichlet(self) -> tuple[np.ndarray, np.ndarray]:
-        """(global unknown indices, shape=(p,); values, shape=(p,)) fixed by the
-        Dirichlet conditions, owned entries only (a DOF in two conditions takes the
-        value of the last, as in the assembly).
+        """Global unknown indices, shape=(p,), and values, shape=(p,), of the Dirichlet DOFs.
+
+        Owned entries only; a DOF in two conditions takes the value of the last, as in
+        the assembly.
         """
         V = self.element.space
         imap, bs = V.dofmap.index_map, V.dofmap.index_map_bs

@@ -316,8 +316,10 @@ class CrackDriver:
         return used
 
     def assemble(self, held_values: np.ndarray) -> tuple[PETSc.Mat, PETSc.Vec, np.ndarray]:
-        """Stiffness and load vector of the current crack state, with the Dirichlet and
-        held DOFs applied; returns (A, b, held DOF ids).
+        """Stiffness and load vector of the current crack state; returns (A, b, held DOFs).
+
+        Dirichlet DOFs and held DOFs (no stiffness, or in a cut-free fragment) are
+        applied with ``MatZeroRowsColumns``; held DOFs keep ``held_values``.
         """
         state = self.state
         is_mls = state.is_mls()
@@ -548,28 +550,26 @@ class CrackDriver:
             for event in range(1, cfg.max_events + 1):
                 t = time.perf_counter()
                 if A is None:
-                    A, b, held = self.assemble(u_unit)
+                    A, b, _ = self.assemble(u_unit)
                 t = timing.add("assemble", t)
+                failure = None
                 try:
                     its = self.solve(A, b, x)
-                except RunError:
+                except RunError as exc:
+                    failure = str(exc)
+                if failure is not None and self._find_fragments():
                     A.destroy()
                     b.destroy()
-                    A = b = None
-                    if self._find_fragments():
-                        A, b, _held = self.assemble(u_unit)
-                        try:
-                            its = self.solve(A, b, x)
-                        except RunError:
-                            pass
-                        else:
-                            exc = None
-                    if exc is not None:
-                        end = "singular"
-                        self.say(
-                            f"cracking: event {event}: the system is singular, the run ends ({exc})"
-                        )
-                        break
+                    A, b, _ = self.assemble(u_unit)
+                    try:
+                        its = self.solve(A, b, x)
+                        failure = None
+                    except RunError as exc:
+                        failure = str(exc)
+                if failure is not None:
+                    end = "singular"
+                    self.say(f"cracking: event {event}: the system is singular ({failure})")
+                    break
                 u_unit = self._gather(x)
                 timing.iterations += its
                 t = timing.add("solve", t)

@@ -63,7 +63,7 @@ class CrackState:
     forced: np.ndarray
     settings: MlsSettings = field(default_factory=MlsSettings)
 
-    def __post_init__(self) -> None:
+    def __post_init__(self) -> None:  # noqa: D105
         m = self.mesh
         self.cracked = np.zeros(len(m.edges), dtype=bool)
         self.fits: dict[int, LinearFit | None] = {}
@@ -139,8 +139,8 @@ class CrackState:
     def refit(self, cells: np.ndarray) -> None:
         """(Re)compute the MLS fits of ``cells`` (pure function of the crack state)."""
         s, coords = self.settings, self.mesh.coords
-        for c in np.asarray(cells, dtype=np.int64):
-            c = int(c)
+        for cell in np.asarray(cells, dtype=np.int64):
+            c = int(cell)
             size = self.cell_size[c]
             ids, h = visible_nodes(
                 self.centroids[c],

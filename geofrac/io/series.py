@@ -49,6 +49,7 @@ class XdmfSeries:
         """Append a step at time ``t``.
 
         Args:
+            t: the step's time value (the event number for the crack driver).
             point_data: name -> values, shape=(num_nodes,) or (num_nodes, k).
             cell_data: name -> values, shape=(num_cells,) or (num_cells, k).
         """
@@ -56,8 +57,8 @@ class XdmfSeries:
         fields = []
         with h5py.File(self.h5, "a") as f:
             for centre, data in (("Node", point_data or {}), ("Cell", cell_data or {})):
-                for name, values in data.items():
-                    values = np.asarray(values, dtype=float)
+                for name, given in data.items():
+                    values = np.asarray(given, dtype=float)
                     if values.ndim == 2 and values.shape[1] == 2:  # ParaView wants 3D vectors
                         values = np.column_stack([values, np.zeros(len(values))])
                     f[f"step_{i}/{name}"] = values

@@ -1,0 +1,138 @@
+"""The sequentially linear event loop on small versions of the jobs/ scenes."""
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from geofrac.elements import make_element
+from geofrac.fem.elastic import make_problem
+from geofrac.fracture.driver import END_REASONS, CrackDriver
+from geofrac.meshing.distribute import build_mesh
+from geofrac.runner import Solution
+from geofrac.scene import load_scene_collective
+from tests.conftest import JOBS
+
+#: A coarse notched beam (about 740 nodes) for fast event loops.
+SMALL_BEAM = ("geometry.parameters.h_fine=8", "geometry.parameters.h=30")
+
+
+def make_driver(name: str, *overrides: str, comm: MPI.Comm = MPI.COMM_WORLD) -> CrackDriver:
+    """A driver for ``jobs/<name>.toml`` ready to run (the caller destroys the problem)."""
+    scene = load_scene_collective(comm, JOBS / f"{name}.toml", overrides)
+    tagged = build_mesh(scene.geometry, comm)
+    element = make_element(scene.discretization.element, tagged.mesh)
+    problem = make_problem(tagged, element, scene)
+    problem.compile()
+    config = next(s.config for s in scene.effects if s.name == "cracking")
+    return CrackDriver(config, Solution(scene, tagged, problem), lambda msg: None)
+
+
+def run_beam(*overrides: str, comm: MPI.Comm = MPI.COMM_WORLD) -> tuple[CrackDriver, dict]:
+    driver = make_driver("notched_beam", *SMALL_BEAM, *overrides, comm=comm)
+    try:
+        return driver, driver.run()
+    finally:
+        driver.problem.destroy()
+
+
+def test_events_are_finite_and_frozen_cells_never_crack():
+    driver, res = run_beam("cracking.max_events=20")
+    assert res["events"] == 20 and res["end_reason"] == "max_events"
+    state = driver.state
+    frozen_edges = np.unique(state.mesh.cell_edges[state.frozen])
+    assert state.frozen.any()
+    new = np.setdiff1d(np.flatnonzero(state.cracked), driver.precracked)
+    assert len(new) == 20
+    assert not np.isin(new, frozen_edges).any()
+    for key in ("r", "reaction", "strain_energy", "control_displacement"):
+        assert np.all(np.isfinite([row[key] for row in driver.rows]))
+    assert all(row["r"] > 0 for row in driver.rows)
+
+
+def test_reuse_gives_the_refactor_sequence():
+    a, _ = run_beam("cracking.max_events=18")
+    b, _ = run_beam("cracking.max_events=18", "cracking.solver=refactor")
+    assert len(a.rows) == len(b.rows) == 18
+    assert [r["edge"] for r in a.rows] == [r["edge"] for r in b.rows]
+    np.testing.assert_allclose([r["r"] for r in a.rows], [r["r"] for r in b.rows], rtol=1e-7)
+
+
+def test_node_with_all_edges_cracked_is_held_not_singular():
+    driver = make_driver("notched_beam", *SMALL_BEAM, "cracking.max_events=1", comm=MPI.COMM_SELF)
+    try:
+        m = driver.state.mesh
+        interior = np.setdiff1d(np.arange(len(m.coords)), np.unique(m.edges[m.boundary_edges]))
+        c = m.coords[interior]
+        node = interior[np.argmin(np.hypot(c[:, 0] - 200.0, c[:, 1] - 100.0))]
+        star = np.flatnonzero((m.edges == node).any(axis=1))
+        driver.precracked = np.union1d(driver.precracked, star)
+        res = driver.run()
+        assert res["end_reason"] == "max_events" and res["events"] == 1
+        dofs = driver.gm.node_block[node] * driver.bs + np.arange(driver.bs)
+        A, _, held = driver.assemble(np.zeros(driver.n_global))
+        A.destroy()
+        assert np.isin(dofs, held).all()
+    finally:
+        driver.problem.destroy()
+
+
+def test_fragment_is_held_and_gives_no_nan():
+    """Every edge of a patch of cells cracked: the cells are void fragments (no stiffness),
+    their inner nodes are held, and the run goes on with finite numbers."""
+    driver = make_driver("notched_beam", *SMALL_BEAM, "cracking.max_events=5", comm=MPI.COMM_SELF)
+    try:
+        m = driver.state.mesh
+        cent = m.centroids()
+        island = np.flatnonzero(np.hypot(cent[:, 0] + 200.0, cent[:, 1] - 75.0) < 25.0)
+        assert len(island) > 5
+        driver.precracked = np.union1d(driver.precracked, m.cell_edges[island].ravel())
+        res = driver.run()
+        assert res["end_reason"] in END_REASONS
+        assert res["events"] == 5
+        assert set(island.tolist()) <= set(driver.state.void_cells().tolist())
+        assert all(np.isfinite(r["strain_energy"]) for r in driver.rows)
+    finally:
+        driver.problem.destroy()
+
+
+def test_patch_test_error_falls_with_refinement():
+    errors = []
+    for h in (0.475, 0.26, 0.182):
+        driver = make_driver("crack_patch_test", f"geometry.parameters.h={h}")
+        try:
+            errors.append(driver.run()["displacement_error_l2"])
+        finally:
+            driver.problem.destroy()
+    assert errors[0] > errors[1] > errors[2] > 0.0
+
+
+def run_plate(comm: MPI.Comm) -> CrackDriver:
+    """50 events of a coarse plate with a hole (1242 nodes)."""
+    driver = make_driver(
+        "plate_hole", "geometry.parameters.h=3", "cracking.max_events=50", comm=comm
+    )
+    try:
+        driver.run()
+        return driver
+    finally:
+        driver.problem.destroy()
+
+
+def test_small_beam_crack_reaches_the_top_and_ends_cleanly():
+    _, res = run_beam("cracking.max_events=200")
+    assert res["end_reason"] in ("singular", "separated")
+    assert res["crack_face"]["event"] is not None
+
+
+@pytest.mark.mpi(min_size=2)
+def test_same_first_50_events_on_1_and_2_ranks():
+    world = MPI.COMM_WORLD
+    parallel = run_plate(world)
+    serial = run_plate(MPI.COMM_SELF)
+    assert len(parallel.rows) == 50
+    assert [r["edge"] for r in parallel.rows] == [r["edge"] for r in serial.rows]
+    np.testing.assert_allclose(
+        [r["r"] for r in parallel.rows], [r["r"] for r in serial.rows], rtol=1e-8
+    )
+    edges = world.allgather([r["edge"] for r in parallel.rows])
+    assert all(e == edges[0] for e in edges)
