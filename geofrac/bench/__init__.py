@@ -19,6 +19,10 @@ BENCHES: dict[str, tuple[str, str]] = {
         "geofrac.bench.cantilever",
         "Timoshenko cantilever (seed 2.4.1): displacement/energy error against DOFs and wall time",
     ),
+    "cracking": (
+        "geofrac.bench.cracking",
+        "crack events (seed Fig. 2.6): events/s and seconds per phase, notched beam, DFN Model 2",
+    ),
     "dfn": (
         "geofrac.bench.dfn",
         "DFN Models 1 and 2 (seed 2.5.1): generation and meshing wall times, mesh statistics",

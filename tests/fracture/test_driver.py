@@ -77,8 +77,10 @@ def test_node_with_all_edges_cracked_is_held_not_singular():
 
 
 def test_fragment_is_held_and_gives_no_nan():
-    """Every edge of a patch of cells cracked: the cells are void fragments (no stiffness),
-    their inner nodes are held, and the run goes on with finite numbers."""
+    """Every edge of a patch of cells cracked: void fragments, finite numbers.
+
+    The cells carry no stiffness, their inner nodes are held, and the run goes on.
+    """
     driver = make_driver("notched_beam", *SMALL_BEAM, "cracking.max_events=5", comm=MPI.COMM_SELF)
     try:
         m = driver.state.mesh

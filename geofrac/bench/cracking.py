@@ -1,0 +1,110 @@
+"""``geofrac bench cracking``: events per second and time per phase of the crack driver.
+
+Cases (``--cases``): ``beam`` (jobs/notched_beam.toml at seed size, RGNT), ``model2``
+(jobs/crack_model2.toml: DFN Model 2 at seed size, RGNT), ``plate`` (jobs/plate_hole.toml)
+and ``patch`` (the patch test over the seed's node counts, error (2.22) per mesh). Each
+event case runs ``--events`` events on the ranks it is started with and reports events/s
+and the seconds of each phase (assemble, solve, criterion/stress, update) as the maximum
+over ranks. Run it under ``mpiexec -n 2`` for the 2-rank figures.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+__all__ = ["CASES", "PATCH_H", "add_arguments", "run"]
+
+_JOBS = Path(__file__).resolve().parents[2] / "jobs"
+
+#: case -> (scene, extra overrides)
+CASES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "beam": ("notched_beam", ()),
+    "model2": ("crack_model2", ()),
+    "plate": ("plate_hole", ()),
+}
+
+#: Mesh sizes of meshes/patch_core.geo for the seed's node counts 218 ... 9857.
+PATCH_H = (0.475, 0.26, 0.182, 0.128, 0.0904, 0.056)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of this bench."""
+    p.add_argument(
+        "--cases", default="beam,model2", help="comma-separated: beam, model2, plate, patch"
+    )
+    p.add_argument("--events", type=int, default=30, help="events per case (default 30)")
+    p.add_argument("--solver", choices=("reuse", "refactor"), default="reuse")
+    p.add_argument("--json", type=Path, help="write the JSON records to this file")
+
+
+def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
+    """Run the cases; print a table (rank 0); return the records."""
+    from geofrac.io.summary import write_json
+    from geofrac.log import echo
+    from geofrac.runner import solve_scene
+    from geofrac.scene import load_scene_collective
+
+    if args.events < 1:
+        raise SystemExit("--events must be >= 1")
+    records = []
+    for case in [c.strip() for c in args.cases.split(",") if c.strip()]:
+        if case == "patch":
+            for h in PATCH_H:
+                scene = load_scene_collective(
+                    comm, _JOBS / "crack_patch_test.toml", [f"geometry.parameters.h={h}"]
+                )
+                sol = solve_scene(scene, comm, verbose=False)
+                res = sol.results["cracking"]
+                sol.problem.destroy()
+                records.append(
+                    {
+                        "case": "patch",
+                        "element": scene.discretization.element,
+                        "ranks": comm.size,
+                        "dofs": res["dofs"],
+                        "nodes": sol.mesh_counts()["vertices"],
+                        "h": h,
+                        "displacement_error_l2": res["displacement_error_l2"],
+                    }
+                )
+                echo(
+                    comm,
+                    f"patch h={h}: {records[-1]['nodes']} nodes, "
+                    f"error {res['displacement_error_l2']:.3e}",
+                )
+            continue
+        if case not in CASES:
+            raise SystemExit(f"unknown case '{case}'; choose from {', '.join([*CASES, 'patch'])}")
+        name, extra = CASES[case]
+        overrides = [*extra, f"cracking.max_events={args.events}", f"cracking.solver={args.solver}"]
+        scene = load_scene_collective(comm, _JOBS / f"{name}.toml", overrides)
+        sol = solve_scene(scene, comm, verbose=False)
+        res = sol.results["cracking"]
+        sol.problem.destroy()
+        record = {
+            "case": case,
+            "element": scene.discretization.element,
+            "ranks": comm.size,
+            "dofs": res["dofs"],
+            "events": res["events"],
+            "events_per_s": res["events_per_s"],
+            "solver": args.solver,
+            "factorizations": res["factorizations"],
+            "cg_iterations": res["cg_iterations"],
+            "end_reason": res["end_reason"],
+            **{f"{k}_s": v for k, v in res["phase_s"].items()},
+        }
+        records.append(record)
+        echo(
+            comm,
+            f"{case}: {record['dofs']} DOFs, {record['events']} events on {comm.size} rank(s): "
+            f"{record['events_per_s']:.2f} events/s; assemble {record['assemble_s']:.1f} s, solve "
+            f"{record['solve_s']:.1f} s, criterion {record['criterion_s']:.1f} s, update "
+            f"{record['update_s']:.1f} s; {record['factorizations']} factorisations, "
+            f"{record['cg_iterations']} CG iterations",
+        )
+    if args.json is not None and comm.rank == 0:
+        write_json(args.json, records)
+    return records
