@@ -45,3 +45,12 @@ def test_every_dfn_key_has_a_row():
     documented = {name for row in rows for name in re.findall(r"`(\w+)`", row)}
     for key in (*TABLE_KEYS, *SET_KEYS):
         assert key in documented, key
+
+
+def test_every_cracking_key_has_a_row():
+    from geofrac.effects.cracking import KEYS
+
+    start = TEXT.index("### `[cracking]`")
+    body = TEXT[start : TEXT.index("### `[dfn]`")]
+    for key in KEYS:
+        assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), key
