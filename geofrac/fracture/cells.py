@@ -28,6 +28,7 @@ __all__ = [
     "mls_matrix",
     "mls_stress",
     "principal_max",
+    "strain_operator",
 ]
 
 #: DOFs per vertex of the elements the crack driver supports.
@@ -93,8 +94,17 @@ def _p2_gradients(lam_grad: np.ndarray, bary: np.ndarray) -> np.ndarray:
 MIDPOINTS = np.array([[0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [0.5, 0.5, 0.0]])
 
 
-def _cell_operator(element: str, x: np.ndarray, bary: np.ndarray) -> np.ndarray:
-    """Strain operator at points: ε = B d for the cell DOFs d, shape=(nc, nq, 3, nv * bs)."""
+def strain_operator(element: str, x: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """Strain operator at barycentric points: ε = B d for the cell DOFs d.
+
+    Args:
+        element: ``cst``, ``rgnt`` or ``gnt``.
+        x: vertex coordinates, shape=(nc, 3, 2).
+        bary: barycentric coordinates of the points, shape=(nq, 3).
+
+    Returns:
+        B, shape=(nc, nq, 3, 3 bs).
+    """
     lam_grad, _ = _barycentric_gradients(x)
     if element in ("cst", "p1"):
         B = _voigt(lam_grad)[:, None]
@@ -121,7 +131,7 @@ def fe_matrices(
         K_e with DOFs vertex by vertex, shape=(nc, 3 bs, 3 bs).
     """
     _, area = _barycentric_gradients(x)
-    B = _cell_operator(element, x, MIDPOINTS)  # shape=(nc, 3, 3, n)
+    B = strain_operator(element, x, MIDPOINTS)  # shape=(nc, 3, 3, n)
     w = thickness * area / 3.0
     K = np.einsum("c,cqip,ij,cqjr->cpr", w, B, D, B)
     if element in ("cst", "p1") or penalty == 0.0:
@@ -156,7 +166,7 @@ def fe_stresses(element: str, x: np.ndarray, dofs: np.ndarray, D: np.ndarray) ->
     Returns:
         shape=(nc, 3, 3): [cell, local edge j (opposite vertex j), component].
     """
-    B = _cell_operator(element, x, MIDPOINTS)  # point q is the midpoint of edge q
+    B = strain_operator(element, x, MIDPOINTS)  # point q is the midpoint of edge q
     return np.einsum("ij,cqjp,cp->cqi", D, B, dofs)
 
 
@@ -167,7 +177,10 @@ def mls_matrix(fit: LinearFit, D: np.ndarray, thickness: float, area: float) -> 
 
 
 def mls_stress(fit: LinearFit, D: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Constant stress of a cracked cell from its satellites' translations u, shape=(n, 2)."""
+    """Constant stress (σ_xx, σ_yy, σ_xy) of a cracked cell, shape=(3,).
+
+    ``u``: its satellites' translations, shape=(n, 2) or flattened (2 n,).
+    """
     return D @ (strain_matrix(fit) @ np.asarray(u).ravel())
 
 

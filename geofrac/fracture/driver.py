@@ -35,8 +35,15 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from geofrac.errors import RunError
-from geofrac.fracture.cells import BLOCK_SIZES, MIDPOINTS, fe_matrices, mls_matrix, principal_max
-from geofrac.fracture.cells import _cell_operator as cell_operator
+from geofrac.fracture.cells import (
+    BLOCK_SIZES,
+    MIDPOINTS,
+    fe_matrices,
+    mls_matrix,
+    mls_stress,
+    principal_max,
+    strain_operator,
+)
 from geofrac.fracture.criterion import edge_principal, select_edges
 from geofrac.fracture.state import CrackState, MlsSettings
 from geofrac.fracture.topology import edge_mesh
@@ -230,7 +237,8 @@ class CrackDriver:
         self.timing = _Timing()
         self.solver: LinearSolver | None = None
         self.ksp: PETSc.KSP | None = None
-        self.A: PETSc.Mat | None = None
+        #: cell -> (its fit, the fit's stiffness): assembly and measures share it.
+        self._mls_k: dict[int, tuple[Any, np.ndarray]] = {}
         self._b0: PETSc.Vec | None = None
         #: nodes of pieces cut free by cracks (no Dirichlet node), held like a node whose
         #: every edge is cracked, shape=(k,).
@@ -244,11 +252,10 @@ class CrackDriver:
         parts = self.comm.allgather((rows, vals))
         self.bc_rows = np.concatenate([p[0] for p in parts]).astype(np.int64)
         self.bc_vals = np.concatenate([p[1] for p in parts])
-        block_node = {int(b): n for n, b in enumerate(gm.node_block)}
-        self.dof_node = lambda dofs: np.array(
-            [block_node[int(d) // bs] for d in dofs], dtype=np.int64
-        )
-        bc_nodes = np.unique(self.dof_node(self.bc_rows))
+        order = np.argsort(gm.node_block)
+        #: node of each Dirichlet DOF, shape=(len(bc_rows),).
+        self.bc_row_nodes = order[np.searchsorted(gm.node_block[order], self.bc_rows // bs)]
+        bc_nodes = np.unique(self.bc_row_nodes)
         mesh_e = edge_mesh(gm.coords, gm.cells)
         frozen = np.isin(gm.cells, bc_nodes).any(axis=1)
         forced = np.zeros(len(gm.cells), dtype=bool)
@@ -269,7 +276,7 @@ class CrackDriver:
         # control group: its prescribed, non-zero DOFs
         dim, ents = self.tagged.entities(cfg.control)
         control_nodes = np.unique(_facet_nodes(self.mesh, gm, dim, ents))
-        on = np.isin(self.dof_node(self.bc_rows), control_nodes) & (self.bc_vals != 0)
+        on = np.isin(self.bc_row_nodes, control_nodes) & (self.bc_vals != 0)
         self.control_rows, self.control_vals = self.bc_rows[on], self.bc_vals[on]
         self.control_unit = float(np.mean(np.abs(self.control_vals)))
         self.face_nodes = None
@@ -295,7 +302,7 @@ class CrackDriver:
         dofs = gm.node_block[gm.cells[own]][:, :, None] * bs + np.arange(bs)
         self.fe_dofs = dofs.reshape(len(own), 3 * bs)
         self.fe_stress_op = np.einsum(
-            "ij,cqjp->cqip", self.D, cell_operator(self.element, x, MIDPOINTS)
+            "ij,cqjp->cqip", self.D, strain_operator(self.element, x, MIDPOINTS)
         )
         self.owned_flag = np.zeros(len(gm.cells), dtype=bool)
         self.owned_flag[own] = True
@@ -334,7 +341,7 @@ class CrackDriver:
             d = self._mls_dofs(fit.nodes)
             rows.append(np.repeat(d, len(d)))
             cols.append(np.tile(d, len(d)))
-            vals.append(mls_matrix(fit, self.D, self.t, state.areas[c]).ravel())
+            vals.append(self._mls_stiffness(c, fit).ravel())
         diag = np.arange(self.row0, self.row0 + self.n_local, dtype=np.int64)
         rows.append(diag)
         cols.append(diag)
@@ -384,7 +391,7 @@ class CrackDriver:
         labels = _components(
             len(gm.coords), np.array(a, dtype=np.int64), np.array(b, dtype=np.int64)
         )
-        anchored = np.unique(labels[np.unique(self.dof_node(self.bc_rows))])
+        anchored = np.unique(labels[np.unique(self.bc_row_nodes)])
         touched = np.zeros(len(gm.coords), dtype=bool)
         touched[np.array(a + b, dtype=np.int64)] = True
         loose = np.flatnonzero(touched & ~np.isin(labels, anchored))
@@ -455,11 +462,11 @@ class CrackDriver:
             if fit is None or not self.owned_flag[c]:
                 continue
             d = self._mls_dofs(fit.nodes)
-            k = mls_matrix(fit, self.D, self.t, state.areas[c])
+            k = self._mls_stiffness(c, fit)
             f = k @ u[d]
             energy += 0.5 * float(u[d] @ f)
             force[d] += f
-            sig = self.D @ (self._strain(fit) @ u[d])
+            sig = mls_stress(fit, self.D, u[d])
             s1[c] = principal_max(sig)
         s1 = self.comm.allreduce(s1, op=MPI.SUM)
         energy = self.comm.allreduce(energy, op=MPI.SUM)
@@ -510,11 +517,13 @@ class CrackDriver:
             total += state.areas[c] * float(w @ np.sum((uh - ue) ** 2, axis=1))
         return math.sqrt(self.comm.allreduce(total, op=MPI.SUM))
 
-    @staticmethod
-    def _strain(fit: Any) -> np.ndarray:
-        from geofrac.mls.shape import strain_matrix
-
-        return strain_matrix(fit)
+    def _mls_stiffness(self, c: int, fit: Any) -> np.ndarray:
+        """Stiffness (2.19) of MLS cell c, computed once per fit."""
+        cached = self._mls_k.get(c)
+        if cached is None or cached[0] is not fit:
+            cached = (fit, mls_matrix(fit, self.D, self.t, self.state.areas[c]))
+            self._mls_k[c] = cached
+        return cached[1]
 
     # -- the loop --------------------------------------------------------------------
     def run(self) -> dict[str, Any]:
@@ -591,8 +600,8 @@ class CrackDriver:
                     end = "no_tensile_edge"
                     break
                 energy = r * r * energy_unit
-                mid = state.mesh.midpoints()[edges[0]]
                 a, bnode = state.mesh.edges[edges[0]]
+                mid = state.mesh.coords[[a, bnode]].mean(axis=0)
                 rows.append(
                     {
                         "event": event,

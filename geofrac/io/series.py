@@ -85,23 +85,9 @@ class XdmfSeries:
                 NumberOfElements=str(self.num_cells),
                 NodesPerElement=str(self.nv),
             )
-            ET.SubElement(
-                top,
-                "DataItem",
-                Dimensions=f"{self.num_cells} {self.nv}",
-                NumberType="Int",
-                Precision="8",
-                Format="HDF",
-            ).text = f"{h5}:/mesh/topology"
+            _hdf_item(top, f"{self.num_cells} {self.nv}", "Int", f"{h5}:/mesh/topology")
             geo = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-            ET.SubElement(
-                geo,
-                "DataItem",
-                Dimensions=f"{self.num_nodes} 3",
-                NumberType="Float",
-                Precision="8",
-                Format="HDF",
-            ).text = f"{h5}:/mesh/geometry"
+            _hdf_item(geo, f"{self.num_nodes} 3", "Float", f"{h5}:/mesh/geometry")
             ET.SubElement(grid, "Time", Value=repr(t))
             for name, centre, k in fields:
                 n = self.num_nodes if centre == "Node" else self.num_cells
@@ -112,15 +98,16 @@ class XdmfSeries:
                     AttributeType="Vector" if k > 1 else "Scalar",
                     Center=centre,
                 )
-                ET.SubElement(
-                    attr,
-                    "DataItem",
-                    Dimensions=f"{n} {k}" if k > 1 else f"{n}",
-                    NumberType="Float",
-                    Precision="8",
-                    Format="HDF",
-                ).text = f"{h5}:/step_{i}/{name}"
+                dims = f"{n} {k}" if k > 1 else f"{n}"
+                _hdf_item(attr, dims, "Float", f"{h5}:/step_{i}/{name}")
         ET.indent(root)
         tmp = self.path.with_suffix(".xdmf.tmp")
         ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8")
         tmp.replace(self.path)
+
+
+def _hdf_item(parent: ET.Element, dims: str, number_type: str, path: str) -> None:
+    """An 8-byte HDF5 DataItem ``path`` (``file.h5:/dataset``) of shape ``dims``."""
+    ET.SubElement(
+        parent, "DataItem", Dimensions=dims, NumberType=number_type, Precision="8", Format="HDF"
+    ).text = path
