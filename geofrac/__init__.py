@@ -3,9 +3,30 @@
 Importing :mod:`geofrac` is cheap: it loads neither MPI, DOLFINx nor PETSc. The
 distributed plumbing lives in :mod:`geofrac.fem`, :mod:`geofrac.meshing` and
 :mod:`geofrac.io`, which import ``dolfinx_solver`` before any binding.
+
+Under a multi-rank ``mpiexec`` every rank already has a core, so importing geofrac
+before numpy sets ``OPENBLAS_NUM_THREADS`` and ``OMP_NUM_THREADS`` to 1 unless the user
+set them: threaded BLAS in each rank oversubscribes the cores (the crack driver's dense
+updates ran 2-3 times slower with 2 ranks × 2 threads on 2 cores).
 """
 
+import os
 from importlib.metadata import PackageNotFoundError, version
+
+
+def _single_threaded_blas_under_mpi() -> None:
+    """One BLAS/OpenMP thread per rank in multi-rank MPI jobs (MPICH, Open MPI, Slurm)."""
+    size = 1
+    for key in ("PMI_SIZE", "OMPI_COMM_WORLD_SIZE", "MPI_LOCALNRANKS"):
+        value = os.environ.get(key, "")
+        if value.isdigit():
+            size = max(size, int(value))
+    if size > 1:
+        for key in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
+            os.environ.setdefault(key, "1")
+
+
+_single_threaded_blas_under_mpi()
 
 try:
     __version__ = version("geofrac")

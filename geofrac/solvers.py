@@ -13,11 +13,15 @@ solver has read them, so one solver's options never leak into the next.
 
 from __future__ import annotations
 
+import ctypes
+import functools
 from collections.abc import Callable
+from pathlib import Path
 
-import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+import dolfinx_solver  # orders MPI before the DOLFINx bindings; its lib/ holds libpetsc
 
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from geofrac.errors import RunError
@@ -26,6 +30,7 @@ __all__ = [
     "AUTO_DIRECT_MAX_DOFS",
     "MAX_RELATIVE_RESIDUAL",
     "LinearSolver",
+    "mumps_inverse_entries",
     "orthonormal_nullspace",
     "preset_options",
     "rigid_body_modes",
@@ -59,6 +64,73 @@ def preset_options(preset: str, num_dofs: int) -> tuple[str, dict[str, str]]:
         "mg_levels_ksp_type": "chebyshev",
         "mg_levels_pc_type": "jacobi",
     }
+
+
+@functools.cache
+def _petsc_library() -> ctypes.CDLL:
+    """The PETSc shared library petsc4py is linked to (for calls petsc4py does not wrap)."""
+    libs = sorted(Path(dolfinx_solver.__path__[0], "lib").glob("libpetsc.so*"))
+    if not libs:
+        raise RunError("libpetsc not found next to dolfinx_solver; reinstall the venv")
+    lib = ctypes.CDLL(str(libs[0]))
+    lib.MatMumpsGetInverse.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+    lib.MatMumpsGetInverse.restype = ctypes.c_int
+    return lib
+
+
+def mumps_inverse_entries(F: PETSc.Mat, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """Entries (A⁻¹)[rows, cols] from a MUMPS factor of A (collective), shape=(nr, nc).
+
+    MUMPS computes selected entries of the inverse from sparse right-hand sides
+    (ICNTL(30)), pruning its elimination tree to the requested rows and columns, which
+    is far cheaper than full solves for a few columns (``MatMumpsGetInverse``; petsc4py
+    does not wrap it, so it is called through ctypes). The request is built on rank 0,
+    as MUMPS wants it; the result is broadcast to every rank. The solve controls the
+    call changes (ICNTL 20, 21, 30) are restored, so ``F`` solves as before.
+
+    Args:
+        F: the MUMPS factor (``pc.getFactorMatrix()``), on its communicator.
+        rows: global row indices, the same on every rank, shape=(nr,).
+        cols: global column indices, the same on every rank, shape=(nc,).
+    """
+    pcomm = F.getComm()
+    comm = pcomm.tompi4py()
+    n = F.getSize()[0]
+    rows = np.asarray(rows, dtype=np.int64)
+    cols = np.asarray(cols, dtype=np.int64)
+    r_order, c_order = np.argsort(rows), np.argsort(cols)
+    r_sorted, c_sorted = rows[r_order], cols[c_order]
+    # Bt: row j lists the rows i of the requested A⁻¹(i, j); all of it on rank 0
+    Bt = PETSc.Mat().create(pcomm)
+    local = n if comm.rank == 0 else 0
+    Bt.setSizes(((local, n), (local, n)))
+    Bt.setType(PETSc.Mat.Type.AIJ)
+    if comm.rank == 0:
+        count = np.zeros(n, dtype=np.int64)
+        count[c_sorted] = len(rows)
+        indptr = np.concatenate([[0], np.cumsum(count)]).astype(PETSc.IntType)
+        indices = np.tile(r_sorted, len(cols)).astype(PETSc.IntType)
+        Bt.setPreallocationCSR((indptr, indices))
+        Bt.setValuesCSR(indptr, indices, np.zeros(len(indices)))
+    else:
+        Bt.setPreallocationCSR((np.zeros(1, dtype=PETSc.IntType), np.zeros(0, dtype=PETSc.IntType)))
+    Bt.assemble()
+    spRHS = PETSc.Mat().createTranspose(Bt)
+    saved = {i: F.getMumpsIcntl(i) for i in (20, 21, 30)}
+    try:
+        err = _petsc_library().MatMumpsGetInverse(F.handle, spRHS.handle)
+        values = Bt.getValuesCSR()[2] if comm.rank == 0 else None
+    finally:
+        for i, v in saved.items():
+            F.setMumpsIcntl(i, v)
+        spRHS.destroy()
+        Bt.destroy()
+    if comm.allreduce(err, op=MPI.MAX):
+        raise RunError(f"MatMumpsGetInverse failed (PETSc error {err})")
+    block = comm.bcast(values)
+    out = np.empty((len(rows), len(cols)))
+    out[np.ix_(r_order, c_order)] = block.reshape(len(cols), len(rows)).T
+    return out
 
 
 def rigid_body_modes(space: object) -> PETSc.NullSpace:

@@ -14,6 +14,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from geofrac.effects.cracking import SOLVERS
+
 __all__ = ["CASES", "PATCH_H", "add_arguments", "run"]
 
 _JOBS = Path(__file__).resolve().parents[2] / "jobs"
@@ -35,7 +37,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--cases", default="beam,model2", help="comma-separated: beam, model2, plate, patch"
     )
     p.add_argument("--events", type=int, default=30, help="events per case (default 30)")
-    p.add_argument("--solver", choices=("reuse", "refactor"), default="reuse")
+    p.add_argument(
+        "--solver",
+        choices=SOLVERS,
+        default="update",
+        help="cracking.solver of every case (default update)",
+    )
     p.add_argument("--json", type=Path, help="write the JSON records to this file")
 
 

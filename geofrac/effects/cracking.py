@@ -17,9 +17,12 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
   the first ``[[bc]]`` with a non-zero value).
 - ``edges_per_event`` (1), ``batch_tolerance`` (0): crack up to ``edges_per_event`` edges
   with r ≤ (1 + batch_tolerance) r_min in one event.
-- ``solver`` (``"reuse"``): ``"reuse"`` keeps one factorisation as preconditioner of CG
-  for later events and refactorises when CG needs more than ``reuse_iterations`` (30);
-  ``"refactor"`` factorises every event (the reference).
+- ``solver`` (``"update"``): ``"update"`` keeps one factorisation and corrects its
+  solution exactly for the cells changed since (Woodbury on the touched DOFs), and
+  refactorises when more than ``update_dofs`` (1200) DOFs were touched or a piece is cut
+  free; ``"reuse"`` keeps one factorisation as preconditioner of CG and refactorises when
+  CG needs more than ``reuse_iterations`` (30); ``"refactor"`` factorises every event
+  (the reference).
 - ``output_every``: write a frame of the XDMF series every this many events (default
   max_events / 50).
 - ``face``, ``face_origin`` (0): report where the crack first reaches the facet group
@@ -37,10 +40,13 @@ from typing import Any
 from geofrac.effects import ConfigureContext
 from geofrac.scene.errors import SceneError, did_you_mean
 
-__all__ = ["ELEMENTS", "KEYS", "CrackingConfig", "configure", "driver"]
+__all__ = ["ELEMENTS", "KEYS", "SOLVERS", "CrackingConfig", "configure", "driver"]
 
 #: Elements the crack driver supports.
 ELEMENTS = ("cst", "p1", "rgnt", "gnt")
+
+#: Values of ``cracking.solver``.
+SOLVERS = ("update", "reuse", "refactor")
 
 #: Keys of the ``[cracking]`` table.
 KEYS = (
@@ -57,6 +63,7 @@ KEYS = (
     "batch_tolerance",
     "solver",
     "reuse_iterations",
+    "update_dofs",
     "output_every",
     "face",
     "face_origin",
@@ -80,6 +87,7 @@ class CrackingConfig:
     batch_tolerance: float
     solver: str
     reuse_iterations: int
+    update_dofs: int
     output_every: int
     face: str | None
     face_origin: float
@@ -185,9 +193,11 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "cracking.face",
             f"unknown group {face!r}" + did_you_mean(str(face), list(ctx.groups)),
         )
-    solver = table.get("solver", "reuse")
-    if solver not in ("reuse", "refactor"):
-        raise SceneError(file, "cracking.solver", f"must be 'reuse' or 'refactor', got {solver!r}")
+    solver = table.get("solver", "update")
+    if solver not in SOLVERS:
+        raise SceneError(
+            file, "cracking.solver", f"must be one of {', '.join(SOLVERS)}, got {solver!r}"
+        )
     return CrackingConfig(
         method=method,
         max_events=max_events,
@@ -202,6 +212,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         batch_tolerance=_number(table, file, "batch_tolerance", 0.0, float, 0.0),
         solver=solver,
         reuse_iterations=_number(table, file, "reuse_iterations", 30, int, 1),
+        update_dofs=_number(table, file, "update_dofs", 1200, int, 1, 20000),
         output_every=_number(table, file, "output_every", max(1, max_events // 50), int, 1),
         face=face,
         face_origin=_number(table, file, "face_origin", 0.0, float, -float("inf")),

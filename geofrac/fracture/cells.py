@@ -23,6 +23,7 @@ from geofrac.mls.shape import LinearFit, strain_matrix
 __all__ = [
     "BLOCK_SIZES",
     "P2_EDGES",
+    "MlsTable",
     "fe_matrices",
     "fe_stresses",
     "mls_matrix",
@@ -189,3 +190,72 @@ def principal_max(s: np.ndarray) -> np.ndarray:
     c = 0.5 * (s[..., 0] + s[..., 1])
     r = np.hypot(0.5 * (s[..., 0] - s[..., 1]), s[..., 2])
     return c + r
+
+
+class MlsTable:
+    """Strain operators of MLS cells in padded arrays, for vectorised stresses and energies.
+
+    Row r holds one cell: its DOFs padded with ``n_dofs`` (an index whose value the
+    caller sets to 0 by appending a zero to u), its B of (2.19) padded with zero columns,
+    and t · area. Rows of removed cells are recycled.
+
+    Args:
+        n_dofs: number of global DOFs (the padding index).
+    """
+
+    def __init__(self, n_dofs: int) -> None:
+        self.n_dofs = n_dofs
+        self.row: dict[int, int] = {}
+        self._free: list[int] = []
+        self.cells = np.zeros(0, dtype=np.int64)  # shape=(rows,); -1 for a free row
+        self.dofs = np.zeros((0, 0), dtype=np.int64)  # shape=(rows, width)
+        self.B = np.zeros((0, 3, 0))  # shape=(rows, 3, width)
+        self.weight = np.zeros(0)  # t · area, 0 for a free row, shape=(rows,)
+
+    def _grow(self, rows: int, width: int) -> None:
+        r0, w0 = self.dofs.shape
+        rows, width = max(rows, r0), max(width, w0)
+        if (rows, width) == (r0, w0):
+            return
+        dofs = np.full((rows, width), self.n_dofs, dtype=np.int64)
+        dofs[:r0, :w0] = self.dofs
+        B = np.zeros((rows, 3, width))
+        B[:r0, :, :w0] = self.B
+        self.dofs, self.B = dofs, B
+        self.cells = np.concatenate([self.cells, np.full(rows - r0, -1, dtype=np.int64)])
+        self.weight = np.concatenate([self.weight, np.zeros(rows - r0)])
+        self._free += list(range(rows - 1, r0 - 1, -1))
+
+    def set(self, cell: int, dofs: np.ndarray, B: np.ndarray, weight: float) -> None:
+        """Put (or replace) a cell: DOFs shape=(p,), B shape=(3, p)."""
+        if cell in self.row:
+            r = self.row[cell]
+        else:
+            if not self._free:
+                self._grow(max(16, 2 * len(self.cells)), 0)
+            r = self._free.pop()
+            self.row[cell] = r
+        if len(dofs) > self.dofs.shape[1]:
+            self._grow(0, len(dofs))
+        self.dofs[r] = self.n_dofs
+        self.dofs[r, : len(dofs)] = dofs
+        self.B[r] = 0.0
+        self.B[r, :, : len(dofs)] = B
+        self.weight[r] = weight
+        self.cells[r] = cell
+
+    def remove(self, cell: int) -> None:
+        """Drop a cell (it uses its element again, or became void)."""
+        r = self.row.pop(cell, None)
+        if r is not None:
+            self.cells[r] = -1
+            self.weight[r] = 0.0
+            self.B[r] = 0.0
+            self.dofs[r] = self.n_dofs
+            self._free.append(r)
+
+    def strains(self, u_ext: np.ndarray) -> np.ndarray:
+        """Constant strain of every row; u_ext has a trailing 0, shape=(rows, 3)."""
+        if not len(self.cells):
+            return np.zeros((0, 3))
+        return np.einsum("rip,rp->ri", self.B, u_ext[self.dofs])

@@ -10,9 +10,13 @@ Division of work:
   of other ranks' rows travel with PETSc's own assembly), because an MLS cell couples
   nodes that are not its vertices and so falls outside any finite element sparsity
   pattern; the per-cell σ1 values are gathered to every rank for the criterion;
-- the solve is PETSc's: a MUMPS factorisation, reused across events as the
-  preconditioner of CG (``solver = "reuse"``) and renewed when CG needs more than
-  ``reuse_iterations`` iterations, or renewed every event (``"refactor"``).
+- the solve is PETSc's MUMPS. ``solver = "update"`` (the default) keeps one
+  factorisation for many events and corrects its solution exactly for the cells changed
+  since (:mod:`geofrac.fracture.incremental`: Woodbury on the touched DOFs, with entries
+  of the inverse from MUMPS's sparse solves), refactorising when the touched DOFs exceed
+  ``update_dofs`` or a piece is cut free; ``"reuse"`` uses the factorisation as the
+  preconditioner of CG, renewed when CG needs more than ``reuse_iterations``
+  iterations; ``"refactor"`` factorises every event (the reference).
 
 Each event: unit load (the scene's prescribed displacements as given) → solve → σ1 per
 edge → the edge with least r = f_t/σ1 cracks → the solution scaled by r is the state of
@@ -38,17 +42,19 @@ from geofrac.errors import RunError
 from geofrac.fracture.cells import (
     BLOCK_SIZES,
     MIDPOINTS,
+    MlsTable,
     fe_matrices,
     mls_matrix,
-    mls_stress,
     principal_max,
     strain_operator,
 )
 from geofrac.fracture.criterion import edge_principal, select_edges
+from geofrac.fracture.incremental import IncrementalSolver, Stale, gather_all
 from geofrac.fracture.state import CrackState, MlsSettings
 from geofrac.fracture.topology import edge_mesh
 from geofrac.log import format_seconds
 from geofrac.materials import d_matrix, lame
+from geofrac.mls.shape import strain_matrix
 from geofrac.solvers import LinearSolver
 
 __all__ = ["END_REASONS", "CrackDriver", "GlobalMesh", "gather_mesh"]
@@ -64,6 +70,9 @@ SEPARATED = 1e-9
 
 #: Options prefix of the crack solver.
 PREFIX = "geofrac_crack_"
+
+#: Marks a cell that uses its element's field (not an MLS fit).
+_FE = "fe"
 
 EVENT_COLUMNS = (
     "event",
@@ -237,6 +246,19 @@ class CrackDriver:
         self.timing = _Timing()
         self.solver: LinearSolver | None = None
         self.ksp: PETSc.KSP | None = None
+        #: the ``update`` solver's reference factorisation and correction.
+        self.inc: IncrementalSolver | None = None
+        #: cells changed by the last event, not yet applied to ``inc``, shape=(k,).
+        self._pending = np.zeros(0, dtype=np.int64)
+        #: MLS fits at the reference (cells absent use their element), and the
+        #: contribution applied since for each cell changed after it (fit, None or _FE).
+        self._ref_fits: dict[int, Any] = {}
+        self._applied: dict[int, Any] = {}
+        #: cells giving stiffness to each DOF as applied to ``inc``, shape=(n_global,).
+        self._use = np.zeros(0, dtype=np.int64)
+        #: MLS cells of this rank for the vectorised measures, and cells to refresh.
+        self._table: MlsTable | None = None
+        self._table_dirty: list[int] = []
         #: cell -> (its fit, the fit's stiffness): assembly and measures share it.
         self._mls_k: dict[int, tuple[Any, np.ndarray]] = {}
         self._b0: PETSc.Vec | None = None
@@ -278,6 +300,10 @@ class CrackDriver:
         control_nodes = np.unique(_facet_nodes(self.mesh, gm, dim, ents))
         on = np.isin(self.bc_row_nodes, control_nodes) & (self.bc_vals != 0)
         self.control_rows, self.control_vals = self.bc_rows[on], self.bc_vals[on]
+        #: direction of the prescribed control displacement per DOF (0 elsewhere; one
+        #: trailing 0 for the padding index of the MLS table), shape=(n_global + 1,).
+        self._control_sign = np.zeros(self.n_global + 1)
+        self._control_sign[self.control_rows] = np.sign(self.control_vals)
         self.control_unit = float(np.mean(np.abs(self.control_vals)))
         self.face_nodes = None
         if cfg.face is not None:
@@ -311,16 +337,13 @@ class CrackDriver:
     def _mls_dofs(self, nodes: np.ndarray) -> np.ndarray:
         return (self.gm.node_block[nodes][:, None] * self.bs + np.arange(2)).ravel()
 
-    def _used_dofs(self, is_mls: np.ndarray) -> np.ndarray:
-        """Whether each global DOF has stiffness from some cell (replicated)."""
+    def _use_counts(self, is_mls: np.ndarray) -> np.ndarray:
+        """How many cells give stiffness to each global DOF, shape=(n_global,) (replicated)."""
         gm, bs = self.gm, self.bs
-        used = np.zeros(self.n_global, dtype=bool)
         fe = gm.node_block[gm.cells[~is_mls]].ravel()
-        used[(fe[:, None] * bs + np.arange(bs)).ravel()] = True
-        for fit in self.state.fits.values():
-            if fit is not None:
-                used[self._mls_dofs(fit.nodes)] = True
-        return used
+        dofs = [(fe[:, None] * bs + np.arange(bs)).ravel()]
+        dofs += [self._mls_dofs(f.nodes) for f in self.state.fits.values() if f is not None]
+        return np.bincount(np.concatenate(dofs), minlength=self.n_global)
 
     def assemble(self, held_values: np.ndarray) -> tuple[PETSc.Mat, PETSc.Vec, np.ndarray]:
         """Stiffness and load vector of the current crack state; returns (A, b, held DOFs).
@@ -354,7 +377,7 @@ class CrackDriver:
         )
         A.setValuesCOO(np.concatenate(vals), addv=PETSc.InsertMode.ADD_VALUES)
         A.assemble()
-        used = self._used_dofs(is_mls)
+        used = self._use_counts(is_mls) > 0
         if len(self.fragment_nodes):
             used[
                 (
@@ -436,43 +459,200 @@ class CrackDriver:
         self.solver = LinearSolver(A, PREFIX, "direct", options, self.n_global)
         self.timing.factorizations += 1
 
-    def _gather(self, x: PETSc.Vec) -> np.ndarray:
-        """The whole solution vector on every rank, shape=(n_global,)."""
-        scatter, full = PETSc.Scatter.toAll(x)
+    def _solve_event(self, u_prev: np.ndarray, x: PETSc.Vec) -> tuple[np.ndarray, int]:
+        """Unit-load solution of the current crack state on every rank; CG iterations.
+
+        The iterations are 0 for a direct solve. Holds the nodes of cut-free pieces when
+        the system turns singular; raises RunError when it stays singular.
+        """
+        if self.config.solver == "update":
+            return self._solve_update(u_prev, x), 0
+        t = time.perf_counter()
+        A, b, _ = self.assemble(u_prev)
+        t = self.timing.add("assemble", t)
         try:
-            scatter.scatter(x, full, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-            return full.getArray().copy()
+            try:
+                its = self.solve(A, b, x)
+            except RunError:
+                if not self._find_fragments():
+                    raise
+                A.destroy()
+                b.destroy()
+                A, b, _ = self.assemble(u_prev)
+                its = self.solve(A, b, x)
         finally:
-            scatter.destroy()
-            full.destroy()
+            A.destroy()  # a KSP that still uses it holds its own reference
+            b.destroy()
+        u = gather_all(x)
+        self.timing.add("solve", t)
+        return u, its
+
+    def _solve_update(self, u_prev: np.ndarray, x: PETSc.Vec) -> np.ndarray:
+        """``solver = "update"``: correct the reference solution, or start a new reference."""
+        timing = self.timing
+        t = time.perf_counter()
+        if self.inc is not None and len(self._pending):
+            try:
+                self._apply_changes(self._pending, u_prev)
+            except Stale:
+                self._drop_reference()
+        self._pending = np.zeros(0, dtype=np.int64)
+        t = timing.add("assemble", t)
+        if self.inc is not None:
+            try:
+                u = self.inc.solve(x)
+                timing.add("solve", t)
+                return u
+            except Stale:
+                self._drop_reference()
+        return self._new_reference(u_prev, x)
+
+    def _new_reference(self, u_prev: np.ndarray, x: PETSc.Vec) -> np.ndarray:
+        """Assemble, factorise and solve the current state; it becomes the reference."""
+        bc = np.zeros(self.n_global, dtype=bool)
+        bc[self.bc_rows] = True
+        g = np.zeros(self.n_global)
+        g[self.bc_rows] = self.bc_vals
+        for attempt in range(2):
+            t = time.perf_counter()
+            A, b, held = self.assemble(u_prev)
+            t = self.timing.add("assemble", t)
+            fixed = bc.copy()
+            fixed[held] = True
+            try:
+                self._refactor(A)
+                assert self.solver is not None
+                self.inc = IncrementalSolver(
+                    A, b, fixed, bc, g, self.solver, x, self.config.update_dofs
+                )
+                self.solver = None  # the reference owns it now
+                break
+            except RunError:
+                self._drop_reference()
+                A.destroy()
+                b.destroy()
+                if attempt or not self._find_fragments():
+                    raise
+            finally:
+                self.timing.add("solve", t)
+        self._ref_fits = dict(self.state.fits)
+        self._applied = {}
+        self._use = self._use_counts(self.state.is_mls())
+        assert self.inc is not None
+        return self.inc.y.copy()
+
+    def _drop_reference(self) -> None:
+        for obj in (self.inc, self.solver):
+            if obj is not None:
+                obj.destroy()
+        self.inc = self.solver = None
+
+    def _apply_changes(self, cells: np.ndarray, u_prev: np.ndarray) -> None:
+        """Pass the changed cells' matrices (new − old) to the reference's correction.
+
+        DOFs that lose their last cell are held at ``u_prev``, as :meth:`assemble` does.
+
+        Raises:
+            Stale: the change needs a new factorisation.
+        """
+        assert self.inc is not None
+        state, gm, bs = self.state, self.gm, self.bs
+        pairs = []
+        for c in cells.tolist():
+            old = self._applied.get(c, self._ref_fits.get(c, _FE))
+            new = state.fits.get(c, _FE)
+            if old is not new:
+                pairs.append((c, old, new))
+                self._applied[c] = new
+        fe_cells = [c for c, old, new in pairs if _FE in (old, new)]
+        fe_k = (
+            dict(
+                zip(
+                    fe_cells,
+                    fe_matrices(
+                        self.element, gm.coords[gm.cells[fe_cells]], self.D, self.t, self.penalty
+                    ),
+                    strict=True,
+                )
+            )
+            if fe_cells
+            else {}
+        )
+        blocks = []
+        for c, old, new in pairs:
+            for fit, sign in ((old, -1.0), (new, 1.0)):
+                if fit is _FE:
+                    dofs = (gm.node_block[gm.cells[c]][:, None] * bs + np.arange(bs)).ravel()
+                    k = fe_k[c]
+                elif fit is None:
+                    continue
+                else:
+                    dofs = self._mls_dofs(fit.nodes)
+                    k = self._mls_stiffness(c, fit)
+                self._use[dofs] += int(sign)
+                blocks.append((dofs, sign * k))
+        if not blocks:
+            return
+        inc = self.inc
+        touched = np.unique(np.concatenate([d for d, _ in blocks]))
+        if np.any(inc.held[touched] & (self._use[touched] > 0)):
+            raise Stale("a held DOF carries stiffness again")
+        hold = touched[(self._use[touched] == 0) & ~inc.fixed[touched] & ~inc.held[touched]]
+        inc.apply(blocks, hold, u_prev[hold])
+
+    def _sync_table(self) -> None:
+        """Bring the MLS table of the owned cells up to the crack state."""
+        state = self.state
+        if self._table is None:
+            self._table = MlsTable(self.n_global)
+            dirty = list(state.fits)
+        else:
+            dirty, self._table_dirty = self._table_dirty, []
+        for c in dirty:
+            if not self.owned_flag[c]:
+                continue
+            fit = state.fits.get(c)
+            if fit is None:
+                self._table.remove(c)
+            else:
+                self._table.set(
+                    c, self._mls_dofs(fit.nodes), strain_matrix(fit), self.t * state.areas[c]
+                )
 
     def measures(self, u: np.ndarray) -> tuple[np.ndarray, float, float]:
-        """(σ1 per edge, strain energy, control reaction) of a global solution u."""
+        """(σ1 per edge, strain energy, control reaction) of a global solution u.
+
+        Vectorised over the owned cells: element cells by their stress operators and
+        matrices, MLS cells by the padded :class:`MlsTable`. The reaction sums the
+        forces f = K u of the cells on the control DOFs (signed by the prescribed
+        direction).
+        """
         state, own = self.state, self.own_cells
         is_mls = state.is_mls()
         s1 = np.zeros((len(self.gm.cells), 3))
+        u_ext = np.append(u, 0.0)
         ud = u[self.fe_dofs]  # shape=(n_own, nd)
+        nc, nd = ud.shape
         fe = ~is_mls[own]
-        stress = np.einsum("cqip,cp->cqi", self.fe_stress_op[fe], ud[fe])
-        s1[own[fe]] = principal_max(stress)
-        energy = 0.5 * float(np.einsum("cp,cpr,cr->", ud[fe], self.K_fe[fe], ud[fe]))
-        force = np.zeros(self.n_global)
-        np.add.at(force, self.fe_dofs[fe], np.einsum("cpr,cr->cp", self.K_fe[fe], ud[fe]))
-        for c, fit in state.fits.items():
-            if fit is None or not self.owned_flag[c]:
-                continue
-            d = self._mls_dofs(fit.nodes)
-            k = self._mls_stiffness(c, fit)
-            f = k @ u[d]
-            energy += 0.5 * float(u[d] @ f)
-            force[d] += f
-            sig = mls_stress(fit, self.D, u[d])
-            s1[c] = principal_max(sig)
+        stress = (self.fe_stress_op.reshape(nc, 9, nd) @ ud[:, :, None]).reshape(nc, 3, 3)
+        s1[own[fe]] = principal_max(stress[fe])
+        ku = (self.K_fe @ ud[:, :, None])[..., 0]  # shape=(n_own, nd)
+        energy = 0.5 * float(np.sum((ud * ku)[fe]))
+        sign = self._control_sign
+        reaction = float(np.sum((ku * sign[self.fe_dofs])[fe]))
+        self._sync_table()
+        table = self._table
+        assert table is not None
+        eps = table.strains(u_ext)  # shape=(rows, 3)
+        sig = eps @ self.D.T
+        live = table.cells >= 0
+        s1[table.cells[live]] = principal_max(sig[live])[:, None]
+        energy += 0.5 * float(np.sum(table.weight * np.sum(eps * sig, axis=1)))
+        force = table.weight[:, None] * np.einsum("rip,ri->rp", table.B, sig)
+        reaction += float(np.sum(force * sign[table.dofs]))
         s1 = self.comm.allreduce(s1, op=MPI.SUM)
         energy = self.comm.allreduce(energy, op=MPI.SUM)
-        reaction = self.comm.allreduce(
-            float(force[self.control_rows] @ np.sign(self.control_vals)), op=MPI.SUM
-        )
+        reaction = self.comm.allreduce(reaction, op=MPI.SUM)
         return edge_principal(state.mesh, s1), energy, reaction
 
     def l2_error(self, u: np.ndarray) -> float:
@@ -518,12 +698,14 @@ class CrackDriver:
         return math.sqrt(self.comm.allreduce(total, op=MPI.SUM))
 
     def _mls_stiffness(self, c: int, fit: Any) -> np.ndarray:
-        """Stiffness (2.19) of MLS cell c, computed once per fit."""
+        """Stiffness (2.19) of MLS cell c, computed once per fit (cached for the current one)."""
         cached = self._mls_k.get(c)
-        if cached is None or cached[0] is not fit:
-            cached = (fit, mls_matrix(fit, self.D, self.t, self.state.areas[c]))
-            self._mls_k[c] = cached
-        return cached[1]
+        if cached is not None and cached[0] is fit:
+            return cached[1]
+        k = mls_matrix(fit, self.D, self.t, self.state.areas[c])
+        if self.state.fits.get(c, _FE) is fit:
+            self._mls_k[c] = (fit, k)
+        return k
 
     # -- the loop --------------------------------------------------------------------
     def run(self) -> dict[str, Any]:
@@ -545,43 +727,23 @@ class CrackDriver:
         end, peak, face_hit, first_energy = "max_events", 0.0, None, 0.0
         timing = self.timing
         started = time.perf_counter()
-        A = b = None
         error = None
         if cfg.max_events == 0:
-            A, b, _ = self.assemble(u_unit)
-            self.solve(A, b, x)
-            u_unit = self._gather(x)
+            u_unit, _ = self._solve_event(u_unit, x)
             if self.problem.exact is not None:
                 error = self.l2_error(u_unit)
                 self.say(f"cracking: displacement error (2.22) {error:.4e}")
             end = "max_events"
         try:
             for event in range(1, cfg.max_events + 1):
-                t = time.perf_counter()
-                if A is None:
-                    A, b, _ = self.assemble(u_unit)
-                t = timing.add("assemble", t)
-                failure = None
                 try:
-                    its = self.solve(A, b, x)
+                    u_unit, its = self._solve_event(u_unit, x)
                 except RunError as exc:
-                    failure = str(exc)
-                if failure is not None and self._find_fragments():
-                    A.destroy()
-                    b.destroy()
-                    A, b, _ = self.assemble(u_unit)
-                    try:
-                        its = self.solve(A, b, x)
-                        failure = None
-                    except RunError as exc:
-                        failure = str(exc)
-                if failure is not None:
                     end = "singular"
-                    self.say(f"cracking: event {event}: the system is singular ({failure})")
+                    self.say(f"cracking: event {event}: the system is singular ({exc})")
                     break
-                u_unit = self._gather(x)
                 timing.iterations += its
-                t = timing.add("solve", t)
+                t = time.perf_counter()
                 sigma1, energy_unit, reaction_unit = self.measures(u_unit)
                 first_energy = energy_unit if event == 1 else first_energy
                 if energy_unit <= SEPARATED * first_energy:
@@ -619,7 +781,9 @@ class CrackDriver:
                         "iterations": its,
                     }
                 )
-                state.crack_many([int(e) for e in edges])
+                changed = state.crack_many([int(e) for e in edges])
+                self._pending = np.union1d(self._pending, changed)
+                self._table_dirty += changed.tolist()
                 if face_hit is None and self.face_nodes is not None:
                     ends = state.mesh.edges[edges].ravel()
                     hit = ends[np.isin(ends, self.face_nodes)]
@@ -628,9 +792,6 @@ class CrackDriver:
                 if writer is not None and (event % cfg.output_every == 0 or event == 1):
                     self._write_frame(writer, event, r * u_unit)
                 peak = max(peak, energy)
-                A.destroy()  # a KSP that still uses it holds its own reference
-                b.destroy()
-                A = b = None
                 timing.add("update", t)
                 if event % max(1, cfg.max_events // 20) == 0:
                     rate = event / (time.perf_counter() - started)
@@ -642,9 +803,7 @@ class CrackDriver:
                     end = "energy_drop"
                     break
         finally:
-            for obj in (A, b):
-                if obj is not None:
-                    obj.destroy()
+            self._drop_reference()
         elapsed = time.perf_counter() - started
         if writer is not None and rows:
             self._write_frame(
@@ -786,7 +945,8 @@ class CrackDriver:
 
     def destroy(self) -> None:
         """Free the solvers."""
-        for obj in (self.ksp, self.solver, self._b0):
+        self._drop_reference()
+        for obj in (self.ksp, self._b0):
             if obj is not None:
                 obj.destroy()
-        self.ksp = self.solver = self._b0 = None
+        self.ksp = self._b0 = None

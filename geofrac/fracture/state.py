@@ -8,8 +8,9 @@ is the linear fit of :mod:`geofrac.mls.shape` through its visible satellite node
 non-collinear nodes is *void*: it carries no stiffness, as the seed does for a fragment
 (Fig. 2.4(d)).
 
-:meth:`CrackState.crack` returns the cells whose field changed (the cells of the edge and
-every MLS cell whose influence circle the edge crosses); only those are refitted.
+:meth:`CrackState.crack` refits the cells of the edge and every MLS cell whose influence
+circle the edge crosses, and returns those whose field really changed (a refit that finds
+the same satellites and radius keeps its fit object, so caches keyed by it stay valid).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from geofrac.fracture.topology import EdgeMesh
-from geofrac.fracture.visibility import Bins, visible_nodes
+from geofrac.fracture.visibility import Bins, blocked, visible_nodes
 from geofrac.mls.shape import LinearFit, linear_fit
 
 __all__ = ["CrackState", "MlsSettings", "segment_distance"]
@@ -106,39 +107,55 @@ class CrackState:
         cells = set(np.flatnonzero(self.forced).tolist())
         for e in np.flatnonzero(self.cracked):
             cells.update(c for c in self.mesh.edge_cells[e] if c >= 0)
-        changed = np.array(sorted(cells), dtype=np.int64)
-        self.refit(changed)
-        return changed
+        return self.refit(np.array(sorted(cells), dtype=np.int64))
 
     def crack(self, edge: int) -> np.ndarray:
-        """Crack one edge; refit and return the changed cells, sorted, shape=(k,)."""
+        """Crack one edge; refit; return the cells whose field changed, sorted, shape=(k,)."""
         return self.crack_many([edge])
 
     def crack_many(self, edges: list[int]) -> np.ndarray:
-        """Crack several edges at once; refit and return the changed cells."""
-        changed: set[int] = set()
+        """Crack several edges at once; refit; return the cells whose field changed.
+
+        An MLS cell whose influence circle a new edge crosses keeps its fit without a
+        new search when it has ``neighbours`` satellites and the new edges hide none of
+        them: a crack only hides nodes, so its nearest visible nodes, h and the visible
+        set inside h stay as they are (the same :func:`blocked` test decides both).
+        """
+        own: set[int] = set()
+        near: set[int] = set()
         mls = self.mls_cells
         for e in edges:
             if self.cracked[e]:
                 raise ValueError(f"edge {e} is already cracked")
             self._mark(e)
-            changed.update(int(c) for c in self.mesh.edge_cells[e] if c >= 0)
+            own.update(int(c) for c in self.mesh.edge_cells[e] if c >= 0)
             if len(mls):
                 a, b = self.segments[e]
                 d = segment_distance(self.centroids[mls], a, b)
-                changed.update(mls[d < self._h[mls]].tolist())
-        out = np.array(sorted(changed), dtype=np.int64)
-        self.refit(out)
-        return out
+                near.update(mls[d < self._h[mls]].tolist())
+        seg = self.segments[np.asarray(edges, dtype=np.int64)]
+        coords, target = self.mesh.coords, self.settings.neighbours
+        for c in sorted(near - own):
+            fit = self.fits[c]
+            if fit is None or len(fit.nodes) < target:
+                own.add(c)
+            elif blocked(self.centroids[c], coords[fit.nodes], seg[:, 0], seg[:, 1]).any():
+                own.add(c)
+        return self.refit(np.array(sorted(own), dtype=np.int64))
 
     def _mark(self, e: int) -> None:
         self.cracked[e] = True
         a, b = self.segments[e]
         self.crack_bins.add(e, np.minimum(a, b), np.maximum(a, b))
 
-    def refit(self, cells: np.ndarray) -> None:
-        """(Re)compute the MLS fits of ``cells`` (pure function of the crack state)."""
+    def refit(self, cells: np.ndarray) -> np.ndarray:
+        """(Re)compute the MLS fits of ``cells`` (pure function of the crack state).
+
+        Returns the cells whose fit changed (new, or other satellites or radius), sorted,
+        shape=(k,); the others keep their fit object.
+        """
         s, coords = self.settings, self.mesh.coords
+        changed = []
         for cell in np.asarray(cells, dtype=np.int64):
             c = int(cell)
             size = self.cell_size[c]
@@ -154,4 +171,13 @@ class CrackState:
                 margin=s.margin,
             )
             self._h[c] = h
-            self.fits[c] = linear_fit(self.centroids[c], h, ids, coords[ids]) if len(ids) else None
+            known = c in self.fits
+            old = self.fits.get(c)
+            if known and old is not None and old.h == h and np.array_equal(old.nodes, ids):
+                continue
+            fit = linear_fit(self.centroids[c], h, ids, coords[ids]) if len(ids) else None
+            if known and old is None and fit is None:
+                continue
+            self.fits[c] = fit
+            changed.append(c)
+        return np.array(changed, dtype=np.int64)

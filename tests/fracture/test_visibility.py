@@ -111,3 +111,32 @@ def test_visible_nodes_grow_to_target():
     )
     assert len(ids) >= 10
     assert np.all(np.hypot(*(coords[ids] - [5.2, 5.3]).T) < h)
+
+
+def test_kept_fits_equal_a_full_refit():
+    """Cracking edge by edge (fits kept when no satellite is hidden) gives the fits a
+    fresh state with all those edges cracked computes from scratch."""
+    coords, cells = grid_mesh(12)
+    rng = np.random.default_rng(11)
+    inner = (coords[:, 0] > 0) & (coords[:, 0] < 12)
+    coords[inner, 0] += rng.uniform(-0.2, 0.2, inner.sum())  # x only: the lines stay
+    m = edge_mesh(coords, cells)
+    none = np.zeros(len(cells), bool)
+    step = CrackState(m, none, none, MlsSettings())
+    step.start(np.zeros(0, dtype=np.int64))
+    path = np.concatenate([_crack_line(m, 6.0, 1.0, 9.0), _crack_line(m, 3.0, 2.0, 10.0)])
+    kept = 0
+    for e in path:
+        before = dict(step.fits)
+        changed = step.crack(int(e))
+        kept += sum(1 for c in before if c not in changed and step.fits[c] is before[c])
+    fresh = CrackState(m, none, none, MlsSettings())
+    fresh.start(path)
+    assert kept > 0
+    assert set(step.fits) == set(fresh.fits)
+    for c, fit in fresh.fits.items():
+        if fit is None:
+            assert step.fits[c] is None
+        else:
+            np.testing.assert_array_equal(step.fits[c].nodes, fit.nodes)
+            assert step.fits[c].h == fit.h

@@ -1,0 +1,176 @@
+"""One MUMPS factorisation serving many crack events exactly (the ``update`` solver).
+
+The PETSc side of :mod:`geofrac.fracture.woodbury`: the reference system A₀ x = b₀ (the
+stiffness at the last factorisation, Dirichlet and held DOFs applied), its MUMPS factor,
+y = A₀⁻¹ b₀, and the changed block on the touched DOFs T. Each event costs
+
+- the entries of A₀⁻¹ on (T, new DOFs of T), from MUMPS's selected-inverse solve
+  (:func:`geofrac.solvers.mumps_inverse_entries`);
+- the dense m×m correction solve (m = |T|, replicated);
+- one solve with the factor, x = y + A₀⁻¹ E g, and a residual check against the current
+  system ‖b − A x‖ ≤ :data:`MAX_RESIDUAL` ‖b‖.
+
+The solver is *stale* (the driver then assembles and factorises afresh) when T would
+exceed its capacity, when a change touches a DOF held at the reference (held DOFs may
+not come back without a new factorisation), when the corrected system is singular or the
+residual check fails (a fragment cut free: the fresh factorisation finds and holds it).
+"""
+
+from __future__ import annotations
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import numpy as np
+from petsc4py import PETSc
+
+from geofrac.fracture.woodbury import LocalUpdate
+from geofrac.solvers import LinearSolver, mumps_inverse_entries
+
+__all__ = ["MAX_RESIDUAL", "IncrementalSolver", "Stale", "gather_all"]
+
+#: Largest relative residual of a corrected solution; above it the solver is stale.
+MAX_RESIDUAL = 1e-8
+
+
+class Stale(Exception):
+    """The reference factorisation can no longer serve the current system."""
+
+
+def gather_all(x: PETSc.Vec) -> np.ndarray:
+    """The whole of a distributed vector on every rank, shape=(n_global,)."""
+    scatter, full = PETSc.Scatter.toAll(x)
+    try:
+        scatter.scatter(x, full, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        return full.getArray().copy()
+    finally:
+        scatter.destroy()
+        full.destroy()
+
+
+class IncrementalSolver:
+    """A reference factorisation and the exact correction for later local changes.
+
+    Args:
+        A: the reference matrix with Dirichlet and held DOFs applied (owned by this
+            object from now on).
+        b: the matching right-hand side (owned from now on).
+        fixed: Dirichlet and held DOFs of the reference, shape=(n_global,) bool.
+        bc_mask: Dirichlet DOFs, shape=(n_global,) bool.
+        bc_values: prescribed values on Dirichlet DOFs (0 elsewhere), shape=(n_global,).
+        solver: a factorisation of ``A`` (MUMPS; owned from now on).
+        x: a vector of A's layout to solve into (ghosted DOLFINx vector).
+        capacity: the largest |T|.
+
+    Raises:
+        geofrac.errors.RunError: the reference solve failed (singular system).
+    """
+
+    def __init__(
+        self,
+        A: PETSc.Mat,
+        b: PETSc.Vec,
+        fixed: np.ndarray,
+        bc_mask: np.ndarray,
+        bc_values: np.ndarray,
+        solver: LinearSolver,
+        x: PETSc.Vec,
+        capacity: int,
+    ) -> None:
+        self.A, self.b, self.solver = A, b, solver
+        self.fixed, self.bc_mask, self.bc_values = fixed, bc_mask, bc_values
+        self.comm = A.getComm().tompi4py()
+        self.row0, self.row1 = A.getOwnershipRange()
+        self.update = LocalUpdate(A.getSize()[0], capacity)
+        self.held = np.zeros_like(fixed)
+        self.solver.solve(b, x)
+        self.y_vec = x.copy()
+        self.y = gather_all(x)
+        self.b_full = gather_all(b)
+        self._b_norm2 = float(self.b_full @ self.b_full)
+        self.factor = solver.ksp.getPC().getFactorMatrix()
+
+    def apply(
+        self, blocks: list[tuple[np.ndarray, np.ndarray]], hold: np.ndarray, hold_values: np.ndarray
+    ) -> None:
+        """Add changed cell matrices and hold DOFs that lost all stiffness.
+
+        Args:
+            blocks: (global DOFs, shape=(p,); signed matrix, shape=(p, p)) per change: the
+                new contribution of a cell with +, its old one with −.
+            hold: DOFs that no longer carry stiffness, shape=(h,).
+            hold_values: their values, shape=(h,).
+
+        Raises:
+            Stale: a change needs a new factorisation.
+        """
+        lu, bc = self.update, self.bc_mask
+        touched = np.concatenate([d for d, _ in blocks] + [hold]).astype(np.int64)
+        if np.any(self.fixed[touched] & ~bc[touched]):
+            raise Stale("a change touches a DOF held at the reference")
+        new = lu.missing(touched[~bc[touched]])
+        if lu.m + len(new) > lu.capacity:
+            raise Stale(f"{lu.m + len(new)} changed DOFs exceed the update capacity")
+        if len(new):
+            rows = np.concatenate([lu.dofs, new])
+            lu.grow(new, mumps_inverse_entries(self.factor, rows, new))
+        for dofs, k in blocks:
+            free = ~bc[dofs]
+            lu.add(dofs[free], k[np.ix_(free, free)])
+            if not free.all():
+                lu.add_rhs(dofs[free], -k[np.ix_(free, ~free)] @ self.bc_values[dofs[~free]])
+        for j, v in zip(hold.tolist(), hold_values.tolist(), strict=True):
+            # its row and column are zero now (every cell that used it changed): make
+            # them the identity with the held value on the right
+            p = int(lu.positions(np.array([j]))[0])
+            lu.add(np.array([j]), np.ones((1, 1)))
+            lu.add_rhs(np.array([j]), np.array([v - self.b_full[j] - lu.db[p]]))
+            self.held[j] = True
+
+    def solve(self, x: PETSc.Vec) -> np.ndarray:
+        """Solve the current system into ``x``; return the solution on every rank.
+
+        Raises:
+            Stale: the corrected system is singular or misses the residual check.
+        """
+        lu = self.update
+        if lu.m == 0:
+            self.y_vec.copy(x)
+            return self.y.copy()
+        y_t = self.y[lu.dofs]
+        try:
+            g = lu.correction(y_t)
+        except np.linalg.LinAlgError as exc:
+            raise Stale(f"the changed system is singular ({exc})") from None
+        mine = (lu.dofs >= self.row0) & (lu.dofs < self.row1)
+        e = self.b.duplicate()
+        try:
+            e.set(0.0)
+            e.setValues(lu.dofs[mine].astype(PETSc.IntType), g[mine])
+            e.assemble()
+            self.solver.ksp.solve(e, x)
+            x.axpy(1.0, self.y_vec)
+            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+            u = gather_all(x)
+            if not np.all(np.isfinite(u)):
+                raise Stale("non-finite corrected solution")
+            # r = b0 + E Δb - A0 x - E ΔC x_T
+            self.A.mult(x, e)
+            e.aypx(-1.0, self.b)
+            corr = lu.db - lu.dC @ u[lu.dofs]
+            e.setValues(
+                lu.dofs[mine].astype(PETSc.IntType), corr[mine], addv=PETSc.InsertMode.ADD_VALUES
+            )
+            e.assemble()
+            r2 = e.norm() ** 2
+        finally:
+            e.destroy()
+        b_t = self.b_full[lu.dofs]
+        b2 = self._b_norm2 + float(np.sum((b_t + lu.db) ** 2 - b_t**2))
+        if not r2 <= MAX_RESIDUAL**2 * max(b2, 1e-300):
+            raise Stale(f"relative residual {np.sqrt(r2 / max(b2, 1e-300)):.1e}")
+        return u
+
+    def destroy(self) -> None:
+        """Free the reference matrix, vectors and factorisation."""
+        for obj in (self.solver, self.A, self.b, self.y_vec):
+            obj.destroy()

@@ -1,0 +1,96 @@
+"""The exact low-rank correction of a locally changed system (pure numpy)."""
+
+import numpy as np
+import pytest
+
+from geofrac.fracture.woodbury import LocalUpdate
+
+
+def _spd(n: int, rng: np.random.Generator) -> np.ndarray:
+    """A sparse-ish SPD matrix like a stiffness: a chain Laplacian plus a random coupling."""
+    A = np.diag(np.full(n, 4.0)) - np.diag(np.ones(n - 1), 1) - np.diag(np.ones(n - 1), -1)
+    R = rng.normal(size=(n, 3))
+    return A + 0.1 * R @ R.T
+
+
+def _cell_change(rng: np.random.Generator, p: int) -> np.ndarray:
+    """A symmetric change: a rank-2 softening plus a rank-1 stiffening."""
+    U = rng.normal(size=(p, 3))
+    return -0.3 * U[:, :2] @ U[:, :2].T + 0.2 * np.outer(U[:, 2], U[:, 2])
+
+
+def test_corrected_solution_equals_the_direct_solve_over_many_events():
+    rng = np.random.default_rng(7)
+    n = 60
+    A0 = _spd(n, rng)
+    b0 = rng.normal(size=n)
+    inv = np.linalg.inv(A0)
+    y = inv @ b0
+    lu = LocalUpdate(n, capacity=40)
+    A, b = A0.copy(), b0.copy()
+    for _event in range(8):
+        dofs = np.sort(rng.choice(n, size=5, replace=False))
+        new = lu.missing(dofs)
+        if len(new):
+            rows = np.concatenate([lu.dofs, new])
+            lu.grow(new, inv[np.ix_(rows, new)])
+        k = _cell_change(rng, len(dofs))
+        lu.add(dofs, k)
+        A[np.ix_(dofs, dofs)] += k
+        f = rng.normal(size=len(dofs))
+        lu.add_rhs(dofs, f)
+        b[dofs] += f
+        g = lu.correction(y[lu.dofs])
+        e = np.zeros(n)
+        e[lu.dofs] = g
+        x = y + inv @ e
+        np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-9, atol=1e-10)
+    assert lu.m <= 40
+    # N⁻¹ kept by updates equals the inverse formed afresh
+    N = np.eye(lu.m) + lu.S @ lu.dC
+    np.testing.assert_allclose(lu.Ninv @ N, np.eye(lu.m), atol=1e-9)
+
+
+def test_a_row_made_identity_holds_its_value():
+    """Removing every coupling of a DOF and adding 1 on its diagonal holds it at Δb's value."""
+    rng = np.random.default_rng(3)
+    n = 20
+    A0 = _spd(n, rng)
+    b0 = rng.normal(size=n)
+    inv = np.linalg.inv(A0)
+    lu = LocalUpdate(n, capacity=n)
+    j = 7
+    dofs = np.flatnonzero(A0[j] != 0)
+    lu.grow(dofs, inv[np.ix_(dofs, dofs)])
+    k = np.zeros((len(dofs), len(dofs)))
+    q = int(np.flatnonzero(dofs == j)[0])
+    k[q, :] -= A0[j, dofs]
+    k[:, q] -= A0[dofs, j]
+    k[q, q] += A0[j, j] + 1.0
+    lu.add(dofs, k)
+    lu.add_rhs(np.array([j]), np.array([0.25 - b0[j]]))
+    g = lu.correction((inv @ b0)[lu.dofs])
+    e = np.zeros(n)
+    e[lu.dofs] = g
+    x = inv @ b0 + inv @ e
+    assert x[j] == pytest.approx(0.25, abs=1e-12)
+
+
+def test_capacity_and_membership_are_checked():
+    lu = LocalUpdate(10, capacity=2)
+    with pytest.raises(ValueError, match="capacity"):
+        lu.grow(np.array([0, 1, 2]), np.zeros((3, 3)))
+    lu.grow(np.array([4]), np.ones((1, 1)))
+    with pytest.raises(ValueError, match="already"):
+        lu.grow(np.array([4]), np.ones((1, 1)))
+    with pytest.raises(ValueError, match="not in T"):
+        lu.add(np.array([5]), np.ones((1, 1)))
+
+
+def test_singular_change_is_reported():
+    """Removing all stiffness of a 1-DOF system makes the corrected system singular."""
+    lu = LocalUpdate(1, capacity=1)
+    lu.grow(np.array([0]), np.array([[0.5]]))  # A0 = [2]
+    lu.add(np.array([0]), np.array([[-2.0]]))
+    with pytest.raises(np.linalg.LinAlgError):
+        lu.correction(np.array([1.0]))
