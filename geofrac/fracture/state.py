@@ -137,9 +137,11 @@ class CrackState:
         coords, target = self.mesh.coords, self.settings.neighbours
         for c in sorted(near - own):
             fit = self.fits[c]
-            if fit is None or len(fit.nodes) < target:
-                own.add(c)
-            elif blocked(self.centroids[c], coords[fit.nodes], seg[:, 0], seg[:, 1]).any():
+            if (
+                fit is None
+                or len(fit.nodes) < target
+                or blocked(self.centroids[c], coords[fit.nodes], seg[:, 0], seg[:, 1]).any()
+            ):
                 own.add(c)
         return self.refit(np.array(sorted(own), dtype=np.int64))
 

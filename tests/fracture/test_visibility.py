@@ -114,8 +114,10 @@ def test_visible_nodes_grow_to_target():
 
 
 def test_kept_fits_equal_a_full_refit():
-    """Cracking edge by edge (fits kept when no satellite is hidden) gives the fits a
-    fresh state with all those edges cracked computes from scratch."""
+    """Edge by edge (fits kept when no satellite is hidden) equals fitting from scratch.
+
+    A fresh state with all those edges cracked computes every fit anew.
+    """
     coords, cells = grid_mesh(12)
     rng = np.random.default_rng(11)
     inner = (coords[:, 0] > 0) & (coords[:, 0] < 12)
