@@ -212,7 +212,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         batch_tolerance=_number(table, file, "batch_tolerance", 0.0, float, 0.0),
         solver=solver,
         reuse_iterations=_number(table, file, "reuse_iterations", 30, int, 1),
-        update_dofs=_number(table, file, "update_dofs", 1200, int, 1, 20000),
+        update_dofs=_number(table, file, "update_dofs", 2000, int, 1, 20000),
         output_every=_number(table, file, "output_every", max(1, max_events // 50), int, 1),
         face=face,
         face_origin=_number(table, file, "face_origin", 0.0, float, -float("inf")),

@@ -26,7 +26,7 @@ from petsc4py import PETSc
 from geofrac.fracture.woodbury import LocalUpdate
 from geofrac.solvers import LinearSolver, mumps_inverse_entries
 
-__all__ = ["MAX_RESIDUAL", "IncrementalSolver", "Stale", "gather_all"]
+__all__ = ["MAX_RESIDUAL", "Gather", "IncrementalSolver", "Stale", "gather_all"]
 
 #: Largest relative residual of a corrected solution; above it the solver is stale.
 MAX_RESIDUAL = 1e-8
@@ -36,15 +36,36 @@ class Stale(Exception):
     """The reference factorisation can no longer serve the current system."""
 
 
+class Gather:
+    """Copies of distributed vectors of one layout on every rank (a cached scatter).
+
+    Args:
+        x: a vector of the layout.
+    """
+
+    def __init__(self, x: PETSc.Vec) -> None:
+        self.scatter, self.full = PETSc.Scatter.toAll(x)
+
+    def __call__(self, x: PETSc.Vec) -> np.ndarray:
+        """The whole of ``x``, shape=(n_global,)."""
+        self.scatter.scatter(
+            x, self.full, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD
+        )
+        return self.full.getArray().copy()
+
+    def destroy(self) -> None:
+        """Free the scatter and the copy."""
+        self.scatter.destroy()
+        self.full.destroy()
+
+
 def gather_all(x: PETSc.Vec) -> np.ndarray:
     """The whole of a distributed vector on every rank, shape=(n_global,)."""
-    scatter, full = PETSc.Scatter.toAll(x)
+    gather = Gather(x)
     try:
-        scatter.scatter(x, full, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        return full.getArray().copy()
+        return gather(x)
     finally:
-        scatter.destroy()
-        full.destroy()
+        gather.destroy()
 
 
 class IncrementalSolver:
@@ -84,8 +105,9 @@ class IncrementalSolver:
         self.held = np.zeros_like(fixed)
         self.solver.solve(b, x)
         self.y_vec = x.copy()
-        self.y = gather_all(x)
-        self.b_full = gather_all(b)
+        self.gather = Gather(x)
+        self.y = self.gather(x)
+        self.b_full = self.gather(b)
         self._b_norm2 = float(self.b_full @ self.b_full)
         self.factor = solver.ksp.getPC().getFactorMatrix()
 
@@ -150,7 +172,7 @@ class IncrementalSolver:
             self.solver.ksp.solve(e, x)
             x.axpy(1.0, self.y_vec)
             x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-            u = gather_all(x)
+            u = self.gather(x)
             if not np.all(np.isfinite(u)):
                 raise Stale("non-finite corrected solution")
             # r = b0 + E Δb - A0 x - E ΔC x_T
@@ -172,5 +194,5 @@ class IncrementalSolver:
 
     def destroy(self) -> None:
         """Free the reference matrix, vectors and factorisation."""
-        for obj in (self.solver, self.A, self.b, self.y_vec):
+        for obj in (self.solver, self.A, self.b, self.y_vec, self.gather):
             obj.destroy()
