@@ -14,7 +14,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from geofrac.effects.cracking import SOLVERS
+from geofrac.fracture import SOLVERS
 
 __all__ = ["CASES", "PATCH_H", "add_arguments", "run"]
 

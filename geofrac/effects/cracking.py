@@ -38,15 +38,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from geofrac.effects import ConfigureContext
+from geofrac.fracture import SOLVERS
 from geofrac.scene.errors import SceneError, did_you_mean
 
 __all__ = ["ELEMENTS", "KEYS", "SOLVERS", "CrackingConfig", "configure", "driver"]
 
 #: Elements the crack driver supports.
 ELEMENTS = ("cst", "p1", "rgnt", "gnt")
-
-#: Values of ``cracking.solver``.
-SOLVERS = ("update", "reuse", "refactor")
 
 #: Keys of the ``[cracking]`` table.
 KEYS = (

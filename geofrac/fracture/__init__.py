@@ -2,6 +2,12 @@
 
 Pure numpy modules: :mod:`~geofrac.fracture.topology`, :mod:`~geofrac.fracture.visibility`,
 :mod:`~geofrac.fracture.cells`, :mod:`~geofrac.fracture.state`,
-:mod:`~geofrac.fracture.criterion`. The distributed plumbing (PETSc assembly, solve,
-output) is :mod:`~geofrac.fracture.driver`.
+:mod:`~geofrac.fracture.criterion`, :mod:`~geofrac.fracture.woodbury`. The distributed
+plumbing (PETSc assembly, solve, output) is :mod:`~geofrac.fracture.driver` and
+:mod:`~geofrac.fracture.incremental`.
 """
+
+__all__ = ["SOLVERS"]
+
+#: Solvers of the event loop (``cracking.solver``), the default first.
+SOLVERS = ("update", "reuse", "refactor")
