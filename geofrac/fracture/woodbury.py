@@ -168,3 +168,11 @@ class LocalUpdate:
         if not np.all(np.isfinite(g)):
             raise np.linalg.LinAlgError("non-finite correction")
         return g
+
+    def homogeneous_correction(self, w_t: np.ndarray) -> np.ndarray:
+        """The correction g = −ΔC N⁻¹ w_T for a right-hand side f with A₀⁻¹ f = w.
+
+        Then A⁻¹ f = A₀⁻¹ (f + E g) (iterative refinement of a corrected solution).
+        """
+        self._fold()
+        return -(self.dC @ (self.Ninv @ w_t))
