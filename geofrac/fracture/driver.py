@@ -201,6 +201,8 @@ class _Timing:
     )
     factorizations: int = 0
     iterations: int = 0
+    #: why the ``update`` solver factorised afresh: kind -> count.
+    stale: dict[str, int] = field(default_factory=dict)
 
     def add(self, phase: str, t0: float) -> float:
         t1 = time.perf_counter()
@@ -494,7 +496,8 @@ class CrackDriver:
         if self.inc is not None and len(self._pending):
             try:
                 self._apply_changes(self._pending, u_prev)
-            except Stale:
+            except Stale as exc:
+                timing.stale[exc.kind] = timing.stale.get(exc.kind, 0) + 1
                 self._drop_reference()
         self._pending = np.zeros(0, dtype=np.int64)
         t = timing.add("assemble", t)
@@ -503,7 +506,8 @@ class CrackDriver:
                 u = self.inc.solve(x)
                 timing.add("solve", t)
                 return u
-            except Stale:
+            except Stale as exc:
+                timing.stale[exc.kind] = timing.stale.get(exc.kind, 0) + 1
                 self._drop_reference()
         return self._new_reference(u_prev, x)
 
@@ -596,7 +600,7 @@ class CrackDriver:
         inc = self.inc
         touched = np.unique(np.concatenate([d for d, _ in blocks]))
         if np.any(inc.held[touched] & (self._use[touched] > 0)):
-            raise Stale("a held DOF carries stiffness again")
+            raise Stale("held", "a held DOF carries stiffness again")
         hold = touched[(self._use[touched] == 0) & ~inc.fixed[touched] & ~inc.held[touched]]
         inc.apply(blocks, hold, u_prev[hold])
 
@@ -922,6 +926,7 @@ class CrackDriver:
             "events_per_s": len(rows) / elapsed if elapsed > 0 else float("nan"),
             "phase_s": {k: self.comm.allreduce(v, op=MPI.MAX) for k, v in t.seconds.items()},
             "factorizations": t.factorizations,
+            "refactor_reasons": dict(sorted(t.stale.items())),
             "cg_iterations": t.iterations,
             "solver": self.config.solver,
         }

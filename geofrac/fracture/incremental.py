@@ -37,17 +37,27 @@ __all__ = [
 ]
 
 #: Largest relative residual of a corrected solution; above it the solver is stale.
-MAX_RESIDUAL = 1e-11
+MAX_RESIDUAL = 1e-10
 
 #: A corrected solution with a larger relative residual is refined ...
-REFINE_ABOVE = 1e-13
+REFINE_ABOVE = 1e-11
 
 #: ... by at most this many steps of iterative refinement.
 REFINEMENTS = 2
 
 
 class Stale(Exception):
-    """The reference factorisation can no longer serve the current system."""
+    """The reference factorisation can no longer serve the current system.
+
+    Args:
+        kind: ``held`` (a change touches a held DOF), ``capacity``, ``singular`` or
+            ``residual``: counted per run in the results (``refactor_reasons``).
+        detail: the message.
+    """
+
+    def __init__(self, kind: str, detail: str) -> None:
+        super().__init__(detail)
+        self.kind = kind
 
 
 class Gather:
@@ -142,10 +152,10 @@ class IncrementalSolver:
         lu, bc = self.update, self.bc_mask
         touched = np.concatenate([d for d, _ in blocks] + [hold]).astype(np.int64)
         if np.any(self.fixed[touched] & ~bc[touched]):
-            raise Stale("a change touches a DOF held at the reference")
+            raise Stale("held", "a change touches a DOF held at the reference")
         new = lu.missing(touched[~bc[touched]])
         if lu.m + len(new) > lu.capacity:
-            raise Stale(f"{lu.m + len(new)} changed DOFs exceed the update capacity")
+            raise Stale("capacity", f"{lu.m + len(new)} changed DOFs exceed the update capacity")
         if len(new):
             rows = np.concatenate([lu.dofs, new])
             lu.grow(new, mumps_inverse_entries(self.factor, rows, new))
@@ -180,7 +190,7 @@ class IncrementalSolver:
         try:
             g = lu.correction(self.y[lu.dofs])
         except np.linalg.LinAlgError as exc:
-            raise Stale(f"the changed system is singular ({exc})") from None
+            raise Stale("singular", f"the changed system is singular ({exc})") from None
         b_t = self.b_full[lu.dofs]
         b2 = max(self._b_norm2 + float(np.sum((b_t + lu.db) ** 2 - b_t**2)), 1e-300)
         e, w = self.b.duplicate(), self.b.duplicate()
@@ -191,7 +201,7 @@ class IncrementalSolver:
                 x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
                 u = self.gather(x)
                 if not np.all(np.isfinite(u)):
-                    raise Stale("non-finite corrected solution")
+                    raise Stale("singular", "non-finite corrected solution")
                 r2 = self._residual(x, u, e)
                 if r2 <= REFINE_ABOVE**2 * b2 or step == REFINEMENTS:
                     break
@@ -205,7 +215,7 @@ class IncrementalSolver:
             e.destroy()
             w.destroy()
         if not r2 <= MAX_RESIDUAL**2 * b2:
-            raise Stale(f"relative residual {np.sqrt(r2 / b2):.1e}")
+            raise Stale("residual", f"relative residual {np.sqrt(r2 / b2):.1e}")
         return u
 
     def _solve_with(self, g: np.ndarray, e: PETSc.Vec, out: PETSc.Vec) -> None:
@@ -232,5 +242,6 @@ class IncrementalSolver:
 
     def destroy(self) -> None:
         """Free the reference matrix, vectors and factorisation."""
-        for obj in (self.solver, self.A, self.b, self.y_vec, self.gather):
+        # the factor's Python wrapper holds a PETSc reference of its own
+        for obj in (self.factor, self.solver, self.A, self.b, self.y_vec, self.gather):
             obj.destroy()

@@ -6,11 +6,12 @@ import pytest
 from geofrac.fracture.woodbury import LocalUpdate
 
 
-def _spd(n: int, rng: np.random.Generator) -> np.ndarray:
-    """A sparse-ish SPD matrix like a stiffness: a chain Laplacian plus a random coupling."""
+def _system(n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A0, b0, A0⁻¹): a chain Laplacian plus a random SPD coupling, like a stiffness."""
     A = np.diag(np.full(n, 4.0)) - np.diag(np.ones(n - 1), 1) - np.diag(np.ones(n - 1), -1)
     R = rng.normal(size=(n, 3))
-    return A + 0.1 * R @ R.T
+    A = A + 0.1 * R @ R.T
+    return A, rng.normal(size=n), np.linalg.inv(A)
 
 
 def _cell_change(rng: np.random.Generator, p: int) -> np.ndarray:
@@ -22,9 +23,7 @@ def _cell_change(rng: np.random.Generator, p: int) -> np.ndarray:
 def test_corrected_solution_equals_the_direct_solve_over_many_events():
     rng = np.random.default_rng(7)
     n = 60
-    A0 = _spd(n, rng)
-    b0 = rng.normal(size=n)
-    inv = np.linalg.inv(A0)
+    A0, b0, inv = _system(n, rng)
     y = inv @ b0
     lu = LocalUpdate(n, capacity=40)
     A, b = A0.copy(), b0.copy()
@@ -55,9 +54,7 @@ def test_a_row_made_identity_holds_its_value():
     """Removing every coupling of a DOF and adding 1 on its diagonal holds it at Δb's value."""
     rng = np.random.default_rng(3)
     n = 20
-    A0 = _spd(n, rng)
-    b0 = rng.normal(size=n)
-    inv = np.linalg.inv(A0)
+    A0, b0, inv = _system(n, rng)
     lu = LocalUpdate(n, capacity=n)
     j = 7
     dofs = np.flatnonzero(A0[j] != 0)
