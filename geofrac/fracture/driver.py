@@ -49,7 +49,7 @@ from geofrac.fracture.cells import (
     strain_operator,
 )
 from geofrac.fracture.criterion import edge_principal, select_edges
-from geofrac.fracture.incremental import IncrementalSolver, Stale, gather_all
+from geofrac.fracture.incremental import Gather, IncrementalSolver, Stale
 from geofrac.fracture.state import CrackState, MlsSettings
 from geofrac.fracture.topology import edge_mesh
 from geofrac.log import format_seconds
@@ -261,6 +261,8 @@ class CrackDriver:
         #: MLS cells of this rank for the vectorised measures, and cells to refresh.
         self._table: MlsTable | None = None
         self._table_dirty: list[int] = []
+        #: copies the work vector to every rank (set up by :meth:`run`).
+        self._gather: Gather | None = None
         #: cell -> (its fit, the fit's stiffness): assembly and measures share it.
         self._mls_k: dict[int, tuple[Any, np.ndarray]] = {}
         self._b0: PETSc.Vec | None = None
@@ -277,6 +279,11 @@ class CrackDriver:
         self.bc_rows = np.concatenate([p[0] for p in parts]).astype(np.int64)
         self.bc_vals = np.concatenate([p[1] for p in parts])
         order = np.argsort(gm.node_block)
+        #: Dirichlet DOFs, shape=(n_global,) bool, and their values (0 elsewhere).
+        self._bc_mask = np.zeros(self.n_global, dtype=bool)
+        self._bc_mask[self.bc_rows] = True
+        self._bc_full = np.zeros(self.n_global)
+        self._bc_full[self.bc_rows] = self.bc_vals
         #: node of each Dirichlet DOF, shape=(len(bc_rows),).
         self.bc_row_nodes = order[np.searchsorted(gm.node_block[order], self.bc_rows // bs)]
         bc_nodes = np.unique(self.bc_row_nodes)
@@ -327,8 +334,7 @@ class CrackDriver:
         self.own_cells = own
         x = gm.coords[gm.cells[own]]
         self.K_fe = fe_matrices(self.element, x, self.D, self.t, self.penalty)
-        dofs = gm.node_block[gm.cells[own]][:, :, None] * bs + np.arange(bs)
-        self.fe_dofs = dofs.reshape(len(own), 3 * bs)
+        self.fe_dofs = self._node_dofs(gm.cells[own].ravel()).reshape(len(own), 3 * bs)
         self.fe_stress_op = np.einsum(
             "ij,cqjp->cqip", self.D, strain_operator(self.element, x, MIDPOINTS)
         )
@@ -336,14 +342,21 @@ class CrackDriver:
         self.owned_flag[own] = True
 
     # -- per-event pieces ------------------------------------------------------------
+    def _node_dofs(self, nodes: np.ndarray, per_node: int | None = None) -> np.ndarray:
+        """Global DOFs of nodes, node by node, shape=(len(nodes) * per_node,).
+
+        All ``block_size`` DOFs of each node, or its first ``per_node`` (2: translations).
+        """
+        k = self.bs if per_node is None else per_node
+        return (self.gm.node_block[nodes][:, None] * self.bs + np.arange(k)).ravel()
+
     def _mls_dofs(self, nodes: np.ndarray) -> np.ndarray:
-        return (self.gm.node_block[nodes][:, None] * self.bs + np.arange(2)).ravel()
+        """The translation DOFs an MLS fit couples, shape=(2 len(nodes),)."""
+        return self._node_dofs(nodes, 2)
 
     def _use_counts(self, is_mls: np.ndarray) -> np.ndarray:
         """How many cells give stiffness to each global DOF, shape=(n_global,) (replicated)."""
-        gm, bs = self.gm, self.bs
-        fe = gm.node_block[gm.cells[~is_mls]].ravel()
-        dofs = [(fe[:, None] * bs + np.arange(bs)).ravel()]
+        dofs = [self._node_dofs(self.gm.cells[~is_mls].ravel())]
         dofs += [self._mls_dofs(f.nodes) for f in self.state.fits.values() if f is not None]
         return np.bincount(np.concatenate(dofs), minlength=self.n_global)
 
@@ -380,12 +393,7 @@ class CrackDriver:
         A.setValuesCOO(np.concatenate(vals), addv=PETSc.InsertMode.ADD_VALUES)
         A.assemble()
         used = self._use_counts(is_mls) > 0
-        if len(self.fragment_nodes):
-            used[
-                (
-                    self.gm.node_block[self.fragment_nodes][:, None] * self.bs + np.arange(self.bs)
-                ).ravel()
-            ] = False
+        used[self._node_dofs(self.fragment_nodes)] = False
         used[self.bc_rows] = True
         held = np.flatnonzero(~used)
         fixed = np.concatenate([self.bc_rows, held])
@@ -485,7 +493,7 @@ class CrackDriver:
         finally:
             A.destroy()  # a KSP that still uses it holds its own reference
             b.destroy()
-        u = gather_all(x)
+        u = self._gather(x)
         self.timing.add("solve", t)
         return u, its
 
@@ -497,8 +505,7 @@ class CrackDriver:
             try:
                 self._apply_changes(self._pending, u_prev)
             except Stale as exc:
-                timing.stale[exc.kind] = timing.stale.get(exc.kind, 0) + 1
-                self._drop_reference()
+                self._drop_reference(exc)
         self._pending = np.zeros(0, dtype=np.int64)
         t = timing.add("assemble", t)
         if self.inc is not None:
@@ -507,16 +514,12 @@ class CrackDriver:
                 timing.add("solve", t)
                 return u
             except Stale as exc:
-                timing.stale[exc.kind] = timing.stale.get(exc.kind, 0) + 1
-                self._drop_reference()
+                self._drop_reference(exc)
         return self._new_reference(u_prev, x)
 
     def _new_reference(self, u_prev: np.ndarray, x: PETSc.Vec) -> np.ndarray:
         """Assemble, factorise and solve the current state; it becomes the reference."""
-        bc = np.zeros(self.n_global, dtype=bool)
-        bc[self.bc_rows] = True
-        g = np.zeros(self.n_global)
-        g[self.bc_rows] = self.bc_vals
+        bc = self._bc_mask
         for attempt in range(2):
             t = time.perf_counter()
             A, b, held = self.assemble(u_prev)
@@ -527,7 +530,15 @@ class CrackDriver:
                 self._refactor(A)
                 assert self.solver is not None
                 self.inc = IncrementalSolver(
-                    A, b, fixed, bc, g, self.solver, x, self.config.update_dofs
+                    A,
+                    b,
+                    fixed,
+                    bc,
+                    self._bc_full,
+                    self.solver,
+                    x,
+                    self._gather,
+                    self.config.update_dofs,
                 )
                 self.solver = None  # the reference owns it now
                 break
@@ -545,7 +556,10 @@ class CrackDriver:
         assert self.inc is not None
         return self.inc.y.copy()
 
-    def _drop_reference(self) -> None:
+    def _drop_reference(self, why: Stale | None = None) -> None:
+        """Free the reference factorisation; count ``why`` in the refactor reasons."""
+        if why is not None:
+            self.timing.stale[why.kind] = self.timing.stale.get(why.kind, 0) + 1
         for obj in (self.inc, self.solver):
             if obj is not None:
                 obj.destroy()
@@ -560,7 +574,7 @@ class CrackDriver:
             Stale: the change needs a new factorisation.
         """
         assert self.inc is not None
-        state, gm, bs = self.state, self.gm, self.bs
+        state, gm = self.state, self.gm
         pairs = []
         for c in cells.tolist():
             old = self._applied.get(c, self._ref_fits.get(c, _FE))
@@ -569,24 +583,21 @@ class CrackDriver:
                 pairs.append((c, old, new))
                 self._applied[c] = new
         fe_cells = [c for c, old, new in pairs if _FE in (old, new)]
-        fe_k = (
-            dict(
+        fe_k: dict[int, np.ndarray] = {}
+        if fe_cells:
+            x = gm.coords[gm.cells[fe_cells]]
+            fe_k = dict(
                 zip(
                     fe_cells,
-                    fe_matrices(
-                        self.element, gm.coords[gm.cells[fe_cells]], self.D, self.t, self.penalty
-                    ),
+                    fe_matrices(self.element, x, self.D, self.t, self.penalty),
                     strict=True,
                 )
             )
-            if fe_cells
-            else {}
-        )
         blocks = []
         for c, old, new in pairs:
             for fit, sign in ((old, -1.0), (new, 1.0)):
                 if fit is _FE:
-                    dofs = (gm.node_block[gm.cells[c]][:, None] * bs + np.arange(bs)).ravel()
+                    dofs = self._node_dofs(gm.cells[c])
                     k = fe_k[c]
                 elif fit is None:
                     continue
@@ -685,9 +696,9 @@ class CrackDriver:
         for c in self.own_cells:
             x = gm.coords[gm.cells[c]]
             pts = bary @ x
-            fit = state.fits.get(int(c), "fe")
-            if fit == "fe":
-                d = u[gm.node_block[gm.cells[c]][:, None] * bs + np.arange(bs)]
+            fit = state.fits.get(int(c), _FE)
+            if fit is _FE:
+                d = u[self._node_dofs(gm.cells[c])].reshape(3, bs)
                 if self.element in ("cst", "p1"):
                     uh = bary @ d
                 else:
@@ -726,6 +737,7 @@ class CrackDriver:
         writer = self._open_outputs()
         work = dolfinx.fem.Function(self.unknown.function_space)  # a ghosted vector
         x = work.x.petsc_vec
+        self._gather = Gather(x)
         u_unit = np.zeros(self.n_global)
         rows: list[dict[str, Any]] = []
         end, peak, face_hit, first_energy = "max_events", 0.0, None, 0.0
@@ -951,7 +963,7 @@ class CrackDriver:
     def destroy(self) -> None:
         """Free the solvers."""
         self._drop_reference()
-        for obj in (self.ksp, self._b0):
+        for obj in (self.ksp, self._b0, self._gather):
             if obj is not None:
                 obj.destroy()
-        self.ksp = self._b0 = None
+        self.ksp = self._b0 = self._gather = None

@@ -33,7 +33,6 @@ __all__ = [
     "Gather",
     "IncrementalSolver",
     "Stale",
-    "gather_all",
 ]
 
 #: Largest relative residual of a corrected solution; above it the solver is stale.
@@ -83,15 +82,6 @@ class Gather:
         self.full.destroy()
 
 
-def gather_all(x: PETSc.Vec) -> np.ndarray:
-    """The whole of a distributed vector on every rank, shape=(n_global,)."""
-    gather = Gather(x)
-    try:
-        return gather(x)
-    finally:
-        gather.destroy()
-
-
 class IncrementalSolver:
     """A reference factorisation and the exact correction for later local changes.
 
@@ -104,6 +94,7 @@ class IncrementalSolver:
         bc_values: prescribed values on Dirichlet DOFs (0 elsewhere), shape=(n_global,).
         solver: a factorisation of ``A`` (MUMPS; owned from now on).
         x: a vector of A's layout to solve into (ghosted DOLFINx vector).
+        gather: copies vectors of x's layout to every rank (the caller's; not owned).
         capacity: the largest |T|.
 
     Raises:
@@ -119,6 +110,7 @@ class IncrementalSolver:
         bc_values: np.ndarray,
         solver: LinearSolver,
         x: PETSc.Vec,
+        gather: Gather,
         capacity: int,
     ) -> None:
         self.A, self.b, self.solver = A, b, solver
@@ -129,7 +121,7 @@ class IncrementalSolver:
         self.held = np.zeros_like(fixed)
         self.solver.solve(b, x)
         self.y_vec = x.copy()
-        self.gather = Gather(x)
+        self.gather = gather
         self.y = self.gather(x)
         self.b_full = self.gather(b)
         self._b_norm2 = float(self.b_full @ self.b_full)
@@ -243,5 +235,5 @@ class IncrementalSolver:
     def destroy(self) -> None:
         """Free the reference matrix, vectors and factorisation."""
         # the factor's Python wrapper holds a PETSc reference of its own
-        for obj in (self.factor, self.solver, self.A, self.b, self.y_vec, self.gather):
+        for obj in (self.factor, self.solver, self.A, self.b, self.y_vec):
             obj.destroy()
