@@ -19,7 +19,7 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
   with r ≤ (1 + batch_tolerance) r_min in one event.
 - ``solver`` (``"update"``): ``"update"`` keeps one factorisation and corrects its
   solution exactly for the cells changed since (Woodbury on the touched DOFs), and
-  refactorises when more than ``update_dofs`` (1200) DOFs were touched or a piece is cut
+  refactorises when more than ``update_dofs`` (2000) DOFs were touched or a piece is cut
   free; ``"reuse"`` keeps one factorisation as preconditioner of CG and refactorises when
   CG needs more than ``reuse_iterations`` (30); ``"refactor"`` factorises every event
   (the reference).
@@ -41,7 +41,7 @@ from geofrac.effects import ConfigureContext
 from geofrac.fracture import SOLVERS
 from geofrac.scene.errors import SceneError, did_you_mean
 
-__all__ = ["ELEMENTS", "KEYS", "SOLVERS", "CrackingConfig", "configure", "driver"]
+__all__ = ["ELEMENTS", "KEYS", "CrackingConfig", "configure", "driver"]
 
 #: Elements the crack driver supports.
 ELEMENTS = ("cst", "p1", "rgnt", "gnt")

@@ -27,7 +27,6 @@ __all__ = [
     "fe_matrices",
     "fe_stresses",
     "mls_matrix",
-    "mls_stress",
     "principal_max",
     "strain_operator",
 ]
@@ -175,14 +174,6 @@ def mls_matrix(fit: LinearFit, D: np.ndarray, thickness: float, area: float) -> 
     """Stiffness (2.19) of a cracked cell on its satellites' translations, shape=(2n, 2n)."""
     B = strain_matrix(fit)
     return thickness * area * B.T @ D @ B
-
-
-def mls_stress(fit: LinearFit, D: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Constant stress (σ_xx, σ_yy, σ_xy) of a cracked cell, shape=(3,).
-
-    ``u``: its satellites' translations, shape=(n, 2) or flattened (2 n,).
-    """
-    return D @ (strain_matrix(fit) @ np.asarray(u).ravel())
 
 
 def principal_max(s: np.ndarray) -> np.ndarray:

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from geofrac.fracture.cells import fe_matrices, principal_max
+from geofrac.fracture.cells import MlsTable, fe_matrices, principal_max
 from geofrac.fracture.driver import gather_mesh
 from geofrac.materials import d_matrix, lame
 from tests.fem.helpers import solve_job
@@ -55,3 +55,29 @@ def test_fe_matrices_match_dolfinx(element):
 def test_principal_max():
     s = np.array([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 1.0], [-1.0, -3.0, 0.0]])
     np.testing.assert_allclose(principal_max(s), [1.0, 2.0, 1.0, -1.0])
+
+
+def test_mls_table_strains_match_each_cell():
+    """Padded rows give each cell's B u; removed rows give zero and are reused."""
+    rng = np.random.default_rng(5)
+    n = 50
+    u = rng.normal(size=n)
+    table = MlsTable(n)
+    cells = {}
+    for c, p in [(3, 4), (8, 10), (11, 6), (20, 24)]:  # the 24-DOF cell widens the table
+        dofs = rng.choice(n, size=p, replace=False)
+        B = rng.normal(size=(3, p))
+        table.set(c, dofs, B, 1.0)
+        cells[c] = (dofs, B)
+    table.remove(8)
+    dofs, B = rng.choice(n, size=8, replace=False), rng.normal(size=(3, 8))
+    table.set(30, dofs, B, 2.0)  # takes the freed row
+    cells[30] = (dofs, B)
+    del cells[8]
+    eps = table.strains(np.append(u, 0.0))
+    assert len(table.cells) == 16 and sorted(table.row) == sorted(cells)
+    for c, (dofs, B) in cells.items():
+        np.testing.assert_allclose(eps[table.row[c]], B @ u[dofs], rtol=1e-13)
+    free = table.cells < 0
+    np.testing.assert_array_equal(eps[free], 0.0)
+    assert table.weight[table.row[30]] == 2.0
