@@ -100,6 +100,7 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
             "solver": args.solver,
             "factorizations": res["factorizations"],
             "cg_iterations": res["cg_iterations"],
+            "refinement_solves": res["refinement_solves"],
             "end_reason": res["end_reason"],
             **{f"{k}_s": v for k, v in res["phase_s"].items()},
         }
@@ -110,7 +111,8 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
             f"{record['events_per_s']:.2f} events/s; assemble {record['assemble_s']:.1f} s, solve "
             f"{record['solve_s']:.1f} s, criterion {record['criterion_s']:.1f} s, update "
             f"{record['update_s']:.1f} s; {record['factorizations']} factorisations, "
-            f"{record['cg_iterations']} CG iterations",
+            f"{record['cg_iterations']} CG iterations, "
+            f"{record['refinement_solves']} refinement solves",
         )
     if args.json is not None and comm.rank == 0:
         write_json(args.json, records)

@@ -203,6 +203,8 @@ class _Timing:
     iterations: int = 0
     #: why the ``update`` solver factorised afresh: kind -> count.
     stale: dict[str, int] = field(default_factory=dict)
+    #: refinement steps of the ``update`` solver that needed solves with the factor.
+    refinements: int = 0
 
     def add(self, phase: str, t0: float) -> float:
         t1 = time.perf_counter()
@@ -560,6 +562,8 @@ class CrackDriver:
         """Free the reference factorisation; count ``why`` in the refactor reasons."""
         if why is not None:
             self.timing.stale[why.kind] = self.timing.stale.get(why.kind, 0) + 1
+        if self.inc is not None:
+            self.timing.refinements += self.inc.refinements
         for obj in (self.inc, self.solver):
             if obj is not None:
                 obj.destroy()
@@ -939,6 +943,7 @@ class CrackDriver:
             "phase_s": {k: self.comm.allreduce(v, op=MPI.MAX) for k, v in t.seconds.items()},
             "factorizations": t.factorizations,
             "refactor_reasons": dict(sorted(t.stale.items())),
+            "refinement_solves": t.refinements + (self.inc.refinements if self.inc else 0),
             "cg_iterations": t.iterations,
             "solver": self.config.solver,
         }

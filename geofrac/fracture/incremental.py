@@ -126,6 +126,8 @@ class IncrementalSolver:
         self.b_full = self.gather(b)
         self._b_norm2 = float(self.b_full @ self.b_full)
         self.factor = solver.ksp.getPC().getFactorMatrix()
+        #: refinement steps with solves by A₀ taken so far (after the refinement on T)
+        self.refinements = 0
 
     def apply(
         self, blocks: list[tuple[np.ndarray, np.ndarray]], hold: np.ndarray, hold_values: np.ndarray
@@ -179,12 +181,12 @@ class IncrementalSolver:
         if lu.m == 0:
             self.y_vec.copy(x)
             return self.y.copy()
-        try:
-            g = lu.correction(self.y[lu.dofs])
-        except np.linalg.LinAlgError as exc:
-            raise Stale("singular", f"the changed system is singular ({exc})") from None
         b_t = self.b_full[lu.dofs]
         b2 = max(self._b_norm2 + float(np.sum((b_t + lu.db) ** 2 - b_t**2)), 1e-300)
+        try:
+            g = lu.correction(self.y[lu.dofs], atol=0.1 * REFINE_ABOVE * np.sqrt(b2))
+        except np.linalg.LinAlgError as exc:
+            raise Stale("singular", f"the changed system is singular ({exc})") from None
         e, w = self.b.duplicate(), self.b.duplicate()
         try:
             self._solve_with(g, e, x)
@@ -197,6 +199,7 @@ class IncrementalSolver:
                 r2 = self._residual(x, u, e)
                 if r2 <= REFINE_ABOVE**2 * b2 or step == REFINEMENTS:
                     break
+                self.refinements += 1
                 # x += A⁻¹ r = A₀⁻¹ (r + E g_r), g_r = −ΔC N⁻¹ (A₀⁻¹ r)_T
                 self.solver.ksp.solve(e, w)
                 g_r = lu.homogeneous_correction(self.gather(w)[lu.dofs])

@@ -28,6 +28,9 @@ __all__ = ["Bins", "blocked", "visible_nodes"]
 #: Relative tolerance of the segment tests.
 TOLERANCE = 1e-9
 
+#: Steps of the growing search radius evaluated by one segment test.
+LOOKAHEAD = 2
+
 
 class Bins:
     """Uniform square bins over the plane holding integer ids of points or segments.
@@ -146,17 +149,30 @@ def visible_nodes(
     Returns:
         (visible node ids sorted by distance, shape=(n,); h). n may be < target.
     """
-    radius = start
+    # The search of radii r_0 = start, r_{i+1} = min(1.5 r_i, max_radius) is evaluated on
+    # the visible set of a radius R two steps ahead: the nodes visible within r <= R are
+    # those of R's set with d <= r (an obstacle that touches a segment of length d lies
+    # in the bins of radius d), so one segment test serves several steps.
+    ladder = [start]
+    while ladder[-1] < max_radius:
+        ladder.append(min(1.5 * ladder[-1], max_radius))
+    i = 0
     while True:
-        ids, dist = _visible_within(centre, coords, node_bins, crack_bins, crack_segments, radius)
-        if len(ids) >= target or radius >= max_radius:
+        top = min(i + LOOKAHEAD, len(ladder) - 1)
+        ids, dist = _visible_within(
+            centre, coords, node_bins, crack_bins, crack_segments, ladder[top]
+        )
+        counts = np.searchsorted(dist, ladder[i : top + 1], side="right")
+        enough = np.flatnonzero((counts >= target) | (np.arange(i, top + 1) == len(ladder) - 1))
+        if len(enough):
+            i += int(enough[0])
             break
-        radius = min(1.5 * radius, max_radius)
-    if len(ids) == 0:
-        return ids, radius
-    k = min(target, len(ids)) - 1
-    h = margin * float(dist[k])
-    if h > radius:  # nodes between the search radius and h: look again
+        i = top + 1
+    radius, n = ladder[i], int(np.searchsorted(dist, ladder[i], side="right"))
+    if n == 0:
+        return ids[:0], radius
+    h = margin * float(dist[min(target, n) - 1])
+    if h > ladder[top]:  # nodes beyond the evaluated radius: look again
         ids, dist = _visible_within(centre, coords, node_bins, crack_bins, crack_segments, h)
     inside = dist < h
     return ids[inside], h
