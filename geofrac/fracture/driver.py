@@ -342,6 +342,9 @@ class CrackDriver:
         )
         self.owned_flag = np.zeros(len(gm.cells), dtype=bool)
         self.owned_flag[own] = True
+        #: owned cells (positions in own_cells) with a control DOF: the only ones whose
+        #: forces enter the reaction, shape=(k,).
+        self._reacting = np.flatnonzero(np.any(self._control_sign[self.fe_dofs] != 0, axis=1))
 
     # -- per-event pieces ------------------------------------------------------------
     def _node_dofs(self, nodes: np.ndarray, per_node: int | None = None) -> np.ndarray:
@@ -653,12 +656,13 @@ class CrackDriver:
         ud = u[self.fe_dofs]  # shape=(n_own, nd)
         nc, nd = ud.shape
         fe = ~is_mls[own]
-        stress = (self.fe_stress_op.reshape(nc, 9, nd) @ ud[:, :, None]).reshape(nc, 3, 3)
+        stress = np.einsum("cij,cj->ci", self.fe_stress_op.reshape(nc, 9, nd), ud).reshape(nc, 3, 3)
         s1[own[fe]] = principal_max(stress[fe])
-        ku = (self.K_fe @ ud[:, :, None])[..., 0]  # shape=(n_own, nd)
-        energy = 0.5 * float(np.sum((ud * ku)[fe]))
+        ku = np.einsum("cij,cj->ci", self.K_fe, ud)  # shape=(n_own, nd)
+        energy = 0.5 * float(fe @ np.einsum("ci,ci->c", ud, ku))
         sign = self._control_sign
-        reaction = float(np.sum((ku * sign[self.fe_dofs])[fe]))
+        r = self._reacting[fe[self._reacting]]
+        reaction = float(np.sum(ku[r] * sign[self.fe_dofs[r]]))
         self._sync_table()
         table = self._table
         assert table is not None
