@@ -38,6 +38,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from geofrac.elements.kinematics import KINDS, dofs_from_gradient, vertex_field
 from geofrac.errors import RunError
 from geofrac.fracture.cells import (
     BLOCK_SIZES,
@@ -51,7 +52,7 @@ from geofrac.fracture.cells import (
 from geofrac.fracture.criterion import edge_principal, select_edges
 from geofrac.fracture.incremental import Gather, IncrementalSolver, Stale
 from geofrac.fracture.state import CrackState, MlsSettings
-from geofrac.fracture.topology import edge_mesh
+from geofrac.fracture.topology import constraint_rank, edge_mesh, free_motion_pins
 from geofrac.log import format_seconds
 from geofrac.materials import d_matrix, lame
 from geofrac.mls.shape import strain_matrix
@@ -233,6 +234,12 @@ class CrackDriver:
         self.mesh, self.comm = mesh, mesh.comm
         self.element = self.scene.discretization.element
         self.bs = BLOCK_SIZES[self.element]
+        #: extra vertex DOFs under a unit rigid rotation, shape=(bs - 2,).
+        self._rotation = (
+            dofs_from_gradient(KINDS[self.element], np.array([[[0.0, -1.0], [1.0, 0.0]]]))[0]
+            if self.element in KINDS
+            else np.zeros(0)
+        )
         self.unknown = self.problem._unknown()
         space = self.unknown.function_space
         self.gm = gather_mesh(mesh, space)
@@ -271,6 +278,10 @@ class CrackDriver:
         #: nodes of pieces cut free by cracks (no Dirichlet node), held like a node whose
         #: every edge is cracked, shape=(k,).
         self.fragment_nodes = np.zeros(0, dtype=np.int64)
+        #: DOFs pinned at their last displacement to stop a supported piece's free
+        #: rigid motion, shape=(k,), and their nodes, shape=(k,).
+        self.pinned_dofs = np.zeros(0, dtype=np.int64)
+        self._pinned_nodes = np.zeros(0, dtype=np.int64)
         self.rows: list[dict[str, Any]] = []
 
     # -- set-up ----------------------------------------------------------------------
@@ -399,6 +410,7 @@ class CrackDriver:
         A.assemble()
         used = self._use_counts(is_mls) > 0
         used[self._node_dofs(self.fragment_nodes)] = False
+        used[self.pinned_dofs] = False
         used[self.bc_rows] = True
         held = np.flatnonzero(~used)
         fixed = np.concatenate([self.bc_rows, held])
@@ -415,8 +427,17 @@ class CrackDriver:
         return A, b, held
 
     def _find_fragments(self) -> bool:
-        """Hold the nodes of pieces that no longer touch a Dirichlet node; True if new."""
-        gm, state = self.gm, self.state
+        """Hold what the supports no longer hold; True if anything new is held.
+
+        Pieces are the nodes joined by uncracked element cells and MLS fits. A piece
+        with no Dirichlet DOF is cut free: all its nodes are held at their last
+        displacement. A piece whose Dirichlet and pinned DOFs leave a rigid motion free
+        (:func:`constraint_rank` < 3; e.g. a column split off between the loading platens,
+        free to slide sideways) gets the fewest u_x/u_y DOFs pinned at their last
+        displacement that remove the free motions (:func:`free_motion_pins`), so it goes
+        on carrying load. Both choices depend on coordinates only (rank-independent).
+        """
+        gm, state, bs = self.gm, self.state, self.bs
         is_mls = state.is_mls()
         a, b = [], []
         for cell in gm.cells[~is_mls]:
@@ -437,7 +458,27 @@ class CrackDriver:
         if len(new):
             self.fragment_nodes = np.union1d(self.fragment_nodes, new)
             self.say(f"cracking: {len(new)} nodes of cut-free fragments are held")
-        return len(new) > 0
+        rows = np.concatenate([self.bc_rows, self.pinned_dofs])
+        nodes = np.concatenate([self.bc_row_nodes, self._pinned_nodes])
+        xy = gm.coords[:, :2]
+        pinned = []
+        for label in anchored:
+            on = labels[nodes] == label
+            members = np.flatnonzero(touched & (labels == label))
+            if (
+                not len(members)
+                or constraint_rank(xy[nodes[on]], rows[on] % bs, self._rotation) == 3
+            ):
+                continue  # no cell left to move, or held
+            pins = free_motion_pins(xy[nodes[on]], rows[on] % bs, self._rotation, xy[members])
+            pinned += [(int(members[i]), comp) for i, comp in pins]
+        if pinned:
+            pn = np.array([p[0] for p in pinned], dtype=np.int64)
+            self._pinned_nodes = np.concatenate([self._pinned_nodes, pn])
+            dofs = gm.node_block[pn] * bs + np.array([p[1] for p in pinned])
+            self.pinned_dofs = np.concatenate([self.pinned_dofs, dofs])
+            self.say(f"cracking: {len(pinned)} DOFs pinned to stop free rigid motions")
+        return len(new) > 0 or len(pinned) > 0
 
     def solve(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> int:
         """Solve with reuse of the reference factorisation; returns CG iterations (0 = direct)."""
@@ -684,8 +725,6 @@ class CrackDriver:
         A 6-point Gauss rule of degree 4 is exact for the squared error of the linear
         (CST, MLS) and quadratic (RGNT, GNT) fields against a linear exact solution.
         """
-        from geofrac.elements.kinematics import KINDS, vertex_field
-
         exact = self.problem.exact
         gm, state, bs = self.gm, self.state, self.bs
         a, b = 0.445948490915965, 0.091576213509771
@@ -941,6 +980,7 @@ class CrackDriver:
             "mls_cells": len(state.fits),
             "void_cells": len(state.void_cells()),
             "fragment_nodes": len(self.fragment_nodes),
+            "pinned_dofs": len(self.pinned_dofs),
             "edges": len(state.mesh.edges),
             "dofs": self.n_global,
             "events_per_s": len(rows) / elapsed if elapsed > 0 else float("nan"),

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["EdgeMesh", "edge_mesh"]
+__all__ = ["EdgeMesh", "constraint_rank", "edge_mesh"]
 
 #: Local vertex pairs of the three edges of a triangle; edge j is opposite vertex j.
 LOCAL_EDGES = np.array([[1, 2], [2, 0], [0, 1]])
@@ -93,3 +93,71 @@ def edge_mesh(coords: np.ndarray, cells: np.ndarray) -> EdgeMesh:
     if counts.max() > 2:
         raise ValueError("an edge is shared by more than two triangles (non-manifold mesh)")
     return EdgeMesh(coords, cells, edges, cell_edges, edge_cells)
+
+
+def constraint_rank(points: np.ndarray, components: np.ndarray, rotation: np.ndarray) -> int:
+    """How many of a 2D piece's 3 rigid body motions its Dirichlet DOFs prevent.
+
+    Row k of the constraint matrix is the value of the translations x, y and the rotation
+    about the points' centroid at constrained DOF k; the piece is a mechanism (free to
+    move without strain) when the rank is below 3.
+
+    Args:
+        points: node of each constrained DOF, shape=(k, 2).
+        components: the DOF's index in its node's block (0: u_x, 1: u_y, 2...: the
+            element's extra DOFs), shape=(k,).
+        rotation: the extra DOFs' values under a unit rigid rotation (for RGNT θ = ½,
+            for GNT also 0 for the strains), shape=(block_size - 2,).
+    """
+    if len(points) == 0:
+        return 0
+    x = points - points.mean(axis=0)
+    rows = np.zeros((len(points), 3))
+    ux, uy = components == 0, components == 1
+    rows[ux, 0], rows[ux, 2] = 1.0, -x[ux, 1]
+    rows[uy, 1], rows[uy, 2] = 1.0, x[uy, 0]
+    extra = components >= 2
+    rows[extra, 2] = rotation[components[extra] - 2]
+    scale = max(1.0, float(np.abs(x).max()))
+    rows[:, 2] /= scale
+    sv = np.linalg.svd(rows, compute_uv=False)
+    return int(np.sum(sv > 1e-8 * sv[0]))
+
+
+def free_motion_pins(
+    points: np.ndarray, components: np.ndarray, rotation: np.ndarray, candidates: np.ndarray
+) -> list[tuple[int, int]]:
+    """The fewest DOFs (u_x or u_y of candidate nodes) that complete a piece's supports.
+
+    The first candidate is the one nearest the candidates' centroid, the second the one
+    farthest from the first (ties by x, then y, so the choice depends on coordinates
+    only); their u_x, then u_y, are added while they raise :func:`constraint_rank`.
+
+    Args:
+        points: node of each constrained DOF, shape=(k, 2).
+        components: the DOF's index in its node's block, shape=(k,).
+        rotation: the extra DOFs' values under a unit rigid rotation,
+            shape=(block_size - 2,).
+        candidates: nodes of the piece, shape=(m, 2), m >= 1.
+
+    Returns:
+        (candidate index, component) of each DOF to pin, at most 3 of them.
+    """
+    c = np.asarray(candidates, dtype=float)
+    d0 = np.linalg.norm(c - c.mean(axis=0), axis=1)
+    first = int(np.lexsort((c[:, 1], c[:, 0], d0))[0])
+    d1 = np.linalg.norm(c - c[first], axis=1)
+    second = int(np.lexsort((c[:, 1], c[:, 0], -d1))[0])
+    pts, comps = np.asarray(points, dtype=float).reshape(-1, 2), np.asarray(components)
+    rank = constraint_rank(pts, comps, rotation)
+    pins: list[tuple[int, int]] = []
+    for node in dict.fromkeys((first, second)):
+        for comp in (0, 1):
+            if rank == 3:
+                return pins
+            p2, c2 = np.vstack([pts, c[node]]), np.append(comps, comp)
+            r2 = constraint_rank(p2, c2, rotation)
+            if r2 > rank:
+                pts, comps, rank = p2, c2, r2
+                pins.append((node, comp))
+    return pins

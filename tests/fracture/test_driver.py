@@ -151,3 +151,26 @@ def test_same_first_50_events_on_1_and_2_ranks():
     )
     edges = world.allgather([r["edge"] for r in parallel.rows])
     assert all(e == edges[0] for e in edges)
+
+
+def test_piece_free_to_slide_is_pinned_not_singular():
+    """A column cut off between the platens of DFN Model 1 (supported in y only).
+
+    Without a pin its x-translation is free and the factorisation is singular (the Model 1
+    run that ended at event 1647); one u_x is pinned and the run goes on.
+    """
+    driver = make_driver(
+        "crack_model1", "dfn.mesh_size=6", "cracking.max_events=3", comm=MPI.COMM_SELF
+    )
+    try:
+        m = driver.state.mesh
+        strip = np.flatnonzero(np.abs(m.centroids()[:, 0] - 150.0) < 4.0)
+        driver.precracked = np.union1d(driver.precracked, m.cell_edges[strip].ravel())
+        res = driver.run()
+        assert res["end_reason"] == "max_events" and res["events"] == 3
+        assert res["pinned_dofs"] == 1 and res["fragment_nodes"] == 0
+        assert driver.pinned_dofs[0] % driver.bs == 0  # u_x
+        assert driver.gm.coords[driver._pinned_nodes[0], 0] > 154.0  # in the cut-off column
+        assert all(np.isfinite(r["strain_energy"]) for r in driver.rows)
+    finally:
+        driver.problem.destroy()

@@ -1,0 +1,57 @@
+"""Pure geometry of crack pieces: rigid motions left free by the supports."""
+
+import numpy as np
+
+from geofrac.fracture.topology import constraint_rank, free_motion_pins
+
+NO_EXTRA = np.zeros(0)
+RGNT = np.array([0.5])  # θ = ½ ω under a rigid rotation ω
+
+
+def column() -> tuple[np.ndarray, np.ndarray]:
+    """u_y fixed on the top and bottom rows of a column: free to slide in x."""
+    xs = np.arange(3.0)
+    pts = np.vstack([np.c_[xs, np.zeros(3)], np.c_[xs, np.full(3, 10.0)]])
+    return pts, np.ones(6, dtype=np.int64)
+
+
+def test_constraint_rank_counts_prevented_rigid_motions():
+    assert constraint_rank(np.zeros((0, 2)), np.zeros(0, dtype=np.int64), NO_EXTRA) == 0
+    one = np.array([[3.0, 4.0], [3.0, 4.0]])
+    assert constraint_rank(one, np.array([0, 1]), NO_EXTRA) == 2  # a pin: rotation free
+    # RGNT's θ at the pin also stops the rotation
+    assert constraint_rank(np.vstack([one, one[:1]]), np.array([0, 1, 2]), RGNT) == 3
+    pts, comps = column()
+    assert constraint_rank(pts, comps, NO_EXTRA) == 2
+    assert constraint_rank(pts, comps, RGNT) == 2
+    assert constraint_rank(np.vstack([pts, [[0.0, 0.0]]]), np.append(comps, 0), NO_EXTRA) == 3
+    # far from the origin and at a large scale the rank is unchanged
+    assert constraint_rank(pts * 1e3 + 1e6, comps, NO_EXTRA) == 2
+
+
+def test_free_motion_pins_complete_the_supports_with_fewest_dofs():
+    pts, comps = column()
+    cand = np.array([[x, y] for x in range(3) for y in range(11)], dtype=float)
+    pins = free_motion_pins(pts, comps, NO_EXTRA, cand)
+    assert len(pins) == 1 and pins[0][1] == 0  # one u_x stops the sliding
+    node = pins[0][0]
+    np.testing.assert_array_equal(cand[node], [1.0, 5.0])  # nearest the centroid
+    for extra in (NO_EXTRA, RGNT):
+        free = free_motion_pins(np.zeros((0, 2)), np.zeros(0, dtype=np.int64), extra, cand)
+        assert len(free) == 3
+        p = cand[[i for i, _ in free]]
+        c = np.array([k for _, k in free])
+        assert constraint_rank(p, c, extra) == 3
+
+
+def test_free_motion_pins_do_not_depend_on_candidate_order():
+    rng = np.random.default_rng(7)
+    cand = rng.uniform(0.0, 10.0, size=(40, 2))
+    pts = np.array([[0.0, 0.0]])
+    comps = np.array([1])
+    pins = free_motion_pins(pts, comps, NO_EXTRA, cand)
+    perm = rng.permutation(len(cand))
+    again = free_motion_pins(pts, comps, NO_EXTRA, cand[perm])
+    assert [(tuple(cand[i]), k) for i, k in pins] == [(tuple(cand[perm][i]), k) for i, k in again]
+    p = np.vstack([pts, cand[[i for i, _ in pins]]])
+    assert constraint_rank(p, np.append(comps, [k for _, k in pins]), NO_EXTRA) == 3
