@@ -7,7 +7,8 @@ y = A₀⁻¹ b₀, and the changed block on the touched DOFs T. Each event cost
 - the entries of A₀⁻¹ on (T, new DOFs of T), from MUMPS's selected-inverse solve
   (:func:`geofrac.solvers.mumps_inverse_entries`);
 - the dense m×m correction solve (m = |T|, replicated);
-- one solve with the factor, x = y + A₀⁻¹ E g, and a residual check against the current
+- one solve with the factor, x = y + A₀⁻¹ E g (E g handed to MUMPS as a sparse right-hand
+  side, :func:`geofrac.solvers.mumps_sparse_solve`), and a residual check against the current
   system ‖b − A x‖ ≤ :data:`MAX_RESIDUAL` ‖b‖ (with iterative refinement when needed).
 
 The solver is *stale* (the driver then assembles and factorises afresh) when T would
@@ -24,7 +25,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from geofrac.fracture.woodbury import LocalUpdate
-from geofrac.solvers import LinearSolver, mumps_inverse_entries
+from geofrac.solvers import LinearSolver, mumps_inverse_entries, mumps_sparse_solve
 
 __all__ = [
     "MAX_RESIDUAL",
@@ -189,7 +190,7 @@ class IncrementalSolver:
             raise Stale("singular", f"the changed system is singular ({exc})") from None
         e, w = self.b.duplicate(), self.b.duplicate()
         try:
-            self._solve_with(g, e, x)
+            self._solve_with(g, x)
             x.axpy(1.0, self.y_vec)
             for step in range(REFINEMENTS + 1):
                 x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
@@ -204,7 +205,7 @@ class IncrementalSolver:
                 self.solver.ksp.solve(e, w)
                 g_r = lu.homogeneous_correction(self.gather(w)[lu.dofs])
                 x.axpy(1.0, w)
-                self._solve_with(g_r, e, w)
+                self._solve_with(g_r, w)
                 x.axpy(1.0, w)
         finally:
             e.destroy()
@@ -213,14 +214,9 @@ class IncrementalSolver:
             raise Stale("residual", f"relative residual {np.sqrt(r2 / b2):.1e}")
         return u
 
-    def _solve_with(self, g: np.ndarray, e: PETSc.Vec, out: PETSc.Vec) -> None:
-        """Solve A₀ out = E g, with ``e`` as work vector."""
-        lu = self.update
-        mine = (lu.dofs >= self.row0) & (lu.dofs < self.row1)
-        e.set(0.0)
-        e.setValues(lu.dofs[mine].astype(PETSc.IntType), g[mine])
-        e.assemble()
-        self.solver.ksp.solve(e, out)
+    def _solve_with(self, g: np.ndarray, out: PETSc.Vec) -> None:
+        """Solve A₀ out = E g; E g has nonzeros on T only (a sparse right-hand side)."""
+        mumps_sparse_solve(self.factor, self.update.dofs, g, out)
 
     def _residual(self, x: PETSc.Vec, u: np.ndarray, e: PETSc.Vec) -> float:
         """Residual b₀ + E Δb − A₀ x − E ΔC x_T of the current system into e; ‖e‖²."""
