@@ -169,6 +169,22 @@ def _facet_nodes(
     return gm.nodes_of(out)
 
 
+def _matvecs(M: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """One small matrix-vector product per cell, cells last (contiguous, vectorised).
+
+    Args:
+        M: the matrices, shape=(r, k, num_cells).
+        x: the vectors, shape=(k, num_cells).
+
+    Returns:
+        M x per cell, shape=(r, num_cells).
+    """
+    out = M[:, 0] * x[0]
+    for j in range(1, x.shape[0]):
+        out += M[:, j] * x[j]
+    return out
+
+
 def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Connected-component label (smallest node id) of n nodes joined by pairs a–b."""
     labels = np.arange(n)
@@ -308,7 +324,7 @@ class CrackDriver:
             c = mesh_e.centroids()
             forced = (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
         settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
-        self.state = CrackState(mesh_e, frozen, forced, settings)
+        self.state = CrackState(mesh_e, frozen, forced, settings, self._rank_map)
         keys = mesh_e.edges[:, 0] * len(gm.coords) + mesh_e.edges[:, 1]
         self._edge_keys = keys
         pre = []
@@ -348,14 +364,41 @@ class CrackDriver:
         x = gm.coords[gm.cells[own]]
         self.K_fe = fe_matrices(self.element, x, self.D, self.t, self.penalty)
         self.fe_dofs = self._node_dofs(gm.cells[own].ravel()).reshape(len(own), 3 * bs)
-        self.fe_stress_op = np.einsum(
-            "ij,cqjp->cqip", self.D, strain_operator(self.element, x, MIDPOINTS)
-        )
+        stress_op = np.einsum("ij,cqjp->cqip", self.D, strain_operator(self.element, x, MIDPOINTS))
+        nc, nd = self.fe_dofs.shape
+        #: cells-last copies for :meth:`measures`: the stress at the 3 edge midpoints,
+        #: shape=(9, nd, n_own), K, shape=(nd, nd, n_own), and the DOFs, shape=(nd, n_own).
+        self._stress_op_t = np.ascontiguousarray(stress_op.reshape(nc, 9, nd).transpose(1, 2, 0))
+        self._K_fe_t = np.ascontiguousarray(self.K_fe.transpose(1, 2, 0))
+        self._fe_dofs_t = np.ascontiguousarray(self.fe_dofs.T)
         self.owned_flag = np.zeros(len(gm.cells), dtype=bool)
         self.owned_flag[own] = True
         #: owned cells (positions in own_cells) with a control DOF: the only ones whose
         #: forces enter the reaction, shape=(k,).
         self._reacting = np.flatnonzero(np.any(self._control_sign[self.fe_dofs] != 0, axis=1))
+
+    def _rank_map(self, f: Any, items: list[int]) -> list[Any]:
+        """:data:`~geofrac.fracture.state.Mapper` sharing ``items`` among the ranks.
+
+        Rank r computes items r, r + size, ...; the results are gathered on every rank
+        in order. An exception on any rank is raised on every rank (no rank is left
+        waiting in the gather).
+        """
+        size, rank = self.comm.size, self.comm.rank
+        if size == 1 or len(items) < 2 * size:
+            return [f(i) for i in items]
+        try:
+            mine: Any = [f(i) for i in items[rank::size]]
+        except Exception as exc:  # re-raised on every rank below
+            mine = exc
+        parts = self.comm.allgather(mine)
+        for part in parts:
+            if isinstance(part, Exception):
+                raise part
+        out: list[Any] = [None] * len(items)
+        for r, part in enumerate(parts):
+            out[r::size] = part
+        return out
 
     # -- per-event pieces ------------------------------------------------------------
     def _node_dofs(self, nodes: np.ndarray, per_node: int | None = None) -> np.ndarray:
@@ -694,16 +737,15 @@ class CrackDriver:
         is_mls = state.is_mls()
         s1 = np.zeros((len(self.gm.cells), 3))
         u_ext = np.append(u, 0.0)
-        ud = u[self.fe_dofs]  # shape=(n_own, nd)
-        nc, nd = ud.shape
+        ud = u[self._fe_dofs_t]  # shape=(nd, n_own)
         fe = ~is_mls[own]
-        stress = np.einsum("cij,cj->ci", self.fe_stress_op.reshape(nc, 9, nd), ud).reshape(nc, 3, 3)
-        s1[own[fe]] = principal_max(stress[fe])
-        ku = np.einsum("cij,cj->ci", self.K_fe, ud)  # shape=(n_own, nd)
-        energy = 0.5 * float(fe @ np.einsum("ci,ci->c", ud, ku))
+        stress = _matvecs(self._stress_op_t, ud).reshape(3, 3, -1)  # (midpoint, component, cell)
+        s1[own[fe]] = principal_max(np.moveaxis(stress, 1, 2)).T[fe]
+        ku = _matvecs(self._K_fe_t, ud)  # shape=(nd, n_own)
+        energy = 0.5 * float(np.sum(ud * ku, axis=0) @ fe)
         sign = self._control_sign
         r = self._reacting[fe[self._reacting]]
-        reaction = float(np.sum(ku[r] * sign[self.fe_dofs[r]]))
+        reaction = float(np.sum(ku[:, r] * sign[self._fe_dofs_t[:, r]]))
         self._sync_table()
         table = self._table
         assert table is not None
@@ -714,7 +756,7 @@ class CrackDriver:
         energy += 0.5 * float(np.sum(table.weight * np.sum(eps * sig, axis=1)))
         force = table.weight[:, None] * np.einsum("rip,ri->rp", table.B, sig)
         reaction += float(np.sum(force * sign[table.dofs]))
-        s1 = self.comm.allreduce(s1, op=MPI.SUM)
+        self.comm.Allreduce(MPI.IN_PLACE, s1, op=MPI.SUM)
         energy = self.comm.allreduce(energy, op=MPI.SUM)
         reaction = self.comm.allreduce(reaction, op=MPI.SUM)
         return edge_principal(state.mesh, s1), energy, reaction

@@ -15,7 +15,9 @@ the same satellites and radius keeps its fit object, so caches keyed by it stay 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -23,7 +25,16 @@ from geofrac.fracture.topology import EdgeMesh
 from geofrac.fracture.visibility import Bins, blocked, visible_nodes
 from geofrac.mls.shape import LinearFit, linear_fit
 
-__all__ = ["CrackState", "MlsSettings", "segment_distance"]
+__all__ = ["CrackState", "Mapper", "MlsSettings", "segment_distance", "serial_map"]
+
+#: ``mapper(f, items) -> [f(i) for i in items]``, in order; the driver passes one that
+#: shares the items among MPI ranks (the results do not depend on who computes them).
+Mapper = Callable[[Callable[[int], Any], list[int]], list[Any]]
+
+
+def serial_map(f: Callable[[int], Any], items: list[int]) -> list[Any]:
+    """The plain :data:`Mapper`: ``[f(i) for i in items]``."""
+    return [f(i) for i in items]
 
 
 @dataclass(frozen=True)
@@ -57,12 +68,14 @@ class CrackState:
         frozen: cells that may not crack (touching a Dirichlet node), shape=(num_cells,).
         forced: cells that use MLS from the start, shape=(num_cells,).
         settings: neighbourhood settings.
+        mapper: runs the neighbourhood searches of a refit (:data:`Mapper`).
     """
 
     mesh: EdgeMesh
     frozen: np.ndarray
     forced: np.ndarray
     settings: MlsSettings = field(default_factory=MlsSettings)
+    mapper: Mapper = serial_map
 
     def __post_init__(self) -> None:  # noqa: D105
         m = self.mesh
@@ -156,22 +169,10 @@ class CrackState:
         Returns the cells whose fit changed (new, or other satellites or radius), sorted,
         shape=(k,); the others keep their fit object.
         """
-        s, coords = self.settings, self.mesh.coords
+        coords = self.mesh.coords
         changed = []
-        for cell in np.asarray(cells, dtype=np.int64):
-            c = int(cell)
-            size = self.cell_size[c]
-            ids, h = visible_nodes(
-                self.centroids[c],
-                coords,
-                self.node_bins,
-                self.crack_bins,
-                self.segments,
-                start=1.5 * size,
-                target=s.neighbours,
-                max_radius=s.max_radius_factor * size,
-                margin=s.margin,
-            )
+        items = [int(c) for c in np.asarray(cells, dtype=np.int64)]
+        for c, (ids, h) in zip(items, self.mapper(self._search, items), strict=True):
             self._h[c] = h
             known = c in self.fits
             old = self.fits.get(c)
@@ -183,3 +184,18 @@ class CrackState:
             self.fits[c] = fit
             changed.append(c)
         return np.array(changed, dtype=np.int64)
+
+    def _search(self, c: int) -> tuple[np.ndarray, float]:
+        """Visible satellites of cell c and its radius h (:func:`visible_nodes`)."""
+        s, size = self.settings, self.cell_size[c]
+        return visible_nodes(
+            self.centroids[c],
+            self.mesh.coords,
+            self.node_bins,
+            self.crack_bins,
+            self.segments,
+            start=1.5 * size,
+            target=s.neighbours,
+            max_radius=s.max_radius_factor * size,
+            margin=s.margin,
+        )
