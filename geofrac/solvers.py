@@ -79,6 +79,34 @@ def _petsc_library() -> ctypes.CDLL:
     return lib
 
 
+def _rank0_aij(
+    pcomm: PETSc.Comm,
+    nrows: int,
+    ncols: int,
+    indptr: np.ndarray,
+    indices: np.ndarray,
+    values: np.ndarray,
+) -> PETSc.Mat:
+    """An assembled AIJ matrix held, rows and columns, wholly on rank 0 (from its CSR).
+
+    The layout MUMPS wants for sparse right-hand sides: PETSc hands it rank 0's
+    diagonal block only, so rank 0 must own every column too. Other ranks' CSR
+    arguments are ignored.
+    """
+    rank0 = pcomm.tompi4py().rank == 0
+    A = PETSc.Mat().create(pcomm)
+    A.setSizes(((nrows if rank0 else 0, nrows), (ncols if rank0 else 0, ncols)))
+    A.setType(PETSc.Mat.Type.AIJ)
+    if rank0:
+        ip, ix = indptr.astype(PETSc.IntType), indices.astype(PETSc.IntType)
+        A.setPreallocationCSR((ip, ix))
+        A.setValuesCSR(ip, ix, np.asarray(values, dtype=float))
+    else:
+        A.setPreallocationCSR((np.zeros(1, dtype=PETSc.IntType), np.zeros(0, dtype=PETSc.IntType)))
+    A.assemble()
+    return A
+
+
 def mumps_inverse_entries(F: PETSc.Mat, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     """Entries (A⁻¹)[rows, cols] from a MUMPS factor of A (collective), shape=(nr, nc).
 
@@ -101,21 +129,12 @@ def mumps_inverse_entries(F: PETSc.Mat, rows: np.ndarray, cols: np.ndarray) -> n
     cols = np.asarray(cols, dtype=np.int64)
     r_order, c_order = np.argsort(rows), np.argsort(cols)
     r_sorted, c_sorted = rows[r_order], cols[c_order]
-    # Bt: row j lists the rows i of the requested A⁻¹(i, j); all of it on rank 0
-    Bt = PETSc.Mat().create(pcomm)
-    local = n if comm.rank == 0 else 0
-    Bt.setSizes(((local, n), (local, n)))
-    Bt.setType(PETSc.Mat.Type.AIJ)
-    if comm.rank == 0:
-        count = np.zeros(n, dtype=np.int64)
-        count[c_sorted] = len(rows)
-        indptr = np.concatenate([[0], np.cumsum(count)]).astype(PETSc.IntType)
-        indices = np.tile(r_sorted, len(cols)).astype(PETSc.IntType)
-        Bt.setPreallocationCSR((indptr, indices))
-        Bt.setValuesCSR(indptr, indices, np.zeros(len(indices)))
-    else:
-        Bt.setPreallocationCSR((np.zeros(1, dtype=PETSc.IntType), np.zeros(0, dtype=PETSc.IntType)))
-    Bt.assemble()
+    # Bt: row j lists the rows i of the requested A⁻¹(i, j)
+    count = np.zeros(n, dtype=np.int64)
+    count[c_sorted] = len(rows)
+    indptr = np.concatenate([[0], np.cumsum(count)])
+    indices = np.tile(r_sorted, len(cols))
+    Bt = _rank0_aij(pcomm, n, n, indptr, indices, np.zeros(len(indices)))
     spRHS = PETSc.Mat().createTranspose(Bt)
     saved = {i: F.getMumpsIcntl(i) for i in (20, 21, 30)}
     try:
@@ -150,22 +169,11 @@ def mumps_sparse_solve(F: PETSc.Mat, rows: np.ndarray, values: np.ndarray, out: 
         out: the solution, laid out as the factor's rows (ghosts are not updated).
     """
     pcomm = F.getComm()
-    comm = pcomm.tompi4py()
     n = F.getSize()[0]
     n_local = out.getLocalSize()
     order = np.argsort(rows)
-    Bt = PETSc.Mat().create(pcomm)
-    # all of Bt on rank 0, its columns too: PETSc hands MUMPS rank 0's diagonal block
-    Bt.setSizes(((1 if comm.rank == 0 else 0, 1), (n if comm.rank == 0 else 0, n)))
-    Bt.setType(PETSc.Mat.Type.AIJ)
-    if comm.rank == 0:
-        indptr = np.array([0, len(rows)], dtype=PETSc.IntType)
-        indices = np.asarray(rows, dtype=PETSc.IntType)[order]
-        Bt.setPreallocationCSR((indptr, indices))
-        Bt.setValuesCSR(indptr, indices, np.asarray(values, dtype=float)[order])
-    else:
-        Bt.setPreallocationCSR((np.zeros(1, dtype=PETSc.IntType), np.zeros(0, dtype=PETSc.IntType)))
-    Bt.assemble()
+    indptr = np.array([0, len(rows)])
+    Bt = _rank0_aij(pcomm, 1, n, indptr, np.asarray(rows)[order], np.asarray(values)[order])
     B = PETSc.Mat().createTranspose(Bt)
     X = PETSc.Mat().createDense(((n_local, n), (None, 1)), comm=pcomm)
     X.setUp()

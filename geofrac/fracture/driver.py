@@ -52,7 +52,7 @@ from geofrac.fracture.cells import (
 from geofrac.fracture.criterion import edge_principal, select_edges
 from geofrac.fracture.incremental import Gather, IncrementalSolver, Stale
 from geofrac.fracture.state import CrackState, MlsSettings
-from geofrac.fracture.topology import constraint_rank, edge_mesh, free_motion_pins
+from geofrac.fracture.topology import edge_mesh, free_motion_pins
 from geofrac.log import format_seconds
 from geofrac.materials import d_matrix, lame
 from geofrac.mls.shape import strain_matrix
@@ -475,10 +475,11 @@ class CrackDriver:
         Pieces are the nodes joined by uncracked element cells and MLS fits. A piece
         with no Dirichlet DOF is cut free: all its nodes are held at their last
         displacement. A piece whose Dirichlet and pinned DOFs leave a rigid motion free
-        (:func:`constraint_rank` < 3; e.g. a column split off between the loading platens,
-        free to slide sideways) gets the fewest u_x/u_y DOFs pinned at their last
-        displacement that remove the free motions (:func:`free_motion_pins`), so it goes
-        on carrying load. Both choices depend on coordinates only (rank-independent).
+        (:func:`~geofrac.fracture.topology.constraint_rank` < 3; e.g. a column split off
+        between the loading platens, free to slide sideways) gets the fewest u_x/u_y DOFs
+        pinned at their last displacement that remove the free motions
+        (:func:`~geofrac.fracture.topology.free_motion_pins`), so it goes on carrying load.
+        Both choices depend on coordinates only (rank-independent).
         """
         gm, state, bs = self.gm, self.state, self.bs
         is_mls = state.is_mls()
@@ -508,11 +509,8 @@ class CrackDriver:
         for label in anchored:
             on = labels[nodes] == label
             members = np.flatnonzero(touched & (labels == label))
-            if (
-                not len(members)
-                or constraint_rank(xy[nodes[on]], rows[on] % bs, self._rotation) == 3
-            ):
-                continue  # no cell left to move, or held
+            if not len(members):
+                continue  # no cell left to move
             pins = free_motion_pins(xy[nodes[on]], rows[on] % bs, self._rotation, xy[members])
             pinned += [(int(members[i]), comp) for i, comp in pins]
         if pinned:

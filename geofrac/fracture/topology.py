@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["EdgeMesh", "constraint_rank", "edge_mesh"]
+__all__ = ["EdgeMesh", "constraint_rank", "edge_mesh", "free_motion_pins"]
 
 #: Local vertex pairs of the three edges of a triangle; edge j is opposite vertex j.
 LOCAL_EDGES = np.array([[1, 2], [2, 0], [0, 1]])
@@ -141,7 +141,8 @@ def free_motion_pins(
         candidates: nodes of the piece, shape=(m, 2), m >= 1.
 
     Returns:
-        (candidate index, component) of each DOF to pin, at most 3 of them.
+        (candidate index, component) of each DOF to pin, at most 3 of them; none when
+        the supports already hold all 3 rigid motions.
     """
     c = np.asarray(candidates, dtype=float)
     d0 = np.linalg.norm(c - c.mean(axis=0), axis=1)
