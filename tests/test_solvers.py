@@ -31,7 +31,13 @@ def _factor(comm: MPI.Comm, A: np.ndarray) -> tuple[PETSc.Mat, LinearSolver]:
     return M, LinearSolver(M, "test_mumps_", "direct", {}, n)
 
 
-@pytest.mark.parametrize("comm", [MPI.COMM_SELF, MPI.COMM_WORLD], ids=["self", "world"])
+@pytest.mark.parametrize(
+    "comm",
+    [
+        pytest.param(MPI.COMM_SELF, id="self"),
+        pytest.param(MPI.COMM_WORLD, id="world", marks=pytest.mark.mpi(min_size=2)),
+    ],
+)
 def test_sparse_rhs_solve_and_inverse_entries_match_numpy(comm):
     A = _dense()
     inv = np.linalg.inv(A)

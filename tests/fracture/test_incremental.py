@@ -43,7 +43,13 @@ def _change() -> tuple[np.ndarray, np.ndarray]:
     return dofs, k
 
 
-@pytest.mark.parametrize("comm", [MPI.COMM_SELF, MPI.COMM_WORLD], ids=["self", "world"])
+@pytest.mark.parametrize(
+    "comm",
+    [
+        pytest.param(MPI.COMM_SELF, id="self"),
+        pytest.param(MPI.COMM_WORLD, id="world", marks=pytest.mark.mpi(min_size=2)),
+    ],
+)
 def test_corrected_solution_is_the_changed_systems(comm):
     A, b = _spd(), np.linspace(-1.0, 2.0, N)
     inc, x = _solver(comm, A, b)
