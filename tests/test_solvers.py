@@ -8,6 +8,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from geofrac.solvers import LinearSolver, mumps_inverse_entries, mumps_sparse_solve
+from tests.petsc_matrices import aij_from_dense
 
 N = 60
 
@@ -20,15 +21,8 @@ def _dense(n: int = N) -> np.ndarray:
 
 
 def _factor(comm: MPI.Comm, A: np.ndarray) -> tuple[PETSc.Mat, LinearSolver]:
-    n = len(A)
-    M = PETSc.Mat().createAIJ((n, n), comm=comm)
-    M.setUp()
-    r0, r1 = M.getOwnershipRange()
-    for i in range(r0, r1):
-        cols = np.flatnonzero(A[i]).astype(PETSc.IntType)
-        M.setValues(i, cols, A[i, cols])
-    M.assemble()
-    return M, LinearSolver(M, "test_mumps_", "direct", {}, n)
+    M = aij_from_dense(comm, A)
+    return M, LinearSolver(M, "test_mumps_", "direct", {}, len(A))
 
 
 @pytest.mark.parametrize(

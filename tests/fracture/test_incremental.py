@@ -9,6 +9,7 @@ from petsc4py import PETSc
 
 from geofrac.fracture.incremental import MAX_RESIDUAL, Gather, IncrementalSolver
 from geofrac.solvers import LinearSolver
+from tests.petsc_matrices import aij_from_dense
 
 N = 40
 
@@ -20,13 +21,8 @@ def _spd(n: int = N) -> np.ndarray:
 
 def _solver(comm: MPI.Comm, A: np.ndarray, b: np.ndarray) -> tuple[IncrementalSolver, PETSc.Vec]:
     n = len(A)
-    M = PETSc.Mat().createAIJ((n, n), comm=comm)
-    M.setUp()
+    M = aij_from_dense(comm, A)
     r0, r1 = M.getOwnershipRange()
-    for i in range(r0, r1):
-        cols = np.flatnonzero(A[i]).astype(PETSc.IntType)
-        M.setValues(i, cols, A[i, cols])
-    M.assemble()
     bv = M.createVecLeft()
     bv.array[:] = b[r0:r1]
     x = PETSc.Vec().createGhost([], (r1 - r0, n), comm=comm)
