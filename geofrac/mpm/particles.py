@@ -1,0 +1,89 @@
+"""Particle state of the MPM (seed eqs. 4.7-4.11)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Particles", "particles"]
+
+
+@dataclass
+class Particles:
+    """Material points; arrays are updated in place by the schemes.
+
+    Attributes:
+        x: positions, shape=(n, dim).
+        v: velocities, shape=(n, dim).
+        mass: m_p, shape=(n,).
+        volume: V_p (current), shape=(n,).
+        stress: Cauchy stress σ_p, shape=(n, dim, dim).
+        F: deformation gradient G_p (eq. 4.70), shape=(n, dim, dim).
+        lp0: initial GIMP half-widths l_p⁰, shape=(n, dim).
+        lp: current half-widths (= lp0 except for ``cpgimp``), shape=(n, dim).
+    """
+
+    x: np.ndarray
+    v: np.ndarray
+    mass: np.ndarray
+    volume: np.ndarray
+    stress: np.ndarray
+    F: np.ndarray
+    lp0: np.ndarray
+    lp: np.ndarray
+
+    @property
+    def n(self) -> int:
+        """Number of particles."""
+        return len(self.x)
+
+    @property
+    def dim(self) -> int:
+        """Spatial dimension."""
+        return self.x.shape[1]
+
+    @property
+    def density(self) -> np.ndarray:
+        """ρ_p = m_p / V_p (eq. 4.9), shape=(n,)."""
+        return self.mass / self.volume
+
+    def kinetic_energy(self) -> float:
+        """Σ ½ m_p |v_p|²."""
+        return 0.5 * float(np.sum(self.mass * np.sum(self.v**2, axis=1)))
+
+    def momentum(self) -> np.ndarray:
+        """Σ m_p v_p, shape=(dim,)."""
+        return self.mass @ self.v
+
+
+def particles(
+    x: np.ndarray, volume: np.ndarray, density: np.ndarray | float, lp0: np.ndarray
+) -> Particles:
+    """Particles at rest and stress-free.
+
+    Args:
+        x: positions, shape=(n, dim).
+        volume: initial volumes, shape=(n,).
+        density: initial density ρ_p, shape=(n,) or one number.
+        lp0: initial GIMP half-widths, shape=(n, dim) (half the particle spacing).
+    """
+    x = np.array(x, dtype=float)
+    n, dim = x.shape
+    vol = np.array(volume, dtype=float).reshape(n)
+    if np.any(vol <= 0):
+        raise ValueError("particles: every volume must be > 0")
+    rho = np.broadcast_to(np.asarray(density, dtype=float), (n,))
+    if np.any(rho <= 0):
+        raise ValueError("particles: every density must be > 0")
+    lp0 = np.array(lp0, dtype=float).reshape(n, dim)
+    return Particles(
+        x=x,
+        v=np.zeros((n, dim)),
+        mass=rho * vol,
+        volume=vol.copy(),
+        stress=np.zeros((n, dim, dim)),
+        F=np.broadcast_to(np.eye(dim), (n, dim, dim)).copy(),
+        lp0=lp0,
+        lp=lp0.copy(),
+    )

@@ -1,0 +1,128 @@
+"""MPM steps: conservation in the transfers, rigid motion, the quasi-static bar (eq. 4.73)."""
+
+import numpy as np
+import pytest
+
+from geofrac.mpm.grid import grid
+from geofrac.mpm.particles import particles
+from geofrac.mpm.schemes import (
+    SCHEMES,
+    Elastic,
+    ParticlesLeftGrid,
+    StepSettings,
+    _nodal_velocity,
+    _to_grid,
+    step,
+    strain_energy,
+    time_step,
+)
+from geofrac.mpm.shapes import SHAPES, weights
+
+
+def _block(dim: int, n_side: int = 6, h: float = 0.25):
+    """Particles filling a cube of side n_side·h at 1.0, two per cell of size 2h."""
+    axes = [1.0 + (np.arange(n_side) + 0.5) * h] * dim
+    x = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
+    return particles(x, np.full(len(x), h**dim), 2.0, np.full(x.shape, h / 2))
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_transfers_conserve_mass_and_momentum(dim, shape):
+    rng = np.random.default_rng(dim)
+    p = _block(dim)
+    p.x += rng.uniform(-0.05, 0.05, p.x.shape)
+    p.v = rng.normal(size=p.x.shape)
+    g = grid(np.zeros(dim), 0.5, [6] * dim)
+    w = weights(g, p.x, None if shape == "mpm" else p.lp)
+    mass = _to_grid(w, p.mass[:, None], g.num_nodes)[:, 0]
+    assert mass.sum() == pytest.approx(p.mass.sum(), rel=1e-14)
+    active = mass > 0
+    v = _nodal_velocity(w, p, mass, active, np.zeros((g.num_nodes, dim), bool))
+    np.testing.assert_allclose(mass @ v, p.momentum(), rtol=1e-13, atol=1e-13)
+
+
+@pytest.mark.parametrize("scheme", SCHEMES)
+@pytest.mark.parametrize("shape", SHAPES)
+def test_uniformly_moving_block_stays_stress_free(scheme, shape):
+    """2D block translating through cells: no stress, no change of velocity, 400 steps."""
+    p = _block(2)
+    v0 = np.array([0.7, -0.4])
+    p.v[:] = v0
+    mat = Elastic(E=1000.0, nu=0.3)
+    g = grid([0.0, 0.0], 0.5, [8, 8])
+    dt = time_step(0.2, g.spacing, mat, 2.0, 2)
+    s = StepSettings(scheme, shape, dt, np.zeros(2), np.zeros((g.num_nodes, 2), bool))
+    x0 = p.x.copy()
+    for _ in range(400):
+        step(g, p, mat, s)
+    assert np.abs(p.stress).max() < 1e-9 * mat.E
+    np.testing.assert_allclose(p.v, np.broadcast_to(v0, p.v.shape), atol=1e-12)
+    np.testing.assert_allclose(p.x, x0 + 400 * dt * v0, atol=1e-10)
+    assert np.all(np.isfinite(p.x))
+    # it crossed more than one cell
+    assert np.abs(400 * dt * v0).max() > g.spacing
+
+
+def quasi_static_bar(shape: str, scheme: str, W: float = 1000.0) -> float:
+    """Seed 4.5.1 after Bardenhagen and Kober: the RMS stress error normalised by ρ₀|b|L₀.
+
+    A bar of L₀ = 50, E = 1e6, ρ₀ = 1, A = 1, 100 particles, cell 1.0, fixed at x = 0,
+    under gravity b with W = ρ₀|b|L₀, Courant number 0.1 (Δt = 1e-4). At t = L₀/c the
+    stress wave from the base has crossed the bar once, and the stress equals the static
+    one, eq. 4.73: σ(x) = E (√(1 − 2ρ₀|b|(Δ − x)/E) − 1), Δ = L₀ − ρ₀|b|L₀²/(2E) (4.74).
+    """
+    E, rho0, L0, n, L = 1e6, 1.0, 50.0, 100, 1.0
+    b = W / (rho0 * L0)
+    h = L0 / n
+    p = particles((np.arange(n) + 0.5)[:, None] * h, np.full(n, h), rho0, np.full((n, 1), h / 2))
+    g = grid([-2.0], L, [56])
+    mat = Elastic(E)
+    dt = time_step(0.1, L, mat, rho0, 1)
+    fixed = (g.nodes() <= 0.0).reshape(-1, 1)
+    s = StepSettings(scheme, shape, dt, np.array([-b]), fixed)
+    for _ in range(round(L0 / mat.wave_speed(rho0, 1) / dt)):
+        step(g, p, mat, s)
+    delta = L0 - rho0 * b * L0**2 / (2 * E)
+    exact = E * (np.sqrt(1 - 2 * rho0 * b * (delta - p.x[:, 0]) / E) - 1)
+    return float(np.sqrt(np.mean((p.stress[:, 0, 0] - exact) ** 2)) / (rho0 * b * L0))
+
+
+@pytest.mark.parametrize("scheme", SCHEMES)
+@pytest.mark.parametrize("shape", SHAPES)
+def test_quasi_static_bar_matches_eq_4_73_at_W_1000(shape, scheme):
+    assert quasi_static_bar(shape, scheme) < 0.02
+
+
+def test_particle_leaving_the_grid_is_reported_and_nothing_changes():
+    p = particles(np.array([[0.5], [3.8]]), np.ones(2), 1.0, np.full((2, 1), 0.25))
+    p.v[1] = 5.0
+    g = grid([0.0], 1.0, [4])
+    mat = Elastic(100.0)
+    s = StepSettings("musl", "ugimp", 0.01, np.zeros(1), np.zeros((g.num_nodes, 1), bool))
+    with pytest.raises(ParticlesLeftGrid, match="1 particle") as info:
+        step(g, p, mat, s)
+    assert info.value.ids.tolist() == [1]
+    np.testing.assert_array_equal(p.x[:, 0], [0.5, 3.8])
+
+
+def test_strain_energy_matches_half_sigma_epsilon():
+    """½ σ:ε V for a known plane-strain state and a 1D bar."""
+    mat = Elastic(E=200.0, nu=0.25)
+    p = _block(2, n_side=1)
+    eps = np.array([[1e-3, 2e-4], [2e-4, -5e-4]])
+    p.stress[0] = mat.increment(eps[None])[0]
+    assert strain_energy(p, mat) == pytest.approx(0.5 * np.sum(p.stress[0] * eps) * p.volume[0])
+    bar = _block(1, n_side=1)
+    bar.stress[0, 0, 0] = 3.0
+    assert strain_energy(bar, mat) == pytest.approx(0.5 * 9.0 / 200.0 * bar.volume[0])
+
+
+def test_bad_settings_are_refused():
+    fixed = np.zeros((2, 1), bool)
+    with pytest.raises(ValueError, match="scheme 'usl'"):
+        StepSettings("usl", "mpm", 0.1, np.zeros(1), fixed)
+    with pytest.raises(ValueError, match="shape 'gimp'"):
+        StepSettings("musl", "gimp", 0.1, np.zeros(1), fixed)
+    with pytest.raises(ValueError, match="Courant"):
+        time_step(1.2, 1.0, Elastic(1.0), 1.0, 1)
