@@ -31,6 +31,10 @@ BENCHES: dict[str, tuple[str, str]] = {
         "geofrac.bench.mms3d",
         "manufactured smooth 3D displacement on a box: error against DOFs and wall time",
     ),
+    "mpm": (
+        "geofrac.bench.mpm",
+        "MPM quasi-static bar (seed 4.5.1): stress error against particle-steps/s per variant",
+    ),
     "stability": (
         "geofrac.bench.stability",
         "distorted meshes (minimum angle down to 5°) and ν up to 0.499: degradation and failures",
