@@ -1,12 +1,20 @@
 """``geofrac bench mpm``: accuracy against cost of the MPM variants (seed chapter 4).
 
-Case so far: the quasi-static bar of seed 4.5.1 (:mod:`geofrac.mpm.bar`) at the seed's
-W = ρ₀|b|L₀ = 1000, 12500 and 100000 (``--W``), for every shape (``mpm``, ``ugimp``,
-``cpgimp``) and scheme (``musl``, ``usf``, ``usavg``): the RMS stress error against eq.
-4.73 (normalised by ρ₀|b|L₀) beside particle-steps per second. The engine is the pure
-numpy reference and runs on one rank (under ``mpiexec`` rank 0 runs it, ``ranks`` in
-the records says 1). Prints a table; ``--json F`` writes the records, ``--out DIR`` the
-stress profiles (``mpm_bar.png``, after Fig. 4.13-4.15).
+Cases (``--cases``):
+
+- ``bar``: the quasi-static bar of seed 4.5.1 (:func:`geofrac.mpm.bar.quasi_static_bar`)
+  at W = ρ₀|b|L₀ in ``--W`` (the seed's 1000, 12500, 100000) for every shape and scheme:
+  the RMS stress error against eq. 4.73 (normalised by ρ₀|b|L₀); plot ``mpm_bar.png``
+  (after Fig. 4.13-4.15);
+- ``translating``: the translating bar of seed 4.5.3
+  (:func:`geofrac.mpm.bar.translating_bar`) to ``--t-end`` (100, Fig. 4.20-4.21) for every
+  shape and scheme, without and with MLS smoothing (radius ``--smoothing`` cells): the
+  largest drift of the total energy, max |E(t) − E₀|/E₀; plot ``mpm_translating.png``.
+
+Every record has particle-steps per second beside its error. The engine is the pure
+numpy reference and runs on one rank (under ``mpiexec`` rank 0 runs it and ``ranks`` in
+the records says 1). Prints a table; ``--json F`` writes the report, ``--out DIR`` the
+plots.
 """
 
 from __future__ import annotations
@@ -19,20 +27,33 @@ __all__ = ["COLUMNS", "add_arguments", "run"]
 
 #: (key, header, format) of the printed table.
 COLUMNS = (
+    ("case", "case", "s"),
     ("shape", "shape", "s"),
     ("scheme", "scheme", "s"),
+    ("smoothing", "smoothing", "s"),
     ("W", "W", "g"),
     ("particles", "particles", "d"),
     ("steps", "steps", "d"),
     ("particle_steps_per_s", "particle-steps/s", ".3g"),
     ("stress_error_rms", "stress error (RMS/ρ0|b|L0)", ".4f"),
+    ("energy_drift_max", "energy drift max", ".4f"),
 )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of this bench."""
+    p.add_argument("--cases", default="bar,translating", help="comma-separated: bar, translating")
     p.add_argument(
         "--W", default="1000,12500,100000", help="comma-separated W = ρ0|b|L0 of the bar"
+    )
+    p.add_argument(
+        "--t-end", type=float, default=100.0, help="end time of the translating bar (100)"
+    )
+    p.add_argument(
+        "--smoothing",
+        type=float,
+        default=2.0,
+        help="MLS radius in cells of the smoothed translating-bar runs (2.0)",
     )
     p.add_argument("--shapes", default="mpm,ugimp,cpgimp", help="comma-separated shapes")
     p.add_argument("--schemes", default="musl,usf,usavg", help="comma-separated schemes")
@@ -79,15 +100,41 @@ def _plot(runs: dict[tuple[str, str, float], Any], Ws: list[float], path: Path) 
     )
 
 
+def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None:
+    """Total energy E(t)/E₀ per shape, without and with smoothing (Fig. 4.20-4.21)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from geofrac.bench.report import save_figure
+
+    labels = list(dict.fromkeys(k[2] for k in histories))
+    fig, axes = plt.subplots(
+        1, len(labels), figsize=(5.5 * len(labels), 4.2), constrained_layout=True, sharey=True
+    )
+    axes = [axes] if len(labels) == 1 else list(axes)
+    for ax, label in zip(axes, labels, strict=True):
+        for (shape, scheme, lab), h in histories.items():
+            if lab == label:
+                ax.plot(h.t, h.total, lw=1, label=f"{shape} ({scheme})")
+        ax.axhline(1.02, color="k", lw=0.5, ls=":")
+        ax.axhline(0.98, color="k", lw=0.5, ls=":")
+        ax.set_xlabel("t")
+        ax.set_title(f"smoothing: {label}")
+    save_figure(fig, axes, path, "Translating bar (seed 4.5.3): total energy", "E(t) / E0")
+
+
 def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     """Run the variants; print the table (rank 0); return the JSON report."""
     from geofrac.bench.report import format_table
     from geofrac.io.summary import versions, write_json
     from geofrac.log import Progress, echo
-    from geofrac.mpm.bar import quasi_static_bar
+    from geofrac.mpm.bar import quasi_static_bar, translating_bar
     from geofrac.mpm.schemes import SCHEMES
     from geofrac.mpm.shapes import SHAPES
 
+    cases = _names(args.cases, ("bar", "translating"), "--cases")
     shapes = _names(args.shapes, SHAPES, "--shapes")
     schemes = _names(args.schemes, SCHEMES, "--schemes")
     try:
@@ -96,11 +143,42 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         raise SystemExit(f"--W: a comma-separated list of numbers, got {args.W!r}") from None
     if not Ws or min(Ws) <= 0:
         raise SystemExit(f"--W: every W must be > 0, got {args.W!r}")
+    if not args.t_end > 0 or not args.smoothing > 0:
+        raise SystemExit("--t-end and --smoothing must be > 0")
     records: list[dict[str, Any]] = []
     runs = {}
+    histories = {}
+    smoothings = (None, args.smoothing)
+    total = len(shapes) * len(schemes) * (len(Ws) * ("bar" in cases) + 2 * ("translating" in cases))
     if comm.rank == 0:
-        progress = Progress(comm, len(Ws) * len(shapes) * len(schemes), "bench mpm")
-        for W in Ws:
+        progress = Progress(comm, total, "bench mpm")
+        for shape in shapes if "translating" in cases else ():
+            for scheme in schemes:
+                for sm in smoothings:
+                    hist = translating_bar(shape, scheme, sm, t_end=args.t_end)
+                    label = "none" if sm is None else f"mls {sm:g} cells"
+                    histories[(shape, scheme, label)] = hist
+                    records.append(
+                        {
+                            "case": "translating_bar",
+                            "scheme": scheme,
+                            "shape": shape,
+                            "smoothing": label,
+                            "dim": 1,
+                            "particles": hist.particles,
+                            "ranks": 1,
+                            "W": None,
+                            "steps": hist.steps,
+                            "seconds": hist.seconds,
+                            "particle_steps_per_s": hist.particles * hist.steps / hist.seconds,
+                            "stress_error_rms": None,
+                            "energy_drift_max": hist.drift_max,
+                        }
+                    )
+                    progress.step(
+                        f"translating {shape} {scheme} {label}: drift {hist.drift_max:.4f}"
+                    )
+        for W in Ws if "bar" in cases else ():
             for shape in shapes:
                 for scheme in schemes:
                     res = quasi_static_bar(shape, scheme, W)
@@ -135,8 +213,12 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     if comm.rank == 0:
         echo(comm, format_table(records, COLUMNS))
         args.out.mkdir(parents=True, exist_ok=True)
-        _plot(runs, Ws, args.out / "mpm_bar.png")
-        echo(comm, f"plot: {args.out / 'mpm_bar.png'}")
+        if runs:
+            _plot(runs, Ws, args.out / "mpm_bar.png")
+            echo(comm, f"plot: {args.out / 'mpm_bar.png'}")
+        if histories:
+            _plot_energy(histories, args.out / "mpm_translating.png")
+            echo(comm, f"plot: {args.out / 'mpm_translating.png'}")
         if args.json is not None:
             write_json(args.json, report)
     return report

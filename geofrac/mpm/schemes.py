@@ -140,6 +140,9 @@ class StepSettings:
         dt: time step.
         gravity: body force per mass b, shape=(dim,).
         fixed: held velocity components of the nodes, shape=(num_nodes, dim) bool.
+        smoothing: MLS influence radius of the strain increments as a multiple of the
+            cell size (:mod:`~geofrac.mpm.smoothing`), or None for no smoothing (the
+            smoothing code is then not even imported).
     """
 
     scheme: str
@@ -147,6 +150,7 @@ class StepSettings:
     dt: float
     gravity: np.ndarray
     fixed: np.ndarray = field(repr=False)
+    smoothing: float | None = None
 
     def __post_init__(self) -> None:
         """Check the names and the step."""
@@ -156,6 +160,8 @@ class StepSettings:
             raise ValueError(f"shape {self.shape!r} is not one of {', '.join(SHAPES)}")
         if not self.dt > 0:
             raise ValueError(f"dt must be > 0, got {self.dt}")
+        if self.smoothing is not None and not self.smoothing > 0:
+            raise ValueError(f"smoothing radius factor must be > 0, got {self.smoothing}")
 
 
 def _to_grid(w: Weights, values: np.ndarray, num_nodes: int) -> np.ndarray:
@@ -202,11 +208,27 @@ def _nodal_velocity(
 
 
 def _update_stress(
-    w: Weights, p: Particles, material: Elastic, v: np.ndarray, dt: float, shape: str
+    w: Weights,
+    p: Particles,
+    material: Elastic,
+    v: np.ndarray,
+    dt: float,
+    shape: str,
+    smooth_at: tuple[np.ndarray, float] | None,
 ) -> None:
-    """Stress, volume and deformation gradient from the nodal velocity v (D.7-D.9, 4.70)."""
+    """Stress, volume and deformation gradient from the nodal velocity v (D.7-D.9, 4.70).
+
+    ``smooth_at`` = (positions at the step's start, radius): the strain increments are
+    replaced by their MLS fit there (4.57, 4.66) before they change stress and volume.
+    """
     L = np.einsum("nka,nkb->nab", v[w.nodes], w.grad)  # ∇v_p, shape=(n, dim, dim)
     deps = 0.5 * dt * (L + np.swapaxes(L, 1, 2))
+    if smooth_at is not None:
+        from geofrac.mpm.smoothing import smooth
+
+        x0, h = smooth_at
+        n, d = p.n, p.dim
+        deps = smooth(x0, deps.reshape(n, d * d), h)[0].reshape(n, d, d)
     p.stress += material.increment(deps)
     p.volume *= 1.0 + np.trace(deps, axis1=1, axis2=2)
     p.F = np.einsum("nab,nbc->nac", np.eye(p.dim) + dt * L, p.F)
@@ -228,12 +250,13 @@ def step(g: Grid, p: Particles, material: Elastic, s: StepSettings) -> None:
         raise ParticlesLeftGrid(ids, p.x[ids])
     w = weights(g, p.x, p.lp if gimp else None)
     N, dt = g.num_nodes, s.dt
+    smooth_at = None if s.smoothing is None else (p.x.copy(), s.smoothing * g.spacing)
     mass = _to_grid(w, p.mass[:, None], N)[:, 0]
     active = mass > MASS_FLOOR * mass.max()
     v = _nodal_velocity(w, p, mass, active, s.fixed)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):
-        _update_stress(w, p, material, v, half * dt, s.shape)
+        _update_stress(w, p, material, v, half * dt, s.shape, smooth_at)
     a = np.zeros((N, p.dim))
     f = _forces(w, p, s.gravity, N)
     a[active] = f[active] / mass[active, None]
@@ -243,4 +266,4 @@ def step(g: Grid, p: Particles, material: Elastic, s: StepSettings) -> None:
     p.x += dt * _from_grid(w, v_new)  # D.5, D.17, D.25
     if s.scheme in ("musl", "usavg"):
         v = _nodal_velocity(w, p, mass, active, s.fixed)  # D.6, D.26
-        _update_stress(w, p, material, v, half * dt, s.shape)
+        _update_stress(w, p, material, v, half * dt, s.shape, smooth_at)

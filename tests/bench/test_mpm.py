@@ -8,7 +8,8 @@ import pytest
 def test_bench_mpm_writes_records_table_and_plot(cli, tmp_path):
     out = tmp_path / "out"
     code, stdout, _ = cli(
-        "bench", "mpm", "--W", "1000,12500", "--shapes", "mpm,cpgimp", "--schemes", "musl",
+        "bench", "mpm", "--cases", "bar", "--W", "1000,12500", "--shapes", "mpm,cpgimp",
+        "--schemes", "musl",
         "--json", tmp_path / "b.json", "--out", out,
     )  # fmt: skip
     assert code == 0
@@ -22,6 +23,19 @@ def test_bench_mpm_writes_records_table_and_plot(cli, tmp_path):
     # cell crossing spoils the point-particle MPM at W = 12500 more than cpGIMP (Fig. 4.14)
     assert by[("mpm", 12500.0)]["stress_error_rms"] > by[("cpgimp", 12500.0)]["stress_error_rms"]
     assert (out / "mpm_bar.png").stat().st_size > 0
+
+
+def test_bench_mpm_translating_bar_reports_energy_drift(cli, tmp_path):
+    code, _, _ = cli(
+        "bench", "mpm", "--cases", "translating", "--shapes", "cpgimp", "--schemes", "usf",
+        "--t-end", "2", "--json", tmp_path / "t.json", "--out", tmp_path,
+    )  # fmt: skip
+    assert code == 0
+    records = json.loads((tmp_path / "t.json").read_text())["records"]
+    assert [r["smoothing"] for r in records] == ["none", "mls 2 cells"]
+    # before the first wall hit (t = 11.25) the bar only flies: energy is conserved
+    assert all(0 <= r["energy_drift_max"] < 1e-6 for r in records)
+    assert (tmp_path / "mpm_translating.png").stat().st_size > 0
 
 
 def test_bench_mpm_refuses_unknown_names(cli, tmp_path):
