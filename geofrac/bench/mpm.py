@@ -11,6 +11,11 @@ Cases (``--cases``):
   shape and scheme, without and with MLS smoothing (radius ``--smoothing`` cells): the
   largest drift of the total energy, max |E(t) − E₀|/E₀; plot ``mpm_translating.png``.
 
+- ``block``: throughput of a 2D elastic block of ``--particles`` particles (default
+  100,000) on a fixed floor under gravity (:func:`geofrac.mpm.block.gravity_block`),
+  MUSL with each shape, without and with smoothing: particle-steps per second over
+  ``--steps`` steps.
+
 Every record has particle-steps per second beside its error. The engine is the pure
 numpy reference and runs on one rank (under ``mpiexec`` rank 0 runs it and ``ranks`` in
 the records says 1). Prints a table; ``--json F`` writes the report, ``--out DIR`` the
@@ -42,7 +47,13 @@ COLUMNS = (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of this bench."""
-    p.add_argument("--cases", default="bar,translating", help="comma-separated: bar, translating")
+    p.add_argument(
+        "--cases", default="bar,translating", help="comma-separated: bar, translating, block"
+    )
+    p.add_argument(
+        "--particles", type=int, default=100_000, help="particles of the block case (100000)"
+    )
+    p.add_argument("--steps", type=int, default=5, help="timed steps of the block case (5)")
     p.add_argument(
         "--W", default="1000,12500,100000", help="comma-separated W = ρ0|b|L0 of the bar"
     )
@@ -125,16 +136,46 @@ def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None
     save_figure(fig, axes, path, "Translating bar (seed 4.5.3): total energy", "E(t) / E0")
 
 
+def _record(
+    case: str,
+    scheme: str,
+    shape: str,
+    smoothing: float | None,
+    dim: int,
+    particles: int,
+    steps: int,
+    seconds: float,
+    **measured: float | None,
+) -> dict[str, Any]:
+    """One JSON record; ``measured`` gives ``W``, ``stress_error_rms``, ``energy_drift_max``."""
+    return {
+        "case": case,
+        "scheme": scheme,
+        "shape": shape,
+        "smoothing": "none" if smoothing is None else f"mls {smoothing:g} cells",
+        "dim": dim,
+        "particles": particles,
+        "ranks": 1,
+        "W": measured.get("W"),
+        "steps": steps,
+        "seconds": seconds,
+        "particle_steps_per_s": particles * steps / seconds,
+        "stress_error_rms": measured.get("stress_error_rms"),
+        "energy_drift_max": measured.get("energy_drift_max"),
+    }
+
+
 def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     """Run the variants; print the table (rank 0); return the JSON report."""
     from geofrac.bench.report import format_table
     from geofrac.io.summary import versions, write_json
     from geofrac.log import Progress, echo
     from geofrac.mpm.bar import quasi_static_bar, translating_bar
+    from geofrac.mpm.block import gravity_block
     from geofrac.mpm.schemes import SCHEMES
     from geofrac.mpm.shapes import SHAPES
 
-    cases = _names(args.cases, ("bar", "translating"), "--cases")
+    cases = _names(args.cases, ("bar", "translating", "block"), "--cases")
     shapes = _names(args.shapes, SHAPES, "--shapes")
     schemes = _names(args.schemes, SCHEMES, "--schemes")
     try:
@@ -145,39 +186,48 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         raise SystemExit(f"--W: every W must be > 0, got {args.W!r}")
     if not args.t_end > 0 or not args.smoothing > 0:
         raise SystemExit("--t-end and --smoothing must be > 0")
+    if args.particles < 4 or args.steps < 1:
+        raise SystemExit("--particles must be >= 4 and --steps >= 1")
     records: list[dict[str, Any]] = []
     runs = {}
     histories = {}
     smoothings = (None, args.smoothing)
     total = len(shapes) * len(schemes) * (len(Ws) * ("bar" in cases) + 2 * ("translating" in cases))
+    total += 2 * len(shapes) * ("block" in cases)
     if comm.rank == 0:
         progress = Progress(comm, total, "bench mpm")
         for shape in shapes if "translating" in cases else ():
             for scheme in schemes:
                 for sm in smoothings:
                     hist = translating_bar(shape, scheme, sm, t_end=args.t_end)
-                    label = "none" if sm is None else f"mls {sm:g} cells"
-                    histories[(shape, scheme, label)] = hist
                     records.append(
-                        {
-                            "case": "translating_bar",
-                            "scheme": scheme,
-                            "shape": shape,
-                            "smoothing": label,
-                            "dim": 1,
-                            "particles": hist.particles,
-                            "ranks": 1,
-                            "W": None,
-                            "steps": hist.steps,
-                            "seconds": hist.seconds,
-                            "particle_steps_per_s": hist.particles * hist.steps / hist.seconds,
-                            "stress_error_rms": None,
-                            "energy_drift_max": hist.drift_max,
-                        }
+                        _record(
+                            "translating_bar",
+                            scheme,
+                            shape,
+                            sm,
+                            1,
+                            hist.particles,
+                            hist.steps,
+                            hist.seconds,
+                            energy_drift_max=hist.drift_max,
+                        )
                     )
+                    label = records[-1]["smoothing"]
+                    histories[(shape, scheme, label)] = hist
                     progress.step(
                         f"translating {shape} {scheme} {label}: drift {hist.drift_max:.4f}"
                     )
+        for shape in shapes if "block" in cases else ():
+            for sm in smoothings:
+                tp = gravity_block(args.particles, "musl", shape, sm, args.steps)
+                records.append(
+                    _record("block2d", "musl", shape, sm, 2, tp.particles, tp.steps, tp.seconds)
+                )
+                progress.step(
+                    f"block {shape} {records[-1]['smoothing']}: "
+                    f"{tp.particle_steps_per_s:.3g} p-steps/s"
+                )
         for W in Ws if "bar" in cases else ():
             for shape in shapes:
                 for scheme in schemes:
@@ -185,21 +235,18 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
                     runs[(shape, scheme, W)] = res
                     n = len(res.x)
                     records.append(
-                        {
-                            "case": "quasi_static_bar",
-                            "scheme": scheme,
-                            "shape": shape,
-                            "smoothing": "none",
-                            "dim": 1,
-                            "particles": n,
-                            "ranks": 1,
-                            "W": W,
-                            "steps": res.steps,
-                            "seconds": res.seconds,
-                            "particle_steps_per_s": n * res.steps / res.seconds,
-                            "stress_error_rms": res.error,
-                            "energy_drift_max": None,
-                        }
+                        _record(
+                            "quasi_static_bar",
+                            scheme,
+                            shape,
+                            None,
+                            1,
+                            n,
+                            res.steps,
+                            res.seconds,
+                            W=W,
+                            stress_error_rms=res.error,
+                        )
                     )
                     progress.step(f"{shape} {scheme} W={W:g}: error {res.error:.4f}")
     records = comm.bcast(records, root=0)

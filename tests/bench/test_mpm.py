@@ -5,6 +5,13 @@ import json
 import pytest
 
 
+def _records(cli, tmp_path, *args):
+    """Run ``geofrac bench mpm ARGS --json F --out tmp``; return the records."""
+    code, _, _ = cli("bench", "mpm", *args, "--json", tmp_path / "r.json", "--out", tmp_path)
+    assert code == 0
+    return json.loads((tmp_path / "r.json").read_text())["records"]
+
+
 def test_bench_mpm_writes_records_table_and_plot(cli, tmp_path):
     out = tmp_path / "out"
     code, stdout, _ = cli(
@@ -26,16 +33,25 @@ def test_bench_mpm_writes_records_table_and_plot(cli, tmp_path):
 
 
 def test_bench_mpm_translating_bar_reports_energy_drift(cli, tmp_path):
-    code, _, _ = cli(
-        "bench", "mpm", "--cases", "translating", "--shapes", "cpgimp", "--schemes", "usf",
-        "--t-end", "2", "--json", tmp_path / "t.json", "--out", tmp_path,
+    records = _records(
+        cli, tmp_path, "--cases", "translating", "--shapes", "cpgimp", "--schemes", "usf",
+        "--t-end", "2",
     )  # fmt: skip
-    assert code == 0
-    records = json.loads((tmp_path / "t.json").read_text())["records"]
     assert [r["smoothing"] for r in records] == ["none", "mls 2 cells"]
     # before the first wall hit (t = 11.25) the bar only flies: energy is conserved
     assert all(0 <= r["energy_drift_max"] < 1e-6 for r in records)
     assert (tmp_path / "mpm_translating.png").stat().st_size > 0
+
+
+def test_bench_mpm_block_records_2d_throughput(cli, tmp_path):
+    records = _records(
+        cli, tmp_path, "--cases", "block", "--shapes", "mpm", "--particles", "400", "--steps", "2"
+    )
+    assert [(r["case"], r["dim"], r["particles"], r["smoothing"]) for r in records] == [
+        ("block2d", 2, 400, "none"),
+        ("block2d", 2, 400, "mls 2 cells"),
+    ]
+    assert all(r["particle_steps_per_s"] > 0 for r in records)
 
 
 def test_bench_mpm_refuses_unknown_names(cli, tmp_path):

@@ -96,3 +96,20 @@ def test_bad_settings_are_refused():
         StepSettings("musl", "gimp", 0.1, np.zeros(1), fixed)
     with pytest.raises(ValueError, match="Courant"):
         time_step(1.2, 1.0, Elastic(1.0), 1.0, 1)
+
+
+def test_smoothing_code_is_not_loaded_unless_asked():
+    """Ask 3 at the engine level: a step without smoothing never imports its module."""
+    import subprocess
+    import sys
+
+    probe = (
+        "import sys, numpy as np\n"
+        "from geofrac.mpm.bar import translating_bar\n"
+        "translating_bar('mpm', steps=5)\n"
+        "print('geofrac.mpm.smoothing' in sys.modules)\n"
+        "translating_bar('mpm', smoothing=2.0, steps=5)\n"
+        "print('geofrac.mpm.smoothing' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "True"]
