@@ -178,13 +178,13 @@ def _to_grid(w: Weights, values: np.ndarray, num_nodes: int) -> np.ndarray:
 
 def _from_grid(w: Weights, values: np.ndarray) -> np.ndarray:
     """Σ_i φ_ip values_i, values shape=(num_nodes, c); returns shape=(n, c)."""
-    return np.einsum("nk,nkc->nc", w.phi, values[w.nodes])
+    return np.matmul(w.phi[:, None, :], values[w.nodes])[:, 0, :]
 
 
 def _forces(w: Weights, p: Particles, gravity: np.ndarray, num_nodes: int) -> np.ndarray:
     """f_int + f_ext (eqs. 4.22-4.23, without tractions), shape=(num_nodes, dim)."""
     # −Σ V_p σ_p ∇φ_ip, per particle and node: shape=(n, k, dim)
-    f_int = -np.einsum("n,nab,nkb->nka", p.volume, p.stress, w.grad)
+    f_int = -p.volume[:, None, None] * np.matmul(w.grad, np.swapaxes(p.stress, 1, 2))
     flat = w.nodes.ravel()
     f = np.stack(
         [
@@ -221,7 +221,7 @@ def _update_stress(
     ``smooth_at`` = (positions at the step's start, radius): the strain increments are
     replaced by their MLS fit there (4.57, 4.66) before they change stress and volume.
     """
-    L = np.einsum("nka,nkb->nab", v[w.nodes], w.grad)  # ∇v_p, shape=(n, dim, dim)
+    L = np.matmul(np.swapaxes(v[w.nodes], 1, 2), w.grad)  # ∇v_p, shape=(n, dim, dim)
     deps = 0.5 * dt * (L + np.swapaxes(L, 1, 2))
     if smooth_at is not None:
         from geofrac.mpm.smoothing import smooth
@@ -231,7 +231,7 @@ def _update_stress(
         deps = smooth(x0, deps.reshape(n, d * d), h)[0].reshape(n, d, d)
     p.stress += material.increment(deps)
     p.volume *= 1.0 + np.trace(deps, axis1=1, axis2=2)
-    p.F = np.einsum("nab,nbc->nac", np.eye(p.dim) + dt * L, p.F)
+    p.F = np.matmul(np.eye(p.dim) + dt * L, p.F)
     if shape == "cpgimp":
         p.lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
 
