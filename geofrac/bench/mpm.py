@@ -11,6 +11,10 @@ Cases (``--cases``):
   shape and scheme, without and with MLS smoothing (radius ``--smoothing`` cells): the
   largest drift of the total energy, max |E(t) − E₀|/E₀; plot ``mpm_translating.png``.
 
+- ``impact``: the bar with an initial velocity v₀ = c/50 towards its fixed base (seed
+  4.5.2, :func:`geofrac.mpm.bar.impact_bar`) at t = 0.8 L₀/c, every shape and scheme,
+  without and with MLS smoothing: the RMS of σ/σ₇₅ − 1 behind the wave (eq. 4.75) and
+  the largest |σ/σ₇₅|; plot ``mpm_impact.png`` (after Fig. 4.17-4.18);
 - ``block``: throughput of a 2D elastic block of ``--particles`` particles (default
   100,000) on a fixed floor under gravity (:func:`geofrac.mpm.block.gravity_block`),
   MUSL with each shape, without and with smoothing: particle-steps per second over
@@ -48,7 +52,9 @@ COLUMNS = (
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of this bench."""
     p.add_argument(
-        "--cases", default="bar,translating", help="comma-separated: bar, translating, block"
+        "--cases",
+        default="bar,translating",
+        help="comma-separated: bar, translating, impact, block",
     )
     p.add_argument(
         "--particles", type=int, default=100_000, help="particles of the block case (100000)"
@@ -136,6 +142,30 @@ def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None
     save_figure(fig, axes, path, "Translating bar (seed 4.5.3): total energy", "E(t) / E0")
 
 
+def _plot_impact(impacts: dict[tuple[str, str, str], Any], path: Path) -> None:
+    """σ/σ₇₅ against X/L₀ (MUSL, each shape), without and with smoothing (Fig. 4.17-4.18)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from geofrac.bench.report import save_figure
+
+    labels = list(dict.fromkeys(k[2] for k in impacts))
+    fig, axes = plt.subplots(
+        1, len(labels), figsize=(5.5 * len(labels), 4.2), constrained_layout=True, sharey=True
+    )
+    axes = [axes] if len(labels) == 1 else list(axes)
+    for ax, label in zip(axes, labels, strict=True):
+        for (shape, scheme, lab), r in impacts.items():
+            if lab == label and scheme == "musl":
+                ax.plot(r.x0 / r.x0.max(), r.stress, ".-", ms=3, lw=0.7, label=f"{shape} (MUSL)")
+        ax.axhline(1.0, color="k", lw=0.8, label="eq. 4.75")
+        ax.set_xlabel("X / L0 (initial position)")
+        ax.set_title(f"smoothing: {label}")
+    save_figure(fig, axes, path, "Bar with initial velocity at t = 0.8 L0/c", "σ / (−E v0/c)")
+
+
 def _record(
     case: str,
     scheme: str,
@@ -147,7 +177,11 @@ def _record(
     seconds: float,
     **measured: float | None,
 ) -> dict[str, Any]:
-    """One JSON record; ``measured`` gives ``W``, ``stress_error_rms``, ``energy_drift_max``."""
+    """One JSON record.
+
+    ``measured`` may give ``W``, ``stress_error_rms``, ``energy_drift_max`` and
+    ``stress_overshoot``; the others are None.
+    """
     return {
         "case": case,
         "scheme": scheme,
@@ -162,6 +196,7 @@ def _record(
         "particle_steps_per_s": particles * steps / seconds,
         "stress_error_rms": measured.get("stress_error_rms"),
         "energy_drift_max": measured.get("energy_drift_max"),
+        "stress_overshoot": measured.get("stress_overshoot"),
     }
 
 
@@ -170,12 +205,12 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     from geofrac.bench.report import format_table
     from geofrac.io.summary import versions, write_json
     from geofrac.log import Progress, echo
-    from geofrac.mpm.bar import quasi_static_bar, translating_bar
+    from geofrac.mpm.bar import impact_bar, quasi_static_bar, translating_bar
     from geofrac.mpm.block import gravity_block
     from geofrac.mpm.schemes import SCHEMES
     from geofrac.mpm.shapes import SHAPES
 
-    cases = _names(args.cases, ("bar", "translating", "block"), "--cases")
+    cases = _names(args.cases, ("bar", "translating", "impact", "block"), "--cases")
     shapes = _names(args.shapes, SHAPES, "--shapes")
     schemes = _names(args.schemes, SCHEMES, "--schemes")
     try:
@@ -193,7 +228,10 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     histories = {}
     smoothings = (None, args.smoothing)
     total = len(shapes) * len(schemes) * (len(Ws) * ("bar" in cases) + 2 * ("translating" in cases))
-    total += 2 * len(shapes) * ("block" in cases)
+    total += 2 * len(shapes) * ("block" in cases) + 2 * len(shapes) * len(schemes) * (
+        "impact" in cases
+    )
+    impacts = {}
     if comm.rank == 0:
         progress = Progress(comm, total, "bench mpm")
         for shape in shapes if "translating" in cases else ():
@@ -217,6 +255,22 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
                     histories[(shape, scheme, label)] = hist
                     progress.step(
                         f"translating {shape} {scheme} {label}: drift {hist.drift_max:.4f}"
+                    )
+        for shape in shapes if "impact" in cases else ():
+            for scheme in schemes:
+                for sm in smoothings:
+                    imp = impact_bar(shape, scheme, sm)
+                    records.append(
+                        _record(
+                            "impact_bar", scheme, shape, sm, 1, len(imp.x0), imp.steps,
+                            imp.seconds, stress_error_rms=imp.error,
+                            stress_overshoot=imp.overshoot,
+                        )
+                    )  # fmt: skip
+                    impacts[(shape, scheme, records[-1]["smoothing"])] = imp
+                    progress.step(
+                        f"impact {shape} {scheme} {records[-1]['smoothing']}: "
+                        f"error {imp.error:.4f}, overshoot {imp.overshoot:.3f}"
                     )
         for shape in shapes if "block" in cases else ():
             for sm in smoothings:
@@ -263,6 +317,9 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         if runs:
             _plot(runs, Ws, args.out / "mpm_bar.png")
             echo(comm, f"plot: {args.out / 'mpm_bar.png'}")
+        if impacts:
+            _plot_impact(impacts, args.out / "mpm_impact.png")
+            echo(comm, f"plot: {args.out / 'mpm_impact.png'}")
         if histories:
             _plot_energy(histories, args.out / "mpm_translating.png")
             echo(comm, f"plot: {args.out / 'mpm_translating.png'}")

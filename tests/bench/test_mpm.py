@@ -43,6 +43,18 @@ def test_bench_mpm_translating_bar_reports_energy_drift(cli, tmp_path):
     assert (tmp_path / "mpm_translating.png").stat().st_size > 0
 
 
+def test_bench_mpm_impact_bar_reports_stress_error_and_overshoot(cli, tmp_path):
+    records = _records(
+        cli, tmp_path, "--cases", "impact", "--shapes", "cpgimp", "--schemes", "musl"
+    )
+    assert [(r["case"], r["smoothing"]) for r in records] == [
+        ("impact_bar", "none"),
+        ("impact_bar", "mls 2 cells"),
+    ]
+    assert all(0 < r["stress_error_rms"] < 0.2 and r["stress_overshoot"] > 1 for r in records)
+    assert (tmp_path / "mpm_impact.png").stat().st_size > 0
+
+
 def test_bench_mpm_block_records_2d_throughput(cli, tmp_path):
     records = _records(
         cli, tmp_path, "--cases", "block", "--shapes", "mpm", "--particles", "400", "--steps", "2"
