@@ -242,6 +242,8 @@ def step(g: Grid, p: Particles, material: Elastic, s: StepSettings) -> None:
     Raises:
         ParticlesLeftGrid: a particle (or its GIMP box) is outside the grid; nothing
             was changed.
+        geofrac.errors.RunError: after the step a particle's state is non-finite or
+            its volume is not positive (an unstable step).
     """
     gimp = s.shape != "mpm"
     out = g.outside(p.x, p.lp if gimp else 0.0)
@@ -267,3 +269,22 @@ def step(g: Grid, p: Particles, material: Elastic, s: StepSettings) -> None:
     if s.scheme in ("musl", "usavg"):
         v = _nodal_velocity(w, p, mass, active, s.fixed)  # D.6, D.26
         _update_stress(w, p, material, v, half * dt, s.shape, smooth_at)
+    _check(p)
+
+
+def _check(p: Particles) -> None:
+    """Raise RunError when a particle's state turned non-finite or its volume non-positive.
+
+    A NaN is never carried into the next step: the error names the first particles.
+    """
+    bad = ~(
+        np.all(np.isfinite(p.x), axis=1)
+        & np.all(np.isfinite(p.stress), axis=(1, 2))
+        & (p.volume > 0)
+    )
+    if np.any(bad):
+        ids = np.flatnonzero(bad)
+        raise RunError(
+            f"{len(ids)} particle(s) reached a non-finite state or a non-positive volume "
+            f"(first: {ids[:5].tolist()}); reduce the Courant number or check the material"
+        )

@@ -113,3 +113,22 @@ def test_smoothing_code_is_not_loaded_unless_asked():
     )
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "True"]
+
+
+def test_unstable_step_raises_instead_of_carrying_nan():
+    """A time step far above the Courant limit blows up; the step says so, no NaN goes on."""
+    from geofrac.errors import RunError
+
+    h = 0.25
+    p = particles(
+        (1000.0 + (np.arange(8) + 0.5) * h)[:, None], np.full(8, h), 2.0, np.full((8, 1), h / 2)
+    )
+    p.v[:, 0] = np.linspace(-1.0, 1.0, p.n)
+    mat = Elastic(E=1e4)
+    g = grid([0.0], 0.5, [4000])  # far from the grid's ends: the particles cannot leave it
+    dt = 50 * g.spacing / mat.wave_speed(2.0, 1)  # Courant number 50
+    s = StepSettings("musl", "mpm", dt, np.zeros(1), np.zeros((g.num_nodes, 1), bool))
+    with pytest.raises(RunError, match="non-positive volume") as info:
+        for _ in range(20):
+            step(g, p, mat, s)
+    assert not isinstance(info.value, ParticlesLeftGrid)
