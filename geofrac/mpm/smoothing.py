@@ -24,7 +24,7 @@ import numpy as np
 __all__ = ["basis", "cubic_spline", "neighbour_pairs", "smooth"]
 
 #: Pairs handled per batch of fits (bounds the memory of the moment matrices).
-BATCH_PAIRS = 200_000
+BATCH_PAIRS = 50_000
 
 
 def cubic_spline(s: np.ndarray) -> np.ndarray:
@@ -38,13 +38,20 @@ def cubic_spline(s: np.ndarray) -> np.ndarray:
 
 
 def basis(dx: np.ndarray) -> np.ndarray:
-    """Complete cubic polynomial basis at scaled offsets, dx shape=(k, dim) → (k, m)."""
+    """Complete cubic polynomial basis at scaled offsets, dx shape=(k, dim) → (k, m).
+
+    Columns: 1, then the monomials of degree 1, 2 and 3 (in a fixed order).
+    """
     k, dim = dx.shape
-    cols = [np.ones(k)]
-    exps = [e for e in np.ndindex(*(4,) * dim) if sum(e) <= 3 and sum(e) > 0]
+    powers = [[np.ones(k), dx[:, d], dx[:, d] ** 2, dx[:, d] ** 3] for d in range(dim)]
+    exps = [e for e in np.ndindex(*(4,) * dim) if 0 < sum(e) <= 3]
     exps.sort(key=lambda e: (sum(e), [-v for v in e]))
+    cols = [np.ones(k)]
     for e in exps:
-        cols.append(np.prod(dx ** np.array(e), axis=1))
+        col = powers[0][e[0]]
+        for d in range(1, dim):
+            col = col * powers[d][e[d]]
+        cols.append(col)
     return np.stack(cols, axis=1)
 
 
@@ -114,8 +121,8 @@ def smooth(x: np.ndarray, values: np.ndarray, h: float) -> tuple[np.ndarray, np.
         F = basis((x[qq] - x[pp]) / h)  # shape=(k, m)
         w = cubic_spline(np.sqrt(np.sum((x[qq] - x[pp]) ** 2, axis=1)) / h)
         local = pp - first
-        A = np.zeros((last - first, m, m))
-        np.add.at(A, local, w[:, None, None] * F[:, :, None] * F[:, None, :])
+        seg = starts[first:last] - a  # every particle has a pair (itself): no empty segment
+        A = np.add.reduceat(w[:, None, None] * F[:, :, None] * F[:, None, :], seg, axis=0)
         enough = counts[first:last] >= m
         cond = np.full(last - first, np.inf)
         cond[enough] = np.linalg.cond(A[enough])
@@ -124,13 +131,10 @@ def smooth(x: np.ndarray, values: np.ndarray, h: float) -> tuple[np.ndarray, np.
             e0 = np.zeros((int(ok.sum()), m))
             e0[:, 0] = 1.0
             # row of A⁻¹ at the particle: solve A g = e0 (A symmetric), then Φ_I = w_I g·F_I
-            g = np.linalg.solve(A[ok], e0[:, :, None])[:, :, 0]
-            rows = np.full(last - first, -1)
-            rows[ok] = np.arange(int(ok.sum()))
-            sel = ok[local]
-            phi = w[sel] * np.einsum("km,km->k", F[sel], g[rows[local[sel]]])
-            acc = np.zeros((last - first, values.shape[1]))
-            np.add.at(acc, local[sel], phi[:, None] * values[qq[sel]])
+            g = np.zeros((last - first, m))
+            g[ok] = np.linalg.solve(A[ok], e0[:, :, None])[:, :, 0]
+            phi = w * np.sum(F * g[local], axis=1)  # zero for particles not smoothed
+            acc = np.add.reduceat(phi[:, None] * values[qq], seg, axis=0)
             out[first:last][ok] = acc[ok]
             done[first:last] = ok
         first = last
