@@ -26,6 +26,7 @@ G^{k+1} = (I + ∇v Δt) G^k (4.70) drives ``cpgimp``'s half-widths (4.69).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -33,6 +34,9 @@ from geofrac.errors import RunError
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles
 from geofrac.mpm.shapes import SHAPES, Weights, weights
+
+if TYPE_CHECKING:  # the friction module is imported only by a step that uses it
+    from geofrac.mpm.friction import Friction
 
 __all__ = [
     "MASS_FLOOR",
@@ -143,6 +147,7 @@ class StepSettings:
         smoothing: MLS influence radius of the strain increments as a multiple of the
             cell size (:mod:`~geofrac.mpm.smoothing`), or None for no smoothing (the
             smoothing code is then not even imported).
+        friction: a Coulomb friction boundary (:mod:`~geofrac.mpm.friction`), or None.
     """
 
     scheme: str
@@ -151,6 +156,7 @@ class StepSettings:
     gravity: np.ndarray
     fixed: np.ndarray = field(repr=False)
     smoothing: float | None = None
+    friction: Friction | None = None
 
     def __post_init__(self) -> None:
         """Check the names and the step."""
@@ -264,10 +270,19 @@ def step(g: Grid, p: Particles, material: Elastic, s: StepSettings) -> None:
     a[active] = f[active] / mass[active, None]
     a[s.fixed] = 0.0
     v_new = v + dt * a
+    if s.friction is not None:
+        from geofrac.mpm.friction import apply_friction
+
+        apply_friction(v_new, s.friction)
+        a = (v_new - v) / dt  # the particles take the same, frictional, change
     p.v += dt * _from_grid(w, a)  # D.4, D.16, D.24
     p.x += dt * _from_grid(w, v_new)  # D.5, D.17, D.25
     if s.scheme in ("musl", "usavg"):
         v = _nodal_velocity(w, p, mass, active, s.fixed)  # D.6, D.26
+        if s.friction is not None:
+            from geofrac.mpm.friction import apply_friction
+
+            apply_friction(v, s.friction, sliding_only=True)
         _update_stress(w, p, material, v, half * dt, s.shape, smooth_at)
     _check(p)
 
