@@ -1,0 +1,150 @@
+"""Drucker-Prager plasticity with return mapping, and the Jaumann stress rate.
+
+Pure functions on full 3×3 stress tensors (plane strain keeps σ_zz), for the MPM's
+``plasticity`` effect (seed 4.3.2, App. D):
+
+- yield function f = β I₁ + √J₂ − k (4.39) with I₁ = tr σ (4.40), J₂ = ½ s:s (4.41),
+  β = tan φ / √(9 + 12 tan² φ) (4.42) and k = 3c / √(9 + 12 tan² φ) (4.43), φ the
+  friction angle and c the cohesion (the plane-strain match to Mohr-Coulomb);
+- elastic-perfectly plastic return mapping from the elastic trial stress: the plastic
+  potential g = β_ψ I₁ + √J₂ has the dilatancy angle ψ in place of φ (ψ = φ is
+  associated flow; the default ψ = 0 keeps the plastic volume); the return is
+  σ = σ* − Δλ (3K β_ψ I + G s*/√J₂*) with Δλ = f(σ*)/(9K β β_ψ + G), which lands on
+  f = 0; a trial stress beyond the apex returns to the apex σ = k/(3β) I (σ = 0 for a
+  cohesionless soil: no tension);
+- Jaumann rate (D.30-D.31): σ ← σ + σ Δω − Δω σ with the seed's spin increment
+  Δω_ij = Δt/2 (∂v_j/∂x_i − ∂v_i/∂x_j) (D.31 writes the gradient as dφ/dx v, index i on
+  the derivative), which is −Δt W for the usual spin W = skew(∂v_i/∂x_j); applied before
+  the constitutive increment, it turns a rigidly rotating body's stress with the body.
+  The update is explicit: over a rotation θ in N steps the stress grows by about θ²/N
+  relative (first order in Δt).
+
+The seed gives the yield function only; the flow rule and the apex treatment are the
+standard ones (e.g. de Souza Neto, Perić and Owen, ch. 8) and are documented here
+because the seed is silent on them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["DruckerPrager", "jaumann", "yield_function"]
+
+
+@dataclass(frozen=True)
+class DruckerPrager:
+    """Drucker-Prager material (isotropic elasticity, perfect plasticity).
+
+    Attributes:
+        E: Young's modulus.
+        nu: Poisson's ratio.
+        friction_angle: φ in degrees.
+        cohesion: c (>= 0).
+        dilatancy_angle: ψ in degrees (0 <= ψ <= φ; 0: no plastic volume change).
+    """
+
+    E: float
+    nu: float
+    friction_angle: float
+    cohesion: float = 0.0
+    dilatancy_angle: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Check the parameters."""
+        if not self.E > 0 or not -1 < self.nu < 0.5:
+            raise ValueError(f"need E > 0 and -1 < nu < 0.5, got E={self.E}, nu={self.nu}")
+        if (
+            not 0 <= self.friction_angle < 90
+            or not 0 <= self.dilatancy_angle <= self.friction_angle
+        ):
+            raise ValueError("need 0 <= dilatancy_angle <= friction_angle < 90 (degrees)")
+        if self.cohesion < 0:
+            raise ValueError(f"cohesion must be >= 0, got {self.cohesion}")
+
+    @property
+    def beta(self) -> float:
+        """β of eq. 4.42."""
+        t = np.tan(np.radians(self.friction_angle))
+        return float(t / np.sqrt(9 + 12 * t * t))
+
+    @property
+    def k(self) -> float:
+        """The material constant k of eq. 4.43."""
+        t = np.tan(np.radians(self.friction_angle))
+        return float(3 * self.cohesion / np.sqrt(9 + 12 * t * t))
+
+    @property
+    def beta_psi(self) -> float:
+        """β of the plastic potential (eq. 4.42 with ψ)."""
+        t = np.tan(np.radians(self.dilatancy_angle))
+        return float(t / np.sqrt(9 + 12 * t * t))
+
+    def moduli(self) -> tuple[float, float]:
+        """(bulk modulus K, shear modulus G)."""
+        return self.E / (3 * (1 - 2 * self.nu)), self.E / (2 * (1 + self.nu))
+
+    def update(self, stress: np.ndarray, deps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Elastic trial and return mapping for strain increments.
+
+        Args:
+            stress: stresses at the start, shape=(n, 3, 3).
+            deps: strain increments, shape=(n, 3, 3) (plane strain: zero zz entries).
+
+        Returns:
+            The new stresses, shape=(n, 3, 3), and the plastic multipliers Δλ, shape=(n,)
+            (0 where the step stayed elastic).
+        """
+        K, G = self.moduli()
+        eye = np.eye(3)
+        tr = np.trace(deps, axis1=1, axis2=2)
+        dev = deps - tr[:, None, None] / 3 * eye
+        trial = stress + K * tr[:, None, None] * eye + 2 * G * dev
+        f = yield_function(trial, self.beta, self.k)
+        dlam = np.zeros(len(stress))
+        plastic = f > 0
+        if not np.any(plastic):
+            return trial, dlam
+        t = trial[plastic]
+        i1 = np.trace(t, axis1=1, axis2=2)
+        s = t - i1[:, None, None] / 3 * eye
+        sqrt_j2 = np.sqrt(0.5 * np.sum(s * s, axis=(1, 2)))
+        b, bp = self.beta, self.beta_psi
+        lam = f[plastic] / (9 * K * b * bp + G)
+        q = sqrt_j2 - G * lam  # √J₂ after the return
+        cone = q > 0
+        out = np.empty_like(t)
+        unit = np.where(
+            sqrt_j2[:, None, None] > 0, s / np.maximum(sqrt_j2, 1e-300)[:, None, None], 0
+        )
+        i1_new = i1 - 9 * K * bp * lam
+        out[cone] = (i1_new[cone] / 3)[:, None, None] * eye + q[cone, None, None] * unit[cone]
+        # beyond the apex: the apex (√J₂ = 0, β I₁ = k)
+        apex = ~cone
+        if np.any(apex):
+            if b > 0:
+                out[apex] = (self.k / (3 * b)) * eye
+            else:  # von Mises limit (φ = 0): the deviator on the cylinder k
+                out[apex] = (i1[apex] / 3)[:, None, None] * eye + self.k * unit[apex]
+        new = trial.copy()
+        new[plastic] = out
+        dlam[plastic] = lam
+        return new, dlam
+
+
+def yield_function(stress: np.ndarray, beta: float, k: float) -> np.ndarray:
+    """The yield function f = β I₁ + √J₂ − k (eq. 4.39), shape=(n, 3, 3) → shape=(n,)."""
+    i1 = np.trace(stress, axis1=1, axis2=2)
+    s = stress - i1[:, None, None] / 3 * np.eye(3)
+    return beta * i1 + np.sqrt(0.5 * np.sum(s * s, axis=(1, 2))) - k
+
+
+def jaumann(stress: np.ndarray, spin: np.ndarray) -> np.ndarray:
+    """The rotated stress σ + σ Δω − Δω σ (D.30).
+
+    Args:
+        stress: shape=(n, 3, 3).
+        spin: the seed's Δω (D.31), Δt/2 (∂v_j/∂x_i − ∂v_i/∂x_j), shape=(n, 3, 3).
+    """
+    return stress + np.matmul(stress, spin) - np.matmul(spin, stress)
