@@ -22,6 +22,9 @@ class Particles:
         F: deformation gradient G_p (eq. 4.70), shape=(n, dim, dim).
         lp0: initial GIMP half-widths l_p⁰, shape=(n, dim).
         lp: current half-widths (= lp0 except for ``cpgimp``), shape=(n, dim).
+        stress_zz: out-of-plane stress σ_zz of plane strain (2D; zero otherwise),
+            shape=(n,).
+        plastic: accumulated plastic multiplier Σ Δλ (``plasticity``), shape=(n,).
     """
 
     x: np.ndarray
@@ -32,6 +35,8 @@ class Particles:
     F: np.ndarray
     lp0: np.ndarray
     lp: np.ndarray
+    stress_zz: np.ndarray
+    plastic: np.ndarray
 
     @property
     def n(self) -> int:
@@ -86,4 +91,6 @@ def particles(
         F=np.broadcast_to(np.eye(dim), (n, dim, dim)).copy(),
         lp0=lp0,
         lp=lp0.copy(),
+        stress_zz=np.zeros(n),
+        plastic=np.zeros(n),
     )

@@ -35,8 +35,9 @@ from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles
 from geofrac.mpm.shapes import SHAPES, Weights, weights
 
-if TYPE_CHECKING:  # the friction module is imported only by a step that uses it
+if TYPE_CHECKING:  # imported only by a step that uses them
     from geofrac.mpm.friction import Friction
+    from geofrac.mpm.plasticity import DruckerPrager
 
 __all__ = [
     "MASS_FLOOR",
@@ -112,8 +113,12 @@ class Elastic:
         return float(np.sqrt((lam + 2 * mu) / density))
 
 
-def strain_energy(p: Particles, material: Elastic) -> float:
-    """Σ ½ V_p σ_p : D⁻¹ : σ_p (the elastic energy stored in the stresses)."""
+def strain_energy(p: Particles, material: Elastic | DruckerPrager) -> float:
+    """Σ ½ V_p σ_p : D⁻¹ : σ_p (the elastic energy stored in the stresses).
+
+    In 2D the stored out-of-plane stress of plane strain enters (for an elastic history
+    it equals ν tr σ).
+    """
     s = p.stress
     if p.dim == 1:
         return 0.5 * float(np.sum(p.volume * s[:, 0, 0] ** 2) / material.E)
@@ -121,17 +126,17 @@ def strain_energy(p: Particles, material: Elastic) -> float:
     tr = np.trace(s, axis1=1, axis2=2)
     ss = np.sum(s * s, axis=(1, 2))
     if p.dim == 2:
-        # plane strain: the out-of-plane stress is ν tr σ
-        szz = nu * tr
-        tr, ss = tr + szz, ss + szz**2
+        tr, ss = tr + p.stress_zz, ss + p.stress_zz**2
     return 0.5 * float(np.sum(p.volume * ((1 + nu) * ss - nu * tr**2) / E))
 
 
-def time_step(courant: float, spacing: float, material: Elastic, density: float, dim: int) -> float:
-    """Δt = α L / c from the Courant number α < 1 (eq. 4.72)."""
+def time_step(
+    courant: float, spacing: float, material: Elastic | DruckerPrager, density: float, dim: int
+) -> float:
+    """Δt = α L / c from the Courant number α < 1 (eq. 4.72), c the elastic wave speed."""
     if not 0 < courant < 1:
         raise ValueError(f"the Courant number must lie in (0, 1), got {courant}")
-    return courant * spacing / material.wave_speed(density, dim)
+    return courant * spacing / Elastic(material.E, material.nu).wave_speed(density, dim)
 
 
 @dataclass(frozen=True)
@@ -216,7 +221,7 @@ def _nodal_velocity(
 def _update_stress(
     w: Weights,
     p: Particles,
-    material: Elastic,
+    material: Elastic | DruckerPrager,
     v: np.ndarray,
     dt: float,
     shape: str,
@@ -235,14 +240,44 @@ def _update_stress(
         x0, h = smooth_at
         n, d = p.n, p.dim
         deps = smooth(x0, deps.reshape(n, d * d), h)[0].reshape(n, d, d)
-    p.stress += material.increment(deps)
+    if isinstance(material, Elastic):
+        p.stress += material.increment(deps)
+        if p.dim == 2:
+            p.stress_zz += material.lame()[0] * np.trace(deps, axis1=1, axis2=2)
+    else:
+        _plastic_update(p, material, deps, L, dt)
     p.volume *= 1.0 + np.trace(deps, axis1=1, axis2=2)
     p.F = np.matmul(np.eye(p.dim) + dt * L, p.F)
     if shape == "cpgimp":
         p.lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
 
 
-def step(g: Grid, p: Particles, material: Elastic, s: StepSettings) -> None:
+def _plastic_update(
+    p: Particles, material: DruckerPrager, deps: np.ndarray, L: np.ndarray, dt: float
+) -> None:
+    """Jaumann rotation (D.30-D.31) and Drucker-Prager return (4.39-4.43) on 3×3 stresses.
+
+    Plane strain in 2D: the strain increment has no zz part, σ_zz is the stored one.
+    """
+    from geofrac.mpm.plasticity import jaumann
+
+    n, d = p.n, p.dim
+    full = np.zeros((n, 3, 3))
+    full[:, :d, :d] = p.stress
+    if d == 2:
+        full[:, 2, 2] = p.stress_zz
+    spin = np.zeros((n, 3, 3))
+    spin[:, :d, :d] = -0.5 * dt * (L - np.swapaxes(L, 1, 2))  # the seed's Δω (D.31)
+    deps3 = np.zeros((n, 3, 3))
+    deps3[:, :d, :d] = deps
+    new, dlam = material.update(jaumann(full, spin), deps3)
+    p.stress = new[:, :d, :d].copy()
+    if d == 2:
+        p.stress_zz = new[:, 2, 2].copy()
+    p.plastic += dlam
+
+
+def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettings) -> None:
     """Advance the particles by one step of ``s.scheme`` (in place).
 
     Raises:
@@ -251,6 +286,8 @@ def step(g: Grid, p: Particles, material: Elastic, s: StepSettings) -> None:
         geofrac.errors.RunError: after the step a particle's state is non-finite or
             its volume is not positive (an unstable step).
     """
+    if not isinstance(material, Elastic) and p.dim == 1:
+        raise ValueError("plasticity needs 2D or 3D particles (the 1D bar is elastic)")
     gimp = s.shape != "mpm"
     out = g.outside(p.x, p.lp if gimp else 0.0)
     if np.any(out):

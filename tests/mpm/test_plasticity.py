@@ -90,3 +90,58 @@ def test_bad_parameters_are_refused():
         DruckerPrager(1.0, 0.3, 10.0, dilatancy_angle=20.0)
     with pytest.raises(ValueError, match="cohesion"):
         DruckerPrager(1.0, 0.3, 10.0, cohesion=-1.0)
+
+
+def _column(material, t_end: float = 0.6):
+    """A 2 m × 2 m 2D block (cpGIMP, MUSL) dropped on a fixed floor under gravity."""
+    from geofrac.mpm.grid import grid
+    from geofrac.mpm.particles import particles
+    from geofrac.mpm.schemes import StepSettings, step, time_step
+
+    cell, h = 0.25, 0.125
+    axes = [2.0 + (np.arange(16) + 0.5) * h, 1.0 + (np.arange(16) + 0.5) * h]
+    x = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
+    p = particles(x, np.full(len(x), h * h), 2000.0, np.full(x.shape, h / 2))
+    g = grid([0.0, 0.0], cell, [48, 16])
+    fixed = np.zeros((g.num_nodes, 2), dtype=bool)
+    fixed[g.nodes()[:, 1] <= 1.0] = True
+    dt = time_step(0.2, cell, material, 2000.0, 2)
+    s = StepSettings("musl", "cpgimp", dt, np.array([0.0, -9.81]), fixed)
+    top = p.x[:, 1].max()
+    for _ in range(round(t_end / dt)):
+        step(g, p, material, s)
+    return p, top - p.x[:, 1].max()
+
+
+def test_cohesionless_block_slumps_and_stays_on_the_cone():
+    """A cohesionless block (φ = 20°) cannot stand with vertical faces.
+
+    It slumps: the top drops more than ten times as far as the elastic block settles,
+    and every stress ends on or inside the cone. A very strong Drucker-Prager block
+    settles like the elastic one (the rest is the Jaumann rotation of a vibrating block).
+    """
+    from geofrac.mpm.schemes import Elastic
+
+    _, elastic_drop = _column(Elastic(1e6, 0.3))
+    soil = DruckerPrager(1e6, 0.3, friction_angle=20.0, cohesion=0.0)
+    p, drop = _column(soil)
+    assert drop > 10 * elastic_drop
+    assert np.all(p.plastic > 0)
+    full = np.zeros((p.n, 3, 3))
+    full[:, :2, :2] = p.stress
+    full[:, 2, 2] = p.stress_zz
+    assert yield_function(full, soil.beta, soil.k).max() <= 1e-9 * np.abs(full).max()
+    _, strong_drop = _column(DruckerPrager(1e6, 0.3, friction_angle=20.0, cohesion=1e9))
+    assert strong_drop == pytest.approx(elastic_drop, rel=0.03)
+
+
+def test_plasticity_is_refused_in_1d():
+    from geofrac.mpm.grid import grid
+    from geofrac.mpm.particles import particles
+    from geofrac.mpm.schemes import StepSettings, step
+
+    p = particles(np.array([[1.0]]), np.ones(1), 1.0, np.full((1, 1), 0.25))
+    g = grid([0.0], 1.0, [4])
+    s = StepSettings("musl", "mpm", 1e-3, np.zeros(1), np.zeros((g.num_nodes, 1), bool))
+    with pytest.raises(ValueError, match="2D or 3D"):
+        step(g, p, DruckerPrager(1.0, 0.3, 20.0), s)

@@ -82,7 +82,15 @@ def test_strain_energy_matches_half_sigma_epsilon():
     p = _block(2, n_side=1)
     eps = np.array([[1e-3, 2e-4], [2e-4, -5e-4]])
     p.stress[0] = mat.increment(eps[None])[0]
+    p.stress_zz[0] = mat.lame()[0] * np.trace(eps)  # plane strain: ε_zz = 0
     assert strain_energy(p, mat) == pytest.approx(0.5 * np.sum(p.stress[0] * eps) * p.volume[0])
+    # a 2D elastic step stores that σ_zz itself
+    g = grid([0.0, 0.0], 0.5, [6, 6])
+    q = _block(2)
+    q.v[:, 0] = 0.1 * (q.x[:, 0] - 1.75)  # a uniform stretching in x
+    fixed = np.zeros((g.num_nodes, 2), bool)
+    step(g, q, mat, StepSettings("usf", "mpm", 1e-3, np.zeros(2), fixed))
+    np.testing.assert_allclose(q.stress_zz, mat.nu * np.trace(q.stress, axis1=1, axis2=2))
     bar = _block(1, n_side=1)
     bar.stress[0, 0, 0] = 3.0
     assert strain_energy(bar, mat) == pytest.approx(0.5 * 9.0 / 200.0 * bar.volume[0])
