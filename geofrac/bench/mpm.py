@@ -117,8 +117,20 @@ def _plot(runs: dict[tuple[str, str, float], Any], Ws: list[float], path: Path) 
     )
 
 
-def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None:
-    """Total energy E(t)/E₀ per shape, without and with smoothing (Fig. 4.20-4.21)."""
+def _smoothing_panels(
+    runs: dict[tuple[str, str, str], Any],
+    path: Path,
+    title: str,
+    ylabel: str,
+    xlabel: str,
+    draw: Any,
+    reference: Any,
+) -> None:
+    """Plot one panel per smoothing label.
+
+    ``draw(ax, shape, scheme, run)`` plots a run, ``reference(ax)`` the reference lines
+    of every panel.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -126,44 +138,51 @@ def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None
 
     from geofrac.bench.report import save_figure
 
-    labels = list(dict.fromkeys(k[2] for k in histories))
+    labels = list(dict.fromkeys(k[2] for k in runs))
     fig, axes = plt.subplots(
         1, len(labels), figsize=(5.5 * len(labels), 4.2), constrained_layout=True, sharey=True
     )
     axes = [axes] if len(labels) == 1 else list(axes)
     for ax, label in zip(axes, labels, strict=True):
-        for (shape, scheme, lab), h in histories.items():
+        for (shape, scheme, lab), run in runs.items():
             if lab == label:
-                ax.plot(h.t, h.total, lw=1, label=f"{shape} ({scheme})")
-        ax.axhline(1.02, color="k", lw=0.5, ls=":")
-        ax.axhline(0.98, color="k", lw=0.5, ls=":")
-        ax.set_xlabel("t")
+                draw(ax, shape, scheme, run)
+        reference(ax)
+        ax.set_xlabel(xlabel)
         ax.set_title(f"smoothing: {label}")
-    save_figure(fig, axes, path, "Translating bar (seed 4.5.3): total energy", "E(t) / E0")
+    save_figure(fig, axes, path, title, ylabel)
+
+
+def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None:
+    """Total energy E(t)/E₀ per variant, without and with smoothing (Fig. 4.20-4.21)."""
+
+    def draw(ax: Any, shape: str, scheme: str, h: Any) -> None:
+        ax.plot(h.t, h.total, lw=1, label=f"{shape} ({scheme})")
+
+    def reference(ax: Any) -> None:
+        for level in (0.98, 1.02):
+            ax.axhline(level, color="k", lw=0.5, ls=":")
+
+    _smoothing_panels(
+        histories, path, "Translating bar (seed 4.5.3): total energy", "E(t) / E0", "t",
+        draw, reference,
+    )  # fmt: skip
 
 
 def _plot_impact(impacts: dict[tuple[str, str, str], Any], path: Path) -> None:
     """σ/σ₇₅ against X/L₀ (MUSL, each shape), without and with smoothing (Fig. 4.17-4.18)."""
-    import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    def draw(ax: Any, shape: str, scheme: str, r: Any) -> None:
+        if scheme == "musl":
+            ax.plot(r.x0 / r.x0.max(), r.stress, ".-", ms=3, lw=0.7, label=f"{shape} (MUSL)")
 
-    from geofrac.bench.report import save_figure
-
-    labels = list(dict.fromkeys(k[2] for k in impacts))
-    fig, axes = plt.subplots(
-        1, len(labels), figsize=(5.5 * len(labels), 4.2), constrained_layout=True, sharey=True
-    )
-    axes = [axes] if len(labels) == 1 else list(axes)
-    for ax, label in zip(axes, labels, strict=True):
-        for (shape, scheme, lab), r in impacts.items():
-            if lab == label and scheme == "musl":
-                ax.plot(r.x0 / r.x0.max(), r.stress, ".-", ms=3, lw=0.7, label=f"{shape} (MUSL)")
+    def reference(ax: Any) -> None:
         ax.axhline(1.0, color="k", lw=0.8, label="eq. 4.75")
-        ax.set_xlabel("X / L0 (initial position)")
-        ax.set_title(f"smoothing: {label}")
-    save_figure(fig, axes, path, "Bar with initial velocity at t = 0.8 L0/c", "σ / (−E v0/c)")
+
+    _smoothing_panels(
+        impacts, path, "Bar with initial velocity at t = 0.8 L0/c", "σ / (−E v0/c)",
+        "X / L0 (initial position)", draw, reference,
+    )  # fmt: skip
 
 
 def _record(
