@@ -44,22 +44,22 @@ def test_transfers_conserve_mass_and_momentum(dim, shape):
 
 @pytest.mark.parametrize("scheme", SCHEMES)
 @pytest.mark.parametrize("shape", SHAPES)
-def test_uniformly_moving_block_stays_stress_free(scheme, shape):
-    """2D block translating through cells: no stress, no change of velocity, 400 steps."""
-    p = _block(2)
-    v0 = np.array([0.7, -0.4])
+@pytest.mark.parametrize("dim", [2, 3])
+def test_uniformly_moving_block_stays_stress_free(dim, shape, scheme):
+    """A block translating through cells: no stress, no change of velocity, 400 steps."""
+    p = _block(dim)
+    v0 = np.array([0.7, -0.4, 0.3][:dim])
     p.v[:] = v0
     mat = Elastic(E=1000.0, nu=0.3)
-    g = grid([0.0, 0.0], 0.5, [8, 8])
-    dt = time_step(0.2, g.spacing, mat, 2.0, 2)
-    s = StepSettings(scheme, shape, dt, np.zeros(2), np.zeros((g.num_nodes, 2), bool))
+    g = grid(np.zeros(dim), 0.5, [8] * dim)
+    dt = time_step(0.2, g.spacing, mat, 2.0, dim)
+    s = StepSettings(scheme, shape, dt, np.zeros(dim), np.zeros((g.num_nodes, dim), bool))
     x0 = p.x.copy()
     for _ in range(400):
         step(g, p, mat, s)
     assert np.abs(p.stress).max() < 1e-9 * mat.E
     np.testing.assert_allclose(p.v, np.broadcast_to(v0, p.v.shape), atol=1e-12)
     np.testing.assert_allclose(p.x, x0 + 400 * dt * v0, atol=1e-10)
-    assert np.all(np.isfinite(p.x))
     # it crossed more than one cell
     assert np.abs(400 * dt * v0).max() > g.spacing
 
