@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 
-__all__ = ["number_list"]
+__all__ = ["name_list", "number_list"]
 
 
 def number_list(
@@ -33,5 +33,30 @@ def number_list(
         if not values or not all(valid(v) for v in values):
             raise argparse.ArgumentTypeError(f"expected {requirement} {name}, got {text!r}")
         return values
+
+    return parse
+
+
+def name_list(allowed: tuple[str, ...], what: str) -> Callable[[str], list[str]]:
+    """An argparse type for a non-empty comma-separated list of names from ``allowed``.
+
+    Args:
+        allowed: the valid names.
+        what: the kind of name for the error message, e.g. ``"model"``.
+
+    Returns:
+        ``parse(text) -> list`` raising :class:`argparse.ArgumentTypeError`.
+    """
+
+    def parse(text: str) -> list[str]:
+        names = [v.strip() for v in text.split(",") if v.strip()]
+        if not names:
+            raise argparse.ArgumentTypeError(f"expected at least one {what}")
+        for name in names:
+            if name not in allowed:
+                raise argparse.ArgumentTypeError(
+                    f"unknown {what} {name!r}; choose from {list(allowed)}"
+                )
+        return names
 
     return parse

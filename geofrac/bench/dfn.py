@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from geofrac.bench.args import number_list
+from geofrac.bench.args import name_list, number_list
 
 __all__ = ["add_arguments", "network_statistics", "run"]
 
@@ -44,16 +44,7 @@ COLUMNS = (
 )
 
 
-def _models(text: str) -> list[str]:
-    names = [v.strip() for v in text.split(",") if v.strip()]
-    if not names:
-        raise argparse.ArgumentTypeError("expected at least one model")
-    for name in names:
-        if name not in MODELS:
-            raise argparse.ArgumentTypeError(f"unknown model {name!r}; choose from {list(MODELS)}")
-    return names
-
-
+_models = name_list(tuple(MODELS), "model")
 _scales = number_list(float, lambda v: math.isfinite(v) and v > 0, "finite positive")
 
 

@@ -29,8 +29,11 @@ plots.
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
+
+from geofrac.bench.args import name_list, number_list
 
 __all__ = ["COLUMNS", "add_arguments", "run"]
 
@@ -49,19 +52,30 @@ COLUMNS = (
 )
 
 
+#: Cases of ``--cases``.
+CASES = ("bar", "translating", "impact", "block")
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of this bench."""
+    from geofrac.mpm.schemes import SCHEMES
+    from geofrac.mpm.shapes import SHAPES
+
     p.add_argument(
         "--cases",
-        default="bar,translating",
-        help="comma-separated: bar, translating, impact, block",
+        type=name_list(CASES, "case"),
+        default=["bar", "translating"],
+        help=f"comma-separated from {', '.join(CASES)} (default: bar,translating)",
     )
     p.add_argument(
         "--particles", type=int, default=100_000, help="particles of the block case (100000)"
     )
     p.add_argument("--steps", type=int, default=5, help="timed steps of the block case (5)")
     p.add_argument(
-        "--W", default="1000,12500,100000", help="comma-separated W = ρ0|b|L0 of the bar"
+        "--W",
+        type=number_list(float, lambda v: math.isfinite(v) and v > 0, "finite positive"),
+        default=[1000.0, 12500.0, 100000.0],
+        help="comma-separated W = ρ0|b|L0 of the bar",
     )
     p.add_argument(
         "--t-end", type=float, default=100.0, help="end time of the translating bar (100)"
@@ -72,20 +86,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=2.0,
         help="MLS radius in cells of the smoothed translating-bar runs (2.0)",
     )
-    p.add_argument("--shapes", default="mpm,ugimp,cpgimp", help="comma-separated shapes")
-    p.add_argument("--schemes", default="musl,usf,usavg", help="comma-separated schemes")
+    p.add_argument(
+        "--shapes",
+        type=name_list(SHAPES, "shape"),
+        default=list(SHAPES),
+        help="comma-separated shapes (default: all)",
+    )
+    p.add_argument(
+        "--schemes",
+        type=name_list(SCHEMES, "scheme"),
+        default=list(SCHEMES),
+        help="comma-separated schemes (default: all)",
+    )
     p.add_argument("--json", type=Path, help="write the JSON report to this file")
     p.add_argument(
         "--out", type=Path, default=Path("results/bench_mpm"), help="directory of the plot"
     )
-
-
-def _names(text: str, allowed: tuple[str, ...], option: str) -> list[str]:
-    names = [t.strip() for t in text.split(",") if t.strip()]
-    bad = [n for n in names if n not in allowed]
-    if bad or not names:
-        raise SystemExit(f"{option}: choose from {', '.join(allowed)} (got {text!r})")
-    return names
 
 
 def _plot(runs: dict[tuple[str, str, float], Any], Ws: list[float], path: Path) -> None:
@@ -226,18 +242,8 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     from geofrac.log import Progress, echo
     from geofrac.mpm.bar import impact_bar, quasi_static_bar, translating_bar
     from geofrac.mpm.block import gravity_block
-    from geofrac.mpm.schemes import SCHEMES
-    from geofrac.mpm.shapes import SHAPES
 
-    cases = _names(args.cases, ("bar", "translating", "impact", "block"), "--cases")
-    shapes = _names(args.shapes, SHAPES, "--shapes")
-    schemes = _names(args.schemes, SCHEMES, "--schemes")
-    try:
-        Ws = [float(w) for w in args.W.split(",") if w.strip()]
-    except ValueError:
-        raise SystemExit(f"--W: a comma-separated list of numbers, got {args.W!r}") from None
-    if not Ws or min(Ws) <= 0:
-        raise SystemExit(f"--W: every W must be > 0, got {args.W!r}")
+    cases, shapes, schemes, Ws = args.cases, args.shapes, args.schemes, args.W
     if not args.t_end > 0 or not args.smoothing > 0:
         raise SystemExit("--t-end and --smoothing must be > 0")
     if args.particles < 4 or args.steps < 1:
