@@ -175,16 +175,30 @@ class StepSettings:
             raise ValueError(f"smoothing radius factor must be > 0, got {self.smoothing}")
 
 
-def _to_grid(w: Weights, values: np.ndarray, num_nodes: int) -> np.ndarray:
-    """Σ_p φ_ip values_p, values shape=(n, c); returns shape=(num_nodes, c)."""
+def _scatter(w: Weights, contrib: np.ndarray, num_nodes: int) -> np.ndarray:
+    """Sum per (particle, node) contributions onto the nodes.
+
+    Args:
+        w: the weights (their node ids).
+        contrib: shape=(n, k, c).
+        num_nodes: grid nodes.
+
+    Returns:
+        shape=(num_nodes, c).
+    """
     flat = w.nodes.ravel()
     return np.stack(
         [
-            np.bincount(flat, weights=(w.phi * values[:, c, None]).ravel(), minlength=num_nodes)
-            for c in range(values.shape[1])
+            np.bincount(flat, weights=contrib[:, :, c].ravel(), minlength=num_nodes)
+            for c in range(contrib.shape[2])
         ],
         axis=1,
     )
+
+
+def _to_grid(w: Weights, values: np.ndarray, num_nodes: int) -> np.ndarray:
+    """Σ_p φ_ip values_p, values shape=(n, c); returns shape=(num_nodes, c)."""
+    return _scatter(w, w.phi[:, :, None] * values[:, None, :], num_nodes)
 
 
 def _from_grid(w: Weights, values: np.ndarray) -> np.ndarray:
@@ -194,17 +208,10 @@ def _from_grid(w: Weights, values: np.ndarray) -> np.ndarray:
 
 def _forces(w: Weights, p: Particles, gravity: np.ndarray, num_nodes: int) -> np.ndarray:
     """f_int + f_ext (eqs. 4.22-4.23, without tractions), shape=(num_nodes, dim)."""
-    # −Σ V_p σ_p ∇φ_ip, per particle and node: shape=(n, k, dim)
-    f_int = -p.volume[:, None, None] * np.matmul(w.grad, np.swapaxes(p.stress, 1, 2))
-    flat = w.nodes.ravel()
-    f = np.stack(
-        [
-            np.bincount(flat, weights=f_int[:, :, a].ravel(), minlength=num_nodes)
-            for a in range(p.dim)
-        ],
-        axis=1,
-    )
-    return f + _to_grid(w, p.mass[:, None] * gravity[None, :], num_nodes)
+    # −Σ V_p σ_p ∇φ_ip + m_p b φ_ip, per particle and node: shape=(n, k, dim)
+    f = -p.volume[:, None, None] * np.matmul(w.grad, np.swapaxes(p.stress, 1, 2))
+    f += (p.mass[:, None] * w.phi)[:, :, None] * gravity
+    return _scatter(w, f, num_nodes)
 
 
 def _nodal_velocity(
