@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geofrac.mpm.grid import grid
-from geofrac.mpm.particles import particles
+from geofrac.mpm.particles import lattice
 from geofrac.mpm.schemes import Elastic, StepSettings, step, strain_energy, time_step
 
 __all__ = [
@@ -97,7 +97,7 @@ def quasi_static_bar(
     """Run the bar to t = L₀/c with one shape and scheme; compare with eq. 4.73."""
     b = W / (rho0 * L0)
     h = L0 / n
-    p = particles((np.arange(n) + 0.5)[:, None] * h, np.full(n, h), rho0, np.full((n, 1), h / 2))
+    p = lattice([0.0], [n], h, rho0)
     g = grid([-2.0 * cell], cell, [int(np.ceil(L0 / cell)) + 6])
     mat = Elastic(E)
     dt = time_step(courant, cell, mat, rho0, 1)
@@ -162,8 +162,7 @@ def translating_bar(
     E, rho, length, v0, cell, ppc = 500.0, 1.0, 5.0, 2.0, 0.5, 2
     n = round(length / cell) * ppc
     h = length / n
-    x = 25.0 - length / 2 + (np.arange(n) + 0.5)[:, None] * h
-    p = particles(x, np.full(n, h), rho, np.full((n, 1), h / 2))
+    p = lattice([25.0 - length / 2], [n], h, rho)
     p.v[:] = v0
     g = grid([-2 * cell], cell, [round(50.0 / cell) + 4])
     mat = Elastic(E)
@@ -221,8 +220,8 @@ def impact_bar(
     """Run the bar of seed 4.5.2 to t = 0.8 L₀/c; compare with eq. 4.75."""
     E, rho0, L0, cell = 1e6, 1.0, 50.0, 1.0
     h = L0 / n
-    x0 = (np.arange(n) + 0.5) * h
-    p = particles(x0[:, None], np.full(n, h), rho0, np.full((n, 1), h / 2))
+    p = lattice([0.0], [n], h, rho0)
+    x0 = p.x[:, 0].copy()
     mat = Elastic(E)
     c = mat.wave_speed(rho0, 1)
     v0 = c / 50

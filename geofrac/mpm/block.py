@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geofrac.mpm.grid import grid
-from geofrac.mpm.particles import particles
+from geofrac.mpm.particles import lattice
 from geofrac.mpm.schemes import Elastic, StepSettings, step, time_step
 
 __all__ = ["Throughput", "gravity_block"]
@@ -40,9 +40,7 @@ def gravity_block(
     """Time ``steps`` steps (after one untimed step) of a block of about ``n_particles``."""
     side = max(2, 2 * round(np.sqrt(n_particles) / 2))
     h, cell, rho = 0.5, 1.0, 2000.0
-    axes = [2.0 + (np.arange(side) + 0.5) * h] * 2
-    x = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
-    p = particles(x, np.full(len(x), h * h), rho, np.full(x.shape, h / 2))
+    p = lattice([2.0, 2.0], [side, side], h, rho)
     cells = side // 2 + 6
     g = grid([0.0, 0.0], cell, [cells, cells])
     mat = Elastic(1e7, 0.3)
@@ -55,4 +53,4 @@ def gravity_block(
     for _ in range(steps):
         step(g, p, mat, s)
     seconds = time.perf_counter() - t0
-    return Throughput(len(x), steps, seconds, len(x) * steps / seconds)
+    return Throughput(p.n, steps, seconds, p.n * steps / seconds)

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Particles", "particles"]
+__all__ = ["Particles", "lattice", "particles"]
 
 
 @dataclass
@@ -94,3 +94,24 @@ def particles(
         stress_zz=np.zeros(n),
         plastic=np.zeros(n),
     )
+
+
+def lattice(
+    lower: np.ndarray | list[float], counts: list[int], spacing: float, density: float
+) -> Particles:
+    """Particles filling a box on a regular lattice, one per lattice cell, at its centre.
+
+    Each particle has the volume spacing**dim and the GIMP half-width spacing/2 (the
+    particles tile the box).
+
+    Args:
+        lower: the box's lowest corner, shape=(dim,).
+        counts: particles per direction, shape=(dim,).
+        spacing: the lattice spacing (e.g. half the grid cell for two per cell).
+        density: initial density.
+    """
+    lo = np.asarray(lower, dtype=float).reshape(-1)
+    axes = [lo[a] + (np.arange(n) + 0.5) * spacing for a, n in enumerate(counts)]
+    x = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
+    n = len(x)
+    return particles(x, np.full(n, spacing ** len(lo)), density, np.full(x.shape, spacing / 2))

@@ -5,7 +5,7 @@ import pytest
 
 from geofrac.mpm.friction import apply_friction, friction
 from geofrac.mpm.grid import grid
-from geofrac.mpm.particles import particles
+from geofrac.mpm.particles import lattice
 from geofrac.mpm.schemes import SCHEMES, Elastic, StepSettings, step, time_step
 
 
@@ -34,9 +34,7 @@ def sliding_block(shape: str, scheme: str, mu: float, t_end: float = 0.8):
     Returns (distance travelled by the centre of mass, its final velocity).
     """
     cell, h, g0, v0 = 0.25, 0.125, 10.0, 1.5
-    axes = [1.0 + (np.arange(16) + 0.5) * h, 1.0 + (np.arange(8) + 0.5) * h]
-    x = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
-    p = particles(x, np.full(len(x), h * h), 1000.0, np.full(x.shape, h / 2))
+    p = lattice([1.0, 1.0], [16, 8], h, 1000.0)
     p.v[:, 0] = v0
     g = grid([0.0, 0.0], cell, [24, 12])
     X = g.nodes()

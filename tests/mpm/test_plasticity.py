@@ -95,13 +95,11 @@ def test_bad_parameters_are_refused():
 def _column(material, t_end: float = 0.6):
     """A 2 m × 2 m 2D block (cpGIMP, MUSL) dropped on a fixed floor under gravity."""
     from geofrac.mpm.grid import grid
-    from geofrac.mpm.particles import particles
+    from geofrac.mpm.particles import lattice
     from geofrac.mpm.schemes import StepSettings, step, time_step
 
     cell, h = 0.25, 0.125
-    axes = [2.0 + (np.arange(16) + 0.5) * h, 1.0 + (np.arange(16) + 0.5) * h]
-    x = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
-    p = particles(x, np.full(len(x), h * h), 2000.0, np.full(x.shape, h / 2))
+    p = lattice([2.0, 1.0], [16, 16], h, 2000.0)
     g = grid([0.0, 0.0], cell, [48, 16])
     fixed = np.zeros((g.num_nodes, 2), dtype=bool)
     fixed[g.nodes()[:, 1] <= 1.0] = True

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from geofrac.mpm.grid import grid
-from geofrac.mpm.particles import particles
+from geofrac.mpm.particles import lattice, particles
 from geofrac.mpm.schemes import (
     SCHEMES,
     Elastic,
@@ -21,9 +21,7 @@ from geofrac.mpm.shapes import SHAPES, weights
 
 def _block(dim: int, n_side: int = 6, h: float = 0.25):
     """Particles filling a cube of side n_side·h at 1.0, two per cell of size 2h."""
-    axes = [1.0 + (np.arange(n_side) + 0.5) * h] * dim
-    x = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
-    return particles(x, np.full(len(x), h**dim), 2.0, np.full(x.shape, h / 2))
+    return lattice([1.0] * dim, [n_side] * dim, h, 2.0)
 
 
 @pytest.mark.parametrize("shape", SHAPES)
