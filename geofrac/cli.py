@@ -80,23 +80,40 @@ def _load(args: argparse.Namespace, comm: Any, out: str | None = None) -> Scene:
 def _check(args: argparse.Namespace, comm: Any) -> int:
     scene = _load(args, comm)
     effects = ", ".join(scene.effect_names) or "none"
-    groups = ", ".join(f"{n} ({d}D)" for n, d in scene.geometry.groups.items())
+    if scene.mpm is not None:
+        m = scene.mpm
+        echo(
+            comm,
+            f"ok: {args.scene}: MPM {m.dim}D, {m.scheme}/{m.shape}, particles from "
+            f"{m.particles.kind}, t_end {m.t_end:g}; effects: {effects}",
+        )
+        return 0
+    groups = ", ".join(f"{n} ({d}D)" for n, d in scene.geometry.groups.items())  # type: ignore[union-attr]
     echo(
         comm,
-        f"ok: {args.scene}: {scene.gdim}D, element {scene.discretization.element}, "
+        f"ok: {args.scene}: {scene.gdim}D, element {scene.discretization.element}, "  # type: ignore[union-attr]
         f"effects: {effects}; groups: {groups}",
     )
     return 0
 
 
 def _run(args: argparse.Namespace, comm: Any) -> int:
-    from geofrac.runner import run_scene
     from geofrac.timing import Timings
 
     timings = Timings()
     with timings.phase("load"):
         scene = _load(args, comm, args.out)
     echo(comm, f"geofrac {__version__}: scene '{scene.name}' ({args.scene}) on {comm.size} rank(s)")
+    if scene.method == "mpm":  # no DOLFINx needed
+        from geofrac.mpm.driver import run_mpm_scene
+
+        summary = run_mpm_scene(scene, comm, timings, verbose=not args.quiet)
+        if not args.quiet:
+            _report_mpm(comm, summary)
+        echo(comm, f"output: {scene.output.dir}")
+        return 0
+    from geofrac.runner import run_scene
+
     summary = run_scene(scene, comm, timings, verbose=not args.quiet)
     if not args.quiet:
         _report(comm, summary)
@@ -119,6 +136,18 @@ def _report(comm: Any, summary: dict[str, Any]) -> None:
             f"accuracy: ||u - u_exact||_L2 = {e['u']:.4e} (relative {e['u_relative']:.3e}), "
             f"energy = {e['energy']:.4e} (relative {e['energy_relative']:.3e})",
         )
+    t = summary["timings_s"]
+    echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
+
+
+def _report_mpm(comm: Any, summary: dict[str, Any]) -> None:
+    r = summary["results"]
+    line = f"runout (front x moved): {r['runout_m']:.4g}"
+    if "friction_angle_deg" in r:
+        line += f" at friction angle {r['friction_angle_deg']:g} deg"
+    if r["energy_drift_max"] is not None:
+        line += f"; energy drift max {r['energy_drift_max']:.3g}"
+    echo(comm, line)
     t = summary["timings_s"]
     echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
 

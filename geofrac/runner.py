@@ -30,7 +30,7 @@ from geofrac.fem.post import (
     probe,
     tensor_fields,
 )
-from geofrac.io.summary import versions, write_json
+from geofrac.io.summary import finish_summary, prepare_output, versions
 from geofrac.io.xdmf import write_fields, write_meshtags
 from geofrac.log import echo, format_seconds
 from geofrac.meshing.distribute import TaggedMesh, build_mesh, check_fracture_cover
@@ -228,15 +228,7 @@ def _write_fractures(solution: Solution) -> None:
 
 def _prepare_output(scene: Scene, comm: MPI.Comm) -> None:
     """Create the output directory and remove a previous run's files (rank 0)."""
-    error = None
-    if comm.rank == 0:
-        try:
-            scene.output.dir.mkdir(parents=True, exist_ok=True)
-            for name in OUTPUT_FILES:
-                (scene.output.dir / name).unlink(missing_ok=True)
-        except OSError as exc:
-            error = f"output.dir: cannot prepare {scene.output.dir}: {exc.strerror}"
-    error = comm.bcast(error, root=0)
+    error = prepare_output(scene.output.dir, OUTPUT_FILES, comm)
     if error is not None:
         raise RunError(error)
 
@@ -303,7 +295,4 @@ def run_scene(
 
 def _finish(summary: dict[str, Any], scene: Scene, comm: MPI.Comm, timings: Timings) -> None:
     """Add timings and write summary.json (collective)."""
-    summary["timings_s"] = timings.reduced(comm)
-    summary["finished"] = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
-    if comm.rank == 0:
-        write_json(scene.output.dir / "summary.json", summary)
+    finish_summary(summary, scene.output.dir / "summary.json", comm, timings)

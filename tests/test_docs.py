@@ -54,3 +54,20 @@ def test_every_cracking_key_has_a_row():
     body = TEXT[start : TEXT.index("### `[dfn]`")]
     for key in KEYS:
         assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), key
+
+
+def test_every_mpm_key_has_a_row():
+    from geofrac.effects import friction, mls_smoothing, plasticity
+    from geofrac.scene.mpm import MPM_KEYS, MPM_OUTPUT_FIELDS
+
+    start = TEXT.index("## MPM scenes")
+    body = TEXT[start:]
+    for key in (*MPM_KEYS["mpm"], *MPM_KEYS["mpm.particles"]):
+        assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), key
+    for key in MPM_KEYS["mpm.grid"]:
+        assert f"`{key}`" in body, key
+    for module in (friction, mls_smoothing, plasticity):
+        for key in module.KEYS:
+            assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), key
+    for name in MPM_OUTPUT_FIELDS:
+        assert f"`{name}`" in body, name

@@ -18,9 +18,11 @@ An effect is a module named in :data:`REGISTRY` that provides
   elastic solve by its own loop (``cracking``: the sequentially linear event loop); see
   :func:`geofrac.effects.cracking.driver`.
 
-Later capabilities add hooks beside these (particle state for ``mpm``); see
-``docs/architecture.md``. Nothing in :mod:`geofrac` imports an effect module except
-through :func:`load`.
+MPM scenes (``method = "mpm"``) use ``configure`` only: the MPM driver
+(:mod:`geofrac.mpm.driver`) reads the validated configs of ``gravity``,
+``mls_smoothing``, ``plasticity`` and ``friction`` and imports the engine code of an
+effect only when it is declared; see ``docs/architecture.md``. Nothing in :mod:`geofrac`
+imports an effect module except through :func:`load`.
 """
 
 from __future__ import annotations
@@ -35,7 +37,10 @@ __all__ = ["REGISTRY", "ConfigureContext", "available", "load"]
 REGISTRY: dict[str, str] = {
     "cracking": "geofrac.effects.cracking",
     "dfn": "geofrac.effects.dfn",
+    "friction": "geofrac.effects.friction",
     "gravity": "geofrac.effects.gravity",
+    "mls_smoothing": "geofrac.effects.mls_smoothing",
+    "plasticity": "geofrac.effects.plasticity",
 }
 
 
@@ -51,6 +56,9 @@ class ConfigureContext:
         groups: physical group name -> dimension of the scene's geometry.
         bcs: the validated Dirichlet conditions
             (:class:`geofrac.scene.model.BoundaryCondition`).
+        method: the scene's ``method``, ``"fem"`` or ``"mpm"``. An effect module lists
+            the methods it serves in ``METHODS`` (absent: ``("fem",)``); for MPM scenes
+            ``groups`` names the walled grid sides and ``"bed"``.
     """
 
     file: str
@@ -59,6 +67,7 @@ class ConfigureContext:
     element: str = ""
     groups: dict[str, int] = field(default_factory=dict)
     bcs: tuple = ()
+    method: str = "fem"
 
 
 def available() -> tuple[str, ...]:

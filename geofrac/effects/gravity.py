@@ -1,7 +1,8 @@
 """Effect ``gravity``: self-weight ρ·g as a body force on the whole domain.
 
 Scene table ``[gravity]`` (optional): ``acceleration`` = vector of length gdim,
-default ``[0, -9.81]`` in 2D and ``[0, 0, -9.81]`` in 3D. Needs ``material.density``.
+default ``[-9.81]`` in 1D (MPM bars), ``[0, -9.81]`` in 2D and ``[0, 0, -9.81]`` in 3D.
+Needs ``material.density``.
 """
 
 from __future__ import annotations
@@ -12,7 +13,10 @@ from typing import Any
 from geofrac.effects import ConfigureContext
 from geofrac.scene.errors import SceneError, did_you_mean
 
-__all__ = ["GravityConfig", "configure", "linear_form"]
+__all__ = ["METHODS", "GravityConfig", "configure", "linear_form"]
+
+#: Gravity is a body force in FEM scenes and a nodal force per mass in MPM scenes.
+METHODS = ("fem", "mpm")
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-__all__ = ["XdmfSeries"]
+__all__ = ["XdmfSeries", "hdf_item", "write_xml"]
 
 _TOPOLOGY = {2: "Polyline", 3: "Triangle"}
 
@@ -85,9 +85,9 @@ class XdmfSeries:
                 NumberOfElements=str(self.num_cells),
                 NodesPerElement=str(self.nv),
             )
-            _hdf_item(top, f"{self.num_cells} {self.nv}", "Int", f"{h5}:/mesh/topology")
+            hdf_item(top, f"{self.num_cells} {self.nv}", "Int", f"{h5}:/mesh/topology")
             geo = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-            _hdf_item(geo, f"{self.num_nodes} 3", "Float", f"{h5}:/mesh/geometry")
+            hdf_item(geo, f"{self.num_nodes} 3", "Float", f"{h5}:/mesh/geometry")
             ET.SubElement(grid, "Time", Value=repr(t))
             for name, centre, k in fields:
                 n = self.num_nodes if centre == "Node" else self.num_cells
@@ -99,14 +99,19 @@ class XdmfSeries:
                     Center=centre,
                 )
                 dims = f"{n} {k}" if k > 1 else f"{n}"
-                _hdf_item(attr, dims, "Float", f"{h5}:/step_{i}/{name}")
-        ET.indent(root)
-        tmp = self.path.with_suffix(".xdmf.tmp")
-        ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8")
-        tmp.replace(self.path)
+                hdf_item(attr, dims, "Float", f"{h5}:/step_{i}/{name}")
+        write_xml(root, self.path)
 
 
-def _hdf_item(parent: ET.Element, dims: str, number_type: str, path: str) -> None:
+def write_xml(root: ET.Element, path: Path) -> None:
+    """Write an XML tree atomically (a reader never sees half a file)."""
+    ET.indent(root)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8")
+    tmp.replace(path)
+
+
+def hdf_item(parent: ET.Element, dims: str, number_type: str, path: str) -> None:
     """An 8-byte HDF5 DataItem ``path`` (``file.h5:/dataset``) of shape ``dims``."""
     ET.SubElement(
         parent, "DataItem", Dimensions=dims, NumberType=number_type, Precision="8", Format="HDF"

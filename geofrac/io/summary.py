@@ -7,35 +7,44 @@ Keys (contract, documented in docs/output.md): ``scene``, ``versions``, ``ranks`
 
 from __future__ import annotations
 
+import datetime as dt
 import json
 import platform
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import geofrac
 
-__all__ = ["versions", "write_json"]
+__all__ = ["finish_summary", "prepare_output", "versions", "write_json"]
 
 
-def versions() -> dict[str, str]:
-    """Versions of geofrac and the stack it runs on."""
+def versions(fem: bool = True) -> dict[str, str]:
+    """Versions of geofrac and the stack it runs on.
+
+    ``fem=False`` (MPM runs) leaves out DOLFINx and PETSc, which such a run never imports.
+    """
     out = {"geofrac": geofrac.__version__, "python": platform.python_version()}
     try:
-        import dolfinx_solver  # noqa: F401
-
-        import dolfinx
         import gmsh
         import numpy
         from mpi4py import MPI
-        from petsc4py import PETSc
 
         out |= {
-            "dolfinx": dolfinx.__version__,
-            "petsc": ".".join(map(str, PETSc.Sys.getVersion())),
             "mpi": MPI.Get_library_version().splitlines()[0].strip(),
             "gmsh": gmsh.__version__,
             "numpy": numpy.__version__,
         }
+        if fem:
+            import dolfinx_solver  # noqa: F401
+
+            import dolfinx
+            from petsc4py import PETSc
+
+            out |= {
+                "dolfinx": dolfinx.__version__,
+                "petsc": ".".join(map(str, PETSc.Sys.getVersion())),
+            }
     except ImportError as exc:  # pragma: no cover - the stack is a hard dependency
         out["error"] = str(exc)
     return out
@@ -47,3 +56,28 @@ def write_json(path: Path, data: dict[str, Any]) -> None:
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(json.dumps(data, indent=2, default=str) + "\n")
     tmp.replace(path)
+
+
+def prepare_output(directory: Path, names: Sequence[str], comm: Any) -> str | None:
+    """Create ``directory`` and remove a previous run's ``names`` in it (rank 0; collective).
+
+    Returns:
+        None, or on every rank the message of the failure (``output.dir: ...``).
+    """
+    error = None
+    if comm.rank == 0:
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+            for name in names:
+                (directory / name).unlink(missing_ok=True)
+        except OSError as exc:
+            error = f"output.dir: cannot prepare {directory}: {exc.strerror}"
+    return comm.bcast(error, root=0)
+
+
+def finish_summary(summary: dict[str, Any], path: Path, comm: Any, timings: Any) -> None:
+    """Add the reduced phase timings and the finish time; rank 0 writes ``path`` (collective)."""
+    summary["timings_s"] = timings.reduced(comm)
+    summary["finished"] = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+    if comm.rank == 0:
+        write_json(path, summary)

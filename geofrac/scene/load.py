@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import tomllib
 from collections.abc import Sequence
 from pathlib import Path
@@ -31,9 +30,11 @@ from geofrac.scene.model import (
     Scene,
     Solver,
 )
+from geofrac.scene.table import Table as _Table
 
 __all__ = [
     "DEFAULT_OUTPUT_FIELDS",
+    "METHODS",
     "OUTPUT_FIELDS",
     "SECTION_KEYS",
     "TOP_LEVEL_KEYS",
@@ -46,6 +47,7 @@ TOP_LEVEL_KEYS = (
     "schema",
     "name",
     "description",
+    "method",
     "effects",
     "geometry",
     "material",
@@ -55,7 +57,10 @@ TOP_LEVEL_KEYS = (
     "load",
     "solver",
     "output",
+    "mpm",
 )
+#: Simulation methods a scene may name (``method``).
+METHODS = ("fem", "mpm")
 #: Keys each table accepts (the single source for validation and for docs/scenes.md).
 SECTION_KEYS: dict[str, tuple[str, ...]] = {
     "geometry": ("file", "parameters", "mesh_size"),
@@ -71,80 +76,6 @@ OUTPUT_FIELDS = ("displacement", "stress", "strain", "von_mises", "stress_nodal"
 #: Fields written when ``output.fields`` is not given.
 DEFAULT_OUTPUT_FIELDS = ("displacement", "stress", "von_mises")
 _AXES = ("x", "y", "z")
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-class _Table:
-    """One TOML table under validation: typed getters that name ``file`` and ``key``."""
-
-    def __init__(self, file: Path, key: str, data: Any, allowed: Sequence[str]) -> None:
-        if not isinstance(data, dict):
-            raise SceneError(file, key, f"must be a table, got {type(data).__name__}")
-        self.file, self.key, self.data = file, key, data
-        for name in data:
-            if name not in allowed:
-                raise SceneError(file, self.path(name), "unknown key" + did_you_mean(name, allowed))
-
-    def path(self, name: str) -> str:
-        return f"{self.key}.{name}" if self.key else name
-
-    def error(self, name: str, message: str) -> SceneError:
-        return SceneError(self.file, self.path(name), message)
-
-    def has(self, name: str) -> bool:
-        return name in self.data
-
-    def number(
-        self,
-        name: str,
-        *,
-        default: float | None = None,
-        required: bool = False,
-        positive: bool = False,
-        integer: bool = False,
-    ) -> float | None:
-        if name not in self.data:
-            if required:
-                raise self.error(name, "missing (required)")
-            return default
-        value = self.data[name]
-        if not _is_number(value) or (integer and not isinstance(value, int)):
-            kind = "an integer" if integer else "a number"
-            raise self.error(name, f"must be {kind}, got {value!r}")
-        if not math.isfinite(value):
-            raise self.error(name, f"must be finite, got {value!r}")
-        if positive and value <= 0:
-            raise self.error(name, f"must be > 0, got {value!r}")
-        return value
-
-    def string(
-        self, name: str, *, default: str | None = None, choices: Sequence[str] | None = None
-    ) -> str:
-        if name not in self.data:
-            if default is None:
-                raise self.error(name, "missing (required)")
-            return default
-        value = self.data[name]
-        if not isinstance(value, str):
-            raise self.error(name, f"must be a string, got {value!r}")
-        if choices is not None and value not in choices:
-            raise self.error(name, f"unknown value '{value}'" + did_you_mean(value, choices))
-        return value
-
-    def vector(self, name: str, length: int, value: Any = None) -> tuple[float, ...]:
-        value = self.data[name] if value is None else value
-        if not isinstance(value, list) or len(value) != length or not all(map(_is_number, value)):
-            raise self.error(name, f"must be a list of {length} numbers, got {value!r}")
-        return tuple(float(c) for c in value)
-
-    def boolean(self, name: str, default: bool) -> bool:
-        value = self.data.get(name, default)
-        if not isinstance(value, bool):
-            raise self.error(name, f"must be true or false, got {value!r}")
-        return value
 
 
 def apply_overrides(data: dict[str, Any], overrides: Sequence[str], file: Path) -> None:
@@ -419,6 +350,7 @@ def _effects(
     ctx = effects.ConfigureContext(
         str(file), geometry.dim, material, discretization.element, dict(geometry.groups), bcs
     )
+    _check_methods(file, declared, "fem")
     specs = []
     for name in declared:
         if name in configured:
@@ -427,6 +359,67 @@ def _effects(
         config = effects.load(name).configure(_effect_table(file, data, name), ctx)
         specs.append(EffectSpec(name, config))
     return tuple(specs)
+
+
+def _check_methods(file: Path, declared: Sequence[str], method: str) -> None:
+    """Each declared effect must serve ``method`` (its module's ``METHODS``, default fem)."""
+    for name in declared:
+        methods = getattr(effects.load(name), "METHODS", ("fem",))
+        if method not in methods:
+            raise SceneError(
+                file,
+                "effects",
+                f"effect '{name}' applies to method {' or '.join(map(repr, methods))}, "
+                f"not '{method}'",
+            )
+
+
+def _mpm_scene(
+    file: Path,
+    data: dict[str, Any],
+    declared: list[str],
+    common: dict[str, Any],
+    out: str | Path | None,
+) -> Scene:
+    """The rest of an ``method = "mpm"`` scene (see :mod:`geofrac.scene.mpm`)."""
+    from geofrac.scene.mpm import FEM_ONLY_TABLES, mpm_material, mpm_output, mpm_spec
+
+    for key in FEM_ONLY_TABLES:
+        if key in data:
+            raise SceneError(file, key, "applies to method 'fem' only; remove it")
+    _check_methods(file, declared, "mpm")
+    if "mpm" not in data:
+        raise SceneError(file, "mpm", "missing (required table for method 'mpm')")
+    geometry = _geometry(file, data["geometry"]) if "geometry" in data else None
+    spec = mpm_spec(file, data["mpm"], geometry)
+    if "material" not in data:
+        raise SceneError(file, "material", "missing (required table)")
+    material = mpm_material(file, data["material"], spec.dim)
+    output = mpm_output(
+        file, data.get("output", {}), common["name"], spec.dim, None if out is None else Path(out)
+    )
+    has_bed = bool(spec.bed) or spec.bed_group is not None
+    sides = {side: 1 for side in spec.walls} | ({"bed": 1} if has_bed else {})
+    ctx = effects.ConfigureContext(str(file), spec.dim, material, "", sides, (), "mpm")
+    specs = tuple(
+        EffectSpec(n, effects.load(n).configure(_effect_table(file, data, n), ctx))
+        for n in declared
+    )
+    return Scene(
+        **common,
+        effects=specs,
+        geometry=geometry,
+        material=material,
+        discretization=None,
+        bcs=(),
+        loads=(),
+        exact=None,
+        solver=Solver(),
+        output=output,
+        raw=data,
+        method="mpm",
+        mpm=spec,
+    )
 
 
 def _geometry_from_effect(
@@ -508,7 +501,18 @@ def load_scene(
         raise top.error("schema", f"this geofrac reads schema {SCHEMA_VERSION}, got {schema}")
     name = top.string("name", default=file.stem)
     description = top.string("description", default="")
+    method = top.string("method", default="fem", choices=METHODS)
     declared = _declared(file, data)
+    if method == "mpm":
+        common = {
+            "path": file.resolve(),
+            "sha256": digest,
+            "name": name,
+            "description": description,
+        }
+        return _mpm_scene(file, data, declared, common, out)
+    if "mpm" in data:
+        raise SceneError(file, "mpm", "applies to method 'mpm' only; set method = \"mpm\"")
     provided = _geometry_from_effect(file, data, declared)
     for section in ("geometry", "material", "discretization"):
         if section not in data and not (section == "geometry" and provided):

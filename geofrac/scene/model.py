@@ -18,7 +18,9 @@ __all__ = [
     "Geometry",
     "Load",
     "Material",
+    "MpmSpec",
     "Output",
+    "ParticleSource",
     "Scene",
     "Solver",
 ]
@@ -173,6 +175,75 @@ class Output:
 
 
 @dataclass(frozen=True)
+class ParticleSource:
+    """Where the MPM particles come from.
+
+    Attributes:
+        kind: ``"lattice"`` (a box filled on a regular lattice, one particle per lattice
+            cell at its centre) or ``"geometry"`` (one particle per gmsh cell of the
+            scene's geometry, at its centroid, with its area/volume).
+        lower: lattice: the box's lowest corner, shape=(dim,).
+        counts: lattice: particles per direction, shape=(dim,).
+        spacing: lattice: the lattice spacing.
+        densities: geometry: physical group -> initial density (groups not named take
+            ``material.density``).
+    """
+
+    kind: Literal["lattice", "geometry"]
+    lower: tuple[float, ...] = ()
+    counts: tuple[int, ...] = ()
+    spacing: float = 0.0
+    densities: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class MpmSpec:
+    """The ``[mpm]`` table of a ``method = "mpm"`` scene (seed chapter 4).
+
+    Attributes:
+        dim: spatial dimension (1, 2 or 3).
+        scheme: ``musl``, ``usf`` or ``usavg`` (App. D).
+        shape: ``mpm``, ``ugimp`` or ``cpgimp`` (eqs. 4.28-4.37).
+        lower: the domain box's lowest corner, shape=(dim,).
+        upper: its highest corner, shape=(dim,).
+        spacing: the grid cell size L.
+        padding: grid cells added outside the box on every side (room for GIMP
+            supports reaching past a wall).
+        walls: box side (``x_min`` ... ``z_max``) -> ``"fixed"`` (all velocity
+            components held) or ``"roller"`` (the normal one); nodes on or beyond a
+            walled side are held.
+        bed: 2D only: the immobile ground as a polyline y(x), shape=(k, 2) with x
+            increasing, or empty; grid nodes below it are held (``fixed``) or, when the
+            ``friction`` effect lists ``"bed"``, frictional (eqs. 4.44-4.47).
+        bed_group: 2D only: a physical curve group of the geometry whose mesh nodes,
+            sorted by x, form the bed polyline instead (None: ``bed`` is used).
+        courant: Courant number α of Δt = α L / c (eq. 4.72), or None when ``dt`` is set.
+        dt: fixed time step, or None.
+        t_end: end time.
+        frames: particle output frames written over the run (plus the initial one).
+        velocity: initial velocity of every particle, shape=(dim,).
+        particles: where the particles come from.
+    """
+
+    dim: int
+    scheme: str
+    shape: str
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    spacing: float
+    padding: int
+    walls: dict[str, str]
+    bed: tuple[tuple[float, float], ...]
+    courant: float | None
+    dt: float | None
+    t_end: float
+    frames: int
+    velocity: tuple[float, ...]
+    particles: ParticleSource
+    bed_group: str | None = None
+
+
+@dataclass(frozen=True)
 class EffectSpec:
     """A declared effect and its validated configuration.
 
@@ -196,7 +267,10 @@ class Scene:
         description: free text.
         effects: declared effects in declaration order.
         geometry, material, discretization, bcs, loads, exact, solver, output: see the
-            classes of the same names.
+            classes of the same names (``method = "mpm"``: ``geometry`` is None for
+            lattice particles, ``discretization`` is None, no bcs, loads or solver).
+        method: ``"fem"`` (finite elements, the default) or ``"mpm"`` (material points).
+        mpm: the ``[mpm]`` settings of an MPM scene, else None.
         raw: the input tables after overrides (for the run summary).
         warnings: valid but risky choices, each naming file and key (printed, recorded).
     """
@@ -206,9 +280,9 @@ class Scene:
     name: str
     description: str
     effects: tuple[EffectSpec, ...]
-    geometry: Geometry
+    geometry: Geometry | None
     material: Material
-    discretization: Discretization
+    discretization: Discretization | None
     bcs: tuple[BoundaryCondition, ...]
     loads: tuple[Load, ...]
     exact: ExactSpec | None
@@ -216,6 +290,8 @@ class Scene:
     output: Output
     raw: dict[str, Any]
     warnings: tuple[str, ...] = ()
+    method: Literal["fem", "mpm"] = "fem"
+    mpm: MpmSpec | None = None
 
     @property
     def effect_names(self) -> tuple[str, ...]:
@@ -224,5 +300,8 @@ class Scene:
 
     @property
     def gdim(self) -> int:
-        """Geometric dimension of the problem (2 or 3)."""
+        """Geometric dimension of the problem (2 or 3; 1 to 3 for MPM)."""
+        if self.mpm is not None:
+            return self.mpm.dim
+        assert self.geometry is not None
         return self.geometry.dim

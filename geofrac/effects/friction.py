@@ -1,0 +1,63 @@
+"""Effect ``friction``: Coulomb friction where MPM material meets a boundary (seed 4.3.3).
+
+On the grid nodes of the named boundaries, motion into the boundary is removed and the
+tangential motion is slowed by μ times the normal change (eqs. 4.44-4.47; see
+:mod:`geofrac.mpm.friction`); motion away from the boundary is free. Without this
+effect those nodes are held (no slip). MPM scenes only; the friction code is imported
+only when a scene declares this effect.
+
+Scene table ``[friction]``:
+
+- ``mu``: Coulomb coefficient μ >= 0 (the seed: 0.1), required;
+- ``boundaries``: walled grid sides (``x_min`` ... ``z_max``, as set in ``mpm.walls``)
+  and/or ``"bed"`` (the ``mpm.bed`` polyline), default ``["bed"]``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from geofrac.effects import ConfigureContext
+from geofrac.scene.errors import did_you_mean
+from geofrac.scene.table import Table
+
+__all__ = ["KEYS", "METHODS", "FrictionConfig", "configure"]
+
+#: Methods this effect serves.
+METHODS = ("mpm",)
+#: Keys of ``[friction]``.
+KEYS = ("mu", "boundaries")
+
+
+@dataclass(frozen=True)
+class FrictionConfig:
+    """Validated friction settings.
+
+    Attributes:
+        mu: Coulomb friction coefficient.
+        boundaries: names of the frictional boundaries.
+    """
+
+    mu: float
+    boundaries: tuple[str, ...]
+
+
+def configure(table: dict[str, Any], ctx: ConfigureContext) -> FrictionConfig:
+    """Validate ``[friction]``; the boundaries must exist (``ctx.groups``)."""
+    t = Table(ctx.file, "friction", table, KEYS)
+    mu = float(t.number("mu", required=True))  # type: ignore[arg-type]
+    if mu < 0:
+        raise t.error("mu", f"must be >= 0, got {mu}")
+    names = t.data.get("boundaries", ["bed"])
+    if not isinstance(names, list) or not names or len(set(names)) != len(names):
+        raise t.error("boundaries", f"must be a list of distinct boundary names, got {names!r}")
+    for name in names:
+        if name not in ctx.groups:
+            where = ", ".join(sorted(ctx.groups)) or "none: set mpm.walls or mpm.bed"
+            raise t.error(
+                "boundaries",
+                f"no boundary {name!r} (walled sides and bed: {where})"
+                + did_you_mean(str(name), ctx.groups),
+            )
+    return FrictionConfig(mu, tuple(names))

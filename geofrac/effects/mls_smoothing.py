@@ -1,0 +1,46 @@
+"""Effect ``mls_smoothing``: MLS smoothing of the MPM strain increments (seed 4.4).
+
+Each particle's strain increment is replaced by the moving-least-squares fit of its
+neighbours' increments (eqs. 4.50-4.58: cubic basis, cubic spline weight 4.51); a
+particle with fewer neighbours than basis terms keeps its own (the seed: "fewer than 4").
+The influence radius is a multiple of the grid cell size (the seed: "the cell size times
+an arbitrary constant"). MPM scenes only; the smoothing code is imported only when a
+scene declares this effect.
+
+Scene table ``[mls_smoothing]``: ``radius`` = influence radius in cells (default 2.0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from geofrac.effects import ConfigureContext
+from geofrac.scene.table import Table
+
+__all__ = ["DEFAULT_RADIUS", "KEYS", "METHODS", "SmoothingConfig", "configure"]
+
+#: Methods this effect serves.
+METHODS = ("mpm",)
+#: Keys of ``[mls_smoothing]``.
+KEYS = ("radius",)
+#: Default influence radius in cells.
+DEFAULT_RADIUS = 2.0
+
+
+@dataclass(frozen=True)
+class SmoothingConfig:
+    """Validated smoothing settings.
+
+    Attributes:
+        radius: influence radius h as a multiple of the grid cell size.
+    """
+
+    radius: float
+
+
+def configure(table: dict[str, Any], ctx: ConfigureContext) -> SmoothingConfig:
+    """Validate ``[mls_smoothing]``."""
+    t = Table(ctx.file, "mls_smoothing", table, KEYS)
+    radius = float(t.number("radius", default=DEFAULT_RADIUS, positive=True))  # type: ignore[arg-type]
+    return SmoothingConfig(radius)

@@ -1,0 +1,130 @@
+"""Grid, walls and bed of an MPM scene: which nodal velocity components are held.
+
+Pure numpy. The scene's box ``[lower, upper]`` is padded by ``padding`` cells on every
+side (GIMP supports reach past a wall). A wall on a box side holds the nodes on or
+beyond that side: ``fixed`` all velocity components, ``roller`` the normal one. The
+``bed`` (2D) is the immobile ground as a polyline y(x): nodes on or below it are held,
+or, when the ``friction`` effect names it, frictional (eqs. 4.44-4.47) with the normal
+pointing out of the material into the bed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geofrac.mpm.grid import Grid, grid
+
+__all__ = ["TOL", "bed_nodes", "held", "scene_grid", "wall_nodes"]
+
+#: Relative tolerance (in cells) for "on a side" and "on the bed".
+TOL = 1e-9
+
+
+def scene_grid(
+    lower: tuple[float, ...], upper: tuple[float, ...], spacing: float, padding: int
+) -> Grid:
+    """The background grid covering the box plus ``padding`` cells on every side."""
+    lo, up = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    cells = np.ceil((up - lo) / spacing - TOL).astype(int) + 2 * padding
+    return grid(lo - padding * spacing, spacing, tuple(int(c) for c in cells))
+
+
+def wall_nodes(
+    nodes: np.ndarray, lower: np.ndarray, upper: np.ndarray, side: str, spacing: float
+) -> tuple[np.ndarray, int, float]:
+    """Nodes on or beyond a box side.
+
+    Args:
+        nodes: node coordinates, shape=(N, dim).
+        lower: the box's lowest corner, shape=(dim,).
+        upper: its highest corner, shape=(dim,).
+        side: ``x_min`` ... ``z_max``.
+        spacing: cell size (for the tolerance).
+
+    Returns:
+        (mask shape=(N,), axis, outward sign ±1).
+    """
+    axis = "xyz".index(side[0])
+    tol = TOL * spacing
+    if side.endswith("min"):
+        return nodes[:, axis] <= lower[axis] + tol, axis, -1.0
+    return nodes[:, axis] >= upper[axis] - tol, axis, 1.0
+
+
+def bed_nodes(nodes: np.ndarray, bed: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes on or below the bed polyline within its x-range, with normals into the bed.
+
+    Args:
+        nodes: node coordinates, shape=(N, 2).
+        bed: the polyline, shape=(k, 2), x increasing.
+        spacing: cell size (for the tolerance).
+
+    Returns:
+        (node ids shape=(m,), unit normals out of the material into the bed
+        shape=(m, 2): (f', −1)/√(1 + f'²) of the segment under the node).
+    """
+    x, y = nodes[:, 0], nodes[:, 1]
+    inside = (x >= bed[0, 0]) & (x <= bed[-1, 0])
+    seg = np.clip(np.searchsorted(bed[:, 0], x, side="right") - 1, 0, len(bed) - 2)
+    x0, y0 = bed[seg, 0], bed[seg, 1]
+    slope = (bed[seg + 1, 1] - y0) / (bed[seg + 1, 0] - x0)
+    below = inside & (y <= y0 + slope * (x - x0) + TOL * spacing)
+    ids = np.flatnonzero(below)
+    n = np.column_stack([slope[ids], -np.ones(len(ids))])
+    return ids, n / np.linalg.norm(n, axis=1)[:, None]
+
+
+def held(
+    g: Grid,
+    lower: tuple[float, ...],
+    upper: tuple[float, ...],
+    walls: dict[str, str],
+    bed: tuple[tuple[float, float], ...],
+    frictional: tuple[str, ...] = (),
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Held components and frictional nodes of grid ``g``.
+
+    Args:
+        g: the (local) grid.
+        lower: the scene's box, lowest corner, shape=(dim,).
+        upper: its highest corner, shape=(dim,).
+        walls: side -> ``"fixed"`` or ``"roller"``.
+        bed: the bed polyline (2D), or empty.
+        frictional: boundaries (sides, ``"bed"``) whose nodes are frictional instead of
+            held.
+
+    Returns:
+        (held components shape=(N, dim) bool, frictional node ids shape=(m,), their
+        normals out of the material shape=(m, dim)).
+    """
+    nodes = g.nodes()
+    lo, up = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    fixed = np.zeros((g.num_nodes, g.dim), dtype=bool)
+    f_ids: list[np.ndarray] = []
+    f_normals: list[np.ndarray] = []
+    for side, kind in walls.items():
+        mask, axis, sign = wall_nodes(nodes, lo, up, side, g.spacing)
+        if side in frictional:
+            ids = np.flatnonzero(mask)
+            normal = np.zeros((len(ids), g.dim))
+            normal[:, axis] = sign
+            f_ids.append(ids)
+            f_normals.append(normal)
+        elif kind == "fixed":
+            fixed[mask] = True
+        else:
+            fixed[mask, axis] = True
+    if bed:
+        ids, normals = bed_nodes(nodes, np.asarray(bed, dtype=float), g.spacing)
+        if "bed" in frictional:
+            f_ids.append(ids)
+            f_normals.append(normals)
+        else:
+            fixed[ids] = True
+    if not f_ids:
+        return fixed, np.zeros(0, dtype=np.int64), np.zeros((0, g.dim))
+    ids = np.concatenate(f_ids)
+    normals = np.concatenate(f_normals)
+    ids, first = np.unique(ids, return_index=True)  # a corner node keeps one normal
+    keep = ~np.any(fixed[ids], axis=1)  # a held node stays held
+    return fixed, ids[keep], normals[first][keep]

@@ -1,0 +1,414 @@
+"""Run a ``method = "mpm"`` scene: particles → grid → time loop → output.
+
+The thin MPI layer of the MPM: it builds the grid, walls and particles from the
+validated :class:`~geofrac.scene.model.Scene`, decomposes them over the communicator
+(:mod:`geofrac.mpm.parallel`, on more than one rank), steps to ``t_end`` and writes
+
+- ``particles.xdmf`` / ``.h5``: ``frames`` + 1 frames of particle position and the
+  fields of ``output.fields`` (rank 0 gathers them, in particle-id order, so 1 and N
+  ranks write the same files);
+- ``energies.csv``: per step, kinetic, strain, gravitational potential (relative to the
+  start), total (their sum) and dissipated (initial total minus total: plastic work,
+  friction and numerical dissipation together);
+- ``summary.json`` (by :func:`run_mpm_scene`): ``results`` with ``runout_m`` (the
+  largest particle x at the end minus at the start), ``friction_angle_deg`` (with
+  ``plasticity``), ``energy_drift_max`` (max |E(t) − E₀| / E₀ with E the total above;
+  None when E₀ = 0, a body starting at rest), front and probe histories.
+
+Effects: ``gravity`` sets the body force, ``mls_smoothing`` the strain-increment
+smoothing (4.50-4.58), ``plasticity`` the Drucker-Prager material (4.39-4.43),
+``friction`` the frictional boundaries (4.44-4.47); an undeclared effect's code is never
+imported.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from geofrac.errors import RunError
+from geofrac.io.summary import finish_summary, prepare_output, versions
+from geofrac.log import echo, format_seconds
+from geofrac.mpm.boundaries import held, scene_grid
+from geofrac.mpm.grid import Grid
+from geofrac.mpm.particles import Particles
+from geofrac.mpm.schemes import Elastic, StepSettings, step, strain_energy, time_step
+from geofrac.scene.model import Scene
+from geofrac.timing import Timings
+
+__all__ = ["OUTPUT_FILES", "MpmRun", "prepare", "run_mpm_scene", "simulate"]
+
+#: Files an MPM run writes into its output directory.
+OUTPUT_FILES = ("particles.xdmf", "particles.h5", "energies.csv", "summary.json")
+#: Seconds between progress lines (rank 0).
+PROGRESS_EVERY_S = 10.0
+
+
+@dataclass
+class MpmRun:
+    """Everything a prepared MPM scene needs to step.
+
+    Attributes:
+        grid: the global background grid.
+        local: this rank's grid (``grid`` on one rank).
+        particles: this rank's particles.
+        material: :class:`~geofrac.mpm.schemes.Elastic` or a Drucker-Prager material.
+        settings: the step settings.
+        steps: number of steps to ``t_end``.
+        domain: the decomposition, or None on one rank.
+        probes: probe name -> particle id (the particle nearest the point at t = 0).
+        friction_angle: φ in degrees with ``plasticity``, else None.
+        total: number of particles over all ranks.
+    """
+
+    grid: Grid
+    local: Grid
+    particles: Particles
+    material: Any
+    settings: StepSettings
+    steps: int
+    domain: Any = None
+    probes: dict[str, int] = field(default_factory=dict)
+    friction_angle: float | None = None
+    total: int = 0
+
+
+def _all_particles(
+    scene: Scene, comm: MPI.Comm
+) -> tuple[Particles, tuple[tuple[float, float], ...]]:
+    """The scene's particles and bed, built on rank 0 and broadcast (every rank has all)."""
+    from geofrac.mpm.seeding import from_cells, from_lattice, mesh_cells
+
+    spec, mat = scene.mpm, scene.material
+    assert spec is not None and mat.density is not None
+    src = spec.particles
+    bed = spec.bed
+    if src.kind == "lattice":
+        p = from_lattice(src.lower, src.counts, src.spacing, mat.density)
+    else:
+        geometry = scene.geometry
+        assert geometry is not None and geometry.file is not None
+        result: Any = None
+        if comm.rank == 0:
+            try:
+                groups, polyline = mesh_cells(
+                    geometry.file,
+                    geometry.parameters,
+                    geometry.mesh_size,
+                    geometry.dim,
+                    spec.bed_group,
+                )
+                points = next(xyz for xyz, _ in groups.values())
+                # a cell in several groups is seeded once, with a density its groups name
+                named = sorted(groups, key=lambda n: n not in src.densities)
+                cells = np.concatenate([groups[n][1] for n in named])
+                density = np.concatenate(
+                    [np.full(len(groups[n][1]), src.densities.get(n, mat.density)) for n in named]
+                )
+                _, first = np.unique(np.sort(cells, axis=1), axis=0, return_index=True)
+                first = np.sort(first)
+                cells, density = cells[first], density[first]
+                result = (points, cells, density, polyline)
+            except (RuntimeError, ValueError) as exc:
+                result = f"seeding particles from {geometry.file.name} failed: {exc}"
+        result = comm.bcast(result, root=0)
+        if isinstance(result, str):
+            raise RunError(result)
+        p = from_cells(*result[:3])
+        if result[3] is not None:
+            bed = tuple((float(x), float(y)) for x, y in result[3])
+    p.v[:] = np.asarray(spec.velocity)
+    return p, bed
+
+
+def _material(scene: Scene) -> tuple[Any, float | None]:
+    """The particle material and the friction angle (``plasticity``) or None."""
+    mat = scene.material
+    for e in scene.effects:
+        if e.name == "plasticity":
+            from geofrac.mpm.plasticity import DruckerPrager
+
+            c = e.config
+            return DruckerPrager(
+                mat.E, mat.nu, c.friction_angle, c.cohesion, c.dilatancy_angle
+            ), c.friction_angle
+    return Elastic(mat.E, mat.nu), None
+
+
+def _config(scene: Scene, name: str) -> Any:
+    return next((e.config for e in scene.effects if e.name == name), None)
+
+
+def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
+    """Grid, particles, material, walls and time step of an MPM scene on ``comm``.
+
+    Raises:
+        RunError: on every rank, when the particles cannot be built or start outside
+            the grid.
+    """
+    spec = scene.mpm
+    assert spec is not None
+    g = scene_grid(spec.lower, spec.upper, spec.spacing, spec.padding)
+    p, bed = _all_particles(scene, comm)
+    margin = p.lp if spec.shape != "mpm" else 0.0
+    if np.any(g.outside(p.x, margin)):
+        raise RunError(
+            f"mpm.grid: {int(np.sum(g.outside(p.x, margin)))} particle(s) start outside the "
+            "grid; enlarge mpm.grid or its padding"
+        )
+    material, phi = _material(scene)
+    density = float(np.min(p.density))  # the fastest wave: the lightest particle
+    if spec.dt is not None:
+        dt = spec.dt
+    else:
+        dt = time_step(spec.courant, spec.spacing, material, density, spec.dim)  # type: ignore[arg-type]
+    steps = max(1, math.ceil(spec.t_end / dt - 1e-9))
+    dt = spec.t_end / steps  # end exactly at t_end (never a larger step)
+    probes = {}
+    for name, point in scene.output.probes.items():
+        probes[name] = int(np.argmin(np.sum((p.x - np.asarray(point)) ** 2, axis=1)))
+    domain = None
+    local = g
+    if comm.size > 1:
+        from geofrac.mpm.parallel import decompose
+
+        domain = decompose(g, comm)
+        local = domain.local
+        p = domain.distribute(p)
+    total = comm.allreduce(p.n)
+    gravity = _config(scene, "gravity")
+    smoothing = _config(scene, "mls_smoothing")
+    fric = _config(scene, "friction")
+    fixed, f_nodes, f_normals = held(
+        local, spec.lower, spec.upper, spec.walls, bed, fric.boundaries if fric else ()
+    )
+    friction = None
+    if fric is not None and len(f_nodes):
+        from geofrac.mpm.friction import friction as make_friction
+
+        friction = make_friction(f_nodes, f_normals, fric.mu)
+    settings = StepSettings(
+        spec.scheme,
+        spec.shape,
+        dt,
+        np.asarray(gravity.acceleration if gravity else (0.0,) * spec.dim),
+        fixed,
+        None if smoothing is None else smoothing.radius,
+        friction,
+        **({"domain": domain} if domain is not None else {}),
+    )
+    return MpmRun(g, local, p, material, settings, steps, domain, probes, phi, total)
+
+
+def _energies(run: MpmRun, comm: MPI.Comm) -> list[float]:
+    """(kinetic, strain, gravitational potential −Σ m b·x) summed over the ranks."""
+    p = run.particles
+    local = np.array(
+        [
+            p.kinetic_energy(),
+            strain_energy(p, run.material),
+            -float(p.mass @ (p.x @ run.settings.gravity)),
+        ]
+    )
+    return [float(e) for e in comm.allreduce(local)]
+
+
+def _gather(run: MpmRun, comm: MPI.Comm) -> Particles | None:
+    """All particles in id order on rank 0 (None elsewhere)."""
+    if run.domain is None:
+        return run.particles
+    return run.domain.gather(run.particles)
+
+
+def _fields(p: Particles, x0: np.ndarray, wanted: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Output fields of gathered particles (stress as 3×3 with σ_zz in 2D)."""
+    out: dict[str, np.ndarray] = {}
+    if "displacement" in wanted:
+        out["displacement"] = p.x - x0
+    if "velocity" in wanted:
+        out["velocity"] = p.v
+    if "stress" in wanted:
+        s = np.zeros((p.n, 3, 3))
+        s[:, : p.dim, : p.dim] = p.stress
+        if p.dim == 2:
+            s[:, 2, 2] = p.stress_zz
+        out["stress"] = s
+    if "plastic_strain" in wanted:
+        out["plastic_strain"] = p.plastic
+    if "density" in wanted:
+        out["density"] = p.density
+    return out
+
+
+def simulate(
+    scene: Scene,
+    comm: MPI.Comm,
+    timings: Timings | None = None,
+    verbose: bool = True,
+    write: bool = False,
+) -> dict[str, Any]:
+    """Prepare and step ``scene`` to its end time; return the JSON-ready results.
+
+    ``write``: write ``particles.xdmf`` and ``energies.csv`` into ``output.dir`` (which
+    must exist).
+
+    Raises:
+        RunError: collectively, when the run cannot continue (a particle left the grid,
+            a non-finite state).
+    """
+    timings = timings or Timings()
+    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
+    spec = scene.mpm
+    assert spec is not None
+    with timings.phase("setup"):
+        run = prepare(scene, comm)
+    s = run.settings
+    say(
+        f"mpm: {run.total} particles, grid {'x'.join(map(str, run.grid.cells))} cells of "
+        f"{run.grid.spacing:g}, {spec.scheme}/{spec.shape}, dt = {s.dt:.4g}, "
+        f"{run.steps} steps to t = {spec.t_end:g} on {comm.size} rank(s)"
+    )
+    out = scene.output
+    first = _gather(run, comm)
+    x0 = None if first is None else first.x.copy()
+    series = csv = None
+    if write and comm.rank == 0:
+        assert first is not None
+        if out.xdmf:
+            from geofrac.io.points import PointSeries
+
+            series = PointSeries(out.dir / "particles.xdmf", first.n)
+            series.write(0.0, first.x, _fields(first, x0, out.fields))  # type: ignore[arg-type]
+        csv = (out.dir / "energies.csv").open("w")
+        csv.write("step,t,kinetic,strain,gravity,total,dissipated\n")
+    k0, s0, u0 = _energies(run, comm)
+    e0 = k0 + s0
+    front0 = _front(run, comm)
+    history: dict[str, list[Any]] = {"t": [0.0], "front_x": [front0]}
+    probes: dict[str, list[Any]] = {name: [] for name in run.probes}
+    if first is not None:
+        for name, pid in run.probes.items():
+            probes[name].append(_probe(first, pid, x0))
+    drift = 0.0
+    every = max(1, run.steps // spec.frames)
+    t_wall = time.perf_counter()
+    last_say = t_wall
+    try:
+        if csv is not None:
+            csv.write(f"0,0,{k0!r},{s0!r},0.0,{e0!r},0.0\n")
+        with timings.phase("steps"):
+            for k in range(1, run.steps + 1):
+                step(run.local, run.particles, run.material, s)
+                kin, strain, pot = _energies(run, comm)
+                total = kin + strain + (pot - u0)
+                drift = max(drift, abs(total - e0))
+                if csv is not None:
+                    csv.write(
+                        f"{k},{k * s.dt!r},{kin!r},{strain!r},{pot - u0!r},{total!r},"
+                        f"{e0 - total!r}\n"
+                    )
+                if k % every == 0 or k == run.steps:
+                    t = k * s.dt
+                    history["t"].append(t)
+                    history["front_x"].append(_front(run, comm))
+                    gathered = _gather(run, comm)
+                    if gathered is not None:
+                        for name, pid in run.probes.items():
+                            probes[name].append(_probe(gathered, pid, x0))
+                        if series is not None:
+                            series.write(t, gathered.x, _fields(gathered, x0, out.fields))  # type: ignore[arg-type]
+                        if csv is not None:
+                            csv.flush()
+                now = time.perf_counter()
+                if now - last_say > PROGRESS_EVERY_S or k == run.steps:
+                    last_say = now
+                    rate = k * run.total / (now - t_wall)
+                    say(
+                        f"mpm [{k}/{run.steps}] t = {k * s.dt:.4g}: kinetic {kin:.4g}, "
+                        f"strain {strain:.4g}, front x {history['front_x'][-1]:.4g} "
+                        f"({rate:.3g} particle-steps/s, elapsed "
+                        f"{format_seconds(now - t_wall)}, left "
+                        f"~{format_seconds((run.steps - k) * (now - t_wall) / k)})"
+                    )
+    finally:
+        if csv is not None:
+            csv.close()
+    seconds = time.perf_counter() - t_wall
+    results: dict[str, Any] = {
+        "particles": run.total,
+        "steps": run.steps,
+        "dt": s.dt,
+        "t_end": spec.t_end,
+        "runout_m": history["front_x"][-1] - front0,
+        "energy_drift_max": drift / e0 if e0 > 0 else None,
+        "particle_steps_per_s": run.total * run.steps / seconds if seconds > 0 else None,
+        "history": history,
+        "probes": probes,
+    }
+    if run.friction_angle is not None:
+        results["friction_angle_deg"] = run.friction_angle
+    return results
+
+
+def _front(run: MpmRun, comm: MPI.Comm) -> float:
+    """The largest particle x over all ranks (the front of a slide moving to +x)."""
+    x = run.particles.x[:, 0]
+    return comm.allreduce(float(x.max()) if len(x) else -math.inf, op=MPI.MAX)
+
+
+def _probe(p: Particles | None, pid: int, x0: np.ndarray | None) -> dict[str, list[float]]:
+    """Position, displacement, velocity and stress of particle ``pid``."""
+    assert p is not None and x0 is not None
+    return {
+        "x": p.x[pid].tolist(),
+        "u": (p.x[pid] - x0[pid]).tolist(),
+        "v": p.v[pid].tolist(),
+        "stress": p.stress[pid].ravel().tolist(),
+    }
+
+
+def run_mpm_scene(
+    scene: Scene, comm: MPI.Comm, timings: Timings | None = None, verbose: bool = True
+) -> dict[str, Any]:
+    """Run an MPM scene and write its output directory; return the summary.
+
+    On a :class:`RunError` the particle series and energies are removed and
+    ``summary.json`` records ``status`` = ``"error: ..."`` before the error propagates.
+    """
+    timings = timings or Timings()
+    started = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+    error = prepare_output(scene.output.dir, OUTPUT_FILES, comm)
+    if error is not None:
+        raise RunError(error)
+    summary: dict[str, Any] = {
+        "scene": {
+            "path": str(scene.path),
+            "sha256": scene.sha256,
+            "name": scene.name,
+            "method": "mpm",
+            "effects": list(scene.effect_names),
+            "input": scene.raw,
+        },
+        "warnings": list(scene.warnings),
+        "versions": versions(fem=False),
+        "ranks": comm.size,
+        "started": started,
+    }
+    try:
+        results = simulate(scene, comm, timings, verbose, write=True)
+        summary |= {"results": results, "status": "ok"}
+    except RunError as exc:
+        summary["status"] = f"error: {exc}"
+        if comm.rank == 0:
+            for name in OUTPUT_FILES[:-1]:
+                (scene.output.dir / name).unlink(missing_ok=True)
+        finish_summary(summary, scene.output.dir / "summary.json", comm, timings)
+        raise
+    finish_summary(summary, scene.output.dir / "summary.json", comm, timings)
+    return summary

@@ -1,0 +1,102 @@
+"""Particles of an MPM scene: a regular lattice, or one particle per gmsh cell.
+
+``from_cells`` is pure numpy (centroids and measures of triangles or tetrahedra);
+``mesh_cells`` runs gmsh (no MPI, no DOLFINx) to mesh a scene geometry and return the
+cells of its top-dimensional physical groups.
+"""
+
+from __future__ import annotations
+
+from math import factorial
+from pathlib import Path
+
+import numpy as np
+
+from geofrac.mpm.particles import Particles, lattice, particles
+
+__all__ = ["from_cells", "from_lattice", "mesh_cells"]
+
+
+def from_lattice(
+    lower: tuple[float, ...], counts: tuple[int, ...], spacing: float, density: float
+) -> Particles:
+    """Particles on a regular lattice (one per lattice cell, at its centre)."""
+    return lattice(list(lower), list(counts), spacing, density)
+
+
+def from_cells(points: np.ndarray, cells: np.ndarray, density: np.ndarray) -> Particles:
+    """One particle per simplex, at its centroid, with its area (volume).
+
+    The GIMP half-width of a particle is half the side of the square (cube) of the same
+    measure, in every direction.
+
+    Args:
+        points: vertex coordinates, shape=(num_points, dim).
+        cells: vertex ids per simplex, shape=(num_cells, dim + 1).
+        density: initial density per cell, shape=(num_cells,).
+    """
+    dim = points.shape[1]
+    corners = points[cells]  # shape=(num_cells, dim + 1, dim)
+    edges = corners[:, 1:, :] - corners[:, :1, :]
+    measure = np.abs(np.linalg.det(edges)) / factorial(dim)
+    if np.any(measure <= 0):
+        raise ValueError(f"{int(np.sum(measure <= 0))} degenerate cell(s) in the particle mesh")
+    half = 0.5 * measure ** (1.0 / dim)
+    return particles(corners.mean(axis=1), measure, density, np.repeat(half[:, None], dim, axis=1))
+
+
+def mesh_cells(
+    file: Path,
+    parameters: dict[str, float],
+    mesh_size: float | None,
+    dim: int,
+    curve: str | None = None,
+) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], np.ndarray | None]:
+    """Mesh a gmsh geometry; the simplices of each ``dim``-D physical group, and a curve.
+
+    Returns:
+        (group name -> (vertex coordinates shape=(num_points, dim), simplices
+        shape=(num_cells, dim + 1) indexing them); the mesh nodes of the physical curve
+        group ``curve`` sorted by x, shape=(k, 2), or None without ``curve``).
+
+    Raises:
+        RuntimeError: gmsh failed, or a group holds cells other than simplices.
+    """
+    from geofrac.meshing.geo import gmsh_session
+
+    simplex = {2: 2, 3: 4}[dim]  # gmsh element types: 3-node triangle, 4-node tetrahedron
+    out = {}
+    with gmsh_session(file, parameters, mesh_size) as gmsh:
+        model = gmsh.model  # type: ignore[attr-defined]
+        if file.suffix == ".geo":
+            model.mesh.generate(dim)
+        tags, coords, _ = model.mesh.getNodes()
+        xyz = coords.reshape(-1, 3)[:, :dim]
+        index = np.zeros(int(tags.max()) + 1, dtype=np.int64)
+        index[tags.astype(np.int64)] = np.arange(len(tags))
+        for d, group in model.getPhysicalGroups(dim):
+            name = model.getPhysicalName(d, group)
+            blocks = []
+            for entity in model.getEntitiesForPhysicalGroup(d, group):
+                types, _, nodes = model.mesh.getElements(d, entity)
+                for kind, conn in zip(types, nodes, strict=True):
+                    if kind != simplex:
+                        raise RuntimeError(
+                            f"group '{name}' has gmsh elements of type {kind}; particles are "
+                            "seeded from linear triangles/tetrahedra only"
+                        )
+                    blocks.append(index[conn.astype(np.int64)].reshape(-1, dim + 1))
+            if blocks:
+                out[name] = (xyz, np.concatenate(blocks))
+        polyline = None
+        if curve is not None:
+            tag = next(
+                t for d, t in model.getPhysicalGroups(1) if model.getPhysicalName(d, t) == curve
+            )
+            xyz_c = model.mesh.getNodesForPhysicalGroup(1, tag)[1].reshape(-1, 3)[:, :2]
+            polyline = xyz_c[np.argsort(xyz_c[:, 0], kind="stable")]
+            if np.any(np.diff(polyline[:, 0]) <= 0):
+                raise RuntimeError(f"curve group '{curve}' is not a graph y(x) (x repeats)")
+    if not out:
+        raise RuntimeError(f"'{file.name}' has no meshed {dim}D physical group")
+    return out, polyline
