@@ -21,6 +21,7 @@ from geofrac.mpm.grid import Grid
 from geofrac.mpm.shapes import Weights, gimp_nodes
 
 __all__ = [
+    "bad_particles",
     "bin_neighbours",
     "elastic_update",
     "forces",
@@ -31,6 +32,10 @@ __all__ = [
     "mls_moments",
     "mls_sums",
     "momentum",
+    "nodal_acceleration",
+    "nodal_velocity",
+    "outside",
+    "scratch",
     "strain_increment",
     "velocity_gradient",
     "weights_gimp",
@@ -39,9 +44,31 @@ __all__ = [
 
 _jit = numba.njit(cache=True)
 
+#: Work arrays kept between steps (a fresh large array costs its page faults each step).
+_SCRATCH: dict[str, np.ndarray] = {}
 
-def grid_weights(g: Grid, x: np.ndarray, lp: np.ndarray | None = None) -> Weights:
+
+def scratch(name: str, shape: tuple[int, ...], dtype: type = float) -> np.ndarray:
+    """A reused, uninitialised C-contiguous work array, valid until the next call by name.
+
+    The buffer grows by a quarter beyond the need, so particle counts that change a
+    little (migration between ranks) do not reallocate it.
+    """
+    need = int(np.prod(shape))
+    buf = _SCRATCH.get(name)
+    if buf is None or buf.dtype != np.dtype(dtype) or buf.size < need:
+        buf = np.empty(need + need // 4, dtype)
+        _SCRATCH[name] = buf
+    return buf[:need].reshape(shape)
+
+
+def grid_weights(
+    g: Grid, x: np.ndarray, lp: np.ndarray | None = None, reuse: bool = False
+) -> Weights:
     """Compiled :func:`geofrac.mpm.shapes.weights` (same arguments, same result).
+
+    With ``reuse`` the arrays are :func:`scratch` buffers, overwritten by the next call
+    (a step's own weights).
 
     Raises:
         ValueError: a node with weight lies outside the grid.
@@ -51,9 +78,14 @@ def grid_weights(g: Grid, x: np.ndarray, lp: np.ndarray | None = None) -> Weight
     origin = np.ascontiguousarray(g.origin, dtype=float)
     k1 = 2 if lp is None else gimp_nodes(g.spacing, lp)
     k = k1**dim
-    nodes = np.empty((n, k), np.int64)
-    phi = np.empty((n, k))
-    grad = np.empty((n, k, dim))
+    if reuse:
+        nodes = scratch("nodes", (n, k), np.int64)
+        phi = scratch("phi", (n, k))
+        grad = scratch("grad", (n, k, dim))
+    else:
+        nodes = np.empty((n, k), np.int64)
+        phi = np.empty((n, k))
+        grad = np.empty((n, k, dim))
     if lp is None:
         weights_hat(x, origin, g.spacing, shape, nodes, phi, grad)
     elif not weights_gimp(x, lp, origin, g.spacing, shape, k1, nodes, phi, grad):
@@ -62,9 +94,22 @@ def grid_weights(g: Grid, x: np.ndarray, lp: np.ndarray | None = None) -> Weight
 
 
 @_jit
+def _combos(k1: int, dim: int) -> np.ndarray:
+    """The k1**dim combinations of per-direction node indices, C order, shape=(k, dim)."""
+    k = k1**dim
+    out = np.empty((k, dim), np.int64)
+    for c in range(k):
+        rem = c
+        for a in range(dim - 1, -1, -1):
+            out[c, a] = rem % k1
+            rem //= k1
+    return out
+
+
+@_jit
 def _tensor(
     i: int,
-    k1: int,
+    combos: np.ndarray,
     i1: np.ndarray,
     p1: np.ndarray,
     d1: np.ndarray,
@@ -75,28 +120,22 @@ def _tensor(
 ) -> None:
     """Tensor products (eq. 4.32) of particle i's per-direction weights into row i.
 
-    The k1**dim node combinations in C order (direction 0 slowest), as
-    :func:`geofrac.mpm.shapes.weights` orders them.
+    ``combos`` (shape=(k, dim)) are the k1**dim node combinations in C order (direction 0
+    slowest), as :func:`geofrac.mpm.shapes.weights` orders them.
     """
-    dim = i1.shape[0]
-    k = nodes.shape[1]
-    j = np.empty(dim, np.int64)
+    k, dim = combos.shape
     for c in range(k):
-        rem = c
-        for a in range(dim - 1, -1, -1):
-            j[a] = rem % k1
-            rem //= k1
         flat = 0
-        ph = p1[0, j[0]]
+        ph = p1[0, combos[c, 0]]
         for a in range(dim):
-            flat = flat * shape[a] + i1[a, j[a]]
+            flat = flat * shape[a] + i1[a, combos[c, a]]
             if a > 0:
-                ph *= p1[a, j[a]]
+                ph *= p1[a, combos[c, a]]
         nodes[i, c] = flat
         phi[i, c] = ph
         for b in range(dim):
             if dim == 1:
-                grad[i, c, b] = d1[b, j[b]] * 1.0
+                grad[i, c, b] = d1[b, combos[c, b]] * 1.0
                 continue
             first = True
             others = 0.0
@@ -104,11 +143,11 @@ def _tensor(
                 if a == b:
                     continue
                 if first:
-                    others = p1[a, j[a]]
+                    others = p1[a, combos[c, a]]
                     first = False
                 else:
-                    others *= p1[a, j[a]]
-            grad[i, c, b] = d1[b, j[b]] * others
+                    others *= p1[a, combos[c, a]]
+            grad[i, c, b] = d1[b, combos[c, b]] * others
 
 
 @_jit
@@ -136,6 +175,7 @@ def weights_hat(
     i1 = np.empty((dim, 2), np.int64)
     p1 = np.empty((dim, 2))
     d1 = np.empty((dim, 2))
+    combos = _combos(2, dim)
     for i in range(n):
         for a in range(dim):
             st = np.int64(np.floor((x[i, a] - origin[a]) / L))
@@ -148,7 +188,7 @@ def weights_hat(
             p1[a, 1] = s / L
             d1[a, 0] = -1.0 / L
             d1[a, 1] = 1.0 / L
-        _tensor(i, 2, i1, p1, d1, shape, nodes, phi, grad)
+        _tensor(i, combos, i1, p1, d1, shape, nodes, phi, grad)
 
 
 @_jit
@@ -200,6 +240,7 @@ def weights_gimp(
     i1 = np.empty((dim, k1), np.int64)
     p1 = np.empty((dim, k1))
     d1 = np.empty((dim, k1))
+    combos = _combos(k1, dim)
     ok = True
     for i in range(n):
         for a in range(dim):
@@ -216,7 +257,7 @@ def weights_gimp(
                 i1[a, m] = idx
                 p1[a, m] = ph
                 d1[a, m] = dph
-        _tensor(i, k1, i1, p1, d1, shape, nodes, phi, grad)
+        _tensor(i, combos, i1, p1, d1, shape, nodes, phi, grad)
     return ok
 
 
@@ -643,3 +684,111 @@ def mls_sums(
             phi = w * acc
             for c in range(nc):
                 out[p, c] += phi * values[q, c]
+
+
+@_jit
+def nodal_velocity(
+    mom: np.ndarray, mass: np.ndarray, floor: float, fixed: np.ndarray, v: np.ndarray
+) -> None:
+    """v_i = (m v)_i / m_i where m_i > floor, else 0; held components 0 (D.6, D.10).
+
+    Args:
+        mom: nodal momentum, shape=(N, dim).
+        mass: nodal mass, shape=(N,).
+        floor: the active nodes' least mass.
+        fixed: held components, shape=(N, dim) bool.
+        v: out, shape=(N, dim).
+    """
+    N, dim = mom.shape
+    for j in range(N):
+        act = mass[j] > floor
+        for a in range(dim):
+            v[j, a] = mom[j, a] / mass[j] if act and not fixed[j, a] else 0.0
+
+
+@_jit
+def nodal_acceleration(
+    f: np.ndarray,
+    mass: np.ndarray,
+    floor: float,
+    fixed: np.ndarray,
+    dt: float,
+    v: np.ndarray,
+    a_out: np.ndarray,
+    v_new: np.ndarray,
+) -> None:
+    """a_i = f_i / m_i (active, not held; else 0) and v*_i = v_i + Δt a_i (D.3-D.4).
+
+    Args:
+        f: nodal force, shape=(N, dim).
+        mass: nodal mass, shape=(N,).
+        floor: the active nodes' least mass.
+        fixed: held components, shape=(N, dim) bool.
+        dt: time step.
+        v: nodal velocity, shape=(N, dim).
+        a_out: out, the acceleration, shape=(N, dim).
+        v_new: out, the updated velocity, shape=(N, dim).
+    """
+    N, dim = f.shape
+    for j in range(N):
+        act = mass[j] > floor
+        for a in range(dim):
+            acc = f[j, a] / mass[j] if act and not fixed[j, a] else 0.0
+            a_out[j, a] = acc
+            v_new[j, a] = v[j, a] + dt * acc
+
+
+@_jit
+def outside(
+    x: np.ndarray, lp: np.ndarray, gimp: bool, lo: np.ndarray, hi: np.ndarray, out: np.ndarray
+) -> int:
+    """:meth:`geofrac.mpm.grid.Grid.outside`: which particles reach beyond [lo, hi].
+
+    Args:
+        x: positions, shape=(n, dim).
+        lp: half-widths, shape=(n, dim), used when ``gimp``.
+        gimp: whether the particles have boxes (else points).
+        lo: the grid's lowest corner, shape=(dim,).
+        hi: its highest corner, shape=(dim,).
+        out: out, shape=(n,) bool.
+
+    Returns:
+        How many are outside.
+    """
+    n, dim = x.shape
+    count = 0
+    for i in range(n):
+        o = False
+        for a in range(dim):
+            m = lp[i, a] if gimp else 0.0
+            if x[i, a] - m < lo[a] or x[i, a] + m > hi[a]:
+                o = True
+        out[i] = o
+        count += o
+    return count
+
+
+@_jit
+def bad_particles(x: np.ndarray, stress: np.ndarray, volume: np.ndarray, out: np.ndarray) -> int:
+    """Particles with a non-finite position or stress or a non-positive volume.
+
+    Args:
+        x: positions, shape=(n, dim).
+        stress: σ_p, shape=(n, dim, dim).
+        volume: V_p, shape=(n,).
+        out: out, shape=(n,) bool.
+
+    Returns:
+        How many are bad.
+    """
+    n, dim = x.shape
+    count = 0
+    for i in range(n):
+        ok = volume[i] > 0
+        for a in range(dim):
+            ok = ok and np.isfinite(x[i, a])
+            for b in range(dim):
+                ok = ok and np.isfinite(stress[i, a, b])
+        out[i] = not ok
+        count += not ok
+    return count

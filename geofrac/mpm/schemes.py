@@ -273,9 +273,9 @@ def _update_stress(
     if s.backend == "numba":
         from geofrac.mpm import kernels
 
-        L = np.empty((n, d, d))
+        L = kernels.scratch("L", (n, d, d))
         kernels.velocity_gradient(w.nodes, w.grad, v, L)
-        deps = np.empty((n, d, d))
+        deps = kernels.scratch("deps", (n, d, d))
         kernels.strain_increment(L, dt, deps)
     else:
         L = np.matmul(np.swapaxes(v[w.nodes], 1, 2), w.grad)  # ∇v_p, shape=(n, dim, dim)
@@ -362,20 +362,24 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
     if not isinstance(material, Elastic) and p.dim == 1:
         raise ValueError("plasticity needs 2D or 3D particles (the 1D bar is elastic)")
     dom = s.domain
-    _check_inside(g, p, s)
     gimp = s.shape != "mpm"
     fast = s.backend == "numba"
     if fast:
         from geofrac.mpm import kernels
-
-        w = kernels.grid_weights(g, p.x, p.lp if gimp else None)
+    _check_inside(g, p, s)
+    if fast:
+        w = kernels.grid_weights(g, p.x, p.lp if gimp else None, reuse=True)
     else:
         w = weights(g, p.x, p.lp if gimp else None)
     N, dt, dim = g.num_nodes, s.dt, p.dim
     smooth_at = None if s.smoothing is None else (p.x.copy(), s.smoothing * g.spacing)
     # MUSL's forces use σ^k: they join the first transfer (one pass, one exchange)
     early = s.scheme == "musl"
-    nodal = np.zeros((N, 1 + dim + dim * early))  # mass, momentum (, force)
+    if fast:
+        nodal = kernels.scratch("nodal", (N, 1 + dim + dim * early))
+        nodal.fill(0.0)
+    else:
+        nodal = np.zeros((N, 1 + dim + dim * early))  # mass, momentum (, force)
     mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
     if fast:
         kernels.mass_momentum(w.nodes, w.phi, p.mass, p.v, mass, mom)
@@ -393,7 +397,11 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
     if dom is not None:
         peak = dom.allmax(peak)
     active = mass > MASS_FLOOR * peak
-    v = _velocity(mom, mass, active, s.fixed)
+    if fast:
+        v = kernels.scratch("v", (N, dim))
+        kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
+    else:
+        v = _velocity(mom, mass, active, s.fixed)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):
         _update_stress(w, p, material, v, half * dt, s, smooth_at)
@@ -405,10 +413,14 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
             f = _forces(w, p, s.gravity, N)
         if dom is not None:
             f = dom.sum_halo(f)
-    a = np.zeros((N, dim))
-    a[active] = f[active] / mass[active, None]
-    a[s.fixed] = 0.0
-    v_new = v + dt * a
+    if fast:
+        a, v_new = kernels.scratch("a", (N, dim)), kernels.scratch("v_new", (N, dim))
+        kernels.nodal_acceleration(f, mass, MASS_FLOOR * peak, s.fixed, dt, v, a, v_new)
+    else:
+        a = np.zeros((N, dim))
+        a[active] = f[active] / mass[active, None]
+        a[s.fixed] = 0.0
+        v_new = v + dt * a
     if s.friction is not None:
         from geofrac.mpm.friction import apply_friction
 
@@ -421,21 +433,36 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
         p.x += dt * _from_grid(w, v_new)  # D.5, D.17, D.25
     if s.scheme in ("musl", "usavg"):
         if fast:
-            mom = np.zeros((N, dim))
+            mom = kernels.scratch("mom", (N, dim))
+            mom.fill(0.0)
             kernels.momentum(w.nodes, w.phi, p.mass, p.v, mom)
         else:
             mom = _to_grid(w, p.mass[:, None] * p.v, N)
         if dom is not None:
             mom = dom.sum_halo(mom)
-        v = _velocity(mom, mass, active, s.fixed)  # D.6, D.26
+        if fast:  # D.6, D.26
+            kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
+        else:
+            v = _velocity(mom, mass, active, s.fixed)
         if s.friction is not None:
             from geofrac.mpm.friction import apply_friction
 
             apply_friction(v, s.friction, sliding_only=True)
         _update_stress(w, p, material, v, half * dt, s, smooth_at)
-    _check(p, dom)
+    _check(p, dom, fast)
     if dom is not None:
         dom.migrate(p)
+
+
+def _outside(g: Grid, p: Particles, gimp: bool, fast: bool) -> np.ndarray:
+    """Which particles (or their GIMP boxes) reach beyond the grid, shape=(n,)."""
+    if not fast:
+        return g.outside(p.x, p.lp if gimp else 0.0)
+    from geofrac.mpm import kernels
+
+    out = np.empty(p.n, dtype=bool)
+    kernels.outside(p.x, p.lp, gimp, g.origin, g.upper, out)
+    return out
 
 
 def _check_inside(g: Grid, p: Particles, s: StepSettings) -> None:
@@ -444,36 +471,42 @@ def _check_inside(g: Grid, p: Particles, s: StepSettings) -> None:
     With a domain: against the whole grid, on every rank alike; then a RunError when a
     particle's support reaches beyond its rank's sub-grid (the halo is too narrow).
     """
-    margin = p.lp if s.shape != "mpm" else 0.0
+    gimp, fast = s.shape != "mpm", s.backend == "numba"
     dom = s.domain
     if dom is None:
-        out = g.outside(p.x, margin)
+        out = _outside(g, p, gimp, fast)
         if np.any(out):
             raise ParticlesLeftGrid(p.ids[out], p.x[out])
         return
-    out = dom.grid.outside(p.x, margin)
+    out = _outside(dom.grid, p, gimp, fast)
     ids, positions = dom.allgather_rows(p.ids[out], p.x[out])
     if len(ids):
         order = np.argsort(ids)
         raise ParticlesLeftGrid(ids[order], positions[order])
-    if dom.any(bool(np.any(g.outside(p.x, margin)))):
+    if dom.any(bool(np.any(_outside(g, p, gimp, fast)))):
         raise RunError(
             f"a particle's support reaches beyond its rank's halo of {dom.halo} cells; "
             "decompose with a wider halo"
         )
 
 
-def _check(p: Particles, dom: Domain | None = None) -> None:
+def _check(p: Particles, dom: Domain | None = None, fast: bool = False) -> None:
     """Raise RunError when a particle's state turned non-finite or its volume non-positive.
 
     A NaN is never carried into the next step: the error names the first particles.
     With a domain every rank raises it, naming the particles of all ranks.
     """
-    bad = ~(
-        np.all(np.isfinite(p.x), axis=1)
-        & np.all(np.isfinite(p.stress), axis=(1, 2))
-        & (p.volume > 0)
-    )
+    if fast:
+        from geofrac.mpm import kernels
+
+        bad = np.empty(p.n, dtype=bool)
+        kernels.bad_particles(p.x, p.stress, p.volume, bad)
+    else:
+        bad = ~(
+            np.all(np.isfinite(p.x), axis=1)
+            & np.all(np.isfinite(p.stress), axis=(1, 2))
+            & (p.volume > 0)
+        )
     ids = p.ids[bad]
     if dom is not None:
         ids = np.sort(dom.allgather_rows(ids, p.x[bad])[0])
