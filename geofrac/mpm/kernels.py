@@ -625,10 +625,13 @@ def mls_moments(
                 dx[a] = d / h
             w = _spline(np.sqrt(r2) / h)
             _basis(dx, exps, F)
-            for r in range(m):
+            for r in range(m):  # A is symmetric: the upper triangle, mirrored below
                 wr = w * F[r]
-                for c in range(m):
+                for c in range(r, m):
                     A[b, r, c] += wr * F[c]
+        for r in range(m):
+            for c in range(r):
+                A[b, r, c] = A[b, c, r]
 
 
 @_jit
