@@ -174,3 +174,18 @@ def test_one_rank_domain_equals_the_plain_step():
     comm = MPI.COMM_SELF
     serial, gathered, _, _ = _run(comm, "musl", "cpgimp", 2.0, "elastic", 20)
     _compare(serial, gathered, rtol=0.0)  # one rank: the same sums in the same order
+
+
+@pytest.mark.mpi(min_size=2)
+def test_throughput_block_runs_decomposed():
+    """``bench mpm --cases block`` under mpiexec: all ranks step their own slabs."""
+    from mpi4py import MPI
+
+    from geofrac.mpm.block import gravity_block
+
+    comm = MPI.COMM_WORLD
+    tp = gravity_block(1600, "musl", "cpgimp", 2.0, steps=3, comm=comm)
+    assert tp.ranks == comm.size and len(tp.per_rank) == comm.size
+    assert tp.particles == 1600
+    assert all(r > 0 for r in tp.per_rank)
+    assert sum(tp.per_rank) == pytest.approx(tp.particle_steps_per_s, rel=1e-9)
