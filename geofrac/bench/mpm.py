@@ -18,12 +18,18 @@ Cases (``--cases``):
 - ``block``: throughput of a 2D elastic block of ``--particles`` particles (default
   100,000) on a fixed floor under gravity (:func:`geofrac.mpm.block.gravity_block`),
   MUSL with each shape, without and with smoothing: particle-steps per second over
-  ``--steps`` steps.
+  ``--steps`` steps, after one untimed warm-up step (numba's compilation or cache
+  load, recorded as ``warmup_seconds``). Under ``mpiexec -n N`` the block is
+  decomposed over the N ranks (:mod:`geofrac.mpm.parallel`): ``ranks`` is N,
+  ``particle_steps_per_s`` counts all particles over the slowest rank's wall time and
+  ``per_rank`` gives each rank's own particle-steps per second of that time.
 
-Every record has particle-steps per second beside its error. The engine is the pure
-numpy reference and runs on one rank (under ``mpiexec`` rank 0 runs it and ``ranks`` in
-the records says 1). Prints a table; ``--json F`` writes the report, ``--out DIR`` the
-plots.
+Every record has particle-steps per second beside its error. The engine is the
+compiled one (:mod:`geofrac.mpm.kernels`); ``--backend numpy`` runs the block on the
+numpy reference instead. The bars run on rank 0 only (``ranks`` 1). Measured
+(2 cores; ``mpiexec -n 2 geofrac bench mpm --cases block --shapes mpm --particles
+100000 --steps 50``): see ``docs/mpm.md``. Prints a table; ``--json F`` writes the
+report, ``--out DIR`` the plots.
 """
 
 from __future__ import annotations
@@ -45,6 +51,7 @@ COLUMNS = (
     ("smoothing", "smoothing", "s"),
     ("W", "W", "g"),
     ("particles", "particles", "d"),
+    ("ranks", "ranks", "d"),
     ("steps", "steps", "d"),
     ("particle_steps_per_s", "particle-steps/s", ".3g"),
     ("stress_error_rms", "stress error (RMS/ρ0|b|L0)", ".4f"),
@@ -97,6 +104,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         type=name_list(SCHEMES, "scheme"),
         default=list(SCHEMES),
         help="comma-separated schemes (default: all)",
+    )
+    p.add_argument(
+        "--backend",
+        choices=["numba", "numpy"],
+        default="numba",
+        help="the block's MPM step: compiled kernels (numba, default) or the numpy reference",
     )
     p.add_argument("--json", type=Path, help="write the JSON report to this file")
     p.add_argument(
@@ -210,12 +223,14 @@ def _record(
     particles: int,
     steps: int,
     seconds: float,
-    **measured: float | None,
+    ranks: int = 1,
+    **measured: Any,
 ) -> dict[str, Any]:
     """One JSON record.
 
-    ``measured`` may give ``W``, ``stress_error_rms``, ``energy_drift_max`` and
-    ``stress_overshoot``; the others are None.
+    ``measured`` may give ``W``, ``stress_error_rms``, ``energy_drift_max``,
+    ``stress_overshoot``, ``warmup_seconds``, ``per_rank`` and ``backend``; the others
+    are None.
     """
     return {
         "case": case,
@@ -224,7 +239,8 @@ def _record(
         "smoothing": "none" if smoothing is None else f"mls {smoothing:g} cells",
         "dim": dim,
         "particles": particles,
-        "ranks": 1,
+        "ranks": ranks,
+        "backend": measured.get("backend", "numba"),
         "W": measured.get("W"),
         "steps": steps,
         "seconds": seconds,
@@ -232,6 +248,8 @@ def _record(
         "stress_error_rms": measured.get("stress_error_rms"),
         "energy_drift_max": measured.get("energy_drift_max"),
         "stress_overshoot": measured.get("stress_overshoot"),
+        "warmup_seconds": measured.get("warmup_seconds"),
+        "per_rank": measured.get("per_rank"),
     }
 
 
@@ -257,8 +275,24 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         "impact" in cases
     )
     impacts = {}
+    progress = Progress(comm, total, "bench mpm")
+    # the block runs on every rank, decomposed over comm; the bars on rank 0
+    for shape in shapes if "block" in cases else ():
+        for sm in smoothings:
+            tp = gravity_block(args.particles, "musl", shape, sm, args.steps, comm, args.backend)
+            records.append(
+                _record(
+                    "block2d", "musl", shape, sm, 2, tp.particles, tp.steps, tp.seconds,
+                    tp.ranks, warmup_seconds=tp.warmup_seconds, per_rank=list(tp.per_rank),
+                    backend=args.backend,
+                )
+            )  # fmt: skip
+            progress.step(
+                f"block {shape} {records[-1]['smoothing']}: "
+                f"{tp.particle_steps_per_s:.3g} p-steps/s on {tp.ranks} rank(s) "
+                f"(warm-up {tp.warmup_seconds:.2g} s)"
+            )
     if comm.rank == 0:
-        progress = Progress(comm, total, "bench mpm")
         for shape in shapes if "translating" in cases else ():
             for scheme in schemes:
                 for sm in smoothings:
@@ -297,16 +331,6 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
                         f"impact {shape} {scheme} {records[-1]['smoothing']}: "
                         f"error {imp.error:.4f}, overshoot {imp.overshoot:.3f}"
                     )
-        for shape in shapes if "block" in cases else ():
-            for sm in smoothings:
-                tp = gravity_block(args.particles, "musl", shape, sm, args.steps)
-                records.append(
-                    _record("block2d", "musl", shape, sm, 2, tp.particles, tp.steps, tp.seconds)
-                )
-                progress.step(
-                    f"block {shape} {records[-1]['smoothing']}: "
-                    f"{tp.particle_steps_per_s:.3g} p-steps/s"
-                )
         for W in Ws if "bar" in cases else ():
             for shape in shapes:
                 for scheme in schemes:
@@ -331,7 +355,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     records = comm.bcast(records, root=0)
     report = {
         "bench": "mpm",
-        "engine": "numpy reference, one rank",
+        "engine": f"{args.backend}; block decomposed over {comm.size} rank(s), bars on one",
         "versions": versions(),
         "records": records,
         "rates": {},

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-__all__ = ["Particles", "lattice", "particles"]
+__all__ = ["Particles", "concat", "lattice", "particles", "take"]
 
 
 @dataclass
@@ -25,6 +25,8 @@ class Particles:
         stress_zz: out-of-plane stress σ_zz of plane strain (2D; zero otherwise),
             shape=(n,).
         plastic: accumulated plastic multiplier Σ Δλ (``plasticity``), shape=(n,).
+        ids: global particle ids (kept when particles move between MPI ranks), int64,
+            shape=(n,); ``arange(n)`` when not given.
     """
 
     x: np.ndarray
@@ -37,6 +39,12 @@ class Particles:
     lp: np.ndarray
     stress_zz: np.ndarray
     plastic: np.ndarray
+    ids: np.ndarray = field(default=None)  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        """Number the particles 0 … n−1 unless ids were given."""
+        if self.ids is None:
+            self.ids = np.arange(len(self.x), dtype=np.int64)
 
     @property
     def n(self) -> int:
@@ -93,6 +101,27 @@ def particles(
         lp=lp0.copy(),
         stress_zz=np.zeros(n),
         plastic=np.zeros(n),
+        ids=np.arange(n, dtype=np.int64),
+    )
+
+
+def take(p: Particles, index: np.ndarray) -> Particles:
+    """The particles selected by ``index`` (a boolean mask or ids into p), as copies.
+
+    Args:
+        p: particles.
+        index: shape=(n,) bool or shape=(k,) int.
+    """
+    return Particles(**{f.name: getattr(p, f.name)[index] for f in fields(Particles)})
+
+
+def concat(parts: list[Particles], dim: int) -> Particles:
+    """The particles of ``parts`` one after the other (none: an empty set of ``dim``)."""
+    if not parts:
+        empty = particles(np.zeros((0, dim)), np.zeros(0), 1.0, np.zeros((0, dim)))
+        return empty
+    return Particles(
+        **{f.name: np.concatenate([getattr(q, f.name) for q in parts]) for f in fields(Particles)}
     )
 
 

@@ -21,6 +21,16 @@ Schemes (``scheme``):
 The stress update is the elastic increment Δσ = D : Δε (D.8; ``Elastic``), the volume
 follows ρ^{k+1} = ρ^k / (1 + tr Δε) (D.9), and the deformation gradient
 G^{k+1} = (I + ∇v Δt) G^k (4.70) drives ``cpgimp``'s half-widths (4.69).
+
+Backends (``backend``): ``numba`` (default) runs the transfers as the compiled loops of
+:mod:`~geofrac.mpm.kernels` (numba is imported by the first such step, never by
+importing this module); ``numpy`` is the reference. They agree to round-off.
+
+With a ``domain`` (:mod:`~geofrac.mpm.parallel`) the step runs on one rank's slab: the
+nodal sums (mass, momentum, forces, MUSL's re-mapped momentum) of the nodes shared with
+other ranks are completed by a halo exchange, MLS smoothing sees its neighbours on
+other ranks as ghost particles, errors are raised on every rank alike, and particles
+that left the slab move to their new rank at the end of the step.
 """
 
 from __future__ import annotations
@@ -37,9 +47,11 @@ from geofrac.mpm.shapes import SHAPES, Weights, weights
 
 if TYPE_CHECKING:  # imported only by a step that uses them
     from geofrac.mpm.friction import Friction
+    from geofrac.mpm.parallel import Domain
     from geofrac.mpm.plasticity import DruckerPrager
 
 __all__ = [
+    "BACKENDS",
     "MASS_FLOOR",
     "SCHEMES",
     "Elastic",
@@ -53,6 +65,9 @@ __all__ = [
 #: Update schemes.
 SCHEMES = ("musl", "usf", "usavg")
 
+#: Step implementations: compiled loops, or the numpy reference.
+BACKENDS = ("numba", "numpy")
+
 #: Nodes lighter than this fraction of the heaviest node are inactive.
 MASS_FLOOR = 1e-12
 
@@ -61,7 +76,7 @@ class ParticlesLeftGrid(RunError):
     """Particles (or their GIMP boxes) reach beyond the background grid.
 
     Attributes:
-        ids: the particles, shape=(k,).
+        ids: the particles' ids (:attr:`Particles.ids`), shape=(k,).
         positions: their positions, shape=(k, dim).
     """
 
@@ -153,6 +168,11 @@ class StepSettings:
             cell size (:mod:`~geofrac.mpm.smoothing`), or None for no smoothing (the
             smoothing code is then not even imported).
         friction: a Coulomb friction boundary (:mod:`~geofrac.mpm.friction`), or None.
+        backend: one of :data:`BACKENDS`.
+        domain: this rank's part of a decomposed grid (:func:`geofrac.mpm.parallel.
+            decompose`); the step is then given ``domain.local`` and this rank's
+            particles, and ``fixed`` and ``friction`` refer to ``domain.local``'s nodes.
+            None: the whole grid on one process.
     """
 
     scheme: str
@@ -162,6 +182,8 @@ class StepSettings:
     fixed: np.ndarray = field(repr=False)
     smoothing: float | None = None
     friction: Friction | None = None
+    backend: str = "numba"
+    domain: Domain | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         """Check the names and the step."""
@@ -173,6 +195,8 @@ class StepSettings:
             raise ValueError(f"dt must be > 0, got {self.dt}")
         if self.smoothing is not None and not self.smoothing > 0:
             raise ValueError(f"smoothing radius factor must be > 0, got {self.smoothing}")
+        if self.backend not in BACKENDS:
+            raise ValueError(f"backend {self.backend!r} is not one of {', '.join(BACKENDS)}")
 
 
 def _scatter(w: Weights, contrib: np.ndarray, num_nodes: int) -> np.ndarray:
@@ -218,7 +242,13 @@ def _nodal_velocity(
     w: Weights, p: Particles, mass: np.ndarray, active: np.ndarray, fixed: np.ndarray
 ) -> np.ndarray:
     """v_i = Σ m_p v_p φ_ip / m_i (D.6, D.10), held components zero, shape=(N, dim)."""
-    mom = _to_grid(w, p.mass[:, None] * p.v, len(mass))
+    return _velocity(_to_grid(w, p.mass[:, None] * p.v, len(mass)), mass, active, fixed)
+
+
+def _velocity(
+    mom: np.ndarray, mass: np.ndarray, active: np.ndarray, fixed: np.ndarray
+) -> np.ndarray:
+    """v_i = (m v)_i / m_i on the active nodes, held components zero, shape=(N, dim)."""
     v = np.zeros_like(mom)
     v[active] = mom[active] / mass[active, None]
     v[fixed] = 0.0
@@ -231,7 +261,7 @@ def _update_stress(
     material: Elastic | DruckerPrager,
     v: np.ndarray,
     dt: float,
-    shape: str,
+    s: StepSettings,
     smooth_at: tuple[np.ndarray, float] | None,
 ) -> None:
     """Stress, volume and deformation gradient from the nodal velocity v (D.7-D.9, 4.70).
@@ -239,14 +269,28 @@ def _update_stress(
     ``smooth_at`` = (positions at the step's start, radius): the strain increments are
     replaced by their MLS fit there (4.57, 4.66) before they change stress and volume.
     """
-    L = np.matmul(np.swapaxes(v[w.nodes], 1, 2), w.grad)  # ∇v_p, shape=(n, dim, dim)
-    deps = 0.5 * dt * (L + np.swapaxes(L, 1, 2))
-    if smooth_at is not None:
-        from geofrac.mpm.smoothing import smooth
+    n, d = p.n, p.dim
+    if s.backend == "numba":
+        from geofrac.mpm import kernels
 
-        x0, h = smooth_at
-        n, d = p.n, p.dim
-        deps = smooth(x0, deps.reshape(n, d * d), h)[0].reshape(n, d, d)
+        L = kernels.scratch("L", (n, d, d))
+        kernels.velocity_gradient(w.nodes, w.grad, v, L)
+        deps = kernels.scratch("deps", (n, d, d))
+        kernels.strain_increment(L, dt, deps)
+    else:
+        L = np.matmul(np.swapaxes(v[w.nodes], 1, 2), w.grad)  # ∇v_p, shape=(n, dim, dim)
+        deps = 0.5 * dt * (L + np.swapaxes(L, 1, 2))
+    if smooth_at is not None:
+        deps = _smoothed(deps, smooth_at, s).reshape(n, d, d)
+    if isinstance(material, Elastic) and s.backend == "numba":
+        from geofrac.mpm import kernels
+
+        lam, mu = material.lame() if d > 1 else (0.0, 0.0)
+        kernels.elastic_update(
+            deps, L, dt, material.E, lam, mu, p.stress, p.stress_zz, p.volume, p.F,
+            p.lp0, p.lp, s.shape == "cpgimp",
+        )  # fmt: skip
+        return
     if isinstance(material, Elastic):
         p.stress += material.increment(deps)
         if p.dim == 2:
@@ -255,8 +299,25 @@ def _update_stress(
         _plastic_update(p, material, deps, L, dt)
     p.volume *= 1.0 + np.trace(deps, axis1=1, axis2=2)
     p.F = np.matmul(np.eye(p.dim) + dt * L, p.F)
-    if shape == "cpgimp":
+    if s.shape == "cpgimp":
         p.lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
+
+
+def _smoothed(deps: np.ndarray, smooth_at: tuple[np.ndarray, float], s: StepSettings) -> np.ndarray:
+    """The MLS fits of the strain increments (4.57), shape=(n, dim·dim).
+
+    With a domain the neighbours on other ranks take part as ghosts, so every fit is
+    the one of the whole set.
+    """
+    from geofrac.mpm.smoothing import smooth
+
+    x0, h = smooth_at
+    n = len(deps)
+    values = deps.reshape(n, -1)
+    if s.domain is not None:
+        gx, gv = s.domain.ghosts(x0, values, h)
+        x0, values = np.concatenate([x0, gx]), np.concatenate([values, gv])
+    return smooth(x0, values, h, s.backend)[0][:n]
 
 
 def _plastic_update(
@@ -287,62 +348,169 @@ def _plastic_update(
 def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettings) -> None:
     """Advance the particles by one step of ``s.scheme`` (in place).
 
+    With ``s.domain``, ``g`` is ``s.domain.local`` and ``p`` this rank's particles; every
+    rank calls the step, and at its end ``p``'s arrays hold the particles the rank owns
+    then.
+
     Raises:
         ParticlesLeftGrid: a particle (or its GIMP box) is outside the grid; nothing
-            was changed.
+            was changed. With a domain: on every rank, naming all such particles.
         geofrac.errors.RunError: after the step a particle's state is non-finite or
-            its volume is not positive (an unstable step).
+            its volume is not positive (an unstable step); with a domain also when a
+            particle's support reaches beyond its rank's halo. On every rank alike.
     """
     if not isinstance(material, Elastic) and p.dim == 1:
         raise ValueError("plasticity needs 2D or 3D particles (the 1D bar is elastic)")
+    dom = s.domain
     gimp = s.shape != "mpm"
-    out = g.outside(p.x, p.lp if gimp else 0.0)
-    if np.any(out):
-        ids = np.flatnonzero(out)
-        raise ParticlesLeftGrid(ids, p.x[ids])
-    w = weights(g, p.x, p.lp if gimp else None)
-    N, dt = g.num_nodes, s.dt
+    fast = s.backend == "numba"
+    if fast:
+        from geofrac.mpm import kernels
+    _check_inside(g, p, s)
+    if fast:
+        w = kernels.grid_weights(g, p.x, p.lp if gimp else None, reuse=True)
+    else:
+        w = weights(g, p.x, p.lp if gimp else None)
+    N, dt, dim = g.num_nodes, s.dt, p.dim
     smooth_at = None if s.smoothing is None else (p.x.copy(), s.smoothing * g.spacing)
-    mass = _to_grid(w, p.mass[:, None], N)[:, 0]
-    active = mass > MASS_FLOOR * mass.max()
-    v = _nodal_velocity(w, p, mass, active, s.fixed)
+    # MUSL's forces use σ^k: they join the first transfer (one pass, one exchange)
+    early = s.scheme == "musl"
+    if fast:
+        nodal = kernels.scratch("nodal", (N, 1 + dim + dim * early))
+        nodal.fill(0.0)
+    else:
+        nodal = np.zeros((N, 1 + dim + dim * early))  # mass, momentum (, force)
+    mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
+    if fast:
+        kernels.mass_momentum(w.nodes, w.phi, p.mass, p.v, mass, mom)
+        if early:
+            kernels.forces(w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, f)
+    else:
+        mass[:] = _to_grid(w, p.mass[:, None], N)[:, 0]
+        mom[:] = _to_grid(w, p.mass[:, None] * p.v, N)
+        if early:
+            f[:] = _forces(w, p, s.gravity, N)
+    if dom is not None:
+        nodal = dom.sum_halo(nodal)
+        mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
+    peak = mass.max(initial=0.0)
+    if dom is not None:
+        peak = dom.allmax(peak)
+    active = mass > MASS_FLOOR * peak
+    if fast:
+        v = kernels.scratch("v", (N, dim))
+        kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
+    else:
+        v = _velocity(mom, mass, active, s.fixed)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):
-        _update_stress(w, p, material, v, half * dt, s.shape, smooth_at)
-    a = np.zeros((N, p.dim))
-    f = _forces(w, p, s.gravity, N)
-    a[active] = f[active] / mass[active, None]
-    a[s.fixed] = 0.0
-    v_new = v + dt * a
+        _update_stress(w, p, material, v, half * dt, s, smooth_at)
+    if not early:
+        f = np.zeros((N, dim))
+        if fast:
+            kernels.forces(w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, f)
+        else:
+            f = _forces(w, p, s.gravity, N)
+        if dom is not None:
+            f = dom.sum_halo(f)
+    if fast:
+        a, v_new = kernels.scratch("a", (N, dim)), kernels.scratch("v_new", (N, dim))
+        kernels.nodal_acceleration(f, mass, MASS_FLOOR * peak, s.fixed, dt, v, a, v_new)
+    else:
+        a = np.zeros((N, dim))
+        a[active] = f[active] / mass[active, None]
+        a[s.fixed] = 0.0
+        v_new = v + dt * a
     if s.friction is not None:
         from geofrac.mpm.friction import apply_friction
 
         apply_friction(v_new, s.friction)
         a = (v_new - v) / dt  # the particles take the same, frictional, change
-    p.v += dt * _from_grid(w, a)  # D.4, D.16, D.24
-    p.x += dt * _from_grid(w, v_new)  # D.5, D.17, D.25
+    if fast:
+        kernels.from_grid2(w.nodes, w.phi, a, v_new, dt, p.v, p.x)  # D.4-D.5
+    else:
+        p.v += dt * _from_grid(w, a)  # D.4, D.16, D.24
+        p.x += dt * _from_grid(w, v_new)  # D.5, D.17, D.25
     if s.scheme in ("musl", "usavg"):
-        v = _nodal_velocity(w, p, mass, active, s.fixed)  # D.6, D.26
+        if fast:
+            mom = kernels.scratch("mom", (N, dim))
+            mom.fill(0.0)
+            kernels.momentum(w.nodes, w.phi, p.mass, p.v, mom)
+        else:
+            mom = _to_grid(w, p.mass[:, None] * p.v, N)
+        if dom is not None:
+            mom = dom.sum_halo(mom)
+        if fast:  # D.6, D.26
+            kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
+        else:
+            v = _velocity(mom, mass, active, s.fixed)
         if s.friction is not None:
             from geofrac.mpm.friction import apply_friction
 
             apply_friction(v, s.friction, sliding_only=True)
-        _update_stress(w, p, material, v, half * dt, s.shape, smooth_at)
-    _check(p)
+        _update_stress(w, p, material, v, half * dt, s, smooth_at)
+    _check(p, dom, fast)
+    if dom is not None:
+        dom.migrate(p)
 
 
-def _check(p: Particles) -> None:
+def _outside(g: Grid, p: Particles, gimp: bool, fast: bool) -> np.ndarray:
+    """Which particles (or their GIMP boxes) reach beyond the grid, shape=(n,)."""
+    if not fast:
+        return g.outside(p.x, p.lp if gimp else 0.0)
+    from geofrac.mpm import kernels
+
+    out = np.empty(p.n, dtype=bool)
+    kernels.outside(p.x, p.lp, gimp, g.origin, g.upper, out)
+    return out
+
+
+def _check_inside(g: Grid, p: Particles, s: StepSettings) -> None:
+    """Raise ParticlesLeftGrid when a particle (or its GIMP box) is outside the grid.
+
+    With a domain: against the whole grid, on every rank alike; then a RunError when a
+    particle's support reaches beyond its rank's sub-grid (the halo is too narrow).
+    """
+    gimp, fast = s.shape != "mpm", s.backend == "numba"
+    dom = s.domain
+    if dom is None:
+        out = _outside(g, p, gimp, fast)
+        if np.any(out):
+            raise ParticlesLeftGrid(p.ids[out], p.x[out])
+        return
+    out = _outside(dom.grid, p, gimp, fast)
+    ids, positions = dom.allgather_rows(p.ids[out], p.x[out])
+    if len(ids):
+        order = np.argsort(ids)
+        raise ParticlesLeftGrid(ids[order], positions[order])
+    if dom.any(bool(np.any(_outside(g, p, gimp, fast)))):
+        raise RunError(
+            f"a particle's support reaches beyond its rank's halo of {dom.halo} cells; "
+            "decompose with a wider halo"
+        )
+
+
+def _check(p: Particles, dom: Domain | None = None, fast: bool = False) -> None:
     """Raise RunError when a particle's state turned non-finite or its volume non-positive.
 
     A NaN is never carried into the next step: the error names the first particles.
+    With a domain every rank raises it, naming the particles of all ranks.
     """
-    bad = ~(
-        np.all(np.isfinite(p.x), axis=1)
-        & np.all(np.isfinite(p.stress), axis=(1, 2))
-        & (p.volume > 0)
-    )
-    if np.any(bad):
-        ids = np.flatnonzero(bad)
+    if fast:
+        from geofrac.mpm import kernels
+
+        bad = np.empty(p.n, dtype=bool)
+        kernels.bad_particles(p.x, p.stress, p.volume, bad)
+    else:
+        bad = ~(
+            np.all(np.isfinite(p.x), axis=1)
+            & np.all(np.isfinite(p.stress), axis=(1, 2))
+            & (p.volume > 0)
+        )
+    ids = p.ids[bad]
+    if dom is not None:
+        ids = np.sort(dom.allgather_rows(ids, p.x[bad])[0])
+    if len(ids):
         raise RunError(
             f"{len(ids)} particle(s) reached a non-finite state or a non-positive volume "
             f"(first: {ids[:5].tolist()}); reduce the Courant number or check the material"

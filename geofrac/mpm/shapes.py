@@ -22,7 +22,7 @@ import numpy as np
 
 from geofrac.mpm.grid import Grid
 
-__all__ = ["SHAPES", "Weights", "gimp_1d", "hat_1d", "weights"]
+__all__ = ["SHAPES", "Weights", "gimp_1d", "gimp_nodes", "hat_1d", "weights"]
 
 #: Shape function kinds.
 SHAPES = ("mpm", "ugimp", "cpgimp")
@@ -102,6 +102,12 @@ def gimp_1d(r: np.ndarray, L: float, lp: np.ndarray) -> tuple[np.ndarray, np.nda
     return phi, dphi
 
 
+def gimp_nodes(L: float, lp: np.ndarray) -> int:
+    """Nodes per direction that hold every GIMP support of half-widths lp (any shape)."""
+    widest = float(lp.max()) if lp.size else 0.0
+    return int(np.floor(2 * (L + widest) / L - 1e-12)) + 1
+
+
 def _per_direction(
     g: Grid, x: np.ndarray, lp: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -115,7 +121,7 @@ def _per_direction(
         idx = start[:, :, None] + np.arange(2)
         phi, dphi = hat_1d(s.ravel(), L)
         return idx, phi.reshape(n, dim, 2), dphi.reshape(n, dim, 2)
-    k1 = int(np.floor(2 * (L + float(lp.max())) / L - 1e-12)) + 1
+    k1 = gimp_nodes(L, lp)
     start = np.floor((x - L - lp - g.origin) / L).astype(np.int64) + 1
     idx = start[:, :, None] + np.arange(k1)
     r = x[:, :, None] - (g.origin[:, None] + L * idx)

@@ -64,6 +64,8 @@ def test_bench_mpm_block_records_2d_throughput(cli, tmp_path):
         ("block2d", 2, 400, "mls 2 cells"),
     ]
     assert all(r["particle_steps_per_s"] > 0 for r in records)
+    assert all(r["ranks"] == 1 and r["warmup_seconds"] >= 0 for r in records)
+    assert all(r["backend"] == "numba" and len(r["per_rank"]) == 1 for r in records)
 
 
 def test_bench_mpm_refuses_unknown_names(cli, capsys, tmp_path):

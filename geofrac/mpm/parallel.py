@@ -1,0 +1,224 @@
+"""Domain decomposition of the MPM grid over MPI ranks (slabs along axis 0).
+
+The grid's cells along axis 0 are split evenly between the ranks; each rank owns the
+particles in its slab and steps them on its own sub-grid, the slab plus ``halo`` ghost
+cells each side (clipped at the grid's ends). A step with a :class:`Domain` in its
+settings (:class:`geofrac.mpm.schemes.StepSettings`)
+
+- completes the nodal sums of the nodes shared with other ranks: every rank adds the
+  partial sums of all ranks whose sub-grids hold the node, in rank order, so a shared
+  node has the same value, to the last bit, on every rank that holds it;
+- sends each rank's MLS ghost particles (positions at the step's start and strain
+  increments of the particles within the smoothing radius of another slab);
+- moves the particles that left a slab to their new rank at the end of the step.
+
+Only this module speaks MPI (mpi4py; the communicator is the caller's), and only
+through the small methods of :class:`Domain`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from geofrac.mpm.grid import Grid
+from geofrac.mpm.particles import Particles, concat, take
+
+__all__ = ["Domain", "decompose"]
+
+
+@dataclass(frozen=True, eq=False)
+class Domain:
+    """One rank's part of a decomposed grid.
+
+    Attributes:
+        comm: the MPI communicator (mpi4py).
+        grid: the whole grid.
+        local: this rank's sub-grid: its slab of cells along axis 0 plus ``halo`` ghost
+            cells each side, clipped at the grid's ends; node positions are the global
+            ones.
+        halo: ghost cells each side.
+        cuts: the first cell (along axis 0) of each rank's slab, then the number of
+            cells, shape=(size + 1,).
+        planes: the first and last node plane (along axis 0) of each rank's sub-grid,
+            shape=(size, 2).
+    """
+
+    comm: Any
+    grid: Grid
+    local: Grid
+    halo: int
+    cuts: np.ndarray
+    planes: np.ndarray
+
+    @property
+    def rank(self) -> int:
+        """This rank."""
+        return int(self.comm.rank)
+
+    def owner(self, x: np.ndarray) -> np.ndarray:
+        """The rank owning each position (its cell's slab along axis 0), shape=(n,).
+
+        Args:
+            x: positions, shape=(n, dim).
+        """
+        g = self.grid
+        cell = np.floor((x[:, 0] - g.origin[0]) / g.spacing).astype(np.int64)
+        cell = np.clip(cell, 0, g.cells[0] - 1)
+        return np.searchsorted(self.cuts, cell, side="right") - 1
+
+    def distribute(self, p: Particles) -> Particles:
+        """This rank's particles of the whole set ``p`` (identical on every rank)."""
+        return take(p, self.owner(p.x) == self.rank)
+
+    def gather(self, p: Particles) -> Particles | None:
+        """All ranks' particles sorted by id on rank 0; None on the others."""
+        parts = self.comm.gather(p, root=0)
+        if self.rank != 0:
+            return None
+        whole = concat(parts, p.dim)
+        return take(whole, np.argsort(whole.ids, kind="stable"))
+
+    def allsum(self, value: float | np.ndarray) -> float | np.ndarray:
+        """The sum over the ranks (allreduce)."""
+        from mpi4py import MPI
+
+        if isinstance(value, np.ndarray):
+            out = np.empty_like(value)
+            self.comm.Allreduce(np.ascontiguousarray(value), out, op=MPI.SUM)
+            return out
+        return self.comm.allreduce(value, op=MPI.SUM)
+
+    def allmax(self, value: float) -> float:
+        """The largest value over the ranks."""
+        from mpi4py import MPI
+
+        return float(self.comm.allreduce(float(value), op=MPI.MAX))
+
+    def any(self, flag: bool) -> bool:
+        """Whether the flag is set on any rank."""
+        from mpi4py import MPI
+
+        return bool(self.comm.allreduce(bool(flag), op=MPI.LOR))
+
+    def allgather_rows(self, *arrays: np.ndarray) -> list[np.ndarray]:
+        """Each array's rows of all ranks, in rank order (every rank gets them all)."""
+        parts = self.comm.allgather(arrays)
+        return [np.concatenate([q[i] for q in parts]) for i in range(len(arrays))]
+
+    def _plane_nodes(self) -> int:
+        """Nodes per node plane along axis 0."""
+        return int(np.prod(self.grid.shape[1:]))
+
+    def sum_halo(self, values: np.ndarray) -> np.ndarray:
+        """Complete nodal sums of this rank's sub-grid with the other ranks' parts.
+
+        Each node's value becomes the sum, in rank order, of the partial sums of every
+        rank whose sub-grid holds it, so all those ranks hold the same value.
+
+        Args:
+            values: this rank's partial sums on ``local``'s nodes, shape=(N, c).
+
+        Returns:
+            The complete sums, shape=(N, c).
+        """
+        r = self.rank
+        a, b = self.planes[r]
+        per = self._plane_nodes()
+        values = np.ascontiguousarray(values)
+        others = [
+            q
+            for q in range(len(self.planes))
+            if q != r and max(a, self.planes[q][0]) <= min(b, self.planes[q][1])
+        ]
+        if not others:
+            return values
+        received, requests = {}, []
+        for q in others:
+            lo, hi = max(a, self.planes[q][0]), min(b, self.planes[q][1])
+            part = values[(lo - a) * per : (hi - a + 1) * per]
+            received[q] = np.empty_like(part)
+            requests.append(self.comm.Irecv(received[q], source=q, tag=71))
+            requests.append(self.comm.Isend(np.ascontiguousarray(part), dest=q, tag=71))
+        from mpi4py import MPI
+
+        MPI.Request.Waitall(requests)
+        out = np.zeros_like(values)
+        for q in sorted([*others, r]):
+            if q == r:
+                out += values
+                continue
+            lo, hi = max(a, self.planes[q][0]), min(b, self.planes[q][1])
+            out[(lo - a) * per : (hi - a + 1) * per] += received[q]
+        return out
+
+    def ghosts(self, x: np.ndarray, values: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+        """Other ranks' particles within ``h`` of this rank's slab (MLS ghosts).
+
+        Args:
+            x: this rank's positions (at the step's start, all in its slab),
+                shape=(n, dim).
+            values: their values, shape=(n, c).
+            h: the radius.
+
+        Returns:
+            The ghosts' positions, shape=(k, dim), and values, shape=(k, c), in rank
+            order.
+        """
+        g = self.grid
+        edges = g.origin[0] + g.spacing * self.cuts
+        send = []
+        for q in range(len(self.planes)):
+            near = (x[:, 0] >= edges[q] - h) & (x[:, 0] <= edges[q + 1] + h)
+            send.append(None if q == self.rank or not near.any() else (x[near], values[near]))
+        got = [item for item in self.comm.alltoall(send) if item is not None]
+        if not got:
+            return np.zeros((0, x.shape[1])), np.zeros((0, values.shape[1]))
+        return np.concatenate([a for a, _ in got]), np.concatenate([b for _, b in got])
+
+    def migrate(self, p: Particles) -> None:
+        """Send the particles that left this rank's slab to their owners (p in place)."""
+        owner = self.owner(p.x)
+        stay = owner == self.rank
+        leaving = not stay.all()
+        if not self.any(leaving):
+            return
+        send = [
+            None if q == self.rank or not np.any(owner == q) else take(p, owner == q)
+            for q in range(len(self.planes))
+        ]
+        arrived = [item for item in self.comm.alltoall(send) if item is not None]
+        if not leaving and not arrived:
+            return
+        new = concat([take(p, stay), *arrived], p.dim)
+        for f in fields(Particles):
+            setattr(p, f.name, getattr(new, f.name))
+
+
+def decompose(g: Grid, comm: Any, halo: int = 2) -> Domain:
+    """Split ``g`` into slabs of cells along axis 0, evenly by rank.
+
+    Args:
+        g: the whole grid.
+        comm: the MPI communicator (mpi4py).
+        halo: ghost cells each side of a slab (GIMP supports and MLS radii must fit in
+            it; a step raises when one does not).
+
+    Raises:
+        ValueError: fewer cells along axis 0 than ranks, or a negative halo.
+    """
+    size, rank = int(comm.size), int(comm.rank)
+    cells = g.cells[0]
+    if cells < size:
+        raise ValueError(f"decompose: {cells} cells along axis 0 cannot feed {size} ranks")
+    if halo < 0:
+        raise ValueError(f"decompose: halo must be >= 0, got {halo}")
+    cuts = np.array([(r * cells) // size for r in range(size + 1)], dtype=np.int64)
+    planes = np.stack([np.maximum(cuts[:-1] - halo, 0), np.minimum(cuts[1:] + halo, cells)], 1)
+    a, b = planes[rank]
+    origin = g.origin.copy()
+    origin[0] = g.origin[0] + g.spacing * a
+    local = Grid(origin, g.spacing, (int(b - a), *g.cells[1:]))
+    return Domain(comm, g, local, int(halo), cuts, planes)

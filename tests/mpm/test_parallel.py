@@ -1,0 +1,191 @@
+"""Domain decomposition of the MPM (geofrac.mpm.parallel): decomposed runs equal serial ones.
+
+The MPI tests run under ``mpiexec -n 2 python -m mpi4py -m pytest --only-mpi``: every rank
+runs the serial scene itself and the decomposed one over COMM_WORLD, and rank 0 compares
+the gathered particles.
+"""
+
+import copy
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from geofrac.errors import RunError
+from geofrac.mpm.friction import friction
+from geofrac.mpm.grid import grid
+from geofrac.mpm.parallel import decompose
+from geofrac.mpm.particles import lattice
+from geofrac.mpm.plasticity import DruckerPrager
+from geofrac.mpm.schemes import Elastic, ParticlesLeftGrid, StepSettings, step, time_step
+
+
+def _settings(g, scheme, shape, smoothing, dt, backend="numba", domain=None):
+    """Gravity, the ground below y = 0.5 held, a wall at x < 0.5, friction on the floor."""
+    X = g.nodes()
+    fixed = np.zeros((g.num_nodes, 2), dtype=bool)
+    fixed[(X[:, 1] < 0.5 - 1e-9) | (X[:, 0] < 0.5 - 1e-9)] = True
+    floor = np.flatnonzero(np.isclose(X[:, 1], 0.5))
+    fr = friction(floor, np.tile([0.0, -1.0], (len(floor), 1)), 0.3)
+    gravity = np.array([0.0, -9.81])
+    return StepSettings(scheme, shape, dt, gravity, fixed, smoothing, fr, backend, domain)
+
+
+def _scene(material):
+    """A 2 m × 1 m block sliding at 2 m/s on a floor, across the middle of a 24-cell grid."""
+    g = grid([0.0, 0.0], 0.25, [24, 12])
+    p = lattice([1.5, 0.5], [16, 8], 0.125, 1000.0)
+    p.v[:, 0] = 2.0
+    p.v[:, 1] = 0.3 * np.sin(3.0 * p.x[:, 0])  # some shear, so stresses vary
+    dt = time_step(0.2, g.spacing, material, 1000.0, 2)
+    return g, p, dt
+
+
+CASES = [
+    ("musl", "mpm", None, "elastic"),
+    ("usf", "cpgimp", None, "elastic"),
+    ("musl", "cpgimp", 2.0, "elastic"),
+    ("usf", "mpm", 2.0, "elastic"),
+    ("usavg", "ugimp", None, "elastic"),
+    ("musl", "cpgimp", None, "drucker-prager"),
+]
+
+
+def _material(name):
+    if name == "elastic":
+        return Elastic(1e5, 0.3)
+    return DruckerPrager(1e5, 0.3, friction_angle=20.0, cohesion=5000.0)
+
+
+def _run(comm, scheme, shape, smoothing, material_name, steps, backend="numba"):
+    """The scene serially (on this rank) and decomposed over comm: (serial, gathered, totals)."""
+    mat = _material(material_name)
+    g, whole, dt = _scene(mat)
+    serial = copy.deepcopy(whole)
+    s = _settings(g, scheme, shape, smoothing, dt, backend)
+    dom = decompose(g, comm)
+    mine = dom.distribute(whole)
+    sd = _settings(dom.local, scheme, shape, smoothing, dt, backend, dom)
+    crossed = set()
+    start_owner = dom.owner(whole.x)
+    for _ in range(steps):
+        step(g, serial, mat, s)
+        step(dom.local, mine, mat, sd)
+        crossed.update(mine.ids[start_owner[mine.ids] != comm.rank].tolist())
+    totals = (dom.allsum(float(mine.mass.sum())), dom.allsum(mine.momentum()))
+    crossed = dom.allsum(len(crossed))
+    return serial, dom.gather(mine), totals, crossed
+
+
+def _compare(serial, gathered, rtol=1e-10):
+    np.testing.assert_array_equal(gathered.ids, serial.ids)
+    for name in ("x", "v", "stress", "stress_zz", "volume", "F", "lp", "plastic"):
+        a, b = getattr(serial, name), getattr(gathered, name)
+        scale = max(float(np.abs(a).max()), 1e-300)
+        np.testing.assert_allclose(b, a, rtol=rtol, atol=rtol * scale, err_msg=name)
+
+
+@pytest.mark.mpi(min_size=2)
+@pytest.mark.parametrize(("scheme", "shape", "smoothing", "material"), CASES)
+def test_decomposed_run_equals_the_serial_one(scheme, shape, smoothing, material):
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    serial, gathered, (mass, momentum), crossed = _run(
+        comm, scheme, shape, smoothing, material, steps=250
+    )
+    assert crossed > 10  # particles changed ranks
+    assert mass == pytest.approx(serial.mass.sum(), rel=1e-14)
+    np.testing.assert_allclose(momentum, serial.momentum(), rtol=1e-10, atol=1e-10)
+    if comm.rank == 0:
+        assert serial.x[:, 0].max() > 4.0  # the block slid across the slab boundary
+        if material == "drucker-prager":
+            assert serial.plastic.max() > 0
+        _compare(serial, gathered)
+    else:
+        assert gathered is None
+
+
+@pytest.mark.mpi(min_size=2)
+def test_decomposed_numpy_reference_equals_the_serial_one():
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    serial, gathered, _, _ = _run(comm, "musl", "cpgimp", 2.0, "elastic", 60, "numpy")
+    if comm.rank == 0:
+        _compare(serial, gathered)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_particle_leaving_the_grid_raises_on_every_rank():
+    """A particle flying off the right end (last rank's slab): every rank raises, no hang."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    mat = Elastic(1e5, 0.3)
+    g, whole, dt = _scene(mat)
+    whole.x[5] = [5.9, 2.0]  # alone, far from the block, near the right end
+    whole.v[5] = [50.0, 0.0]
+    dom = decompose(g, comm)
+    mine = dom.distribute(whole)
+    sd = _settings(dom.local, "musl", "mpm", None, dt, domain=dom)
+    with pytest.raises(ParticlesLeftGrid) as info:
+        for _ in range(100):
+            step(dom.local, mine, mat, sd)
+    assert info.value.ids.tolist() == [5]
+    flags = comm.allgather(True)
+    assert all(flags)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_unstable_step_raises_on_every_rank():
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    mat = Elastic(1e5, 0.3)
+    g, whole, dt = _scene(mat)
+    dom = decompose(g, comm)
+    mine = dom.distribute(whole)
+    sd = _settings(dom.local, "musl", "mpm", None, 40 * dt, domain=dom)  # Courant 8
+    with pytest.raises(RunError):
+        for _ in range(50):
+            step(dom.local, mine, mat, sd)
+    assert all(comm.allgather(True))
+
+
+def test_slabs_cover_the_grid_with_halos():
+    """Cells split evenly by rank; sub-grids are the slab plus the halo, clipped."""
+    g = grid([1.0, -2.0], 0.5, [10, 4])
+    doms = [decompose(g, SimpleNamespace(rank=r, size=3), halo=2) for r in range(3)]
+    np.testing.assert_array_equal(doms[0].cuts, [0, 3, 6, 10])
+    assert [d.local.cells for d in doms] == [(5, 4), (7, 4), (6, 4)]
+    np.testing.assert_allclose([d.local.origin[0] for d in doms], [1.0, 1.5, 3.0])
+    np.testing.assert_allclose(doms[2].local.upper, g.upper)
+    # owners by cell along axis 0; the upper boundary belongs to the last slab
+    x = np.array([[1.0, 0.0], [2.49, 0.0], [2.5, 0.0], [6.0, 0.0]])
+    np.testing.assert_array_equal(doms[1].owner(x), [0, 0, 1, 2])
+    with pytest.raises(ValueError, match="cannot feed"):
+        decompose(grid([0.0], 1.0, [2]), SimpleNamespace(rank=0, size=3))
+
+
+def test_one_rank_domain_equals_the_plain_step():
+    from mpi4py import MPI
+
+    comm = MPI.COMM_SELF
+    serial, gathered, _, _ = _run(comm, "musl", "cpgimp", 2.0, "elastic", 20)
+    _compare(serial, gathered, rtol=0.0)  # one rank: the same sums in the same order
+
+
+@pytest.mark.mpi(min_size=2)
+def test_throughput_block_runs_decomposed():
+    """``bench mpm --cases block`` under mpiexec: all ranks step their own slabs."""
+    from mpi4py import MPI
+
+    from geofrac.mpm.block import gravity_block
+
+    comm = MPI.COMM_WORLD
+    tp = gravity_block(1600, "musl", "cpgimp", 2.0, steps=3, comm=comm)
+    assert tp.ranks == comm.size and len(tp.per_rank) == comm.size
+    assert tp.particles == 1600
+    assert all(r > 0 for r in tp.per_rank)
+    assert sum(tp.per_rank) == pytest.approx(tp.particle_steps_per_s, rel=1e-9)
