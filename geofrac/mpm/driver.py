@@ -340,6 +340,7 @@ def simulate(
         if csv is not None:
             csv.close()
     seconds = time.perf_counter() - t_wall
+    probes = comm.bcast(probes, root=0)  # rank 0 gathered them; every rank returns the same
     results: dict[str, Any] = {
         "particles": run.total,
         "steps": run.steps,

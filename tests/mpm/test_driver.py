@@ -4,6 +4,7 @@ import csv
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -79,6 +80,59 @@ def test_the_impact_bar_scene_reaches_eq_4_75_behind_the_wave(tmp_path):
     # the scene is the library's benchmark set-up (geofrac.mpm.bar.impact_bar), step for step
     error = np.sqrt(np.mean((ratio - 1) ** 2))
     assert error == pytest.approx(impact_bar("mpm", "musl").error, rel=1e-9)
+
+
+COARSE_SLIDE = [
+    "geometry.parameters.h=1.5",
+    "mpm.grid.spacing=2.0",
+    "mpm.t_end=4.0",
+    "mpm.frames=2",
+]
+
+
+def test_a_coarse_landslide_runs_and_a_stronger_soil_moves_less(tmp_path):
+    runout = {}
+    for angle in (5.0, 40.0):
+        out = tmp_path / f"phi{angle:g}"
+        scene = load_scene(
+            JOBS / "landslide_kita_uebaru.toml",
+            [*COARSE_SLIDE, f"plasticity.friction_angle={angle}"],
+            out=out,
+        )
+        results = run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)["results"]
+        assert results["friction_angle_deg"] == angle
+        frame = _last_frame(out)
+        assert np.all(np.isfinite(frame["stress"]))
+        assert np.max(frame["plastic_strain"]) > 0  # the soil yields somewhere
+        runout[angle] = results["runout_m"]
+    assert runout[5.0] > 0.5  # the weak soil moves out over the toe
+    assert runout[40.0] < 0.5 * runout[5.0]  # a strong one much less
+
+
+@pytest.mark.mpi(min_size=2)
+def test_a_decomposed_landslide_equals_the_serial_one(tmp_path_factory):
+    """The same scene on 1 rank (each rank alone) and on all ranks: same particles."""
+    comm = MPI.COMM_WORLD
+    base = comm.bcast(str(tmp_path_factory.mktemp("ls")) if comm.rank == 0 else None)
+    overrides = [*COARSE_SLIDE, "mpm.t_end=1.0", "plasticity.friction_angle=10"]
+    serial_out = tmp_path_factory.mktemp(f"serial{comm.rank}")
+    serial = run_mpm_scene(
+        load_scene(JOBS / "landslide_kita_uebaru.toml", overrides, out=serial_out),
+        MPI.COMM_SELF,
+        verbose=False,
+    )["results"]
+    scene = load_scene(JOBS / "landslide_kita_uebaru.toml", overrides, out=f"{base}/par")
+    parallel = run_mpm_scene(scene, comm, verbose=False)["results"]
+    assert parallel["particles"] == serial["particles"]
+    assert parallel["runout_m"] == pytest.approx(serial["runout_m"], rel=1e-9, abs=1e-9)
+    for name, history in serial["probes"].items():
+        np.testing.assert_allclose(
+            parallel["probes"][name][-1]["x"], history[-1]["x"], rtol=1e-9, atol=1e-9
+        )
+    if comm.rank == 0:
+        a, b = _last_frame(serial_out), _last_frame(Path(f"{base}/par"))
+        np.testing.assert_allclose(b["geometry"], a["geometry"], rtol=1e-9, atol=1e-8)
+        np.testing.assert_allclose(b["stress"], a["stress"], rtol=1e-7, atol=1e-3)
 
 
 PROBE = """
