@@ -1,4 +1,4 @@
-"""Material Point Method (seed chapter 4, App. D): pure numpy reference of the engine.
+"""Material Point Method (seed chapter 4, App. D): the engine.
 
 - :mod:`~geofrac.mpm.grid`: the regular background (Euler) grid;
 - :mod:`~geofrac.mpm.shapes`: particle–node weights φ_ip and gradients, linear hat
@@ -6,9 +6,14 @@
   tensor products in 2D and 3D (4.32);
 - :mod:`~geofrac.mpm.particles`: particle state;
 - :mod:`~geofrac.mpm.schemes`: one explicit step of MUSL (D.1-D.9), USF (D.10-D.17) or
-  USAVG (D.18-D.29), with the transfers particle → grid → particle.
+  USAVG (D.18-D.29), with the transfers particle → grid → particle (numpy reference or
+  compiled);
+- :mod:`~geofrac.mpm.kernels`: the compiled (numba) loops of a step, imported only by
+  a step that uses them;
+- :mod:`~geofrac.mpm.parallel`: slab decomposition over MPI ranks (mpi4py only, imported
+  when called).
 
-Nothing here imports MPI or DOLFINx.
+Nothing here imports DOLFINx; importing the package imports neither numba nor MPI.
 """
 
 __all__: list[str] = []
