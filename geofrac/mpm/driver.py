@@ -163,6 +163,11 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
             "grid; enlarge mpm.grid or its padding"
         )
     material, phi = _material(scene)
+    gravity = _config(scene, "gravity")
+    if spec.initial_stress == "geostatic":
+        from geofrac.mpm.seeding import geostatic
+
+        geostatic(p, np.asarray(gravity.acceleration), scene.material.nu, spec.spacing)
     density = float(np.min(p.density))  # the fastest wave: the lightest particle
     if spec.dt is not None:
         dt = spec.dt
@@ -182,7 +187,6 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
         local = domain.local
         p = domain.distribute(p)
     total = comm.allreduce(p.n)
-    gravity = _config(scene, "gravity")
     smoothing = _config(scene, "mls_smoothing")
     fric = _config(scene, "friction")
     fixed, f_nodes, f_normals = held(

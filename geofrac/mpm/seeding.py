@@ -14,7 +14,7 @@ import numpy as np
 
 from geofrac.mpm.particles import Particles, lattice, particles
 
-__all__ = ["from_cells", "from_lattice", "mesh_cells"]
+__all__ = ["from_cells", "from_lattice", "geostatic", "mesh_cells"]
 
 
 def from_lattice(
@@ -100,3 +100,46 @@ def mesh_cells(
     if not out:
         raise RuntimeError(f"'{file.name}' has no meshed {dim}D physical group")
     return out, polyline
+
+
+def geostatic(p: Particles, gravity: np.ndarray, nu: float, width: float) -> None:
+    """Give the particles the at-rest stress of their own weight (in place).
+
+    The vertical stress of a particle is the weight of the particles above it in its
+    column per unit column area, σ_v = −Σ_above m_q |g| / w^(dim−1) (its own weight counts
+    half), and the horizontal ones are K₀ σ_v with K₀ = ν / (1 − ν) (in 2D also the
+    out-of-plane σ_zz of plane strain). Columns are bins of width ``width`` across the
+    vertical axis, which is the last one and must carry all of gravity.
+
+    Args:
+        p: the particles, 2D or 3D.
+        gravity: body force per mass, shape=(dim,), pointing along −(last axis).
+        nu: Poisson's ratio.
+        width: column width (the grid cell size).
+    """
+    dim = p.dim
+    g = np.asarray(gravity, dtype=float)
+    if dim < 2 or np.any(g[:-1] != 0) or not g[-1] < 0:
+        raise ValueError("geostatic stress needs 2D/3D particles and gravity along -(last axis)")
+    cols = np.floor(p.x[:, :-1] / width).astype(np.int64)
+    _, column = np.unique(cols, axis=0, return_inverse=True)
+    height = p.x[:, -1]
+    order = np.lexsort((-height, column.ravel()))  # by column, top first
+    col, y = column.ravel()[order], height[order]
+    weight = p.mass[order] * -g[-1] / width ** (dim - 1)
+    # particles at one height in a column form a layer: each sees the layers above it
+    # plus half its own layer
+    layer = np.r_[0, np.cumsum((np.diff(col) != 0) | (np.diff(y) != 0))]
+    layer_weight = np.bincount(layer, weights=weight)
+    first = np.r_[True, np.diff(col) != 0][np.r_[0, np.flatnonzero(np.diff(layer)) + 1]]
+    above = np.cumsum(layer_weight) - layer_weight
+    above -= np.maximum.accumulate(np.where(first, above, 0.0))  # restart per column
+    sigma_v = np.empty(p.n)
+    sigma_v[order] = -(above + 0.5 * layer_weight)[layer]
+    k0 = nu / (1.0 - nu)
+    p.stress[:] = 0.0
+    for a in range(dim - 1):
+        p.stress[:, a, a] = k0 * sigma_v
+    p.stress[:, -1, -1] = sigma_v
+    if dim == 2:
+        p.stress_zz[:] = k0 * sigma_v

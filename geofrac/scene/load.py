@@ -405,6 +405,17 @@ def _mpm_scene(
         EffectSpec(n, effects.load(n).configure(_effect_table(file, data, n), ctx))
         for n in declared
     )
+    if spec.initial_stress == "geostatic":
+        gravity = next((e.config for e in specs if e.name == "gravity"), None)
+        if gravity is None:
+            raise SceneError(file, "mpm.initial_stress", "'geostatic' needs the gravity effect")
+        g = gravity.acceleration
+        if any(c != 0 for c in g[:-1]) or not g[-1] < 0:
+            raise SceneError(
+                file,
+                "mpm.initial_stress",
+                f"'geostatic' needs gravity along -{'yz'[spec.dim - 2]}, got {list(g)}",
+            )
     return Scene(
         **common,
         effects=specs,

@@ -217,6 +217,8 @@ class MpmSpec:
             ``friction`` effect lists ``"bed"``, frictional (eqs. 4.44-4.47).
         bed_group: 2D only: a physical curve group of the geometry whose mesh nodes,
             sorted by x, form the bed polyline instead (None: ``bed`` is used).
+        initial_stress: ``"none"`` (particles start stress-free) or ``"geostatic"`` (the
+            at-rest stress of their own weight, K₀ = ν/(1 − ν); needs ``gravity``).
         courant: Courant number α of Δt = α L / c (eq. 4.72), or None when ``dt`` is set.
         dt: fixed time step, or None.
         t_end: end time.
@@ -241,6 +243,7 @@ class MpmSpec:
     velocity: tuple[float, ...]
     particles: ParticleSource
     bed_group: str | None = None
+    initial_stress: str = "none"
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ MPM_KEYS: dict[str, tuple[str, ...]] = {
         "t_end",
         "frames",
         "velocity",
+        "initial_stress",
     ),
     "mpm.grid": ("lower", "upper", "spacing", "padding"),
     "mpm.particles": ("lower", "counts", "spacing", "density"),
@@ -209,6 +210,9 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     t_end = float(t.number("t_end", required=True, positive=True))  # type: ignore[arg-type]
     frames = int(t.number("frames", default=DEFAULT_FRAMES, positive=True, integer=True))  # type: ignore[arg-type]
     velocity = t.vector("velocity", dim) if t.has("velocity") else (0.0,) * dim
+    initial_stress = t.string("initial_stress", default="none", choices=("none", "geostatic"))
+    if initial_stress == "geostatic" and dim == 1:
+        raise t.error("initial_stress", "'geostatic' applies to 2D and 3D scenes")
     walls = _walls(file, t.data.get("walls", {}), dim)
     bed = _bed(file, t.data["bed"], dim, geometry) if t.has("bed") else ()
     return MpmSpec(
@@ -228,6 +232,7 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
         frames=frames,
         velocity=velocity,
         particles=source,
+        initial_stress=initial_stress,
     )
 
 

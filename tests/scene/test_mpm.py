@@ -101,3 +101,15 @@ def test_an_unknown_density_group_is_named():
         load_scene(JOBS / "landslide_kita_uebaru.toml", ["mpm.particles.density.wek=1.0"])
     assert info.value.key == "mpm.particles.density.wek"
     assert "did you mean 'weak'" in info.value.message
+
+
+def test_geostatic_initial_stress_needs_2d_and_vertical_gravity(tmp_path):
+    with pytest.raises(SceneError, match="2D and 3D") as info:
+        load_scene(_bar(tmp_path), ["mpm.initial_stress=geostatic"])
+    assert info.value.key == "mpm.initial_stress"
+    slide = JOBS / "landslide_kita_uebaru.toml"
+    tilted = ["mpm.initial_stress=geostatic", "gravity.acceleration=[1.0, -9.81]"]
+    with pytest.raises(SceneError, match="gravity along -y") as info:
+        load_scene(slide, tilted)
+    assert info.value.key == "mpm.initial_stress"
+    assert load_scene(slide, ["mpm.initial_stress=geostatic"]).mpm.initial_stress == "geostatic"
