@@ -16,7 +16,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from geofrac.io.series import hdf_item, write_xml
+from geofrac.io.series import hdf_item, temporal_collection, write_xml
 
 __all__ = ["PointSeries"]
 
@@ -67,14 +67,7 @@ class PointSeries:
 
     def _write_xml(self) -> None:
         h5, n = self.h5.name, self.count
-        root = ET.Element("Xdmf", Version="3.0")
-        series = ET.SubElement(
-            ET.SubElement(root, "Domain"),
-            "Grid",
-            Name=self.path.stem,
-            GridType="Collection",
-            CollectionType="Temporal",
-        )
+        root, series = temporal_collection(self.path.stem)
         for i, (t, kinds) in enumerate(self.frames):
             grid = ET.SubElement(series, "Grid", Name=f"frame_{i}", GridType="Uniform")
             top = ET.SubElement(

@@ -14,7 +14,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-__all__ = ["XdmfSeries", "hdf_item", "write_xml"]
+__all__ = ["XdmfSeries", "hdf_item", "temporal_collection", "write_xml"]
 
 _TOPOLOGY = {2: "Polyline", 3: "Triangle"}
 
@@ -68,14 +68,7 @@ class XdmfSeries:
 
     def _write_xml(self) -> None:
         h5 = self.h5.name
-        root = ET.Element("Xdmf", Version="3.0")
-        series = ET.SubElement(
-            ET.SubElement(root, "Domain"),
-            "Grid",
-            Name=self.path.stem,
-            GridType="Collection",
-            CollectionType="Temporal",
-        )
+        root, series = temporal_collection(self.path.stem)
         for i, (t, fields) in enumerate(self.steps):
             grid = ET.SubElement(series, "Grid", Name=f"step_{i}", GridType="Uniform")
             top = ET.SubElement(
@@ -101,6 +94,19 @@ class XdmfSeries:
                 dims = f"{n} {k}" if k > 1 else f"{n}"
                 hdf_item(attr, dims, "Float", f"{h5}:/step_{i}/{name}")
         write_xml(root, self.path)
+
+
+def temporal_collection(name: str) -> tuple[ET.Element, ET.Element]:
+    """An XDMF 3 root and its temporal collection grid, to which steps are added."""
+    root = ET.Element("Xdmf", Version="3.0")
+    series = ET.SubElement(
+        ET.SubElement(root, "Domain"),
+        "Grid",
+        Name=name,
+        GridType="Collection",
+        CollectionType="Temporal",
+    )
+    return root, series
 
 
 def write_xml(root: ET.Element, path: Path) -> None:

@@ -16,7 +16,7 @@ from geofrac.meshing.distribute import build_mesh, check_fracture_cover
 from geofrac.runner import run_scene
 from geofrac.scene import SceneError, load_scene
 from tests.conftest import JOBS
-from tests.effects.test_effects import _run_and_list_modules
+from tests.conftest import run_and_list_modules as _run_and_list_modules
 
 MODEL1, MODEL2 = JOBS / "dfn_model1.toml", JOBS / "dfn_model2.toml"
 #: A coarse mesh of the seed models for tests (the seed size is geofrac bench dfn), with

@@ -1,34 +1,12 @@
 """Ask 3: a scene gets exactly the effects it declares, and nothing else is loaded."""
 
 import json
-import subprocess
-import sys
 
 import pytest
 
 from geofrac import effects
-from tests.conftest import JOBS, REPO
-
-PROBE = """
-import json, sys
-from geofrac.cli import main
-sets = [arg for override in sys.argv[3:] for arg in ("--set", override)]
-code = main(["run", sys.argv[1], "--out", sys.argv[2], "-q", *sets])
-print(json.dumps({"code": code, "modules": sorted(sys.modules)}))
-"""
-
-
-def _run_and_list_modules(tmp_path, scene, *overrides):
-    proc = subprocess.run(
-        [sys.executable, "-c", PROBE, str(scene), str(tmp_path / "out"), *overrides],
-        capture_output=True,
-        text=True,
-        cwd=REPO,
-        check=True,
-    )
-    result = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert result["code"] == 0, proc.stderr
-    return set(result["modules"])
+from tests.conftest import JOBS
+from tests.conftest import run_and_list_modules as _run_and_list_modules
 
 
 def test_undeclared_effects_are_never_imported(tmp_path):

@@ -2,8 +2,6 @@
 
 import csv
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import h5py
@@ -15,7 +13,7 @@ from geofrac.errors import RunError
 from geofrac.mpm.bar import impact_bar, self_weight_stress
 from geofrac.mpm.driver import run_mpm_scene
 from geofrac.scene import load_scene
-from tests.conftest import JOBS, REPO
+from tests.conftest import JOBS, run_and_list_modules
 
 
 def _last_frame(out):
@@ -135,34 +133,9 @@ def test_a_decomposed_landslide_equals_the_serial_one(tmp_path_factory):
         np.testing.assert_allclose(b["stress"], a["stress"], rtol=1e-7, atol=1e-3)
 
 
-PROBE = """
-import json, sys
-from geofrac.cli import main
-sets = [arg for override in sys.argv[3:] for arg in ("--set", override)]
-code = main(["run", sys.argv[1], "--out", sys.argv[2], "-q", *sets])
-print(json.dumps({"code": code, "modules": sorted(sys.modules)}))
-"""
-
-
 def _modules(tmp_path, *overrides):
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-c",
-            PROBE,
-            str(JOBS / "mpm_translating_bar.toml"),
-            str(tmp_path),
-            "mpm.t_end=0.5",
-            *overrides,
-        ],
-        capture_output=True,
-        text=True,
-        cwd=REPO,
-        check=True,
-    )
-    result = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert result["code"] == 0, proc.stderr
-    return set(result["modules"])
+    scene = JOBS / "mpm_translating_bar.toml"
+    return run_and_list_modules(tmp_path, scene, "mpm.t_end=0.5", *overrides)
 
 
 def test_an_mpm_run_imports_no_undeclared_effect_and_no_dolfinx(tmp_path):
