@@ -3,6 +3,7 @@
 # in results/landslide_phi<angle>/, then a table of runout at t_end beside the seed's.
 #
 #   jobs/landslide_sweep.sh [-n RANKS] [ANGLE ...] [-- extra geofrac run options]
+#   jobs/landslide_sweep.sh --table [ANGLE ...]   (no runs: table and plot of the results there)
 #
 # ANGLEs default to the seed's 8 10 12 14 16 25. RANKS defaults to $GEOFRAC_NP or 2. Writes
 # results/landslide_runout.png (runout against time, cf. seed Fig. 4.6).
@@ -11,6 +12,8 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 venv=${VENV:-$root/.venv}
 np=${GEOFRAC_NP:-2}
+table_only=0
+if [ "${1:-}" = "--table" ]; then table_only=1; shift; fi
 if [ "${1:-}" = "-n" ]; then np=$2; shift 2; fi
 angles=()
 while [ $# -gt 0 ] && [ "$1" != "--" ]; do angles+=("$1"); shift; done
@@ -21,6 +24,7 @@ if [ ! -x "$venv/bin/geofrac" ]; then
     exit 2
 fi
 scene=$root/jobs/landslide_kita_uebaru.toml
+if [ $table_only -eq 0 ]; then
 checks=()  # validate the overrides once, before any run (check takes --set only)
 for arg in "$@"; do [ "$arg" = "-q" ] || [ "$arg" = "--quiet" ] || checks+=("$arg"); done
 "$venv/bin/geofrac" check "$scene" "${checks[@]}" > /dev/null
@@ -29,8 +33,9 @@ for a in "${angles[@]}"; do  # a failed angle is reported in the table, the othe
     "$venv/bin/mpiexec" -n "$np" "$venv/bin/geofrac" run "$scene" \
         --set plasticity.friction_angle="$a" --out "results/landslide_phi$a" "$@" || true
 done
+fi
 "$venv/bin/python" - "${angles[@]}" <<'PY'
-import json, sys
+import json, os, sys
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -38,8 +43,12 @@ seed = {8: 205.9, 10: 176.7, 12: 110.7, 14: 63.0, 16: 32.5, 25: 0.0}
 print(f"{'phi':>5} {'runout_m':>10} {'seed_m':>8}")
 fig, ax = plt.subplots(figsize=(6, 4))
 for a in sys.argv[1:]:
-    summary = json.load(open(f"results/landslide_phi{a}/summary.json"))
     ref = seed.get(round(float(a)))
+    path = f"results/landslide_phi{a}/summary.json"
+    if not os.path.exists(path):  # killed before it finished: nothing to report
+        print(f"{a:>5} {'no run':>10} {'' if ref is None else ref:>8}  no {path}")
+        continue
+    summary = json.load(open(path))
     if summary["status"] != "ok":
         print(f"{a:>5} {'failed':>10} {'' if ref is None else ref:>8}  {summary['status']}")
         continue
