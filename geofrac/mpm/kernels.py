@@ -589,6 +589,23 @@ def _spline(s: float) -> float:
 
 
 @_jit
+def _pair(
+    x: np.ndarray, p: int, q: int, h: float, exps: np.ndarray, dx: np.ndarray, F: np.ndarray
+) -> float:
+    """Weight W(|x_q - x_p|, h) (eq. 4.51), with the basis F(x_q) at the offset into F.
+
+    ``dx`` (shape=(dim,)) is scratch for the scaled offset; ``F`` is out, shape=(m,).
+    """
+    r2 = 0.0
+    for a in range(x.shape[1]):
+        d = x[q, a] - x[p, a]
+        r2 += d * d
+        dx[a] = d / h
+    _basis(dx, exps, F)
+    return _spline(np.sqrt(r2) / h)
+
+
+@_jit
 def mls_moments(
     x: np.ndarray,
     h: float,
@@ -618,13 +635,7 @@ def mls_moments(
         A[b] = 0.0
         for t in range(starts[p], starts[p + 1]):
             q = nbrs[t]
-            r2 = 0.0
-            for a in range(dim):
-                d = x[q, a] - x[p, a]
-                r2 += d * d
-                dx[a] = d / h
-            w = _spline(np.sqrt(r2) / h)
-            _basis(dx, exps, F)
+            w = _pair(x, p, q, h, exps, dx, F)
             for r in range(m):  # A is symmetric: the upper triangle, mirrored below
                 wr = w * F[r]
                 for c in range(r, m):
@@ -674,13 +685,7 @@ def mls_sums(
             out[p, c] = 0.0
         for t in range(starts[p], starts[p + 1]):
             q = nbrs[t]
-            r2 = 0.0
-            for a in range(dim):
-                d = x[q, a] - x[p, a]
-                r2 += d * d
-                dx[a] = d / h
-            w = _spline(np.sqrt(r2) / h)
-            _basis(dx, exps, F)
+            w = _pair(x, p, q, h, exps, dx, F)
             acc = 0.0
             for r in range(m):
                 acc += F[r] * g[b, r]
