@@ -1,0 +1,232 @@
+"""3D polyhedral blocks from a tetrahedral mesh, one per vertex (seed 5.2.2(b), Fig. 5.9).
+
+Each tetrahedron abcd is cut into four hexahedral sub-cells, one per corner: the
+sub-cell of a has the corners a, the edge midpoints m_ab, m_ac, m_ad, the face centroids
+f_abc, f_abd, f_acd and the tetrahedron's centroid c. It is the set of points whose
+largest barycentric coordinate is a's, so it is convex, its faces are planar and its
+volume is a quarter of the tetrahedron's. The block of a vertex is the union of its
+sub-cells: the faces that sub-cells of the same vertex share are dropped ("the faces
+that neighbouring blocks share are removed", seed 5.2.2(b)), which leaves
+
+- per tetrahedron and edge ij, the quadrilateral (m_ij, f_ijk, c, f_ijl) between the
+  sub-cells of i and j (a face of both blocks, in opposite orders), and
+- per boundary triangle ijl and corner i, the quadrilateral (i, m_ij, f_ijl, m_il).
+
+Every face has four points, as in the seed, and is planar: f_ijk - m_ij and f_ijl - m_ij
+span it and c - m_ij = 3/4 (f_ijk - m_ij) + 3/4 (f_ijl - m_ij). A vertex inside the
+domain is not a point of its block; a vertex on the boundary is.
+
+:func:`tet_corners` does the per-tetrahedron work on any subset of the cells (a rank's);
+:func:`assemble` groups what belongs to each block; :func:`blocks_3d` does both for a
+whole mesh held in numpy arrays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from geofrac.blocks.model import Blocks
+from geofrac.blocks.table import PointTable, edge_keys, face_keys
+
+__all__ = ["Corners", "assemble", "blocks_3d", "tet_corners"]
+
+VERTEX, EDGE, FACE, CELL = 0, 1, 2, 3
+#: Local edges of a tetrahedron, (i, j) with i < j.
+EDGES = np.array([(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)])
+#: The two local vertices not on each edge.
+EDGE_OTHERS = np.array([(2, 3), (1, 3), (1, 2), (0, 3), (0, 2), (0, 1)])
+#: Local faces: face k is opposite vertex k (the DOLFINx/Basix facet numbering).
+FACES = np.array([(1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2)])
+_EDGE_INDEX = np.full((4, 4), -1)
+for _e, (_i, _j) in enumerate(EDGES):
+    _EDGE_INDEX[_i, _j] = _EDGE_INDEX[_j, _i] = _e
+
+
+@dataclass
+class Corners:
+    """What a set of cells contributes to the blocks of their vertices, not yet grouped.
+
+    Attributes:
+        table: the points.
+        face_block: global id of the block each face belongs to, shape=(num_faces,).
+        faces: point refs into ``table``, outward order, shape=(num_faces, 4) (3D) or
+            (num_chains, 3) chains in 2D (see :mod:`geofrac.blocks.dual2d`).
+        piece_block: global id of each piece's block, shape=(num_pieces,).
+        pieces: point refs of the convex pieces, shape=(num_pieces, 8) or (num_pieces, 4).
+        extra: per-face integer columns a builder needs after grouping (2D: the keys of
+            a chain's first and last edge), shape=(num_faces, k), or None.
+    """
+
+    table: PointTable
+    face_block: np.ndarray
+    faces: np.ndarray
+    piece_block: np.ndarray
+    pieces: np.ndarray
+    extra: np.ndarray | None = None
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("ij,ij->i", a, b)
+
+
+def tet_corners(
+    x: np.ndarray,
+    gid: np.ndarray,
+    cell_key: np.ndarray,
+    boundary: np.ndarray | None,
+    num_vertices: int,
+) -> Corners:
+    """Block faces and convex pieces contributed by a set of tetrahedra.
+
+    Args:
+        x: vertex coordinates per cell, shape=(num_cells, 4, 3).
+        gid: global vertex ids per cell (the same on any number of ranks),
+            shape=(num_cells, 4).
+        cell_key: a global id per cell, shape=(num_cells,).
+        boundary: whether the face opposite each local vertex lies on the domain
+            boundary, shape=(num_cells, 4); None to find it from these cells (when they
+            are the whole mesh).
+        num_vertices: an upper bound of the global vertex ids.
+
+    Returns:
+        The faces (grouped later by :func:`assemble`) and the hexahedral pieces.
+    """
+    gid = np.asarray(gid, dtype=np.int64)
+    order = np.argsort(gid, axis=1, kind="stable")  # a point from its vertices by id
+    gid = np.take_along_axis(gid, order, axis=1)
+    x = np.take_along_axis(np.asarray(x, dtype=float), order[:, :, None], axis=1)
+    n = num_vertices
+    ekey = edge_keys(gid[:, EDGES[:, 0]], gid[:, EDGES[:, 1]], n)
+    emid = (x[:, EDGES[:, 0]] + x[:, EDGES[:, 1]]) * 0.5
+    fkey = face_keys(gid[:, FACES[:, 0]], gid[:, FACES[:, 1]], gid[:, FACES[:, 2]], n)
+    fmid = ((x[:, FACES[:, 0]] + x[:, FACES[:, 1]]) + x[:, FACES[:, 2]]) / 3.0
+    centre = ((x[:, 0] + x[:, 1]) + (x[:, 2] + x[:, 3])) * 0.25
+    if boundary is None:
+        _, inverse, counts = np.unique(fkey, return_inverse=True, return_counts=True)
+        boundary = (counts[inverse] == 1).reshape(fkey.shape)
+    else:
+        boundary = np.take_along_axis(np.asarray(boundary, dtype=bool), order, axis=1)
+    table = PointTable(
+        [gid.ravel(), ekey.ravel(), fkey.ravel(), np.asarray(cell_key, dtype=np.int64)],
+        [x.reshape(-1, 3), emid.reshape(-1, 3), fmid.reshape(-1, 3), centre],
+    )
+    vref = table.refs(VERTEX, gid)
+    eref = table.refs(EDGE, ekey)
+    fref = table.refs(FACE, fkey)
+    cref = table.refs(CELL, np.asarray(cell_key, dtype=np.int64))
+
+    blocks, faces = [], []
+    for e, (i, j) in enumerate(EDGES):  # the face between the sub-cells of i and j
+        k, m = EDGE_OTHERS[e]
+        quad = np.stack([eref[:, e], fref[:, m], cref, fref[:, k]], axis=1)
+        normal = np.cross(centre - emid[:, e], fmid[:, k] - fmid[:, m])
+        flip = _dot(normal, x[:, j] - x[:, i]) < 0
+        quad[flip] = quad[flip][:, ::-1][:, [3, 0, 1, 2]]  # reverse, keep m_ij first
+        blocks += [gid[:, i], gid[:, j]]
+        faces += [quad, quad[:, ::-1][:, [3, 0, 1, 2]]]
+    for k in range(4):  # boundary triangles: one quad per corner
+        on = np.flatnonzero(boundary[:, k])
+        if len(on) == 0:
+            continue
+        outward = fmid[on, k] - x[on, k]
+        tri = FACES[k]
+        for c in range(3):
+            i, j, m = tri[c], tri[(c + 1) % 3], tri[(c + 2) % 3]
+            eij, eim = _EDGE_INDEX[i, j], _EDGE_INDEX[i, m]
+            quad = np.stack([vref[on, i], eref[on, eij], fref[on, k], eref[on, eim]], axis=1)
+            normal = np.cross(fmid[on, k] - x[on, i], emid[on, eim] - emid[on, eij])
+            flip = _dot(normal, outward) < 0
+            quad[flip] = quad[flip][:, [0, 3, 2, 1]]
+            blocks.append(gid[on, i])
+            faces.append(quad)
+
+    pieces, piece_block = [], []
+    rows = np.arange(len(gid))
+
+    def e(p: int, q: np.ndarray | int) -> np.ndarray:
+        return eref[rows, _EDGE_INDEX[p, q]]
+
+    def f(p: int, q: np.ndarray | int, r: np.ndarray | int) -> np.ndarray:
+        return fref[rows, 6 - (p + q + r)]  # face pqr is opposite the fourth vertex
+
+    for a in range(4):  # the hexahedral sub-cell of corner a, right-handed
+        b, c, d = (v for v in range(4) if v != a)
+        det = _dot(x[:, b] - x[:, a], np.cross(x[:, c] - x[:, a], x[:, d] - x[:, a]))
+        bb = np.where(det < 0, c, b)
+        cc = np.where(det < 0, b, c)
+        # VTK order: bottom (a, m_ab, f_abc, m_ac), then above it (m_ad, f_abd, c, f_acd)
+        hexa = np.stack(
+            [vref[:, a], e(a, bb), f(a, bb, cc), e(a, cc), e(a, d), f(a, bb, d), cref, f(a, cc, d)],
+            axis=1,
+        )
+        pieces.append(hexa)
+        piece_block.append(gid[:, a])
+    return Corners(
+        table=table,
+        face_block=np.concatenate(blocks),
+        faces=np.concatenate(faces),
+        piece_block=np.concatenate(piece_block),
+        pieces=np.concatenate(pieces),
+    )
+
+
+def assemble(corners: Corners, block_ids: np.ndarray, dim: int) -> Blocks:
+    """Group faces and pieces by block and keep only the points they use.
+
+    Args:
+        corners: the contributions (of this rank's cells and those received).
+        block_ids: the global ids of the blocks to build (this rank's vertices), sorted,
+            shape=(num_blocks,). Rows of other blocks are an error.
+        dim: 2 or 3.
+
+    Raises:
+        ValueError: a face or piece belongs to none of ``block_ids``.
+    """
+    block_ids = np.asarray(block_ids, dtype=np.int64)
+    nb = len(block_ids)
+
+    def group(owner: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        index = np.searchsorted(block_ids, owner)
+        if len(owner) and (
+            index.max() >= nb or np.any(block_ids[np.minimum(index, nb - 1)] != owner)
+        ):
+            raise ValueError("a face or piece belongs to a block this rank does not build")
+        order = np.argsort(index, kind="stable")
+        offsets = np.zeros(nb + 1, dtype=np.int64)
+        np.cumsum(np.bincount(index, minlength=nb), out=offsets[1:])
+        return rows[order], offsets
+
+    faces, offsets = group(corners.face_block, corners.faces)
+    pieces, piece_offsets = group(corners.piece_block, corners.pieces)
+    used = np.zeros(len(corners.table.x), dtype=bool)
+    used[faces.ravel()] = True
+    used[pieces.ravel()] = True
+    new = np.cumsum(used) - 1
+    seeds = corners.table.x[corners.table.refs(VERTEX, block_ids)]
+    return Blocks(
+        dim=dim,
+        points=corners.table.x[used],
+        faces=new[faces].astype(np.int32 if used.sum() < 2**31 else np.int64),
+        face_offsets=offsets,
+        pieces=new[pieces].astype(np.int32 if used.sum() < 2**31 else np.int64),
+        piece_block=np.repeat(np.arange(nb, dtype=np.int64), np.diff(piece_offsets)),
+        ids=block_ids,
+        seeds=seeds,
+    )
+
+
+def blocks_3d(points: np.ndarray, tets: np.ndarray) -> Blocks:
+    """The blocks of a whole tetrahedral mesh, one per vertex used by a tetrahedron.
+
+    Args:
+        points: vertex coordinates, shape=(num_vertices, 3).
+        tets: vertex indices per tetrahedron, shape=(num_cells, 4).
+    """
+    tets = np.asarray(tets, dtype=np.int64)
+    points = np.asarray(points, dtype=float)
+    corners = tet_corners(
+        points[tets], tets, np.arange(len(tets), dtype=np.int64), None, len(points)
+    )
+    return assemble(corners, np.unique(tets), 3)

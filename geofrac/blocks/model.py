@@ -1,0 +1,75 @@
+"""Block sets: the containers the block builders return and the writers read (pure numpy).
+
+A block set is a list of polygons (2D) or closed polyhedra (3D) that share one point
+array. Every block also carries its decomposition into convex pieces, one per sub-cell
+of the mesh it was built from (seed 5.2.2: a quadrilateral per triangle corner in 2D,
+a hexahedron per tetrahedron corner in 3D), for the DEM/DDA codes that need convex
+blocks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Blocks", "block_ranges"]
+
+
+@dataclass
+class Blocks:
+    """Polygonal (``dim == 2``) or polyhedral (``dim == 3``) blocks.
+
+    2D: block ``b``'s boundary is the ring ``faces[face_offsets[b]:face_offsets[b + 1], 0]``
+    (its points in counter-clockwise order); ``faces`` has shape=(num_ring_points, 1).
+
+    3D: block ``b``'s faces are the rows ``faces[face_offsets[b]:face_offsets[b + 1]]``,
+    each a planar quadrilateral (seed 5.2.2(b): every block face has 4 points) whose points
+    run counter-clockwise seen from outside the block; ``faces`` has shape=(num_faces, 4).
+    A face two blocks share is stored once in each, in opposite orders.
+
+    Attributes:
+        dim: 2 or 3.
+        points: point coordinates, shape=(num_points, dim).
+        faces: point indices, shape=(num_faces, 1) in 2D or (num_faces, 4) in 3D.
+        face_offsets: where each block's faces start, shape=(num_blocks + 1,).
+        pieces: the convex pieces' point indices, shape=(num_pieces, 4) in 2D (a
+            counter-clockwise quadrilateral) or (num_pieces, 8) in 3D (a hexahedron in VTK's
+            order: bottom quad, then the top quad above it).
+        piece_block: the block of each piece, shape=(num_pieces,).
+        ids: an id per block, unique across ranks (the global index of the mesh vertex it
+            surrounds; -1 for an immobile block), shape=(num_blocks,).
+        seeds: the point each block surrounds (the mesh vertex; for an immobile block its
+            centroid), shape=(num_blocks, dim).
+        kind: per block, 0 for a block of the moving layer (one per mesh vertex), 1 for an
+            immobile block, shape=(num_blocks,).
+    """
+
+    dim: int
+    points: np.ndarray
+    faces: np.ndarray
+    face_offsets: np.ndarray
+    pieces: np.ndarray
+    piece_block: np.ndarray
+    ids: np.ndarray
+    seeds: np.ndarray
+    kind: np.ndarray = field(default=None)  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        """Default ``kind``: every block of the moving layer."""
+        if self.kind is None:
+            self.kind = np.zeros(len(self.ids), dtype=np.int8)
+
+    @property
+    def num_blocks(self) -> int:
+        """Number of blocks."""
+        return len(self.face_offsets) - 1
+
+
+def block_ranges(offsets: np.ndarray) -> np.ndarray:
+    """The block of each entry of a CSR list, shape=(offsets[-1],).
+
+    ``offsets`` has shape=(num_blocks + 1,).
+    """
+    counts = np.diff(offsets)
+    return np.repeat(np.arange(len(counts), dtype=np.int64), counts)
