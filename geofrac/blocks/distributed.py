@@ -51,7 +51,7 @@ def mesh_cells(mesh: Mesh) -> dict[str, Any]:
     if topology.cell_type not in (CellType.triangle, CellType.tetrahedron):
         raise ValueError(f"blocks need triangles or tetrahedra, not {topology.cell_type.name}")
     nv = tdim + 1
-    dofmap = geometry.dofmap
+    dofmap = geometry.dofmaps[0]
     if dofmap.shape[1] != nv:
         raise ValueError("blocks need a linear (straight-sided) mesh")
     num_cells = topology.index_map(tdim).size_local
