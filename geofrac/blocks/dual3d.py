@@ -30,7 +30,7 @@ import numpy as np
 from geofrac.blocks.model import Blocks
 from geofrac.blocks.table import PointTable, edge_keys, face_keys
 
-__all__ = ["Corners", "assemble", "blocks_3d", "tet_corners"]
+__all__ = ["Corners", "assemble", "blocks_3d", "centroids", "tet_corners"]
 
 VERTEX, EDGE, FACE, CELL = 0, 1, 2, 3
 #: Local edges of a tetrahedron, (i, j) with i < j.
@@ -67,6 +67,25 @@ class Corners:
     extra: np.ndarray | None = None
 
 
+def centroids(x: np.ndarray) -> np.ndarray:
+    """Centroids of point groups, the same bits whatever the order of their points.
+
+    Each coordinate's values are summed in increasing order, so a face computed from two
+    tetrahedra (or from a surface patch) gets exactly the same point.
+
+    Args:
+        x: points, shape=(..., k, dim).
+
+    Returns:
+        shape=(..., dim).
+    """
+    s = np.sort(x, axis=-2)
+    total = s[..., 0, :]
+    for i in range(1, s.shape[-2]):
+        total = total + s[..., i, :]
+    return total / s.shape[-2]
+
+
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", a, b)
 
@@ -101,8 +120,8 @@ def tet_corners(
     ekey = edge_keys(gid[:, EDGES[:, 0]], gid[:, EDGES[:, 1]], n)
     emid = (x[:, EDGES[:, 0]] + x[:, EDGES[:, 1]]) * 0.5
     fkey = face_keys(gid[:, FACES[:, 0]], gid[:, FACES[:, 1]], gid[:, FACES[:, 2]], n)
-    fmid = ((x[:, FACES[:, 0]] + x[:, FACES[:, 1]]) + x[:, FACES[:, 2]]) / 3.0
-    centre = ((x[:, 0] + x[:, 1]) + (x[:, 2] + x[:, 3])) * 0.25
+    fmid = centroids(x[:, FACES])
+    centre = centroids(x)
     if boundary is None:
         _, inverse, counts = np.unique(fkey, return_inverse=True, return_counts=True)
         boundary = (counts[inverse] == 1).reshape(fkey.shape)

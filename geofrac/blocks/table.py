@@ -4,7 +4,8 @@ A block point is always one of: a mesh vertex, an edge midpoint, the inner point
 face (a triangle's incentre or centroid), or a tetrahedron's centroid. Naming each by
 (kind, key), where the key comes from the global ids of the mesh vertices it stands
 on, lets every rank compute the same point with the same coordinates, bit for bit,
-whatever the partition: a point is computed from its vertices in increasing-id order.
+whatever the partition: midpoints and centroids sum each coordinate's values in
+increasing order (:func:`geofrac.blocks.dual3d.centroids`), whichever cell computes them.
 """
 
 from __future__ import annotations

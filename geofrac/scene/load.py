@@ -58,9 +58,10 @@ TOP_LEVEL_KEYS = (
     "solver",
     "output",
     "mpm",
+    "blocks",
 )
 #: Simulation methods a scene may name (``method``).
-METHODS = ("fem", "mpm")
+METHODS = ("fem", "mpm", "blocks")
 #: Keys each table accepts (the single source for validation and for docs/scenes.md).
 SECTION_KEYS: dict[str, tuple[str, ...]] = {
     "geometry": ("file", "parameters", "mesh_size"),
@@ -433,6 +434,45 @@ def _mpm_scene(
     )
 
 
+def _blocks_scene(
+    file: Path,
+    data: dict[str, Any],
+    declared: list[str],
+    common: dict[str, Any],
+    out: str | Path | None,
+) -> Scene:
+    """The rest of a ``method = "blocks"`` scene (see :mod:`geofrac.scene.blocks`)."""
+    from geofrac.scene.blocks import FEM_ONLY_TABLES, blocks_output, blocks_spec
+
+    for key in FEM_ONLY_TABLES:
+        if key in data:
+            raise SceneError(file, key, "does not apply to method 'blocks'; remove it")
+    if declared:
+        raise SceneError(file, "effects", "method 'blocks' builds a model and runs no effects")
+    if "blocks" not in data:
+        raise SceneError(file, "blocks", "missing (required table for method 'blocks')")
+    geometry = _geometry(file, data["geometry"]) if "geometry" in data else None
+    spec = blocks_spec(file, data["blocks"], geometry)
+    output = blocks_output(
+        file, data.get("output", {}), common["name"], None if out is None else Path(out)
+    )
+    return Scene(
+        **common,
+        effects=(),
+        geometry=geometry,
+        material=None,
+        discretization=None,
+        bcs=(),
+        loads=(),
+        exact=None,
+        solver=Solver(),
+        output=output,
+        raw=data,
+        method="blocks",
+        blocks=spec,
+    )
+
+
 def _geometry_from_effect(
     file: Path, data: dict[str, Any], declared: list[str]
 ) -> tuple[Geometry, dict[str, Any]] | None:
@@ -514,16 +554,18 @@ def load_scene(
     description = top.string("description", default="")
     method = top.string("method", default="fem", choices=METHODS)
     declared = _declared(file, data)
-    if method == "mpm":
+    if method in ("mpm", "blocks"):
         common = {
             "path": file.resolve(),
             "sha256": digest,
             "name": name,
             "description": description,
         }
-        return _mpm_scene(file, data, declared, common, out)
-    if "mpm" in data:
-        raise SceneError(file, "mpm", "applies to method 'mpm' only; set method = \"mpm\"")
+        build = _mpm_scene if method == "mpm" else _blocks_scene
+        return build(file, data, declared, common, out)
+    for key in ("mpm", "blocks"):
+        if key in data:
+            raise SceneError(file, key, f"applies to method '{key}' only; set method = \"{key}\"")
     provided = _geometry_from_effect(file, data, declared)
     for section in ("geometry", "material", "discretization"):
         if section not in data and not (section == "geometry" and provided):

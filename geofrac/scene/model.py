@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 __all__ = [
+    "BlocksSpec",
     "BoundaryCondition",
     "Discretization",
     "EffectSpec",
@@ -260,6 +261,37 @@ class EffectSpec:
 
 
 @dataclass(frozen=True)
+class BlocksSpec:
+    """``[blocks]`` of a ``method = "blocks"`` scene (seed chapter 5).
+
+    Attributes:
+        source: ``"geometry"`` (the scene's ``[geometry]``) or ``"terrain"`` (seed 5.4).
+        dim: 2 or 3.
+        inner_point: 2D, each triangle's inner point: ``"incentre"`` or ``"random"``.
+        radius: 2D random points: the movable region's radius relative to the inradius.
+        convex: 2D random points: keep every piece convex.
+        seed: seed of the random points.
+        immobile: terrain: add the immobile part as one block.
+        validate: ``"all"``, ``"none"`` or a number of blocks to sample for pyvista's
+            cell validator.
+        histogram_bins: bins of the block volume histogram.
+        terrain: keyword arguments of :class:`geofrac.meshing.terrain.TerrainSpec`, or
+            None.
+    """
+
+    source: str
+    dim: int
+    inner_point: str = "incentre"
+    radius: float = 1.0
+    convex: bool = False
+    seed: int = 0
+    immobile: bool = False
+    validate: str | int = "all"
+    histogram_bins: int = 40
+    terrain: dict[str, Any] | None = None
+
+
+@dataclass(frozen=True)
 class Scene:
     """A fully validated scene.
 
@@ -271,9 +303,12 @@ class Scene:
         effects: declared effects in declaration order.
         geometry, material, discretization, bcs, loads, exact, solver, output: see the
             classes of the same names (``method = "mpm"``: ``geometry`` is None for
-            lattice particles, ``discretization`` is None, no bcs, loads or solver).
-        method: ``"fem"`` (finite elements, the default) or ``"mpm"`` (material points).
+            lattice particles, ``discretization`` is None, no bcs, loads or solver;
+            ``method = "blocks"``: no material either).
+        method: ``"fem"`` (finite elements, the default), ``"mpm"`` (material points) or
+            ``"blocks"`` (a block model, no simulation).
         mpm: the ``[mpm]`` settings of an MPM scene, else None.
+        blocks: the ``[blocks]`` settings of a block scene, else None.
         raw: the input tables after overrides (for the run summary).
         warnings: valid but risky choices, each naming file and key (printed, recorded).
     """
@@ -284,7 +319,7 @@ class Scene:
     description: str
     effects: tuple[EffectSpec, ...]
     geometry: Geometry | None
-    material: Material
+    material: Material | None
     discretization: Discretization | None
     bcs: tuple[BoundaryCondition, ...]
     loads: tuple[Load, ...]
@@ -293,8 +328,9 @@ class Scene:
     output: Output
     raw: dict[str, Any]
     warnings: tuple[str, ...] = ()
-    method: Literal["fem", "mpm"] = "fem"
+    method: Literal["fem", "mpm", "blocks"] = "fem"
     mpm: MpmSpec | None = None
+    blocks: BlocksSpec | None = None
 
     @property
     def effect_names(self) -> tuple[str, ...]:
@@ -306,5 +342,7 @@ class Scene:
         """Geometric dimension of the problem (2 or 3; 1 to 3 for MPM)."""
         if self.mpm is not None:
             return self.mpm.dim
+        if self.blocks is not None:
+            return self.blocks.dim
         assert self.geometry is not None
         return self.geometry.dim

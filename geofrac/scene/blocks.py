@@ -1,0 +1,157 @@
+"""Validation of ``method = "blocks"`` scenes: ``[blocks]``, ``[blocks.terrain]``, output.
+
+A block scene builds a block model (seed chapter 5) from a mesh: either a ``[geometry]``
+(any 2D triangle or 3D tetrahedral gmsh geometry) or the landslide terrain of seed 5.4
+(``source = "terrain"``, a moving layer of blocks over an immobile part that is one
+block). Pure Python: nothing here imports gmsh, DOLFINx or MPI.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+from geofrac.scene.errors import SceneError
+from geofrac.scene.model import BlocksSpec, Geometry, Output
+from geofrac.scene.table import Table
+
+__all__ = ["BLOCKS_KEYS", "BLOCKS_OUTPUT_KEYS", "FEM_ONLY_TABLES", "blocks_output", "blocks_spec"]
+
+#: Keys of ``[blocks]`` (the single source for docs/scenes.md; ``terrain`` is a table).
+BLOCKS_KEYS = (
+    "source",
+    "inner_point",
+    "radius",
+    "convex",
+    "seed",
+    "immobile",
+    "validate",
+    "histogram_bins",
+    "terrain",
+)
+#: Keys of ``[output]`` in a block scene.
+BLOCKS_OUTPUT_KEYS = ("dir", "vtu", "block_file", "histogram")
+#: Tables of other methods that a block scene must not have.
+FEM_ONLY_TABLES = ("material", "discretization", "exact", "bc", "load", "solver", "mpm")
+#: ``[blocks.terrain]`` keys that are lists of numbers, with their lengths.
+_TERRAIN_VECTORS = {"extent": 4, "footprint_centre": 2, "footprint_axes": 2}
+
+
+def _terrain(file: Path, raw: Any) -> dict[str, Any]:
+    """``[blocks.terrain]``: the keyword arguments of ``TerrainSpec``, checked by it."""
+    from geofrac.meshing.terrain import TerrainSpec  # numpy only; gmsh is imported to build
+
+    fields = {f.name: f for f in dataclasses.fields(TerrainSpec)}
+    t = Table(file, "blocks.terrain", raw, tuple(fields))
+    values: dict[str, Any] = {}
+    for name, value in t.data.items():
+        default = fields[name].default
+        if name in _TERRAIN_VECTORS:
+            values[name] = t.vector(name, _TERRAIN_VECTORS[name])
+        elif name == "zones":
+            values[name] = _zones(t, value)
+        elif isinstance(default, bool):
+            values[name] = t.boolean(name, default)
+        elif isinstance(default, int):
+            values[name] = int(t.number(name, integer=True))  # type: ignore[arg-type]
+        elif isinstance(default, float):
+            values[name] = float(t.number(name))  # type: ignore[arg-type]
+        else:
+            values[name] = t.string(name)
+    try:
+        TerrainSpec(**values)
+    except ValueError as exc:
+        raise SceneError(file, "blocks.terrain", str(exc)) from None
+    return values
+
+
+def _zones(t: Table, value: Any) -> tuple[tuple[tuple[float, ...], float, float], ...]:
+    """``zones = [{centre = [x, y, z], radius = r, h = size}, ...]``."""
+    if not isinstance(value, list):
+        raise t.error("zones", "must be a list of tables {centre = [x, y, z], radius, h}")
+    zones = []
+    for i, raw in enumerate(value):
+        z = Table(t.file, f"blocks.terrain.zones[{i}]", raw, ("centre", "radius", "h"))
+        for key in ("centre", "radius", "h"):
+            if not z.has(key):
+                raise z.error(key, "missing (required)")
+        zones.append(
+            (
+                z.vector("centre", 3),
+                float(z.number("radius", positive=True)),  # type: ignore[arg-type]
+                float(z.number("h", positive=True)),  # type: ignore[arg-type]
+            )
+        )
+    return tuple(zones)
+
+
+def blocks_spec(file: Path, raw: Any, geometry: Geometry | None) -> BlocksSpec:
+    """``[blocks]`` of a block scene.
+
+    Raises:
+        SceneError: naming the file and the key.
+    """
+    t = Table(file, "blocks", raw, BLOCKS_KEYS)
+    source = t.string("source", default="geometry", choices=("geometry", "terrain"))
+    terrain = None
+    if source == "terrain":
+        if geometry is not None:
+            raise SceneError(file, "geometry", "not used with blocks.source = 'terrain'; remove it")
+        terrain = _terrain(file, t.data.get("terrain", {}))
+        dim = 3
+    else:
+        if geometry is None:
+            raise SceneError(file, "geometry", "missing (blocks.source = 'geometry' needs it)")
+        if t.has("terrain"):
+            raise t.error("terrain", "applies to source = 'terrain' only")
+        dim = geometry.dim
+    inner = t.string("inner_point", default="incentre", choices=("incentre", "random"))
+    radius = float(t.number("radius", default=1.0))  # type: ignore[arg-type]
+    if not 0 <= radius <= 1:
+        raise t.error(
+            "radius", f"the movable region's relative radius must be in [0, 1], got {radius}"
+        )
+    convex = t.boolean("convex", False)
+    if dim == 3:
+        for key in ("inner_point", "radius", "convex"):
+            if t.has(key):
+                raise t.error(
+                    key, "applies to 2D blocks only (3D faces use centroids, seed 5.2.2(b))"
+                )
+    elif inner == "incentre" and (t.has("radius") or t.has("convex")):
+        raise t.error(
+            "radius" if t.has("radius") else "convex", "applies to inner_point = 'random'"
+        )
+    immobile = t.boolean("immobile", source == "terrain")
+    if immobile and source != "terrain":
+        raise t.error("immobile", "applies to source = 'terrain' only")
+    validate = t.data.get("validate", "all")
+    if not (
+        validate in ("all", "none")
+        or (isinstance(validate, int) and not isinstance(validate, bool) and validate > 0)
+    ):
+        raise t.error(
+            "validate", f"must be 'all', 'none' or a number of blocks to sample, got {validate!r}"
+        )
+    bins = int(t.number("histogram_bins", default=40, integer=True, positive=True))  # type: ignore[arg-type]
+    return BlocksSpec(
+        source=source,
+        dim=dim,
+        inner_point=inner,
+        radius=radius,
+        convex=convex,
+        seed=int(t.number("seed", default=0, integer=True)),  # type: ignore[arg-type]
+        immobile=immobile,
+        validate=validate,
+        histogram_bins=bins,
+        terrain=terrain,
+    )
+
+
+def blocks_output(file: Path, raw: Any, name: str, out: Path | None) -> Output:
+    """``[output]`` of a block scene: ``vtu``, ``block_file`` and ``histogram`` switches."""
+    t = Table(file, "output", raw, BLOCKS_OUTPUT_KEYS)
+    directory = Path(t.string("dir", default=f"results/{name}")) if out is None else out
+    fields = tuple(k for k in ("vtu", "block_file", "histogram") if t.boolean(k, True))
+    return Output(directory.resolve(), fields, "vtu" in fields, {})
