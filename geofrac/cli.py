@@ -88,6 +88,11 @@ def _check(args: argparse.Namespace, comm: Any) -> int:
             f"{m.particles.kind}, t_end {m.t_end:g}; effects: {effects}",
         )
         return 0
+    if scene.blocks is not None:
+        b = scene.blocks
+        source = "the terrain of seed 5.4" if b.source == "terrain" else "its geometry"
+        echo(comm, f"ok: {args.scene}: {b.dim}D blocks from {source}")
+        return 0
     groups = ", ".join(f"{n} ({d}D)" for n, d in scene.geometry.groups.items())  # type: ignore[union-attr]
     echo(
         comm,
@@ -110,6 +115,14 @@ def _run(args: argparse.Namespace, comm: Any) -> int:
         summary = run_mpm_scene(scene, comm, timings, verbose=not args.quiet)
         if not args.quiet:
             _report_mpm(comm, summary)
+        echo(comm, f"output: {scene.output.dir}")
+        return 0
+    if scene.method == "blocks":
+        from geofrac.blocks.driver import run_blocks_scene
+
+        summary = run_blocks_scene(scene, comm, timings, verbose=not args.quiet)
+        if not args.quiet:
+            _report_blocks(comm, summary)
         echo(comm, f"output: {scene.output.dir}")
         return 0
     from geofrac.runner import run_scene
@@ -136,6 +149,25 @@ def _report(comm: Any, summary: dict[str, Any]) -> None:
             f"accuracy: ||u - u_exact||_L2 = {e['u']:.4e} (relative {e['u_relative']:.3e}), "
             f"energy = {e['energy']:.4e} (relative {e['energy_relative']:.3e})",
         )
+    t = summary["timings_s"]
+    echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
+
+
+def _report_blocks(comm: Any, summary: dict[str, Any]) -> None:
+    r = summary["results"]
+    q = r["quality"]
+    v = q["volume"]
+    echo(
+        comm,
+        f"blocks: {q['count']}, volume min {v['min']:.4g} mean {v['mean']:.4g} "
+        f"max {v['max']:.4g}; volumes sum to the domain's within {abs(q['volume_rel_error']):.1e}",
+    )
+    checked = q["validator"]["checked"] if q["validator"] else 0
+    echo(
+        comm,
+        f"checks: {q['invalid_blocks']} invalid, faces paired ({q['pairing']['matched']} "
+        f"matched), validator on {checked} block(s)",
+    )
     t = summary["timings_s"]
     echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
 

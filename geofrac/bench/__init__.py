@@ -15,6 +15,10 @@ __all__ = ["BENCHES", "load_bench"]
 
 #: name -> (module, one-line description)
 BENCHES: dict[str, tuple[str, str]] = {
+    "blocks": (
+        "geofrac.bench.blocks",
+        "3D block models (seed chapter 5): meshing and block wall times, blocks/s, against Voronoi",
+    ),
     "cantilever": (
         "geofrac.bench.cantilever",
         "Timoshenko cantilever (seed 2.4.1): displacement/energy error against DOFs and wall time",

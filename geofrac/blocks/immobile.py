@@ -14,7 +14,7 @@ import numpy as np
 from geofrac.blocks.dual3d import centroids
 from geofrac.blocks.model import Blocks
 
-__all__ = ["join", "surface_block"]
+__all__ = ["surface_block"]
 
 
 def surface_block(points: np.ndarray, triangles: np.ndarray) -> Blocks:
@@ -63,27 +63,4 @@ def surface_block(points: np.ndarray, triangles: np.ndarray) -> Blocks:
         ids=np.array([-1], dtype=np.int64),
         seeds=seed[None, :],
         kind=np.array([1], dtype=np.int8),
-    )
-
-
-def join(first: Blocks, second: Blocks) -> Blocks:
-    """The blocks of ``first`` then those of ``second``, in one set (same ``dim``)."""
-    if first.dim != second.dim:
-        raise ValueError(f"cannot join {first.dim}D and {second.dim}D blocks")
-    if first.faces.shape[1] != second.faces.shape[1]:
-        raise ValueError("cannot join blocks whose faces have different widths")
-    shift = len(first.points)
-    index = np.int64 if len(first.points) + len(second.points) >= 2**31 else np.int32
-    return Blocks(
-        dim=first.dim,
-        points=np.concatenate([first.points, second.points]),
-        faces=np.concatenate([first.faces, second.faces + shift]).astype(index),
-        face_offsets=np.concatenate(
-            [first.face_offsets, first.face_offsets[-1] + second.face_offsets[1:]]
-        ),
-        pieces=np.concatenate([first.pieces, second.pieces + shift]).astype(index),
-        piece_block=np.concatenate([first.piece_block, second.piece_block + first.num_blocks]),
-        ids=np.concatenate([first.ids, second.ids]),
-        seeds=np.concatenate([first.seeds, second.seeds]),
-        kind=np.concatenate([first.kind, second.kind]),
     )

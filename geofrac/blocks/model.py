@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Blocks", "block_ranges"]
+__all__ = ["Blocks", "block_ranges", "join", "weld"]
 
 
 @dataclass
@@ -73,3 +73,55 @@ def block_ranges(offsets: np.ndarray) -> np.ndarray:
     """
     counts = np.diff(offsets)
     return np.repeat(np.arange(len(counts), dtype=np.int64), counts)
+
+
+def join(first: Blocks, second: Blocks) -> Blocks:
+    """The blocks of ``first`` then those of ``second``, in one set (same ``dim``)."""
+    if first.dim != second.dim:
+        raise ValueError(f"cannot join {first.dim}D and {second.dim}D blocks")
+    if first.faces.shape[1] != second.faces.shape[1]:
+        raise ValueError("cannot join blocks whose faces have different widths")
+    shift = len(first.points)
+    index = np.int64 if len(first.points) + len(second.points) >= 2**31 else np.int32
+    return Blocks(
+        dim=first.dim,
+        points=np.concatenate([first.points, second.points]),
+        faces=np.concatenate([first.faces, second.faces + shift]).astype(index),
+        face_offsets=np.concatenate(
+            [first.face_offsets, first.face_offsets[-1] + second.face_offsets[1:]]
+        ),
+        pieces=np.concatenate([first.pieces, second.pieces + shift]).astype(index),
+        piece_block=np.concatenate([first.piece_block, second.piece_block + first.num_blocks]),
+        ids=np.concatenate([first.ids, second.ids]),
+        seeds=np.concatenate([first.seeds, second.seeds]),
+        kind=np.concatenate([first.kind, second.kind]),
+    )
+
+
+def weld(blocks: Blocks) -> Blocks:
+    """The same blocks with exactly coincident points merged into one.
+
+    Block sets built apart (on different ranks, or a moving layer and its immobile
+    part) compute their shared points with the same bits (see
+    :func:`geofrac.blocks.dual3d.centroids`); welding them lets a face two blocks share
+    be recognised by its point indices.
+    """
+    p = blocks.points
+    order = np.lexsort(p.T[::-1])
+    ordered = p[order]
+    starts = np.ones(len(p), dtype=bool)
+    starts[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+    inverse = np.empty(len(p), dtype=blocks.faces.dtype)
+    inverse[order] = np.cumsum(starts) - 1
+    points = ordered[starts]
+    return Blocks(
+        dim=blocks.dim,
+        points=points,
+        faces=inverse[blocks.faces],
+        face_offsets=blocks.face_offsets,
+        pieces=inverse[blocks.pieces],
+        piece_block=blocks.piece_block,
+        ids=blocks.ids,
+        seeds=blocks.seeds,
+        kind=blocks.kind,
+    )

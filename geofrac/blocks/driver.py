@@ -1,0 +1,302 @@
+"""Run a ``method = "blocks"`` scene: mesh, blocks, checks, output (collective).
+
+Data flow: scene -> gmsh on rank 0 (the scene's geometry, or the terrain builder of seed
+5.4) -> distributed DOLFINx mesh -> each rank builds the blocks of its vertices
+(:func:`~geofrac.blocks.distributed.build_blocks`) -> rank 0 adds the immobile block ->
+quality checks -> VTU, block file, histogram, ``summary.json``.
+
+The validator runs on each rank's own blocks; the other checks and the single-file
+outputs need the whole set, which is gathered to rank 0.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import time
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from geofrac.blocks.model import Blocks
+from geofrac.errors import RunError
+from geofrac.io.summary import finish_summary, prepare_output, versions
+from geofrac.log import echo
+from geofrac.scene.model import Geometry, Scene
+from geofrac.timing import Timings
+
+__all__ = ["OUTPUT_FILES", "build", "run_blocks_scene"]
+
+#: Files a block run writes in its output directory (removed first; summary last).
+OUTPUT_FILES = (
+    "blocks.vtu",
+    "blocks.txt",
+    "volume_histogram.png",
+    "volume_histogram.csv",
+    "summary.json",
+)
+
+
+def _geometry(scene: Scene) -> Geometry:
+    spec = scene.blocks
+    assert spec is not None
+    if spec.source == "geometry":
+        assert scene.geometry is not None
+        return scene.geometry
+    from geofrac.meshing.terrain import TerrainBuilder, TerrainSpec
+
+    groups = {"layer": 3, "top": 2, "slip": 2, "side": 2}
+    return Geometry(None, {}, None, 3, groups, TerrainBuilder(TerrainSpec(**spec.terrain)))
+
+
+def _cell_volumes(mesh: Any) -> float:
+    """Volume (area) of this rank's owned cells, from their vertices."""
+    from geofrac.blocks.distributed import mesh_cells
+
+    x = mesh_cells(mesh)["x"]
+    if x.shape[1] == 4:
+        d = x[:, 1:] - x[:, :1]
+        return float(np.abs(np.einsum("ij,ij->i", d[:, 0], np.cross(d[:, 1], d[:, 2]))).sum() / 6)
+    d = x[:, 1:] - x[:, :1]
+    return float(np.abs(d[:, 0, 0] * d[:, 1, 1] - d[:, 0, 1] * d[:, 1, 0]).sum() / 2)
+
+
+def _wall(comm: MPI.Comm, start: float) -> float:
+    """Wall time since ``start`` of a collective step (its slowest rank)."""
+    return comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
+
+
+def build(
+    scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool = True
+) -> tuple[Blocks, dict[str, Any]]:
+    """Mesh and build the blocks of this rank (rank 0 also holds the immobile block).
+
+    Returns:
+        The blocks and a JSON-ready record: ``time_mesh_s``, ``time_blocks_s`` (wall,
+        slowest rank), ``domain_volume``, ``mesh`` (the builder's report and counts).
+    """
+    from geofrac.blocks.distributed import build_blocks
+    from geofrac.meshing.distribute import build_mesh
+
+    spec = scene.blocks
+    assert spec is not None
+    geometry = _geometry(scene)
+    comm.Barrier()
+    start = time.perf_counter()
+    with timings.phase("mesh"):
+        tagged = build_mesh(geometry, comm, verbose=False)
+    time_mesh = _wall(comm, start)
+    mesh = tagged.mesh
+    num_vertices = mesh.topology.index_map(0).size_global
+    num_cells = mesh.topology.index_map(mesh.topology.dim).size_global
+    echo(comm, f"blocks: mesh of {num_cells} cells, {num_vertices} vertices in {time_mesh:.2f} s")
+    comm.Barrier()
+    start = time.perf_counter()
+    with timings.phase("blocks"):
+        blocks = build_blocks(mesh, spec.inner_point, spec.radius, spec.convex, spec.seed)
+    time_blocks = _wall(comm, start)
+    domain = comm.allreduce(_cell_volumes(mesh), op=MPI.SUM)
+    record: dict[str, Any] = {
+        "time_mesh_s": time_mesh,
+        "time_blocks_s": time_blocks,
+        "mesh": {"cells": num_cells, "vertices": num_vertices, **(tagged.report or {})},
+    }
+    if spec.immobile:
+        from geofrac.blocks.immobile import surface_block
+        from geofrac.blocks.model import join
+        from geofrac.meshing.terrain import immobile_volume
+
+        points, triangles = tagged.fractures  # the builder's payload: the surface patch
+        domain += immobile_volume(points, triangles)
+        if comm.rank == 0:
+            blocks = join(blocks, surface_block(points, triangles))
+    record["domain_volume"] = domain
+    echo(
+        comm,
+        f"blocks: {comm.allreduce(blocks.num_blocks)} blocks in {time_blocks:.2f} s "
+        f"({num_vertices / max(time_blocks, 1e-12):.3g} blocks/s)",
+    )
+    return blocks, record
+
+
+def run_blocks_scene(
+    scene: Scene, comm: MPI.Comm, timings: Timings | None = None, verbose: bool = True
+) -> dict[str, Any]:
+    """Run a block scene and write its output directory; return the summary.
+
+    On a :class:`RunError` the outputs are removed and ``summary.json`` records
+    ``status`` = ``"error: ..."`` before the error propagates.
+    """
+    timings = timings or Timings()
+    started = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+    out = scene.output.dir
+    error = prepare_output(out, OUTPUT_FILES, comm)
+    if error is not None:
+        raise RunError(error)
+    summary: dict[str, Any] = {
+        "scene": {
+            "path": str(scene.path),
+            "sha256": scene.sha256,
+            "name": scene.name,
+            "method": "blocks",
+            "input": scene.raw,
+        },
+        "warnings": list(scene.warnings),
+        "versions": versions(fem=True),
+        "ranks": comm.size,
+        "started": started,
+    }
+    try:
+        blocks, record = build(scene, comm, timings, verbose)
+        with timings.phase("checks"):
+            validator = _validate(scene, blocks, comm)
+            whole = _gather(blocks, comm)
+            del blocks
+            record["quality"] = _checks(scene, whole, record["domain_volume"], validator, comm)
+        with timings.phase("output"):
+            if comm.rank == 0:
+                assert whole is not None
+                _write(scene, whole)
+        summary |= {"results": record, "status": "ok"}
+    except RunError as exc:
+        summary["status"] = f"error: {exc}"
+        if comm.rank == 0:
+            for name in OUTPUT_FILES[:-1]:
+                (out / name).unlink(missing_ok=True)
+        finish_summary(summary, out / "summary.json", comm, timings)
+        raise
+    finish_summary(summary, out / "summary.json", comm, timings)
+    return summary
+
+
+def _gather(blocks: Blocks, comm: MPI.Comm) -> Blocks | None:
+    """The whole block set on rank 0 (None elsewhere), shared points welded."""
+    from geofrac.blocks.model import join, weld
+
+    parts = comm.gather(blocks, root=0)
+    if comm.rank != 0:
+        return None
+    whole = parts[0]
+    for part in parts[1:]:
+        whole = join(whole, part)
+    return weld(whole)
+
+
+def _validate(scene: Scene, blocks: Blocks, comm: MPI.Comm) -> dict[str, Any] | None:
+    """Run pyvista's cell validator on each rank's blocks, merged on rank 0 (None elsewhere)."""
+    from geofrac.blocks import quality
+
+    spec = scene.blocks
+    assert spec is not None
+    if spec.validate == "none":
+        return None
+    total = comm.allreduce(blocks.num_blocks)
+    sample = None
+    if isinstance(spec.validate, int) and spec.validate < total:  # this rank's share
+        sample = max(1, round(spec.validate * blocks.num_blocks / total))
+    reports = comm.gather(quality.validate_cells(blocks, sample=sample, seed=spec.seed), root=0)
+    return None if reports is None else _merge_validator(reports)
+
+
+def _checks(
+    scene: Scene,
+    whole: Blocks | None,
+    domain: float,
+    validator: dict[str, Any] | None,
+    comm: MPI.Comm,
+) -> dict[str, Any]:
+    """The quality report of the whole set (computed on rank 0, returned on every rank).
+
+    Raises:
+        RunError: on every rank, when a check fails (the report is in the message).
+    """
+    from geofrac.blocks import quality
+
+    spec = scene.blocks
+    assert spec is not None
+    report = None
+    if comm.rank == 0:
+        assert whole is not None
+        report = quality.summarize(
+            whole,
+            domain,
+            validate=False,
+            on_boundary=_everywhere,
+        )
+        report["validator"] = validator
+        if validator is not None:
+            report["invalid_blocks"] += validator["failed"]
+    report = comm.bcast(report, root=0)
+    problems = _problems(report)
+    if problems:
+        raise RunError("block quality checks failed: " + "; ".join(problems))
+    return report
+
+
+def _everywhere(points: np.ndarray) -> np.ndarray:
+    """Every unmatched face may be boundary (non-box domains: the closure test decides)."""
+    return np.ones(len(points), dtype=bool)
+
+
+def _merge_validator(reports: list[dict[str, Any]]) -> dict[str, Any]:
+    merged: dict[str, Any] = {}
+    for r in reports:
+        for key, value in r.items():
+            if key == "states":
+                states = merged.setdefault("states", {})
+                for name, count in value.items():
+                    states[name] = states.get(name, 0) + count
+            elif key == "failed_blocks":
+                continue
+            elif isinstance(value, int | float) and not isinstance(value, bool):
+                merged[key] = merged.get(key, 0) + value
+    return merged
+
+
+def _problems(report: dict[str, Any]) -> list[str]:
+    """What failed, in words."""
+    problems = []
+    if abs(report["volume_rel_error"]) > 1e-12:
+        problems.append(
+            f"block volumes sum to {report['total_volume']:.15g}, the domain's is "
+            f"{report['domain_volume']:.15g} (relative {report['volume_rel_error']:.2e})"
+        )
+    if report["invalid_blocks"]:
+        problems.append(
+            f"{report['invalid_blocks']} invalid block(s): {report['not_closed']} not closed, "
+            f"{report['wrong_euler']} with a wrong Euler characteristic, "
+            f"{report['non_positive_volume']} of non-positive volume"
+            + (
+                f", {report['validator']['failed']} failing the validator"
+                if report["validator"]
+                else ""
+            )
+        )
+    if not report["pairing"]["ok"]:
+        problems.append(f"faces do not pair up: {report['pairing']}")
+    return problems
+
+
+def _write(scene: Scene, whole: Blocks) -> None:
+    """The VTU, the block file and the histogram of the whole set (rank 0)."""
+    from geofrac.blocks import quality
+    from geofrac.io import blocks as writers
+
+    assert scene.blocks is not None
+    out = scene.output.dir
+    fields = scene.output.fields
+    volumes = quality.block_volumes(whole)
+    if "vtu" in fields:
+        writers.write_vtu(
+            out / "blocks.vtu", whole, {"volume": volumes, "id": whole.ids, "kind": whole.kind}
+        )
+    if "block_file" in fields:
+        writers.write_block_file(out / "blocks.txt", whole)
+    if "histogram" in fields:
+        moving = whole.kind == 0
+        writers.write_histogram(
+            out / "volume_histogram.png",
+            out / "volume_histogram.csv",
+            volumes[moving],
+            bins=scene.blocks.histogram_bins,
+        )
