@@ -71,3 +71,16 @@ def test_every_mpm_key_has_a_row():
             assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), key
     for name in MPM_OUTPUT_FIELDS:
         assert f"`{name}`" in body, name
+
+
+def test_every_blocks_key_has_a_row():
+    import dataclasses
+
+    from geofrac.meshing.terrain import TerrainSpec
+    from geofrac.scene.blocks import BLOCKS_KEYS, BLOCKS_OUTPUT_KEYS
+
+    start = TEXT.index("## Block scenes")
+    body = TEXT[start:]
+    terrain = [f.name for f in dataclasses.fields(TerrainSpec)]
+    for key in (*BLOCKS_KEYS, *BLOCKS_OUTPUT_KEYS, *terrain):
+        assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), key
