@@ -259,3 +259,19 @@ def test_summarize_is_json_ready_and_flags_invalid_blocks(dual3d):
     bad = q.summarize(flipped(dual3d, interior_face(dual3d)), 1.0, validate=False)
     assert bad["invalid_blocks"] == 1
     assert bad["not_closed"] == 1
+
+
+def test_exact_self_intersection_test_finds_a_pushed_through_point():
+    from geofrac.blocks.immobile import surface_block
+
+    corners = np.array(
+        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
+        float,
+    )
+    quads = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
+    tris = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+    cube = surface_block(corners, tris)
+    assert q.self_intersections(cube, 0) == 0
+    dented = corners.copy()
+    dented[6] = [0.5, 0.5, -0.5]  # the top corner pushed down through the bottom face
+    assert q.self_intersections(surface_block(dented, tris), 0) > 0

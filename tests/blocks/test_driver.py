@@ -1,0 +1,101 @@
+"""Small versions of the jobs/ block scenes, run end to end (1 and 2 ranks)."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+import pyvista as pv
+from mpi4py import MPI
+
+from geofrac.blocks.driver import run_blocks_scene
+from geofrac.io.blocks import read_block_file
+from geofrac.meshing.terrain import TerrainSpec, ground
+from geofrac.scene import load_scene
+from tests.conftest import JOBS
+
+# the seed-scale terrain at h = 25 m: a few hundred blocks
+SMALL_TERRAIN = ["blocks.terrain.h=25", "blocks.terrain.h_immobile=150"]
+
+
+def _run(tmp_path, job, overrides, comm=MPI.COMM_SELF):
+    out = tmp_path / "out" if comm.size == 1 else comm.bcast(tmp_path / "out", root=0)
+    scene = load_scene(JOBS / job, overrides, out=out)
+    return run_blocks_scene(scene, comm, verbose=False), out
+
+
+def test_square_blocks_scene_writes_what_it_says(tmp_path):
+    summary, out = _run(tmp_path, "blocks_square.toml", ["geometry.parameters.h=0.2"])
+    q = summary["results"]["quality"]
+    assert summary["status"] == "ok"
+    assert abs(q["volume_rel_error"]) < 1e-12 and q["invalid_blocks"] == 0
+    assert q["validator"]["checked"] == q["count"]
+    grid = pv.read(out / "blocks.vtu")
+    assert grid.n_cells == q["count"]
+    assert np.all(grid.celltypes == pv.CellType.POLYGON)
+    assert abs(grid.cell_data["volume"].sum() - 1.0) < 1e-12
+    blocks = read_block_file(out / "blocks.txt")
+    assert blocks.num_blocks == q["count"]
+    with open(out / "volume_histogram.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert sum(int(r["count"]) for r in rows) == q["count"]
+    assert json.loads((out / "summary.json").read_text())["status"] == "ok"
+
+
+def test_cylinder_blocks_fill_the_meshed_cylinder(tmp_path):
+    summary, out = _run(tmp_path, "blocks_cylinder.toml", ["geometry.parameters.h=0.25"])
+    q = summary["results"]["quality"]
+    assert abs(q["volume_rel_error"]) < 1e-12
+    assert q["invalid_blocks"] == 0 and q["pairing"]["ok"]
+    assert abs(q["total_volume"] - np.pi * 0.25 * 2.0) < 0.05  # the mesh is polyhedral
+    grid = pv.read(out / "blocks.vtu")
+    assert np.all(grid.celltypes == pv.CellType.POLYHEDRON)
+
+
+def test_terrain_scene_has_one_immobile_block_and_fills_the_box(tmp_path):
+    summary, _ = _run(tmp_path, "terrain_100k.toml", SMALL_TERRAIN)
+    r = summary["results"]
+    q = r["quality"]
+    assert q["count"] == r["mesh"]["vertices"] + 1  # the layer's blocks + the immobile one
+    assert abs(q["volume_rel_error"]) < 1e-12
+    assert q["invalid_blocks"] == 0 and q["pairing"]["ok"]
+    # the layer's slip and side faces pair with the immobile block's pit: only the outer
+    # surface (box, ground, the layer's top) is left unmatched, so the two do not overlap
+    assert q["pairing"]["boundary_closed"]
+    spec = TerrainSpec(h=25, h_immobile=150)
+    x0, x1, y0, y1 = spec.extent
+    g = np.linspace(0, 1, 401)
+    x, y = np.meshgrid(x0 + (x1 - x0) * g, y0 + (y1 - y0) * g)
+    box = np.trapezoid(np.trapezoid(ground(x, y, spec) - spec.base_z, x[0], axis=1), y[:, 0])
+    assert abs(q["total_volume"] - box) < 0.03 * box  # piecewise-linear surfaces
+
+
+def test_bad_quality_fails_the_run_and_leaves_no_outputs(tmp_path, monkeypatch):
+    from geofrac.blocks import driver
+    from geofrac.errors import RunError
+
+    monkeypatch.setattr(driver, "_problems", lambda report: ["injected failure"])
+    with pytest.raises(RunError, match="injected failure"):
+        _run(tmp_path, "blocks_square.toml", ["geometry.parameters.h=0.3"])
+    out = tmp_path / "out"
+    assert not (out / "blocks.vtu").exists()
+    assert json.loads((out / "summary.json").read_text())["status"].startswith("error")
+
+
+@pytest.mark.mpi(min_size=2)
+def test_terrain_blocks_are_the_same_on_one_and_two_ranks(tmp_path):
+    comm = MPI.COMM_WORLD
+    base = comm.bcast(tmp_path, root=0)
+    par, _ = _run(base / "par", "terrain_100k.toml", SMALL_TERRAIN, comm)
+    ser = None
+    if comm.rank == 0:
+        ser, _ = _run(base / "ser", "terrain_100k.toml", SMALL_TERRAIN)
+    ser = comm.bcast(ser, root=0)
+    a, b = par["results"]["quality"], ser["results"]["quality"]
+    assert a["count"] == b["count"]
+    assert a["pairing"]["matched"] == b["pairing"]["matched"]
+    for key in ("total_volume",):
+        assert abs(a[key] - b[key]) < 1e-9 * abs(b[key])
+    for key in ("volume", "equivalent_diameter", "aspect_ratio"):
+        for stat in ("min", "max", "mean"):
+            assert abs(a[key][stat] - b[key][stat]) <= 1e-9 * abs(b[key][stat])
