@@ -59,9 +59,15 @@ def test_terrain_scene_has_one_immobile_block_and_fills_the_box(tmp_path):
     assert q["count"] == r["mesh"]["vertices"] + 1  # the layer's blocks + the immobile one
     assert abs(q["volume_rel_error"]) < 1e-12
     assert q["invalid_blocks"] == 0 and q["pairing"]["ok"]
-    # the layer's slip and side faces pair with the immobile block's pit: only the outer
-    # surface (box, ground, the layer's top) is left unmatched, so the two do not overlap
-    assert q["pairing"]["boundary_closed"]
+    # the layer's slip and side faces pair with the immobile block's pit (the two share
+    # that surface, point for point, so neither gap nor overlap): more faces are matched
+    # than in the layer alone
+    layer, _ = _run(
+        tmp_path / "layer", "terrain_100k.toml", [*SMALL_TERRAIN, "blocks.immobile=false"]
+    )
+    alone = layer["results"]["quality"]["pairing"]
+    assert q["pairing"]["boundary_closed"] and alone["ok"]
+    assert q["pairing"]["matched"] > alone["matched"]
     spec = TerrainSpec(h=25, h_immobile=150)
     x0, x1, y0, y1 = spec.extent
     g = np.linspace(0, 1, 401)
