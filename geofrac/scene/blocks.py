@@ -86,8 +86,8 @@ def _zones(t: Table, value: Any) -> tuple[tuple[tuple[float, ...], float, float]
     return tuple(zones)
 
 
-def blocks_spec(file: Path, raw: Any, geometry: Geometry | None) -> BlocksSpec:
-    """``[blocks]`` of a block scene.
+def blocks_spec(file: Path, raw: Any, geometry: Geometry | None, warnings: list[str]) -> BlocksSpec:
+    """``[blocks]`` of a block scene; valid but ignored keys are added to ``warnings``.
 
     Raises:
         SceneError: naming the file and the key.
@@ -119,10 +119,10 @@ def blocks_spec(file: Path, raw: Any, geometry: Geometry | None) -> BlocksSpec:
                 raise t.error(
                     key, "applies to 2D blocks only (3D faces use centroids, seed 5.2.2(b))"
                 )
-    elif inner == "incentre" and (t.has("radius") or t.has("convex")):
-        raise t.error(
-            "radius" if t.has("radius") else "convex", "applies to inner_point = 'random'"
-        )
+    elif inner == "incentre":
+        for key in ("radius", "convex"):
+            if t.has(key):
+                warnings.append(f"{file}: blocks.{key}: ignored, applies to inner_point = 'random'")
     immobile = t.boolean("immobile", source == "terrain")
     if immobile and source != "terrain":
         raise t.error("immobile", "applies to source = 'terrain' only")

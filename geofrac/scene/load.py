@@ -452,7 +452,8 @@ def _blocks_scene(
     if "blocks" not in data:
         raise SceneError(file, "blocks", "missing (required table for method 'blocks')")
     geometry = _geometry(file, data["geometry"]) if "geometry" in data else None
-    spec = blocks_spec(file, data["blocks"], geometry)
+    warnings: list[str] = []
+    spec = blocks_spec(file, data["blocks"], geometry, warnings)
     output = blocks_output(
         file, data.get("output", {}), common["name"], None if out is None else Path(out)
     )
@@ -468,6 +469,7 @@ def _blocks_scene(
         solver=Solver(),
         output=output,
         raw=data,
+        warnings=tuple(warnings),
         method="blocks",
         blocks=spec,
     )

@@ -70,14 +70,14 @@ def test_bad_block_scenes_name_the_key(tmp_path, text, key, message):
     assert message in str(info.value)
 
 
-def test_random_2d_options_need_random_points(tmp_path):
+def test_random_2d_options_apply_to_random_points(tmp_path):
     square = (JOBS.parent / "meshes" / "square.geo").as_posix()
     text = (
         f'method = "blocks"\n[geometry]\nfile = "{square}"\n'
         '[blocks]\ninner_point = "incentre"\nradius = 0.5\n'
     )
-    with pytest.raises(SceneError, match="inner_point = 'random'"):
-        load_scene(_write(tmp_path, text))
+    warnings = load_scene(_write(tmp_path, text)).warnings
+    assert len(warnings) == 1 and "blocks.radius: ignored" in warnings[0]
     text = text.replace('"incentre"', '"random"').replace("0.5", "1.5")
     with pytest.raises(SceneError, match=r"\[0, 1\]"):
         load_scene(_write(tmp_path, text))
