@@ -16,10 +16,10 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pyvista as pv  # noqa: E402
-from matplotlib.collections import PolyCollection  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import pyvista as pv
+from matplotlib.collections import PolyCollection
 
 
 def _polygons(grid: pv.UnstructuredGrid) -> list[np.ndarray]:
@@ -64,6 +64,7 @@ def render_3d(out: Path, run: Path, zoom: float = 1.0) -> None:
 
 
 def main(argv: list[str]) -> None:
+    """``OUT.png RUN_DIR...``: 2D runs side by side, or the first 3D run."""
     out, runs = Path(argv[0]), [Path(a) for a in argv[1:]]
     dims = {pv.read(r / "blocks.vtu").celltypes[0] == pv.CellType.POLYGON for r in runs}
     if dims == {True}:
