@@ -194,7 +194,17 @@ def _validate(scene: Scene, blocks: Blocks, comm: MPI.Comm) -> dict[str, Any] | 
     sample = None
     if isinstance(spec.validate, int) and spec.validate < total:  # this rank's share
         sample = max(1, round(spec.validate * blocks.num_blocks / total))
-    reports = comm.gather(quality.validate_cells(blocks, sample=sample, seed=spec.seed), root=0)
+    from geofrac.log import Progress
+
+    ticker: Progress | None = None
+
+    def progress(done: int, chunks: int) -> None:  # rank 0's share, printed by rank 0
+        nonlocal ticker
+        ticker = ticker or Progress(comm, chunks, "validator (rank 0)")
+        ticker.step(f"{min(done * 2000, blocks.num_blocks)} blocks")
+
+    mine = quality.validate_cells(blocks, sample=sample, seed=spec.seed, progress=progress)
+    reports = comm.gather(mine, root=0)
     return None if reports is None else _merge_validator(reports)
 
 

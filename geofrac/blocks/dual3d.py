@@ -67,6 +67,14 @@ class Corners:
     extra: np.ndarray | None = None
 
 
+#: Sorting networks for 2, 3 and 4 values (pairs to compare and swap, in order).
+_NETWORKS = {
+    2: ((0, 1),),
+    3: ((0, 1), (1, 2), (0, 1)),
+    4: ((0, 1), (2, 3), (0, 2), (1, 3), (1, 2)),
+}
+
+
 def centroids(x: np.ndarray) -> np.ndarray:
     """Centroids of point groups, the same bits whatever the order of their points.
 
@@ -79,11 +87,17 @@ def centroids(x: np.ndarray) -> np.ndarray:
     Returns:
         shape=(..., dim).
     """
-    s = np.sort(x, axis=-2)
-    total = s[..., 0, :]
-    for i in range(1, s.shape[-2]):
-        total = total + s[..., i, :]
-    return total / s.shape[-2]
+    k = x.shape[-2]
+    v = [x[..., i, :] for i in range(k)]
+    for i, j in _NETWORKS.get(k, ()):  # a sorting network: elementwise min/max swaps
+        v[i], v[j] = np.minimum(v[i], v[j]), np.maximum(v[i], v[j])
+    if k not in _NETWORKS:
+        s = np.sort(x, axis=-2)
+        v = [s[..., i, :] for i in range(k)]
+    total = v[0]
+    for i in range(1, k):
+        total = total + v[i]
+    return total / k
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -131,10 +145,12 @@ def tet_corners(
         [gid.ravel(), ekey.ravel(), fkey.ravel(), np.asarray(cell_key, dtype=np.int64)],
         [x.reshape(-1, 3), emid.reshape(-1, 3), fmid.reshape(-1, 3), centre],
     )
-    vref = table.refs(VERTEX, gid)
-    eref = table.refs(EDGE, ekey)
-    fref = table.refs(FACE, fkey)
-    cref = table.refs(CELL, np.asarray(cell_key, dtype=np.int64))
+    vref, eref, fref, cref = (
+        g.reshape(shape)
+        for g, shape in zip(
+            table.given, (gid.shape, ekey.shape, fkey.shape, (len(gid),)), strict=True
+        )
+    )
 
     blocks, faces = [], []
     for e, (i, j) in enumerate(EDGES):  # the face between the sub-cells of i and j
@@ -212,7 +228,7 @@ def assemble(corners: Corners, block_ids: np.ndarray, dim: int) -> Blocks:
             index.max() >= nb or np.any(block_ids[np.minimum(index, nb - 1)] != owner)
         ):
             raise ValueError("a face or piece belongs to a block this rank does not build")
-        order = np.argsort(index, kind="stable")
+        order = np.argsort(index.astype(np.int32))  # within a block, any order will do
         offsets = np.zeros(nb + 1, dtype=np.int64)
         np.cumsum(np.bincount(index, minlength=nb), out=offsets[1:])
         return rows[order], offsets

@@ -28,6 +28,7 @@ from geofrac.blocks.model import Blocks, block_ranges
 
 __all__ = [
     "HEX_FACES",
+    "LARGE_BLOCK_FACES",
     "VALIDATOR_FAILURES",
     "block_centroids",
     "block_points",
@@ -48,6 +49,9 @@ HEX_FACES = np.array(
     [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
 )
 """The faces of a VTK hexahedron, counter-clockwise seen from outside, shape=(6, 4)."""
+
+#: Blocks with more faces skip VTK's (quadratic) validator for the exact tests alone.
+LARGE_BLOCK_FACES = 5000
 
 VALIDATOR_FAILURES = (
     "WRONG_NUMBER_OF_POINTS",
@@ -749,6 +753,7 @@ def validate_cells(
     sample: int | None = None,
     seed: int = 0,
     planarity_tolerance: float = 0.1,
+    progress: Callable[[int, int], None] | None = None,
 ) -> dict:
     """VTK's cell validator on the blocks as ``VTK_POLYHEDRON`` (3D) / ``VTK_POLYGON`` cells.
 
@@ -785,20 +790,30 @@ def validate_cells(
         seed: random seed of the sample.
         planarity_tolerance: VTK's allowed face distance from its plane relative to the
             largest face-centre-to-corner distance (polyhedra only).
+        progress: called as ``progress(chunks_done, chunks)`` after each chunk of 2000
+            blocks, or None.
 
     Returns:
-        ``blocks`` (total), ``checked``, ``valid`` (state 0), ``failed`` (any failure bit),
+        ``blocks`` (total), ``checked``, ``large_exact`` (blocks of more than
+        :data:`LARGE_BLOCK_FACES` faces, checked by :func:`self_intersections` instead of
+        VTK; with :func:`check_closed`, :func:`face_planarity` and a positive volume in
+        :func:`summarize`), ``valid`` (state 0), ``failed`` (any failure bit),
         ``non_convex`` (informational), ``states`` (name -> count of checked cells with that
         bit, for every ``pyvista.CellStatus`` but VALID), ``failed_blocks`` (indices of up
         to 20 failed blocks), ``seconds``.
     """
-    report, failed = _validate(blocks, sample, seed, planarity_tolerance)
+    report, failed = _validate(blocks, sample, seed, planarity_tolerance, progress)
     report["failed_blocks"] = [int(b) for b in failed[:20]]
     return report
 
 
 def _validate(
-    blocks: Blocks, sample: int | None, seed: int, planarity_tolerance: float
+    blocks: Blocks,
+    sample: int | None,
+    seed: int,
+    planarity_tolerance: float,
+    progress: Callable[[int, int], None] | None = None,
+    chunk: int = 2000,
 ) -> tuple[dict, np.ndarray]:
     """``validate_cells`` without the block list, and all failed block indices."""
     import pyvista as pv
@@ -809,7 +824,22 @@ def _validate(
         which = np.sort(np.random.default_rng(seed).choice(n, size=sample, replace=False))
     else:
         which = np.arange(n)
-    state = _validator_states(blocks, which, planarity_tolerance)
+    # VTK's face-intersection test is quadratic in a cell's faces: a block of many faces
+    # (the immobile part: tens of thousands) would take hours, so such blocks get the
+    # exact test alone (self_intersections, sweep and prune) instead of VTK's
+    sizes = np.diff(np.asarray(blocks.face_offsets))[which]
+    large = which[sizes > LARGE_BLOCK_FACES] if blocks.dim == 3 else which[:0]
+    large_failed = np.array(
+        [b for b in large.tolist() if self_intersections(blocks, b) > 0], dtype=np.int64
+    )
+    which = which[~np.isin(which, large)]
+    chunks = [which[i : i + chunk] for i in range(0, len(which), chunk)] or [which]
+    states_list = []
+    for done, part in enumerate(chunks, 1):
+        states_list.append(_validator_states(blocks, part, planarity_tolerance))
+        if progress is not None:
+            progress(done, len(chunks))
+    state = np.concatenate(states_list)
     inverted = int(pv.CellStatus.INVERTED_FACES.value)
     others = _failure_mask() & ~inverted
     convex = (state & int(pv.CellStatus.NON_CONVEX.value)) == 0
@@ -835,61 +865,67 @@ def _validate(
     }
     report = {
         "blocks": n,
-        "checked": len(which),
+        "checked": len(which) + len(large),
+        "large_exact": len(large),
         "valid": int(np.count_nonzero(state == 0)),
-        "failed": int(np.count_nonzero(failed)),
+        "failed": int(np.count_nonzero(failed)) + len(large_failed),
         "non_convex": states["NON_CONVEX"],
         "inverted_faces_non_convex": int(np.count_nonzero(((state & inverted) != 0) & ~convex)),
         "intersecting_faces_cleared": cleared,
         "states": states,
         "seconds": time.perf_counter() - t0,
     }
-    return report, which[failed]
+    return report, np.concatenate([which[failed], large_failed])
 
 
 def self_intersections(blocks: Blocks, b: int, chunk: int = 1 << 20) -> int:
     """Exact count of a 3D block's face edges that cross one of its faces elsewhere.
 
-    The quads are split into triangles; every triangle edge is tested (Möller-Trumbore,
-    float64) against every triangle that shares none of its points. A closed block whose
-    faces do not cross has none. An edge lying in a triangle's plane is not tested
+    The quads are split into triangles. Pairs of triangles that share no point and whose
+    bounding boxes overlap (sweep and prune, :func:`geofrac.blocks.kernels.overlapping_pairs`)
+    are tested edge against triangle (Möller-Trumbore, float64), both ways; touching counts.
+    A closed block whose faces neither cross nor touch away from shared points has none. An edge lying in a triangle's plane is not tested
     (coplanar overlaps of faces that share no point are not detected).
 
     Args:
         blocks: the block set (3D).
         b: the block.
-        chunk: edge-triangle pairs tested at a time.
+        chunk: triangle pairs tested at a time.
     """
-    quads = blocks.faces[blocks.face_offsets[b] : blocks.face_offsets[b + 1]]
-    tris = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
-    edges = np.unique(
-        np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]]), axis=1), axis=0
-    )
-    p = blocks.points
+    from geofrac.blocks.kernels import overlapping_pairs
+
+    quads = np.asarray(blocks.faces[blocks.face_offsets[b] : blocks.face_offsets[b + 1]])
+    tris = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]).astype(np.int64)
+    p = np.asarray(blocks.points, dtype=float)
+    pairs = overlapping_pairs(p, tris)
     hits = 0
-    total = len(edges) * len(tris)
-    for start in range(0, total, chunk):
-        k = np.arange(start, min(total, start + chunk))
-        e, t = edges[k // len(tris)], tris[k % len(tris)]
-        apart = ~((t == e[:, :1]).any(axis=1) | (t == e[:, 1:]).any(axis=1))
-        e, t = e[apart], t[apart]
-        o, d = p[e[:, 0]], p[e[:, 1]] - p[e[:, 0]]
-        a = p[t[:, 0]]
-        e1, e2 = p[t[:, 1]] - a, p[t[:, 2]] - a
-        h = np.cross(d, e2)
-        det = np.einsum("ij,ij->i", e1, h)
-        scale = np.linalg.norm(d, axis=1) * np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
-        ok = np.abs(det) > 1e-12 * scale  # an edge parallel to the triangle cannot cross it
-        inv = 1.0 / np.where(ok, det, 1.0)
-        s = o - a
-        u = inv * np.einsum("ij,ij->i", s, h)
-        q = np.cross(s, e1)
-        v = inv * np.einsum("ij,ij->i", d, q)
-        w = inv * np.einsum("ij,ij->i", e2, q)
-        eps = 1e-12
-        hit = ok & (u > eps) & (v > eps) & (u + v < 1 - eps) & (w > eps) & (w < 1 - eps)
-        hits += int(np.count_nonzero(hit))
+    for start in range(0, len(pairs), chunk):
+        part = pairs[start : start + chunk]
+        for first, second in ((0, 1), (1, 0)):
+            edge_tri, t = tris[part[:, first]], tris[part[:, second]]
+            for c in range(3):
+                hits += _edge_crossings(p, edge_tri[:, c], edge_tri[:, (c + 1) % 3], t)
     return hits
+
+
+def _edge_crossings(p: np.ndarray, e0: np.ndarray, e1: np.ndarray, t: np.ndarray) -> int:
+    """How many segments p[e0] p[e1] meet the (closed) triangles p[t]."""
+    o, d = p[e0], p[e1] - p[e0]
+    a = p[t[:, 0]]
+    u1, u2 = p[t[:, 1]] - a, p[t[:, 2]] - a
+    h = np.cross(d, u2)
+    det = np.einsum("ij,ij->i", u1, h)
+    scale = np.linalg.norm(d, axis=1) * np.linalg.norm(u1, axis=1) * np.linalg.norm(u2, axis=1)
+    ok = np.abs(det) > 1e-12 * scale  # an edge parallel to the triangle cannot cross it
+    inv = 1.0 / np.where(ok, det, 1.0)
+    s = o - a
+    u = inv * np.einsum("ij,ij->i", s, h)
+    q = np.cross(s, u1)
+    v = inv * np.einsum("ij,ij->i", d, q)
+    w = inv * np.einsum("ij,ij->i", u2, q)
+    eps = 1e-12  # touching counts: faces that share no point must not meet at all
+    hit = ok & (u >= -eps) & (v >= -eps) & (u + v <= 1 + eps) & (w >= -eps) & (w <= 1 + eps)
+    return int(np.count_nonzero(hit))
 
 
 def equivalent_diameters(volumes: np.ndarray, dim: int) -> np.ndarray:

@@ -47,16 +47,20 @@ class PointTable:
         """Build from per-kind keys, shape=(n_k,) each, with coordinates, shape=(n_k, gdim).
 
         Keys may repeat (the same point seen from several cells); the first coordinates
-        given for a key are kept.
+        given for a key are kept. :attr:`given` holds, per kind, the index of each given
+        key's point (the refs of the construction keys, same shapes).
         """
         self.keys: list[np.ndarray] = []
+        self.given: list[np.ndarray] = []
         xs = []
         for k, x in zip(keys, coords, strict=True):
-            unique, first = np.unique(k, return_index=True)
+            unique, first, inverse = np.unique(k, return_index=True, return_inverse=True)
             self.keys.append(unique)
+            self.given.append(inverse.reshape(np.shape(k)))
             xs.append(x[first])
         self.x = np.concatenate(xs) if xs else np.empty((0, 3))
         self._offsets()
+        self.given = [g + o for g, o in zip(self.given, self.offsets, strict=False)]
 
     def _offsets(self) -> None:
         sizes = [len(k) for k in self.keys]

@@ -275,3 +275,41 @@ def test_exact_self_intersection_test_finds_a_pushed_through_point():
     dented = corners.copy()
     dented[6] = [0.5, 0.5, -0.5]  # the top corner pushed down through the bottom face
     assert q.self_intersections(surface_block(dented, tris), 0) > 0
+
+
+def _subdivided_cube_surface(n):
+    """Outward triangles of the unit cube's surface, n x n squares per side."""
+    g = np.linspace(0.0, 1.0, n + 1)
+    points, tris = [], []
+    for axis in range(3):
+        for side in (0.0, 1.0):
+            u, v = np.meshgrid(g, g, indexing="ij")
+            p = np.zeros((n + 1, n + 1, 3))
+            p[..., axis] = side
+            p[..., (axis + 1) % 3], p[..., (axis + 2) % 3] = u, v
+            base = sum(len(x) for x in points)
+            points.append(p.reshape(-1, 3))
+            idx = base + np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+            a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+            c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+            t = np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+            if side == 0.0:  # (u, v, axis) is right-handed: flip the low side outward
+                t = t[:, [0, 2, 1]]
+            tris.append(t)
+    points = np.concatenate(points)
+    unique, inverse = np.unique(np.round(points, 12), axis=0, return_inverse=True)
+    return unique, inverse.ravel()[np.concatenate(tris)]
+
+
+def test_a_block_of_many_faces_gets_the_exact_test_instead_of_vtk():
+    from geofrac.blocks.immobile import surface_block
+
+    points, tris = _subdivided_cube_surface(20)  # 2400 triangles, 7200 quads
+    block = surface_block(points, tris)
+    assert abs(q.block_volumes(block)[0] - 1.0) < 1e-12
+    report = q.validate_cells(block)
+    assert report["large_exact"] == 1 and report["checked"] == 1 and report["failed"] == 0
+    centre = np.flatnonzero(np.all(np.isclose(points, [0.5, 0.5, 1.0]), axis=1))[0]
+    points[centre, 2] = -0.5  # pushed from the top through the bottom
+    report = q.validate_cells(surface_block(points, tris))
+    assert report["failed"] == 1 and report["failed_blocks"] == [0]
