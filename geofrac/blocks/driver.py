@@ -232,6 +232,7 @@ def _checks(
             domain,
             validate=False,
             on_boundary=_everywhere,
+            stats_of=whole.kind == 0,  # statistics of the moving blocks
         )
         report["validator"] = validator
         if validator is not None:

@@ -884,8 +884,9 @@ def self_intersections(blocks: Blocks, b: int, chunk: int = 1 << 20) -> int:
     The quads are split into triangles. Pairs of triangles that share no point and whose
     bounding boxes overlap (sweep and prune, :func:`geofrac.blocks.kernels.overlapping_pairs`)
     are tested edge against triangle (Möller-Trumbore, float64), both ways; touching counts.
-    A closed block whose faces neither cross nor touch away from shared points has none. An edge lying in a triangle's plane is not tested
-    (coplanar overlaps of faces that share no point are not detected).
+    A closed block whose faces neither cross nor touch away from shared points has none.
+    An edge lying in a triangle's plane is not tested (coplanar overlaps of faces that
+    share no point are not detected).
 
     Args:
         blocks: the block set (3D).
@@ -961,6 +962,7 @@ def summarize(
     sample: int | None = 2000,
     on_boundary: Callable[[np.ndarray], np.ndarray] | None = None,
     planarity_tolerance: float = 1e-6,
+    stats_of: np.ndarray | slice = slice(None),
 ) -> dict:
     """A JSON-ready quality report of a block set.
 
@@ -977,6 +979,9 @@ def summarize(
         on_boundary: passed to ``check_pairing``.
         planarity_tolerance: a block with a face whose ``face_planarity`` exceeds this
             is invalid.
+        stats_of: the blocks the statistics (volume, equivalent diameter, aspect ratio)
+            describe, a mask or index (default all; e.g. the moving layer only). The
+            checks always cover every block.
 
     Returns:
         ``count``, ``dim``, ``total_volume``, ``volume_rel_error`` ((total - domain) /
@@ -1010,9 +1015,10 @@ def summarize(
         "total_volume": total,
         "domain_volume": float(domain_volume),
         "volume_rel_error": (total - domain_volume) / domain_volume,
-        "volume": _stats(vol),
-        "equivalent_diameter": _stats(d_eq),
-        "aspect_ratio": _stats(aspect),
+        "volume": _stats(vol[stats_of]),
+        "equivalent_diameter": _stats(d_eq[stats_of]),
+        "aspect_ratio": _stats(aspect[stats_of]),
+        "statistics_of": int(np.ones(len(vol), bool)[stats_of].sum()),
         "not_closed": int(np.count_nonzero(~closed)),
         "wrong_euler": int(np.count_nonzero(wrong_euler)),
         "non_positive_volume": int(np.count_nonzero(vol <= 0)),
