@@ -23,6 +23,7 @@ whole mesh held in numpy arrays.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +40,10 @@ EDGES = np.array([(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)])
 EDGE_OTHERS = np.array([(2, 3), (1, 3), (1, 2), (0, 3), (0, 2), (0, 1)])
 #: Local faces: face k is opposite vertex k (the DOLFINx/Basix facet numbering).
 FACES = np.array([(1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2)])
+#: Sign of each permutation of (0, 1, 2, 3), indexed by the permuted tuple.
+_PARITY = np.zeros((4, 4, 4, 4), dtype=np.int8)
+for _p in itertools.permutations(range(4)):
+    _PARITY[_p] = 1 - 2 * (sum(a > b for i, a in enumerate(_p) for b in _p[i + 1 :]) % 2)
 _EDGE_INDEX = np.full((4, 4), -1)
 for _e, (_i, _j) in enumerate(EDGES):
     _EDGE_INDEX[_i, _j] = _EDGE_INDEX[_j, _i] = _e
@@ -135,7 +140,7 @@ def tet_corners(
     emid = (x[:, EDGES[:, 0]] + x[:, EDGES[:, 1]]) * 0.5
     fkey = face_keys(gid[:, FACES[:, 0]], gid[:, FACES[:, 1]], gid[:, FACES[:, 2]], n)
     fmid = centroids(x[:, FACES])
-    centre = centroids(x)
+    centre = ((x[:, 0] + x[:, 1]) + (x[:, 2] + x[:, 3])) * 0.25  # one cell computes it
     if boundary is None:
         _, inverse, counts = np.unique(fkey, return_inverse=True, return_counts=True)
         boundary = (counts[inverse] == 1).reshape(fkey.shape)
@@ -152,15 +157,25 @@ def tet_corners(
         )
     )
 
+    d1, d2, d3 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], x[:, 3] - x[:, 0]
+    negative = _dot(d1, np.cross(d2, d3)) < 0  # the cell's orientation, once per cell
+    index = np.int32 if len(table.x) < 2**31 else np.int64
+    vref, eref, fref, cref = (r.astype(index) for r in (vref, eref, fref, cref))
+
     blocks, faces = [], []
     for e, (i, j) in enumerate(EDGES):  # the face between the sub-cells of i and j
         k, m = EDGE_OTHERS[e]
-        quad = np.stack([eref[:, e], fref[:, m], cref, fref[:, k]], axis=1)
-        normal = np.cross(centre - emid[:, e], fmid[:, k] - fmid[:, m])
-        flip = _dot(normal, x[:, j] - x[:, i]) < 0
-        quad[flip] = quad[flip][:, ::-1][:, [3, 0, 1, 2]]  # reverse, keep m_ij first
+        # (m_ij, f_ijk, c, f_ijm) turns about j - i as det(j - i, k - i, m - i) does (its
+        # normal is (c - m_ij) x (f_ijm - f_ijk) = (k - m_ij) x (m - m_ij) / 6): the sign
+        # of the permutation (i, j, k, m) times the cell's orientation
+        flip = negative ^ (_PARITY[i, j, k, m] < 0)
+        fa = np.where(flip, fref[:, k], fref[:, m])
+        fb = np.where(flip, fref[:, m], fref[:, k])
         blocks += [gid[:, i], gid[:, j]]
-        faces += [quad, quad[:, ::-1][:, [3, 0, 1, 2]]]
+        faces += [
+            np.stack([eref[:, e], fa, cref, fb], axis=1),
+            np.stack([eref[:, e], fb, cref, fa], axis=1),
+        ]
     for k in range(4):  # boundary triangles: one quad per corner
         on = np.flatnonzero(boundary[:, k])
         if len(on) == 0:
@@ -170,27 +185,28 @@ def tet_corners(
         for c in range(3):
             i, j, m = tri[c], tri[(c + 1) % 3], tri[(c + 2) % 3]
             eij, eim = _EDGE_INDEX[i, j], _EDGE_INDEX[i, m]
-            quad = np.stack([vref[on, i], eref[on, eij], fref[on, k], eref[on, eim]], axis=1)
             normal = np.cross(fmid[on, k] - x[on, i], emid[on, eim] - emid[on, eij])
             flip = _dot(normal, outward) < 0
-            quad[flip] = quad[flip][:, [0, 3, 2, 1]]
+            first = np.where(flip, eref[on, eim], eref[on, eij])
+            last = np.where(flip, eref[on, eij], eref[on, eim])
             blocks.append(gid[on, i])
-            faces.append(quad)
+            faces.append(np.stack([vref[on, i], first, fref[on, k], last], axis=1))
 
     pieces, piece_block = [], []
-    rows = np.arange(len(gid))
-
-    def e(p: int, q: np.ndarray | int) -> np.ndarray:
-        return eref[rows, _EDGE_INDEX[p, q]]
-
-    def f(p: int, q: np.ndarray | int, r: np.ndarray | int) -> np.ndarray:
-        return fref[rows, 6 - (p + q + r)]  # face pqr is opposite the fourth vertex
-
     for a in range(4):  # the hexahedral sub-cell of corner a, right-handed
         b, c, d = (v for v in range(4) if v != a)
-        det = _dot(x[:, b] - x[:, a], np.cross(x[:, c] - x[:, a], x[:, d] - x[:, a]))
-        bb = np.where(det < 0, c, b)
-        cc = np.where(det < 0, b, c)
+        swap = negative ^ (_PARITY[a, b, c, d] < 0)  # det(b - a, c - a, d - a) < 0
+        bb, cc = np.where(swap, c, b), np.where(swap, b, c)
+        rows = np.arange(len(gid))
+
+        def e(p: int, q: np.ndarray | int, rows: np.ndarray = rows) -> np.ndarray:
+            return eref[rows, _EDGE_INDEX[p, q]]
+
+        def f(
+            p: int, q: np.ndarray | int, r: np.ndarray | int, rows: np.ndarray = rows
+        ) -> np.ndarray:
+            return fref[rows, 6 - (p + q + r)]  # face pqr is opposite the fourth vertex
+
         # VTK order: bottom (a, m_ab, f_abc, m_ac), then above it (m_ad, f_abd, c, f_acd)
         hexa = np.stack(
             [vref[:, a], e(a, bb), f(a, bb, cc), e(a, cc), e(a, d), f(a, bb, d), cref, f(a, cc, d)],
@@ -208,7 +224,10 @@ def tet_corners(
 
 
 def assemble(corners: Corners, block_ids: np.ndarray, dim: int) -> Blocks:
-    """Group faces and pieces by block and keep only the points they use.
+    """Group the faces by block; the pieces keep their order, with their block index.
+
+    The points are the table's, all of them: after an exchange a few may be used by no
+    block of this rank.
 
     Args:
         corners: the contributions (of this rank's cells and those received).
@@ -221,34 +240,29 @@ def assemble(corners: Corners, block_ids: np.ndarray, dim: int) -> Blocks:
     """
     block_ids = np.asarray(block_ids, dtype=np.int64)
     nb = len(block_ids)
+    index_type = np.int32 if len(corners.table.x) < 2**31 else np.int64
 
-    def group(owner: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def index_of(owner: np.ndarray) -> np.ndarray:
         index = np.searchsorted(block_ids, owner)
         if len(owner) and (
             index.max() >= nb or np.any(block_ids[np.minimum(index, nb - 1)] != owner)
         ):
             raise ValueError("a face or piece belongs to a block this rank does not build")
-        order = np.argsort(index.astype(np.int32))  # within a block, any order will do
-        offsets = np.zeros(nb + 1, dtype=np.int64)
-        np.cumsum(np.bincount(index, minlength=nb), out=offsets[1:])
-        return rows[order], offsets
+        return index
 
-    faces, offsets = group(corners.face_block, corners.faces)
-    pieces, piece_offsets = group(corners.piece_block, corners.pieces)
-    used = np.zeros(len(corners.table.x), dtype=bool)
-    used[faces.ravel()] = True
-    used[pieces.ravel()] = True
-    new = np.cumsum(used) - 1
-    seeds = corners.table.x[corners.table.refs(VERTEX, block_ids)]
+    index = index_of(corners.face_block).astype(np.int32)
+    order = np.argsort(index)  # within a block, any order will do
+    offsets = np.zeros(nb + 1, dtype=np.int64)
+    np.cumsum(np.bincount(index, minlength=nb), out=offsets[1:])
     return Blocks(
         dim=dim,
-        points=corners.table.x[used],
-        faces=new[faces].astype(np.int32 if used.sum() < 2**31 else np.int64),
+        points=corners.table.x,
+        faces=corners.faces.astype(index_type)[order],
         face_offsets=offsets,
-        pieces=new[pieces].astype(np.int32 if used.sum() < 2**31 else np.int64),
-        piece_block=np.repeat(np.arange(nb, dtype=np.int64), np.diff(piece_offsets)),
+        pieces=corners.pieces.astype(index_type),
+        piece_block=index_of(corners.piece_block),
         ids=block_ids,
-        seeds=seeds,
+        seeds=corners.table.x[corners.table.refs(VERTEX, block_ids)],
     )
 
 

@@ -30,13 +30,15 @@ class Blocks:
 
     Attributes:
         dim: 2 or 3.
-        points: point coordinates, shape=(num_points, dim).
+        points: point coordinates, shape=(num_points, dim); a few may be used by no
+            block (points of faces another rank builds).
         faces: point indices, shape=(num_faces, 1) in 2D or (num_faces, 4) in 3D.
         face_offsets: where each block's faces start, shape=(num_blocks + 1,).
         pieces: the convex pieces' point indices, shape=(num_pieces, 4) in 2D (a
             counter-clockwise quadrilateral) or (num_pieces, 8) in 3D (a hexahedron in VTK's
             order: bottom quad, then the top quad above it).
-        piece_block: the block of each piece, shape=(num_pieces,).
+        piece_block: the block of each piece, shape=(num_pieces,); pieces are in any
+            order (the builders leave them in cell order).
         ids: an id per block, unique across ranks (the global index of the mesh vertex it
             surrounds; -1 for an immobile block), shape=(num_blocks,).
         seeds: the point each block surrounds (the mesh vertex; for an immobile block its

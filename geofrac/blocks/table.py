@@ -36,6 +36,22 @@ def face_keys(a: np.ndarray, b: np.ndarray, c: np.ndarray, n: int) -> np.ndarray
     return (a.astype(np.int64) * n + b) * n + c
 
 
+def _unique(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Sorted unique keys, the position of one occurrence of each, and each key's index.
+
+    ``np.unique`` with ``return_index`` sorts stably (merge sort) to return the first
+    occurrence; any occurrence will do here, so an unstable sort is used (about twice
+    as fast).
+    """
+    order = np.argsort(keys)
+    ordered = keys[order]
+    starts = np.ones(len(keys), dtype=bool)
+    starts[1:] = ordered[1:] != ordered[:-1]
+    inverse = np.empty(len(keys), dtype=np.int64)
+    inverse[order] = np.cumsum(starts) - 1
+    return ordered[starts], order[starts], inverse
+
+
 class PointTable:
     """Points of several kinds, each kind a sorted array of unique keys with coordinates.
 
@@ -46,15 +62,16 @@ class PointTable:
     def __init__(self, keys: Sequence[np.ndarray], coords: Sequence[np.ndarray]) -> None:
         """Build from per-kind keys, shape=(n_k,) each, with coordinates, shape=(n_k, gdim).
 
-        Keys may repeat (the same point seen from several cells); the first coordinates
-        given for a key are kept. :attr:`given` holds, per kind, the index of each given
-        key's point (the refs of the construction keys, same shapes).
+        Keys may repeat (the same point seen from several cells, computed with the same
+        bits); the coordinates of one of them are kept. :attr:`given` holds, per kind,
+        the index of each given key's point (the refs of the construction keys, same
+        shapes).
         """
         self.keys: list[np.ndarray] = []
         self.given: list[np.ndarray] = []
         xs = []
         for k, x in zip(keys, coords, strict=True):
-            unique, first, inverse = np.unique(k, return_index=True, return_inverse=True)
+            unique, first, inverse = _unique(np.ravel(k))
             self.keys.append(unique)
             self.given.append(inverse.reshape(np.shape(k)))
             xs.append(x[first])

@@ -299,10 +299,12 @@ def write_block_file(path: str | os.PathLike, blocks: Blocks) -> Path:
     faces = np.asarray(blocks.faces, dtype=np.int64)
     pieces = np.asarray(blocks.pieces, dtype=np.int64)
     piece_block = np.asarray(blocks.piece_block, dtype=np.int64)
+    if np.any(np.diff(piece_block) < 0):  # the builders leave pieces in cell order
+        order = np.argsort(piece_block, kind="stable")
+        pieces, piece_block = pieces[order], piece_block[order]
+        blocks = dataclasses.replace(blocks, pieces=pieces, piece_block=piece_block)
     f_off = np.asarray(blocks.face_offsets, dtype=np.int64)
     p_off = np.searchsorted(piece_block, np.arange(blocks.num_blocks + 1))
-    if np.any(np.diff(piece_block) < 0):
-        raise ValueError("pieces must be sorted by block")
     v_off, v_ids = block_points(blocks, with_pieces=True)
     volumes = block_volumes(blocks)
     num_points = len(x)
