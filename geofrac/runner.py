@@ -7,7 +7,6 @@ directory, XDMF fields and ``summary.json``.
 
 from __future__ import annotations
 
-import datetime as dt
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -30,7 +29,7 @@ from geofrac.fem.post import (
     probe,
     tensor_fields,
 )
-from geofrac.io.summary import finish_summary, prepare_output, versions
+from geofrac.io.summary import finish_summary, prepare_output, start_summary
 from geofrac.io.xdmf import write_fields, write_meshtags
 from geofrac.log import echo, format_seconds
 from geofrac.meshing.distribute import TaggedMesh, build_mesh, check_fracture_cover
@@ -243,22 +242,8 @@ def run_scene(
     like a complete run when it is not.
     """
     timings = timings or Timings()
-    started = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
     _prepare_output(scene, comm)
-    summary: dict[str, Any] = {
-        "scene": {
-            "path": str(scene.path),
-            "sha256": scene.sha256,
-            "name": scene.name,
-            "effects": list(scene.effect_names),
-            "element": scene.discretization.element,
-            "input": scene.raw,
-        },
-        "warnings": list(scene.warnings),
-        "versions": versions(),
-        "ranks": comm.size,
-        "started": started,
-    }
+    summary = start_summary(scene, comm, element=scene.discretization.element)
     solution = None
     try:
         solution = solve_scene(scene, comm, timings, verbose, write=True)

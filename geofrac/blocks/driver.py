@@ -11,7 +11,6 @@ outputs need the whole set, which is gathered to rank 0.
 
 from __future__ import annotations
 
-import datetime as dt
 import time
 from typing import Any
 
@@ -20,7 +19,7 @@ from mpi4py import MPI
 
 from geofrac.blocks.model import Blocks
 from geofrac.errors import RunError
-from geofrac.io.summary import finish_summary, prepare_output, versions
+from geofrac.io.summary import finish_summary, prepare_output, start_summary
 from geofrac.log import echo
 from geofrac.scene.model import Geometry, Scene
 from geofrac.timing import Timings
@@ -128,24 +127,11 @@ def run_blocks_scene(
     ``status`` = ``"error: ..."`` before the error propagates.
     """
     timings = timings or Timings()
-    started = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
     out = scene.output.dir
     error = prepare_output(out, OUTPUT_FILES, comm)
     if error is not None:
         raise RunError(error)
-    summary: dict[str, Any] = {
-        "scene": {
-            "path": str(scene.path),
-            "sha256": scene.sha256,
-            "name": scene.name,
-            "method": "blocks",
-            "input": scene.raw,
-        },
-        "warnings": list(scene.warnings),
-        "versions": versions(fem=True),
-        "ranks": comm.size,
-        "started": started,
-    }
+    summary = start_summary(scene, comm, method="blocks")
     try:
         blocks, record = build(scene, comm, timings, verbose)
         with timings.phase("checks"):

@@ -16,7 +16,13 @@ from typing import Any
 
 import geofrac
 
-__all__ = ["finish_summary", "prepare_output", "versions", "write_json"]
+__all__ = [
+    "finish_summary",
+    "prepare_output",
+    "start_summary",
+    "versions",
+    "write_json",
+]
 
 
 def versions(fem: bool = True) -> dict[str, str]:
@@ -73,6 +79,31 @@ def prepare_output(directory: Path, names: Sequence[str], comm: Any) -> str | No
         except OSError as exc:
             error = f"output.dir: cannot prepare {directory}: {exc.strerror}"
     return comm.bcast(error, root=0)
+
+
+def start_summary(scene: Any, comm: Any, fem: bool = True, **details: Any) -> dict[str, Any]:
+    """The head of a run's ``summary.json``: the scene, warnings, versions, ranks, start.
+
+    Args:
+        scene: the validated scene.
+        comm: the communicator (its size is recorded).
+        fem: whether the run uses DOLFINx (``versions(fem)``).
+        details: extra entries of ``summary["scene"]`` (e.g. ``method``, ``element``).
+    """
+    return {
+        "scene": {
+            "path": str(scene.path),
+            "sha256": scene.sha256,
+            "name": scene.name,
+            "effects": list(scene.effect_names),
+            **details,
+            "input": scene.raw,
+        },
+        "warnings": list(scene.warnings),
+        "versions": versions(fem=fem),
+        "ranks": comm.size,
+        "started": dt.datetime.now(dt.UTC).isoformat(timespec="seconds"),
+    }
 
 
 def finish_summary(summary: dict[str, Any], path: Path, comm: Any, timings: Any) -> None:

@@ -23,7 +23,6 @@ imported.
 
 from __future__ import annotations
 
-import datetime as dt
 import math
 import time
 from dataclasses import dataclass, field
@@ -33,7 +32,7 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.errors import RunError
-from geofrac.io.summary import finish_summary, prepare_output, versions
+from geofrac.io.summary import finish_summary, prepare_output, start_summary
 from geofrac.log import echo, format_seconds
 from geofrac.mpm.boundaries import held, scene_grid
 from geofrac.mpm.grid import Grid
@@ -387,24 +386,10 @@ def run_mpm_scene(
     ``summary.json`` records ``status`` = ``"error: ..."`` before the error propagates.
     """
     timings = timings or Timings()
-    started = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
     error = prepare_output(scene.output.dir, OUTPUT_FILES, comm)
     if error is not None:
         raise RunError(error)
-    summary: dict[str, Any] = {
-        "scene": {
-            "path": str(scene.path),
-            "sha256": scene.sha256,
-            "name": scene.name,
-            "method": "mpm",
-            "effects": list(scene.effect_names),
-            "input": scene.raw,
-        },
-        "warnings": list(scene.warnings),
-        "versions": versions(fem=False),
-        "ranks": comm.size,
-        "started": started,
-    }
+    summary = start_summary(scene, comm, fem=False, method="mpm")
     try:
         results = simulate(scene, comm, timings, verbose, write=True)
         summary |= {"results": results, "status": "ok"}
