@@ -134,12 +134,12 @@ def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, comm: MPI.Com
     kinds = np.concatenate([m[5] for m in parts] or [np.empty(0, np.int64)])
     keys = np.concatenate([m[6] for m in parts] or [np.empty(0, np.int64)])
     xs = np.concatenate([m[7] for m in parts] or [np.empty((0, table.x.shape[1]))])
-    refs, old_to_new = table.merge_remap(kinds, keys, xs)
+    refs = table.append(kinds, keys, xs)
     face_block = [corners.face_block[keep_f]]
-    faces = [old_to_new[corners.faces[keep_f]]]
+    faces = [corners.faces[keep_f]]
     extra = [] if corners.extra is None else [corners.extra[keep_f]]
     piece_block = [corners.piece_block[keep_p]]
-    pieces = [old_to_new[corners.pieces[keep_p]]]
+    pieces = [corners.pieces[keep_p]]
     start = 0
     for fb, fw, fx, pb, pw, *_ in parts:
         n_face = len(fb) * fw

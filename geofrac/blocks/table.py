@@ -53,10 +53,12 @@ def _unique(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 class PointTable:
-    """Points of several kinds, each kind a sorted array of unique keys with coordinates.
+    """Points of several kinds, each named by a key unique within its kind.
 
-    A point's index in the table is ``offset(kind) + position of its key``; the table's
-    :attr:`x` has shape=(num_points, gdim) in that order.
+    The points are stored in segments: the construction's points, kind by kind with their
+    keys sorted, then points appended later (:meth:`append`), again sorted by kind and
+    key within each append. :attr:`x` has shape=(num_points, gdim); :attr:`kind` and
+    :attr:`key` give each point's kind and key, shape=(num_points,).
     """
 
     def __init__(self, keys: Sequence[np.ndarray], coords: Sequence[np.ndarray]) -> None:
@@ -67,65 +69,83 @@ class PointTable:
         the index of each given key's point (the refs of the construction keys, same
         shapes).
         """
-        self.keys: list[np.ndarray] = []
+        self.num_kinds = len(keys)
+        self.segments: list[list[tuple[np.ndarray, int]]] = [[] for _ in keys]
         self.given: list[np.ndarray] = []
-        xs = []
-        for k, x in zip(keys, coords, strict=True):
-            unique, first, inverse = _unique(np.ravel(k))
-            self.keys.append(unique)
-            self.given.append(inverse.reshape(np.shape(k)))
+        xs, kinds, all_keys = [], [], []
+        start = 0
+        for k, (raw, x) in enumerate(zip(keys, coords, strict=True)):
+            unique, first, inverse = _unique(np.ravel(raw))
+            self.segments[k].append((unique, start))
+            self.given.append(start + inverse.reshape(np.shape(raw)))
             xs.append(x[first])
+            kinds.append(np.full(len(unique), k, dtype=np.int8))
+            all_keys.append(unique)
+            start += len(unique)
         self.x = np.concatenate(xs) if xs else np.empty((0, 3))
-        self._offsets()
-        self.given = [g + o for g, o in zip(self.given, self.offsets, strict=False)]
+        self.kind = np.concatenate(kinds) if kinds else np.empty(0, np.int8)
+        self.key = np.concatenate(all_keys) if all_keys else np.empty(0, np.int64)
 
-    def _offsets(self) -> None:
-        sizes = [len(k) for k in self.keys]
-        self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    def find(self, kind: int, keys: np.ndarray) -> np.ndarray:
+        """Indices of the points ``keys`` of ``kind``, -1 where absent, shape like ``keys``."""
+        keys = np.asarray(keys, dtype=np.int64)
+        out = np.full(keys.shape, -1, dtype=np.int64)
+        for sorted_keys, start in self.segments[kind]:
+            if not len(sorted_keys):
+                continue
+            pos = np.minimum(np.searchsorted(sorted_keys, keys), len(sorted_keys) - 1)
+            hit = (sorted_keys[pos] == keys) & (out < 0)
+            out[hit] = start + pos[hit]
+        return out
 
     def refs(self, kind: int, keys: np.ndarray) -> np.ndarray:
-        """Indices of the points ``keys`` (all present) of ``kind``, shape like ``keys``."""
-        return self.offsets[kind] + np.searchsorted(self.keys[kind], keys)
+        """Indices of the points ``keys`` of ``kind``, all present, shape like ``keys``.
+
+        Raises:
+            KeyError: a key is not in the table.
+        """
+        out = self.find(kind, keys)
+        if np.any(out < 0):
+            raise KeyError(f"{int(np.count_nonzero(out < 0))} point(s) of kind {kind} missing")
+        return out
 
     def describe(self, refs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(kind, key, coordinates) of the points ``refs``, shapes (n,), (n,), (n, gdim)."""
         refs = np.asarray(refs, dtype=np.int64)
-        kind = np.searchsorted(self.offsets, refs, side="right") - 1
-        key = np.empty(len(refs), dtype=np.int64)
-        for k, keys in enumerate(self.keys):
-            mine = kind == k
-            key[mine] = keys[refs[mine] - self.offsets[k]]
-        return kind, key, self.x[refs]
+        return self.kind[refs].astype(np.int64), self.key[refs], self.x[refs]
 
-    def merge_remap(
-        self, kind: np.ndarray, key: np.ndarray, x: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Add the points (kind, key, x) not yet present (ours are kept where both have one).
+    def append(self, kind: np.ndarray, key: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Add the points (kind, key, x) not yet present; earlier refs stay valid.
+
+        Args:
+            kind: the points' kinds, shape=(n,).
+            key: their keys, shape=(n,).
+            x: their coordinates, shape=(n, gdim).
 
         Returns:
-            The refs of the given points, shape=(n,), and where each old point went,
-            shape=(old_num_points,): refs issued before the merge must be remapped.
+            The refs of the given points, shape=(n,).
         """
-        old_offsets = self.offsets.copy()
-        old_x = self.x
-        new_keys, new_x, old_pos = [], [], []
-        for k, keys in enumerate(self.keys):
-            mine = kind == k
-            merged = np.union1d(keys, key[mine])
-            new_keys.append(merged)
-            old_pos.append(np.searchsorted(merged, keys))
-            coords = np.empty((len(merged), old_x.shape[1]))
-            coords[np.searchsorted(merged, key[mine])] = x[mine]
-            coords[old_pos[-1]] = old_x[old_offsets[k] : old_offsets[k + 1]]  # keep ours
-            new_x.append(coords)
-        self.keys = new_keys
-        self.x = np.concatenate(new_x) if new_x else old_x
-        self._offsets()
-        old_to_new = np.concatenate(
-            [self.offsets[k] + p for k, p in enumerate(old_pos)] or [np.empty(0, np.int64)]
-        )
+        kind = np.asarray(kind)
         refs = np.empty(len(key), dtype=np.int64)
-        for k in range(len(self.keys)):
-            mine = kind == k
-            refs[mine] = self.refs(k, key[mine])
-        return refs, old_to_new
+        xs, kinds, keys = [self.x], [self.kind], [self.key]
+        start = len(self.x)
+        for k in range(self.num_kinds):
+            mine = np.flatnonzero(kind == k)
+            found = self.find(k, key[mine])
+            refs[mine[found >= 0]] = found[found >= 0]
+            missing = mine[found < 0]
+            if not len(missing):
+                continue
+            unique, first, inverse = _unique(key[missing])
+            self.segments[k].append((unique, start))
+            refs[missing] = start + inverse
+            xs.append(x[missing[first]])
+            kinds.append(np.full(len(unique), k, dtype=np.int8))
+            keys.append(unique)
+            start += len(unique)
+        self.x, self.kind, self.key = (
+            np.concatenate(xs),
+            np.concatenate(kinds),
+            np.concatenate(keys),
+        )
+        return refs
