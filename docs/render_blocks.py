@@ -1,6 +1,6 @@
 """Render the pictures of docs/blocks.md from block runs (pyvista off-screen, matplotlib).
 
-    python docs/render_blocks.py OUT.png RUN_DIR [RUN_DIR ...]
+    python docs/render_blocks.py [--zoom Z] OUT.png RUN_DIR [RUN_DIR ...]
 
 Each RUN_DIR is the output directory of a block scene (``blocks.vtu``). 2D runs are
 drawn side by side with matplotlib; a 3D run is rendered with pyvista, each block shrunk
@@ -59,18 +59,26 @@ def render_3d(out: Path, run: Path, zoom: float = 1.0) -> None:
         immobile = grid.extract_cells(np.flatnonzero(kind == 1)).extract_surface()
         plotter.add_mesh(immobile, color="lightgrey", opacity=0.35)
     plotter.camera_position = "iso"
+    if zoom > 1:  # close up on the moving blocks
+        plotter.reset_camera(bounds=moving.bounds)
     plotter.camera.zoom(zoom)
     plotter.screenshot(str(out))
 
 
 def main(argv: list[str]) -> None:
-    """``OUT.png RUN_DIR...``: 2D runs side by side, or the first 3D run."""
+    """Render ``[--zoom Z] OUT.png RUN_DIR...``.
+
+    2D runs side by side, or the first 3D run (``Z`` > 1: a close-up of its moving blocks).
+    """
+    zoom = 1.0
+    if argv[0] == "--zoom":
+        zoom, argv = float(argv[1]), argv[2:]
     out, runs = Path(argv[0]), [Path(a) for a in argv[1:]]
     dims = {pv.read(r / "blocks.vtu").celltypes[0] == pv.CellType.POLYGON for r in runs}
     if dims == {True}:
         render_2d(out, runs)
     else:
-        render_3d(out, runs[0])
+        render_3d(out, runs[0], zoom)
     print(f"wrote {out}")
 
 
