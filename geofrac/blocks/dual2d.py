@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from geofrac.blocks.dual3d import Corners, assemble
+from geofrac.blocks.dual3d import Corners, assemble, on_boundary, sort_cells
 from geofrac.blocks.model import Blocks
 from geofrac.blocks.table import PointTable, edge_keys, face_keys
 
@@ -132,20 +132,13 @@ def tri_corners(
         convex: keep pieces convex, see :func:`inner_points`.
         seed: the random seed, see :func:`inner_points`.
     """
-    gid = np.asarray(gid, dtype=np.int64)
-    order = np.argsort(gid, axis=1, kind="stable")
-    gid = np.take_along_axis(gid, order, axis=1)
-    x = np.take_along_axis(np.asarray(x, dtype=float)[:, :, :2], order[:, :, None], axis=1)
+    order, gid, x = sort_cells(np.asarray(x, dtype=float)[:, :, :2], gid)
     n = num_vertices
     ekey = edge_keys(gid[:, EDGES[:, 0]], gid[:, EDGES[:, 1]], n)
     emid = (x[:, EDGES[:, 0]] + x[:, EDGES[:, 1]]) * 0.5
     tkey = face_keys(gid[:, 0], gid[:, 1], gid[:, 2], n)
     p = inner_points(x, tkey, inner, radius, convex, seed)
-    if boundary is None:
-        _, inverse, counts = np.unique(ekey, return_inverse=True, return_counts=True)
-        boundary = (counts[inverse] == 1).reshape(ekey.shape)
-    else:
-        boundary = np.take_along_axis(np.asarray(boundary, dtype=bool), order, axis=1)
+    boundary = on_boundary(ekey, boundary, order)
     table = PointTable(
         [gid.ravel(), ekey.ravel(), tkey], [x.reshape(-1, 2), emid.reshape(-1, 2), p]
     )

@@ -31,7 +31,15 @@ import numpy as np
 from geofrac.blocks.model import Blocks
 from geofrac.blocks.table import PointTable, edge_keys, face_keys
 
-__all__ = ["Corners", "assemble", "blocks_3d", "centroids", "tet_corners"]
+__all__ = [
+    "Corners",
+    "assemble",
+    "blocks_3d",
+    "centroids",
+    "on_boundary",
+    "sort_cells",
+    "tet_corners",
+]
 
 VERTEX, EDGE, FACE, CELL = 0, 1, 2, 3
 #: Local edges of a tetrahedron, (i, j) with i < j.
@@ -78,6 +86,41 @@ _NETWORKS = {
     3: ((0, 1), (1, 2), (0, 1)),
     4: ((0, 1), (2, 3), (0, 2), (1, 3), (1, 2)),
 }
+
+
+def sort_cells(x: np.ndarray, gid: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each cell's vertices in increasing global id (so a point comes out the same bits).
+
+    Args:
+        x: vertex coordinates per cell, shape=(num_cells, nv, gdim).
+        gid: global vertex ids per cell, shape=(num_cells, nv).
+
+    Returns:
+        The order applied, the sorted ids and the sorted coordinates (same shapes).
+    """
+    gid = np.asarray(gid, dtype=np.int64)
+    order = np.argsort(gid, axis=1, kind="stable")
+    return (
+        order,
+        np.take_along_axis(gid, order, axis=1),
+        np.take_along_axis(np.asarray(x, dtype=float), order[:, :, None], axis=1),
+    )
+
+
+def on_boundary(facet_keys: np.ndarray, given: np.ndarray | None, order: np.ndarray) -> np.ndarray:
+    """Whether each cell's facet k (opposite its vertex k, after sorting) is on the boundary.
+
+    Args:
+        facet_keys: key of each facet of each (sorted) cell, shape=(num_cells, nv).
+        given: the flags in the cells' original vertex order, shape=(num_cells, nv), or
+            None to find them from ``facet_keys`` (a facet of one cell only: the cells
+            must be the whole mesh).
+        order: the vertex order :func:`sort_cells` applied, shape=(num_cells, nv).
+    """
+    if given is None:
+        _, inverse, counts = np.unique(facet_keys, return_inverse=True, return_counts=True)
+        return (counts[inverse] == 1).reshape(facet_keys.shape)
+    return np.take_along_axis(np.asarray(given, dtype=bool), order, axis=1)
 
 
 def centroids(x: np.ndarray) -> np.ndarray:
@@ -131,21 +174,14 @@ def tet_corners(
     Returns:
         The faces (grouped later by :func:`assemble`) and the hexahedral pieces.
     """
-    gid = np.asarray(gid, dtype=np.int64)
-    order = np.argsort(gid, axis=1, kind="stable")  # a point from its vertices by id
-    gid = np.take_along_axis(gid, order, axis=1)
-    x = np.take_along_axis(np.asarray(x, dtype=float), order[:, :, None], axis=1)
+    order, gid, x = sort_cells(x, gid)
     n = num_vertices
     ekey = edge_keys(gid[:, EDGES[:, 0]], gid[:, EDGES[:, 1]], n)
     emid = (x[:, EDGES[:, 0]] + x[:, EDGES[:, 1]]) * 0.5
     fkey = face_keys(gid[:, FACES[:, 0]], gid[:, FACES[:, 1]], gid[:, FACES[:, 2]], n)
     fmid = centroids(x[:, FACES])
     centre = ((x[:, 0] + x[:, 1]) + (x[:, 2] + x[:, 3])) * 0.25  # one cell computes it
-    if boundary is None:
-        _, inverse, counts = np.unique(fkey, return_inverse=True, return_counts=True)
-        boundary = (counts[inverse] == 1).reshape(fkey.shape)
-    else:
-        boundary = np.take_along_axis(np.asarray(boundary, dtype=bool), order, axis=1)
+    boundary = on_boundary(fkey, boundary, order)
     table = PointTable(
         [gid.ravel(), ekey.ravel(), fkey.ravel(), np.asarray(cell_key, dtype=np.int64)],
         [x.reshape(-1, 3), emid.reshape(-1, 3), fmid.reshape(-1, 3), centre],
