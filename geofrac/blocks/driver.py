@@ -92,7 +92,14 @@ def build(
     comm.Barrier()
     start = time.perf_counter()
     with timings.phase("blocks"):
-        blocks = build_blocks(mesh, spec.inner_point, spec.radius, spec.convex, spec.seed)
+        try:  # the builder's errors come after its last collective: agree, then raise
+            blocks = build_blocks(mesh, spec.inner_point, spec.radius, spec.convex, spec.seed)
+            message = None
+        except ValueError as exc:
+            message = str(exc)
+        message = next((m for m in comm.allgather(message) if m), None)
+        if message is not None:
+            raise RunError(f"cannot build blocks of this mesh: {message}")
     time_blocks = _wall(comm, start)
     domain = comm.allreduce(_cell_volumes(mesh), op=MPI.SUM)
     record: dict[str, Any] = {

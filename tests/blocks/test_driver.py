@@ -105,3 +105,26 @@ def test_terrain_blocks_are_the_same_on_one_and_two_ranks(tmp_path):
     for key in ("volume", "equivalent_diameter", "aspect_ratio"):
         for stat in ("min", "max", "mean"):
             assert abs(a[key][stat] - b[key][stat]) <= 1e-9 * abs(b[key][stat])
+
+
+def test_a_mesh_with_a_non_manifold_vertex_is_refused_with_a_clear_error(tmp_path):
+    from geofrac.errors import RunError
+
+    geo = tmp_path / "touching.geo"  # two squares that share only the corner (1, 1)
+    geo.write_text(
+        "h = 0.25;\n"
+        "Point(1) = {0, 0, 0, h}; Point(2) = {1, 0, 0, h}; Point(3) = {1, 1, 0, h};\n"
+        "Point(4) = {0, 1, 0, h}; Point(5) = {2, 1, 0, h}; Point(6) = {2, 2, 0, h};\n"
+        "Point(7) = {1, 2, 0, h};\n"
+        "Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};\n"
+        "Line(5) = {3, 5}; Line(6) = {5, 6}; Line(7) = {6, 7}; Line(8) = {7, 3};\n"
+        "Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};\n"
+        "Curve Loop(2) = {5, 6, 7, 8}; Plane Surface(2) = {2};\n"
+        'Physical Surface("domain") = {1, 2};\n'
+    )
+    scene = tmp_path / "scene.toml"
+    scene.write_text(f'method = "blocks"\n[geometry]\nfile = "{geo.as_posix()}"\n[blocks]\n')
+    with pytest.raises(RunError, match="do not form one fan"):
+        run_blocks_scene(load_scene(scene, out=tmp_path / "out"), MPI.COMM_SELF, verbose=False)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"].startswith("error: cannot build blocks")
