@@ -195,8 +195,9 @@ def build_blocks(
             convex,
             seed,
         )
-    ids, first = np.unique(cells["gid"].ravel(), return_index=True)
-    corners = exchange(corners, ids, cells["owner"].ravel()[first], mesh.comm)
+    if mesh.comm.size > 1:
+        ids, first = np.unique(cells["gid"].ravel(), return_index=True)
+        corners = exchange(corners, ids, cells["owner"].ravel()[first], mesh.comm)
     if tdim == 3:
         return assemble(corners, cells["owned_ids"], 3)
     return rings(corners, cells["owned_ids"])
