@@ -1,13 +1,22 @@
 """Polygonal and polyhedral block models (seed chapter 5): one block per mesh vertex.
 
-- :mod:`~geofrac.blocks.model`: the :class:`~geofrac.blocks.model.Blocks` container;
+- :mod:`~geofrac.blocks.model`: the :class:`~geofrac.blocks.model.Blocks` container,
+  joining and welding block sets;
 - :mod:`~geofrac.blocks.table`: block points named by the mesh entities they stand on;
 - :mod:`~geofrac.blocks.dual2d`: polygons from triangles (seed 5.2.2(a), Fig. 5.6-5.8);
 - :mod:`~geofrac.blocks.dual3d`: polyhedra from tetrahedra (seed 5.2.2(b), Fig. 5.9);
-- :mod:`~geofrac.blocks.distributed`: the same on a distributed DOLFINx mesh (the only
-  module here that imports DOLFINx and MPI).
+- :mod:`~geofrac.blocks.immobile`: the immobile part as one block (seed 5.3.2);
+- :mod:`~geofrac.blocks.quality`: the checks (volumes, closure, Euler characteristic,
+  planarity, face pairing, overlap sampling, pyvista's cell validator);
+- :mod:`~geofrac.blocks.kernels`: the compiled (numba) sweep and prune of the exact
+  self-intersection test, imported only by that test;
+- :mod:`~geofrac.blocks.distributed`: the blocks of a distributed DOLFINx mesh;
+- :mod:`~geofrac.blocks.driver`: a ``method = "blocks"`` run (mesh, blocks, checks,
+  output).
 
-Everything but ``distributed`` is pure numpy.
+``distributed`` and ``driver`` import DOLFINx and MPI; everything else is numpy (and
+pyvista for the validator). The terrain's gmsh builder is
+:mod:`geofrac.meshing.terrain`; the writers are :mod:`geofrac.io.blocks`.
 """
 
 __all__: list[str] = []
