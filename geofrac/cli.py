@@ -149,8 +149,7 @@ def _report(comm: Any, summary: dict[str, Any]) -> None:
             f"accuracy: ||u - u_exact||_L2 = {e['u']:.4e} (relative {e['u_relative']:.3e}), "
             f"energy = {e['energy']:.4e} (relative {e['energy_relative']:.3e})",
         )
-    t = summary["timings_s"]
-    echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
+    _report_timings(comm, summary)
 
 
 def _report_blocks(comm: Any, summary: dict[str, Any]) -> None:
@@ -168,8 +167,7 @@ def _report_blocks(comm: Any, summary: dict[str, Any]) -> None:
         f"checks: {q['invalid_blocks']} invalid, faces paired ({q['pairing']['matched']} "
         f"matched), validator on {checked} block(s)",
     )
-    t = summary["timings_s"]
-    echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
+    _report_timings(comm, summary)
 
 
 def _report_mpm(comm: Any, summary: dict[str, Any]) -> None:
@@ -180,6 +178,10 @@ def _report_mpm(comm: Any, summary: dict[str, Any]) -> None:
     if r["energy_drift_max"] is not None:
         line += f"; energy drift max {r['energy_drift_max']:.3g}"
     echo(comm, line)
+    _report_timings(comm, summary)
+
+
+def _report_timings(comm: Any, summary: dict[str, Any]) -> None:
     t = summary["timings_s"]
     echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
 

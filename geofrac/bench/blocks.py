@@ -118,7 +118,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     from mpi4py import MPI
 
     from geofrac.bench.report import format_table
-    from geofrac.blocks.distributed import build_blocks, mesh_cells
+    from geofrac.blocks.distributed import build_blocks
     from geofrac.io.summary import versions, write_json
     from geofrac.log import echo
     from geofrac.meshing.distribute import build_mesh
@@ -153,7 +153,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
             "invalid_blocks": None,
         }
         if count <= args.check_max:
-            record |= _check(blocks, mesh_cells(mesh)["x"], args.validate, comm)
+            record |= _check(blocks, mesh, args.validate, comm)
         del blocks, mesh
         if comm.rank == 0:
             seconds = _voronoi(np.concatenate(seeds), comm.size)
@@ -178,26 +178,18 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     return report
 
 
-def _check(blocks: Any, cells: Any, validate: int, comm: Any) -> dict[str, Any]:
+def _check(blocks: Any, mesh: Any, validate: int, comm: Any) -> dict[str, Any]:
     """Volume error and invalid blocks of the gathered set (collective)."""
-    import numpy as np
     from mpi4py import MPI
 
     from geofrac.blocks import quality
-    from geofrac.blocks.model import join, weld
+    from geofrac.blocks.distributed import gather_blocks, owned_measure
 
-    d = cells[:, 1:] - cells[:, :1]
-    domain = comm.allreduce(
-        float(np.abs(np.einsum("ij,ij->i", d[:, 0], np.cross(d[:, 1], d[:, 2]))).sum() / 6),
-        op=MPI.SUM,
-    )
-    parts = comm.gather(blocks, root=0)
+    domain = comm.allreduce(owned_measure(mesh), op=MPI.SUM)
+    whole = gather_blocks(blocks, comm)
     out = None
     if comm.rank == 0:
-        whole = parts[0]
-        for part in parts[1:]:
-            whole = join(whole, part)
-        report = quality.summarize(weld(whole), domain, validate=True, sample=validate)
+        report = quality.summarize(whole, domain, validate=True, sample=validate)
         bad_pairs = 0 if report["pairing"]["ok"] else report["pairing"]["bad_blocks"]
         out = {
             "volume_rel_error": report["volume_rel_error"],

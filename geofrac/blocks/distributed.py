@@ -27,7 +27,7 @@ from geofrac.blocks.dual2d import rings, tri_corners
 from geofrac.blocks.dual3d import Corners, assemble, tet_corners
 from geofrac.blocks.model import Blocks
 
-__all__ = ["build_blocks", "exchange", "mesh_cells"]
+__all__ = ["build_blocks", "exchange", "gather_blocks", "mesh_cells", "owned_measure"]
 
 
 def mesh_cells(mesh: Mesh) -> dict[str, Any]:
@@ -83,6 +83,38 @@ def mesh_cells(mesh: Mesh) -> dict[str, Any]:
         "owned_ids": owned_ids,
         "num_vertices": num_vertices,
     }
+
+
+def owned_measure(mesh: Mesh) -> float:
+    """Volume (area in 2D) of this rank's owned cells of a linear simplex mesh.
+
+    Read off the geometry alone (no connectivity): the domain volume the block volumes
+    must sum to, once summed over the ranks.
+    """
+    tdim = mesh.topology.dim
+    nodes = mesh.geometry.dofmaps[0][: mesh.topology.index_map(tdim).size_local]
+    x = mesh.geometry.x[nodes]
+    d = x[:, 1:] - x[:, :1]
+    if tdim == 3:
+        return float(np.abs(np.einsum("ij,ij->i", d[:, 0], np.cross(d[:, 1], d[:, 2]))).sum() / 6)
+    return float(np.abs(d[:, 0, 0] * d[:, 1, 1] - d[:, 0, 1] * d[:, 1, 0]).sum() / 2)
+
+
+def gather_blocks(blocks: Blocks, comm: MPI.Comm) -> Blocks | None:
+    """The whole block set on rank 0 (None elsewhere), shared points welded (collective).
+
+    Welding (:func:`geofrac.blocks.model.weld`) merges the points the ranks computed
+    apart, so a face two ranks' blocks share is recognised by its point indices.
+    """
+    from geofrac.blocks.model import join, weld
+
+    parts = comm.gather(blocks, root=0)
+    if comm.rank != 0:
+        return None
+    whole = parts[0]
+    for part in parts[1:]:
+        whole = join(whole, part)
+    return weld(whole)
 
 
 def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, comm: MPI.Comm) -> Corners:

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from geofrac.blocks.distributed import build_blocks, gather_blocks, owned_measure
 from geofrac.blocks.model import Blocks
 from geofrac.errors import RunError
 from geofrac.io.summary import finish_summary, prepare_output, start_summary
@@ -48,18 +49,6 @@ def _geometry(scene: Scene) -> Geometry:
     return Geometry(None, {}, None, 3, groups, TerrainBuilder(TerrainSpec(**spec.terrain)))
 
 
-def _cell_volumes(mesh: Any) -> float:
-    """Volume (area) of this rank's owned cells, from their vertices."""
-    from geofrac.blocks.distributed import mesh_cells
-
-    x = mesh_cells(mesh)["x"]
-    if x.shape[1] == 4:
-        d = x[:, 1:] - x[:, :1]
-        return float(np.abs(np.einsum("ij,ij->i", d[:, 0], np.cross(d[:, 1], d[:, 2]))).sum() / 6)
-    d = x[:, 1:] - x[:, :1]
-    return float(np.abs(d[:, 0, 0] * d[:, 1, 1] - d[:, 0, 1] * d[:, 1, 0]).sum() / 2)
-
-
 def _wall(comm: MPI.Comm, start: float) -> float:
     """Wall time since ``start`` of a collective step (its slowest rank)."""
     return comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
@@ -74,7 +63,6 @@ def build(
         The blocks and a JSON-ready record: ``time_mesh_s``, ``time_blocks_s`` (wall,
         slowest rank), ``domain_volume``, ``mesh`` (the builder's report and counts).
     """
-    from geofrac.blocks.distributed import build_blocks
     from geofrac.meshing.distribute import build_mesh
 
     spec = scene.blocks
@@ -101,7 +89,7 @@ def build(
         if message is not None:
             raise RunError(f"cannot build blocks of this mesh: {message}")
     time_blocks = _wall(comm, start)
-    domain = comm.allreduce(_cell_volumes(mesh), op=MPI.SUM)
+    domain = comm.allreduce(owned_measure(mesh), op=MPI.SUM)
     record: dict[str, Any] = {
         "time_mesh_s": time_mesh,
         "time_blocks_s": time_blocks,
@@ -143,7 +131,7 @@ def run_blocks_scene(
         blocks, record = build(scene, comm, timings, verbose)
         with timings.phase("checks"):
             validator = _validate(scene, blocks, comm)
-            whole = _gather(blocks, comm)
+            whole = gather_blocks(blocks, comm)
             del blocks
             record["quality"] = _checks(scene, whole, record["domain_volume"], validator, comm)
         with timings.phase("output"):
@@ -160,19 +148,6 @@ def run_blocks_scene(
         raise
     finish_summary(summary, out / "summary.json", comm, timings)
     return summary
-
-
-def _gather(blocks: Blocks, comm: MPI.Comm) -> Blocks | None:
-    """The whole block set on rank 0 (None elsewhere), shared points welded."""
-    from geofrac.blocks.model import join, weld
-
-    parts = comm.gather(blocks, root=0)
-    if comm.rank != 0:
-        return None
-    whole = parts[0]
-    for part in parts[1:]:
-        whole = join(whole, part)
-    return weld(whole)
 
 
 def _validate(scene: Scene, blocks: Blocks, comm: MPI.Comm) -> dict[str, Any] | None:

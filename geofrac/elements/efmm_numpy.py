@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from geofrac.blocks.dual2d import inner_points
+from geofrac.meshing.distorted import signed_areas
 
 __all__ = ["GAUSS_3", "Domains", "integration_domains", "node_stiffness", "stiffness"]
 
@@ -66,11 +67,6 @@ class Domains:
     clamped: int
 
 
-def _signed_area(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    u, v = b - a, c - a
-    return 0.5 * (u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0])
-
-
 def integration_domains(
     points: np.ndarray, triangles: np.ndarray, q_rand: float = 0.0, seed: int = 0
 ) -> Domains:
@@ -84,7 +80,7 @@ def integration_domains(
     """
     points = np.asarray(points, dtype=float)[:, :2]
     tri = np.asarray(triangles, dtype=np.int64).copy()
-    flip = _signed_area(*(points[tri[:, c]] for c in range(3))) < 0
+    flip = signed_areas(points, tri) < 0
     tri[flip] = tri[flip][:, [0, 2, 1]]  # counter-clockwise
     n = len(points)
     ordered = np.sort(tri, axis=1)
@@ -176,8 +172,9 @@ def node_stiffness(
     A = np.zeros((9, 9))
     C = np.zeros((9, 2 * len(patch)))
     bary, weights = GAUSS_3
-    for s, sub in enumerate(domains.corners[mine]):
-        area = abs(_signed_area(sub[0], sub[1], sub[2]))
+    subs = domains.corners[mine]
+    areas = np.abs(signed_areas(subs.reshape(-1, 2), np.arange(3 * len(subs)).reshape(-1, 3)))
+    for s, (sub, area) in enumerate(zip(subs, areas, strict=True)):
         gp = bary @ sub
         cols = np.array([[2 * local[int(v)], 2 * local[int(v)] + 1] for v in tri[cells[s]]]).ravel()
         for g in range(3):

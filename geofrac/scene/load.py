@@ -375,6 +375,13 @@ def _check_methods(file: Path, declared: Sequence[str], method: str) -> None:
             )
 
 
+def _reject_tables(file: Path, data: dict[str, Any], keys: Sequence[str], message: str) -> None:
+    """A SceneError naming the first of ``keys`` present in ``data``."""
+    for key in keys:
+        if key in data:
+            raise SceneError(file, key, message)
+
+
 def _mpm_scene(
     file: Path,
     data: dict[str, Any],
@@ -385,9 +392,7 @@ def _mpm_scene(
     """The rest of an ``method = "mpm"`` scene (see :mod:`geofrac.scene.mpm`)."""
     from geofrac.scene.mpm import FEM_ONLY_TABLES, mpm_material, mpm_output, mpm_spec
 
-    for key in FEM_ONLY_TABLES:
-        if key in data:
-            raise SceneError(file, key, "applies to method 'fem' only; remove it")
+    _reject_tables(file, data, FEM_ONLY_TABLES, "applies to method 'fem' only; remove it")
     _check_methods(file, declared, "mpm")
     if "mpm" not in data:
         raise SceneError(file, "mpm", "missing (required table for method 'mpm')")
@@ -444,9 +449,7 @@ def _blocks_scene(
     """The rest of a ``method = "blocks"`` scene (see :mod:`geofrac.scene.blocks`)."""
     from geofrac.scene.blocks import FEM_ONLY_TABLES, blocks_output, blocks_spec
 
-    for key in FEM_ONLY_TABLES:
-        if key in data:
-            raise SceneError(file, key, "does not apply to method 'blocks'; remove it")
+    _reject_tables(file, data, FEM_ONLY_TABLES, "does not apply to method 'blocks'; remove it")
     if declared:
         raise SceneError(file, "effects", "method 'blocks' builds a model and runs no effects")
     if "blocks" not in data:
