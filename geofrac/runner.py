@@ -20,10 +20,9 @@ from mpi4py import MPI
 from geofrac import effects as effect_registry
 from geofrac.elements import make_element
 from geofrac.errors import RunError
-from geofrac.fem.elastic import ElasticProblem, exact_ufl, make_problem
+from geofrac.fem.elastic import ElasticProblem, make_problem
 from geofrac.fem.post import (
     TENSOR_FIELDS,
-    error_norms,
     integrate,
     locate_points,
     probe,
@@ -54,6 +53,9 @@ OUTPUT_FILES = (
     "cracks.h5",
     "damage.xdmf",
     "damage.h5",
+    "grains.vtu",
+    "grains.xdmf",
+    "grains.h5",
 )
 
 
@@ -154,9 +156,10 @@ def solve_scene(
             results["solver"] = problem.solver.describe() | {"iterations": problem.iterations}  # type: ignore[union-attr]
         if geometry_report:
             results["geometry"] = geometry_report
+        if hasattr(problem, "describe"):  # the element's own facts (EFMM's domains)
+            results[problem.element.name] = problem.describe()
         if problem.exact is not None:
-            u_exact, _ = exact_ufl(problem.exact, mesh)
-            results["errors"] = error_norms(uh, u_exact, problem.lam, problem.mu)
+            results["errors"] = problem.error_norms()
             results["exact_probes"] = {
                 n: [float(c) for c in problem.exact.displacement(*points[i, : scene.gdim])]
                 for i, n in enumerate(names)
@@ -196,8 +199,14 @@ def _write_xdmf(solution: Solution) -> None:
             uh = u1
         functions.append(uh)
     wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
-    fields = tensor_fields(problem.uh, problem.lam, problem.mu, scene.material.plane, wanted)
-    functions += [fields[f] for f in wanted]
+    own = {}
+    if hasattr(problem, "write_grains"):  # EFMM: its grains, and its own nodal stress
+        problem.write_grains(scene.output.dir / "grains")
+        if "stress_nodal" in wanted:
+            own["stress_nodal"] = problem.node_stress()
+    rest = [f for f in wanted if f not in own]
+    fields = tensor_fields(problem.uh, problem.lam, problem.mu, scene.material.plane, rest)
+    functions += [own[f] if f in own else fields[f] for f in wanted]
     write_fields(scene.output.dir / "results.xdmf", mesh, functions)
 
 

@@ -1,7 +1,7 @@
 """Element registry: scene name -> module that builds the discretisation.
 
-The runner never names an element; it asks this registry. A later element (EFMM)
-joins by adding one entry here and one module that provides a factory
+The runner never names an element; it asks this registry. An element joins by adding
+one entry here and one module that provides a factory
 ``name(mesh) -> geofrac.elements.base.Element``.
 """
 
@@ -55,6 +55,12 @@ REGISTRY: dict[str, tuple[str, str, tuple[int, ...], str]] = {
         "gnt",
         (2,),
         "triangle with drilling and strain DOFs (u, v, θ, εx, εy, γxy), seed eq. 2.29",
+    ),
+    "efmm": (
+        "geofrac.elements.efmm",
+        "efmm",
+        (2,),
+        "Enriched Free Mesh Method: CST displacement, a linear stress per node patch, seed eq. 3.6",
     ),
     "rgnq": (
         "geofrac.elements.gradient",

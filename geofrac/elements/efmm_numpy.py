@@ -30,6 +30,7 @@ global matrix and is meant for small meshes.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,7 +38,16 @@ import numpy as np
 from geofrac.blocks.dual2d import inner_points
 from geofrac.meshing.distorted import signed_areas
 
-__all__ = ["GAUSS_3", "Domains", "integration_domains", "node_stiffness", "stiffness"]
+__all__ = [
+    "GAUSS_3",
+    "Domains",
+    "cell_subtriangles",
+    "edge_crossings",
+    "integration_domains",
+    "node_stiffness",
+    "stiffness",
+    "stress_error",
+]
 
 #: Three-point Gauss rule on a triangle, degree 2: barycentric points and weights
 #: (weights sum to 1; multiply by the area).
@@ -67,8 +77,42 @@ class Domains:
     clamped: int
 
 
+def edge_crossings(
+    xa: np.ndarray, xb: np.ndarray, left: np.ndarray, right: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where the segment between two triangles' inner points crosses their shared edge.
+
+    The edge runs from ``xa`` to ``xb`` (its vertex with the smaller global id first) and
+    ``left``/``right`` are the inner points of the triangles on its left and right, so
+    every rank computes the same bits for the same edge. When the segment misses the
+    edge (a non-convex pair of triangles) the point is clamped onto the edge, 1e-3 of its
+    length away from the vertices.
+
+    Args:
+        xa: edge start, shape=(num_edges, 2).
+        xb: edge end, shape=(num_edges, 2).
+        left: inner point of the triangle on the left, shape=(num_edges, 2).
+        right: inner point of the triangle on the right, shape=(num_edges, 2).
+
+    Returns:
+        the crossings, shape=(num_edges, 2), and which were clamped, shape=(num_edges,).
+    """
+    e, d = xb - xa, right - left
+    denom = d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0]
+    w = xa - left
+    t = (w[:, 0] * d[:, 1] - w[:, 1] * d[:, 0]) / denom  # along the edge, a -> b
+    clamped = ~((t > 0) & (t < 1))
+    t = np.clip(np.nan_to_num(t, nan=0.5), 1e-3, 1 - 1e-3)
+    return xa + t[:, None] * e, clamped
+
+
 def integration_domains(
-    points: np.ndarray, triangles: np.ndarray, q_rand: float = 0.0, seed: int = 0
+    points: np.ndarray,
+    triangles: np.ndarray,
+    q_rand: float = 0.0,
+    seed: int = 0,
+    keys: np.ndarray | None = None,
+    ids: np.ndarray | None = None,
 ) -> Domains:
     """Each node's integration domain as sub-triangles (Fig. 3.3).
 
@@ -77,44 +121,41 @@ def integration_domains(
         triangles: node indices, shape=(num_cells, 3).
         q_rand: randomness of the inner points in [0, 1] (Fig. 3.13).
         seed: seed of the random points.
+        keys: a global key per triangle that seeds its random point, shape=(num_cells,)
+            (default: the triangle's index).
+        ids: a global id per node, shape=(num_nodes,) (default: the node's index); the
+            inner point sees a triangle's corners in increasing id order and an edge runs
+            from its smaller id, so results do not depend on local numbering.
     """
     points = np.asarray(points, dtype=float)[:, :2]
     tri = np.asarray(triangles, dtype=np.int64).copy()
+    ids = np.arange(len(points)) if ids is None else np.asarray(ids, dtype=np.int64)
+    keys = np.arange(len(tri)) if keys is None else np.asarray(keys, dtype=np.int64)
     flip = signed_areas(points, tri) < 0
     tri[flip] = tri[flip][:, [0, 2, 1]]  # counter-clockwise
-    n = len(points)
-    ordered = np.sort(tri, axis=1)
-    keys = (ordered[:, 0] * n + ordered[:, 1]) * n + ordered[:, 2]
+    by_id = np.take_along_axis(tri, np.argsort(ids[tri], axis=1), axis=1)
     inner = inner_points(
-        points[ordered], keys, "random" if q_rand > 0 else "incentre", q_rand, False, seed
+        points[by_id], keys, "random" if q_rand > 0 else "incentre", q_rand, False, seed
     )
-    # edges: (cell, local edge c from corner c to c + 1) keyed by their sorted nodes
-    a, b = tri, np.roll(tri, -1, axis=1)
-    edge_key = np.minimum(a, b) * n + np.maximum(a, b)
-    flat = edge_key.ravel()
-    order = np.argsort(flat, kind="stable")
-    sorted_keys = flat[order]
-    twin = np.full(len(flat), -1)
-    same = sorted_keys[1:] == sorted_keys[:-1]
-    twin[order[1:][same]] = order[:-1][same]
-    twin[order[:-1][same]] = order[1:][same]
+    # edges: (cell, local edge c from corner c to c + 1); a CCW triangle lies on the left
+    a, b = tri.ravel(), np.roll(tri, -1, axis=1).ravel()
+    lo = np.where(ids[a] < ids[b], a, b)
+    hi = np.where(ids[a] < ids[b], b, a)
+    on_left = lo == a
+    n = len(points)
+    order = np.argsort(lo * n + hi, kind="stable")
+    key = (lo * n + hi)[order]
+    pair = np.flatnonzero(key[1:] == key[:-1])
+    first, second = order[pair], order[pair + 1]
     cell_of = np.repeat(np.arange(len(tri)), 3)
-    pa, pb = points[a.ravel()], points[b.ravel()]
-    cross = 0.5 * (pa + pb)  # boundary edges: the midpoint
-    clamped = 0
-    first = np.flatnonzero((twin >= 0) & (twin > np.arange(len(flat))))  # once per edge
-    if len(first):
-        p = inner[cell_of[first]]
-        q = inner[cell_of[twin[first]]]
-        ea, e = pa[first], pb[first] - pa[first]
-        d = q - p
-        denom = d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0]
-        w = ea - p
-        t = (w[:, 0] * d[:, 1] - w[:, 1] * d[:, 0]) / denom  # along the edge, a -> b
-        clamped = int(np.count_nonzero((t <= 0) | (t >= 1)))
-        t = np.clip(t, 1e-3, 1 - 1e-3)
-        cross[first] = ea + t[:, None] * e
-        cross[twin[first]] = cross[first]  # the same point, bit for bit, on both sides
+    cross = 0.5 * (points[lo] + points[hi])  # boundary edges: the midpoint
+    left = np.where(on_left[first], first, second)
+    right = np.where(on_left[first], second, first)
+    x, was_clamped = edge_crossings(
+        points[lo[first]], points[hi[first]], inner[cell_of[left]], inner[cell_of[right]]
+    )
+    cross[first] = x
+    cross[second] = x  # the same point, bit for bit, on both sides
     cross = cross.reshape(-1, 3, 2)  # cross[t, c]: on the edge from corner c to c + 1
     nodes, cells, corners = [], [], []
     for c in range(3):
@@ -131,7 +172,7 @@ def integration_domains(
         cell=np.concatenate(cells),
         corners=np.concatenate(corners),
         inner=inner,
-        clamped=clamped,
+        clamped=int(np.count_nonzero(was_clamped)),
     )
 
 
@@ -198,3 +239,75 @@ def stiffness(
         Ki, dofs = node_stiffness(points, triangles, D, domains, int(i))
         K[np.ix_(dofs, dofs)] += Ki
     return K
+
+
+def cell_subtriangles(x: np.ndarray, domain: np.ndarray) -> np.ndarray:
+    """The sub-triangles of each cell's three node parts, as the C kernel integrates them.
+
+    Args:
+        x: cell vertices, shape=(num_cells, 3, 2).
+        domain: per cell the inner point p and the crossings X_k on the edge opposite
+            vertex k, shape=(num_cells, 8) (:func:`geofrac.elements.efmm.domain_data`).
+
+    Returns:
+        corners, shape=(num_cells, 3, 2, 3, 2): for vertex j the triangles
+        (x_j, X_(j+2)%3, p) and (x_j, p, X_(j+1)%3) (the parts on edges (j, j+1) and
+        (j-1, j)).
+    """
+    p = domain[:, 0:2]
+    X = domain[:, 2:8].reshape(-1, 3, 2)
+    out = np.empty((len(x), 3, 2, 3, 2))
+    for j in range(3):
+        out[:, j, 0] = np.stack([x[:, j], X[:, (j + 2) % 3], p], axis=1)
+        out[:, j, 1] = np.stack([x[:, j], p, X[:, (j + 1) % 3]], axis=1)
+    return out
+
+
+def stress_error(
+    x: np.ndarray,
+    domain: np.ndarray,
+    e: np.ndarray,
+    Dinv: np.ndarray,
+    length: float,
+    exact_stress: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    rule: tuple[np.ndarray, np.ndarray],
+) -> tuple[float, float]:
+    """∫ ½ (σ_h - σ)ᵀ D⁻¹ (σ_h - σ) and ∫ ½ σᵀ D⁻¹ σ over the cells' node parts.
+
+    σ_h is each node's own stress field P_i e_i (eq. 3.2b) on its integration domain:
+    the stress of the seed's energy error norm (eq. 3.30b with ε = D⁻¹ σ, eq. 3.32).
+
+    Args:
+        x: cell vertices, shape=(num_cells, 3, 2).
+        domain: see :func:`cell_subtriangles`, shape=(num_cells, 8).
+        e: stress coefficients of the cells' vertices, shape=(num_cells, 3, 9) ordered
+            (σx, σy, τxy) x (1, (x - x_i)/h, (y - y_i)/h).
+        Dinv: compliance, shape=(3, 3).
+        length: h.
+        exact_stress: (x, y) -> (σx, σy, τxy), arrays shape=(n,) in, shape=(n, 3) out.
+        rule: reference-triangle points, shape=(nq, 2), and weights, shape=(nq,),
+            summing to 1/2.
+
+    Returns:
+        (error energy, exact energy), both sums over the given cells.
+    """
+    subs = cell_subtriangles(x, domain)  # shape=(nc, 3, 2, 3, 2)
+    a, b, c = subs[..., 0, :], subs[..., 1, :], subs[..., 2, :]
+    det = np.abs((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+                 - (c[..., 0] - a[..., 0]) * (b[..., 1] - a[..., 1]))  # fmt: skip
+    pts, wts = rule
+    q = (
+        a[..., None, :]
+        + pts[:, 0, None] * (b - a)[..., None, :]
+        + pts[:, 1, None] * (c - a)[..., None, :]
+    )  # shape=(nc, 3, 2, nq, 2)
+    rel = (q - x[:, :, None, None, :]) / length
+    mono = np.concatenate([np.ones((*rel.shape[:-1], 1)), rel], axis=-1)  # (..., 3)
+    coef = e.reshape(len(e), 3, 3, 3)  # (cell, node, component, monomial)
+    sigma_h = np.einsum("cjsqm,cjkm->cjsqk", mono, coef)
+    sigma = exact_stress(q[..., 0].ravel(), q[..., 1].ravel()).reshape(sigma_h.shape)
+    weight = det[..., None] * wts  # shape=(nc, 3, 2, nq)
+    err = sigma_h - sigma
+    e_err = 0.5 * float((np.einsum("...k,kl,...l->...", err, Dinv, err) * weight).sum())
+    e_ex = 0.5 * float((np.einsum("...k,kl,...l->...", sigma, Dinv, sigma) * weight).sum())
+    return e_err, e_ex

@@ -193,6 +193,31 @@ class ElasticProblem:
         self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         dolfinx.fem.petsc.set_bc(self.b, self.bcs)
 
+    def _constrain(self) -> None:
+        """Impose :meth:`dirichlet` on an assembled ``A`` and ``b`` by elimination.
+
+        Symmetric row and column elimination (``MatZeroRowsColumns`` with lifting), for
+        operators that are not assembled from a DOLFINx form with its conditions.
+        """
+        assert self.A is not None and self.b is not None
+        rows, vals = self.dirichlet()
+        rows = rows.astype(PETSc.IntType)
+        g = self.A.createVecRight()
+        try:
+            g.setValues(rows, vals)
+            g.assemble()
+            self.A.zeroRowsColumns(rows, 1.0, g, self.b)
+        finally:
+            g.destroy()
+
+    def error_norms(self) -> dict[str, float]:
+        """Error norms against the scene's exact solution (see :func:`post.error_norms`)."""
+        from geofrac.fem.post import error_norms
+
+        assert self.exact is not None
+        u_exact, _ = exact_ufl(self.exact, self.mesh)
+        return error_norms(self.uh, u_exact, self.lam, self.mu)
+
     def load_vector(self) -> PETSc.Vec:
         """The assembled load vector on the unknowns, without Dirichlet conditions."""
         if self.L is None:
@@ -342,15 +367,7 @@ class GradientDofProblem(ElasticProblem):
             for M in mats:
                 M.destroy()
         self.b = self.load_vector()
-        rows, vals = self.dirichlet()
-        rows = rows.astype(PETSc.IntType)
-        g = self.A.createVecRight()
-        try:
-            g.setValues(rows, vals)
-            g.assemble()
-            self.A.zeroRowsColumns(rows, 1.0, g, self.b)
-        finally:
-            g.destroy()
+        self._constrain()
 
     def load_vector(self) -> PETSc.Vec:
         """Tᵀ b_P2: the load vector on the vertex DOFs, without Dirichlet conditions."""
@@ -382,6 +399,10 @@ class GradientDofProblem(ElasticProblem):
 
 def make_problem(tagged: TaggedMesh, element: Element, scene: Scene) -> ElasticProblem:
     """The elastic problem class that fits ``element``."""
+    if element.name == "efmm":
+        from geofrac.fem.efmm import EfmmProblem
+
+        return EfmmProblem(tagged, element, scene)
     if isinstance(element, GradientDofElement):
         return GradientDofProblem(tagged, element, scene)
     return ElasticProblem(tagged, element, scene)

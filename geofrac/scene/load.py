@@ -66,7 +66,14 @@ METHODS = ("fem", "mpm", "blocks")
 SECTION_KEYS: dict[str, tuple[str, ...]] = {
     "geometry": ("file", "parameters", "mesh_size"),
     "material": ("E", "nu", "plane", "thickness", "density", "tensile_strength"),
-    "discretization": ("element", "quadrature_degree", "zero_mode_penalty", "gradient_bc"),
+    "discretization": (
+        "element",
+        "quadrature_degree",
+        "zero_mode_penalty",
+        "gradient_bc",
+        "q_rand",
+        "domain_seed",
+    ),
     "bc": ("group", "value", "components"),
     "load": ("type", "group", "value"),
     "solver": ("preset", "options"),
@@ -179,6 +186,17 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
                 f"applies only to elements {', '.join(elements.GRADIENT_DOF_ELEMENTS)}, "
                 f"not '{element}'",
             )
+    for key in ("q_rand", "domain_seed"):
+        if t.has(key) and element != "efmm":
+            raise t.error(key, f"applies only to element efmm, not '{element}'")
+    if t.has("quadrature_degree") and element == "efmm":
+        raise t.error("quadrature_degree", "does not apply to efmm (its Gauss rules are fixed)")
+    q_rand = t.number("q_rand", default=0.0)
+    if not 0.0 <= q_rand <= 1.0:  # type: ignore[operator]
+        raise t.error("q_rand", f"must lie in [0, 1], got {q_rand!r}")
+    domain_seed = t.number("domain_seed", default=0, integer=True)
+    if domain_seed < 0:  # type: ignore[operator]
+        raise t.error("domain_seed", f"must be >= 0, got {domain_seed!r}")
     alpha_default = elements.GRADIENT_DOF_DEFAULTS.get(element, 0.0)
     alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True)
     gradient_bc = t.string("gradient_bc", default="fixed", choices=("fixed", "free"))
@@ -187,6 +205,8 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
         None if q is None else int(q),
         float(alpha),
         gradient_bc,  # type: ignore[arg-type]
+        float(q_rand),  # type: ignore[arg-type]
+        int(domain_seed),  # type: ignore[arg-type]
     )
 
 

@@ -94,12 +94,17 @@ class Discretization:
             the vertices (passes the patch test). ``"free"``: only the translations are
             fixed; boundary edges may bulge between vertices (fails the patch test; kept
             for comparison, docs/elements.md).
+        q_rand: ``efmm`` only: randomness of the integration domains' inner points in
+            [0, 1] (seed Fig. 3.13); 0 takes the incentres.
+        domain_seed: ``efmm`` only: seed of those random points.
     """
 
     element: str
     quadrature_degree: int | None = None
     zero_mode_penalty: float = 0.0
     gradient_bc: Literal["fixed", "free"] = "fixed"
+    q_rand: float = 0.0
+    domain_seed: int = 0
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,209 @@
+"""The elastic problem with the EFMM element: condensed node stiffness, patch stresses.
+
+The stiffness is :meth:`geofrac.elements.efmm.EfmmElement.stiffness` (K = Cᵀ A⁻¹ C,
+seed eq. 3.6); the load vector is the CST one (eq. 3.4c, N^u the CST shape functions),
+assembled from the scene's UFL loads; Dirichlet conditions are imposed on K by symmetric
+elimination. The stress of the solution is each node's own linear field σ = P_i e_i
+with e = A⁻¹ C u (eq. 3.3): the energy error of the results is measured with it
+(seed eq. 3.30b), and it is what the grains and the nodal stress show.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import basix
+import dolfinx
+import numpy as np
+from mpi4py import MPI
+
+from geofrac.elements.efmm import EfmmElement
+from geofrac.elements.efmm_numpy import stress_error
+from geofrac.fem.elastic import ElasticProblem
+from geofrac.materials import d_matrix
+from geofrac.meshing.distribute import TaggedMesh
+from geofrac.scene.model import Scene
+
+__all__ = ["EfmmProblem"]
+
+#: Degree of the rule for the stress error on each sub-triangle (the error of a linear
+#: field against a quadratic exact stress, squared: degree 4, plus margin).
+ERROR_DEGREE = 6
+
+
+def _tensor(voigt: np.ndarray, problem: ElasticProblem) -> np.ndarray:
+    """3x3 stresses, shape=(n, 9), from (σx, σy, τxy), shape=(n, 3), with σzz of the plane."""
+    out = np.zeros((len(voigt), 3, 3))
+    out[:, 0, 0], out[:, 1, 1] = voigt[:, 0], voigt[:, 1]
+    out[:, 0, 1] = out[:, 1, 0] = voigt[:, 2]
+    mat = problem.scene.material
+    if mat.plane == "strain":
+        out[:, 2, 2] = mat.nu * (voigt[:, 0] + voigt[:, 1])
+    return out.reshape(-1, 9)
+
+
+class EfmmProblem(ElasticProblem):
+    """Linear elasticity with EFMM (seed 3.2); see the module text.
+
+    Attributes:
+        e: the stress coefficients after :meth:`solve`, P1 with block size 9.
+    """
+
+    element: EfmmElement
+
+    def __init__(self, tagged: TaggedMesh, element: EfmmElement, scene: Scene) -> None:
+        super().__init__(tagged, element, scene)
+        mat = scene.material
+        self.D = d_matrix(mat.E, mat.nu, 2, mat.plane)
+        self.e: dolfinx.fem.Function | None = None
+
+    def compile(self) -> None:
+        """Compile the load form and load the C kernels (compiled once, then cached)."""
+        from geofrac import kernels
+
+        self.L = dolfinx.fem.form(self._L)
+        kernels.load("efmm", self.comm)
+
+    def assemble(self) -> None:
+        """Domains, C and A⁻¹ (kernels), K = Cᵀ A⁻¹ C, the CST load vector, conditions."""
+        if self.L is None:
+            self.compile()
+        self._free_operators()
+        d = self.scene.discretization
+        self.element.setup(self.D, d.q_rand, d.domain_seed)
+        self.A = self.element.stiffness()
+        self.b = self.load_vector()
+        self._constrain()
+
+    def _to_field(self) -> None:
+        """The stress coefficients e = A⁻¹ C u of the solution."""
+        self.e = self.element.stress_coefficients(self.uh)
+
+    def cell_data(self) -> dict[str, np.ndarray]:
+        """This rank's owned cells with their domains and stresses.
+
+        Returns:
+            ``x`` vertices shape=(n, 3, 2), ``gid`` input vertex ids shape=(n, 3),
+            ``domain`` shape=(n, 8), ``e`` stress coefficients of the vertices
+            shape=(n, 3, 9).
+        """
+        assert self.e is not None and self.element.domains is not None
+        mesh = self.mesh
+        n = mesh.topology.index_map(2).size_local
+        nodes = mesh.geometry.dofmaps[0][:n]
+        E = self.element.stress_space
+        return {
+            "x": mesh.geometry.x[nodes][:, :, :2],
+            "gid": np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)[nodes],
+            "domain": self.element.domains.values[:n],
+            "e": self.e.x.array.reshape(-1, 9)[E.dofmap.list[:n]],
+        }
+
+    def error_norms(self) -> dict[str, float]:
+        """Displacement error of the CST field; energy error of the patch stresses.
+
+        ``energy_cst`` is the energy error of the CST strain B u, for comparison.
+        """
+        out = super().error_norms()
+        assert self.exact is not None
+        exact = self.exact
+        data = self.cell_data()
+        pts, wts = basix.make_quadrature(basix.CellType.triangle, ERROR_DEGREE)
+
+        def stress(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+            (sxx, sxy), (_, syy) = exact.stress(x, y)
+            return np.stack(np.broadcast_arrays(sxx, syy, sxy), axis=1)
+
+        assert self.element.domains is not None
+        err, norm = stress_error(
+            data["x"],
+            data["domain"],
+            data["e"],
+            np.linalg.inv(self.D),
+            self.element.domains.length,
+            stress,
+            (pts, wts),
+        )
+        err, norm = self.comm.allreduce(np.array([err, norm]), op=MPI.SUM)
+        out["energy_cst"] = out["energy"]
+        out["energy"] = float(np.sqrt(err))
+        out["energy_norm"] = float(np.sqrt(norm))
+        out["energy_relative"] = out["energy"] / out["energy_norm"]
+        return out
+
+    def node_stress(self) -> dolfinx.fem.Function:
+        """Each node's stress σ_i(x_i) = its field's constant term, 3x3 P1 (vertex values).
+
+        Out of plane: σzz = ν (σx + σy) in plane strain, 0 in plane stress.
+        """
+        assert self.e is not None
+        mesh = self.mesh
+        T = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (3, 3)))
+        out = dolfinx.fem.Function(T, name="stress_nodal")
+        E = self.element.stress_space
+        e = self.e.x.array.reshape(-1, 9)
+        values = out.x.array.reshape(-1, 9)
+        values[T.dofmap.list.ravel()] = _tensor(e[E.dofmap.list.ravel()][:, [0, 3, 6]], self)
+        return out
+
+    def write_grains(self, stem: Path) -> list[Path]:
+        """Write the integration domains as polygons with their mean stress (collective).
+
+        Rank 0 gathers the owned cells' sub-triangles and stress coefficients, joins each
+        node's sub-triangles into its polygon (:func:`geofrac.io.grains.grain_polygons`)
+        and writes ``stem.vtu``, ``stem.xdmf`` and ``stem.h5``
+        (:func:`geofrac.io.grains.write_grains`) with, per grain, ``stress`` (the mean of
+        the node's stress field over its domain, 3x3), ``stress_node`` (at the node) and
+        the cell arrays ``node`` (input vertex id) and ``area``.
+
+        Returns:
+            the paths written (rank 0), an empty list elsewhere.
+        """
+        from geofrac.elements.efmm_numpy import cell_subtriangles
+        from geofrac.io.grains import grain_polygons, write_grains
+
+        assert self.element.domains is not None
+        data = self.cell_data()
+        parts = self.comm.gather(data, root=0)
+        if self.comm.rank != 0:
+            return []
+        assert parts is not None
+        x, gid, domain, e = (
+            np.concatenate([p[k] for p in parts]) for k in ("x", "gid", "domain", "e")
+        )
+        subs = cell_subtriangles(x, domain)  # shape=(nc, 3, 2, 3, 2)
+        a, b, c = subs[..., 0, :], subs[..., 1, :], subs[..., 2, :]
+        area = 0.5 * np.abs((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+                            - (c[..., 0] - a[..., 0]) * (b[..., 1] - a[..., 1]))  # fmt: skip
+        rel = (subs.mean(axis=3) - x[:, :, None, :]) / self.element.domains.length
+        coef = e.reshape(len(e), 3, 3, 3)  # (cell, node, component, monomial)
+        at_centroid = coef[..., 0][:, :, None] + np.einsum("cjsm,cjkm->cjsk", rel, coef[..., 1:])
+        node = np.broadcast_to(gid[:, :, None], area.shape).ravel()
+        grains = grain_polygons(node, subs.reshape(-1, 3, 2))
+        index = np.searchsorted(grains.node, node)
+        integral = np.zeros((grains.num_grains, 3))
+        np.add.at(integral, index, (at_centroid * area[..., None]).reshape(-1, 3))
+        at_node = np.zeros((grains.num_grains, 3))
+        at_node[np.searchsorted(grains.node, gid.ravel())] = e.reshape(-1, 9)[:, [0, 3, 6]]
+        return write_grains(
+            stem,
+            grains,
+            {
+                "stress": _tensor(integral / grains.area[:, None], self),
+                "stress_node": _tensor(at_node, self),
+            },
+        )
+
+    def describe(self) -> dict[str, Any]:
+        """Domain facts for the results: the length h and the clamped edge crossings."""
+        assert self.element.domains is not None
+        d = self.scene.discretization
+        return {
+            "q_rand": d.q_rand,
+            "domain_seed": d.domain_seed,
+            "length": self.element.domains.length,
+            "clamped_crossings": self.element.domains.clamped,
+        }
