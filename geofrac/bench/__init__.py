@@ -21,7 +21,8 @@ BENCHES: dict[str, tuple[str, str]] = {
     ),
     "cantilever": (
         "geofrac.bench.cantilever",
-        "Timoshenko cantilever (seed 2.4.1): displacement/energy error against DOFs and wall time",
+        "Timoshenko cantilever (seed 2.4.1, 3.4.1): displacement/energy error against DOFs "
+        "and wall time",
     ),
     "cracking": (
         "geofrac.bench.cracking",
@@ -30,6 +31,10 @@ BENCHES: dict[str, tuple[str, str]] = {
     "dfn": (
         "geofrac.bench.dfn",
         "DFN Models 1 and 2 (seed 2.5.1): generation and meshing wall times, mesh statistics",
+    ),
+    "efmm-qrand": (
+        "geofrac.bench.efmm_qrand",
+        "EFMM integration domains (seed Table 3.1): error mean and spread over q_rand and seeds",
     ),
     "mms3d": (
         "geofrac.bench.mms3d",

@@ -1,11 +1,20 @@
 """``geofrac bench cantilever``: accuracy against cost on the Timoshenko cantilever.
 
-For each element and each seed mesh ny × nx (4×40 … 11×110, seed 2.4.1) the scene
-``jobs/cantilever.toml`` is solved; the bench reports nodes, DOFs, the displacement
-L2 error (seed eq. 2.22), the energy error (seed eq. 3.30b) and the assemble/solve wall
-times, fits the rate R against √nodes (seed Fig. 2.8: R = 2.0 for CST, 2.1 for RGNT),
-states the cost of a target relative error per element, and writes ``cantilever.json``
-and ``cantilever.png`` to the output directory (see :mod:`geofrac.bench.study`).
+Two seed set-ups (``--setup``):
+
+- ``2.4.1`` (Fig. 2.7-2.8): ``jobs/cantilever.toml``, L = 10, D = 1, E = 100; meshes
+  ny × nx = 4×40 … 11×110 (``--meshes`` are the depths ny, nx = 10 ny). Seed rates:
+  R = 2.0 for CST, 2.1 for RGNT.
+- ``3.4.1`` (Fig. 3.9-3.11): ``jobs/cantilever_efmm.toml``, L = 8, d = 2, E = 1000;
+  meshes nx × ny = 8×2 … 96×24 (``--meshes`` are the depths ny, nx = 4 ny). Seed: EFMM
+  6.20e-2 → 9.41e-5 (R = 2.9) in displacement, R = 1.9 in energy; CST R = 2.0 and 0.9.
+
+The default is ``3.4.1`` when ``efmm`` is among ``--elements`` (the chapter that
+introduces it) and ``2.4.1`` otherwise. The bench reports nodes, DOFs, the displacement
+L2 error (seed eq. 2.22/3.30a), the energy error (seed eq. 3.30b; for EFMM with its patch
+stresses) and the assemble/solve wall times, fits the rate R against √nodes, states the
+cost of a target relative error and the error reached in equal time per element, and
+writes ``cantilever.json`` and ``cantilever.png`` (see :mod:`geofrac.bench.study`).
 """
 
 from __future__ import annotations
@@ -16,11 +25,30 @@ from typing import Any
 
 from geofrac.bench.args import number_list
 
-__all__ = ["SEED_MESHES", "add_arguments", "int_list", "run"]
+__all__ = ["SEED_MESHES", "SETUPS", "add_arguments", "int_list", "run"]
 
-#: Seed meshes: ny (depth) values; nx = 10 ny.
-SEED_MESHES = (4, 5, 6, 7, 8, 9, 10, 11)
-_DEFAULT_SCENE = Path(__file__).resolve().parents[2] / "jobs" / "cantilever.toml"
+_JOBS = Path(__file__).resolve().parents[2] / "jobs"
+
+#: Seed set-ups: section -> (scene, default depths ny, nx / ny, seed reference text).
+SETUPS: dict[str, tuple[Path, tuple[int, ...], int, str]] = {
+    "2.4.1": (
+        _JOBS / "cantilever.toml",
+        (4, 5, 6, 7, 8, 9, 10, 11),
+        10,
+        "Fig. 2.8: R = 2.0 (CST), R = 2.1 (RGNT) in the displacement norm",
+    ),
+    "3.4.1": (
+        _JOBS / "cantilever_efmm.toml",
+        tuple(range(2, 25, 2)),
+        4,
+        "Fig. 3.10-3.11: EFMM ||E||_u 6.20e-2 (8x2) to 9.41e-5 (96x24), R = 2.9; ||E||_e "
+        "2.61e-1 to 7.70e-3, R = 1.9; CST ||E||_u 2.29e-1 to 2.95e-3, R = 2.0; ||E||_e "
+        "1.94e-1 to 2.45e-2, R = 0.9",
+    ),
+}
+
+#: Seed meshes of section 2.4.1: ny (depth) values; nx = 10 ny.
+SEED_MESHES = SETUPS["2.4.1"][1]
 
 
 #: Positive integers from a comma-separated list (an argparse type).
@@ -31,40 +59,52 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of this bench."""
     from geofrac.bench.study import add_common_arguments
 
-    add_common_arguments(p, "cantilever", "cst,p2", _DEFAULT_SCENE)
+    add_common_arguments(p, "cantilever", "cst,p2", None)
+    p.add_argument(
+        "--setup",
+        choices=tuple(SETUPS),
+        help="seed section whose beam and meshes to use (default: 3.4.1 when efmm is "
+        "among --elements, else 2.4.1)",
+    )
     p.add_argument(
         "--meshes",
         type=int_list,
-        default=list(SEED_MESHES),
-        help="comma-separated depths ny; nx = 10 ny (default: the seed's 4,...,11)",
+        help="comma-separated depths ny (default: the set-up's seed meshes, "
+        "2.4.1: 4,...,11 with nx = 10 ny; 3.4.1: 2,4,...,24 with nx = 4 ny)",
     )
 
 
 def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
     from geofrac.bench.study import Case, parse_elements, run_study
+    from geofrac.log import echo
 
+    elements = parse_elements(args.elements, 2)
+    setup = args.setup or ("3.4.1" if "efmm" in elements else "2.4.1")
+    scene, meshes, aspect, reference = SETUPS[setup]
+    if args.scene is None:
+        args.scene = scene
+    depths = args.meshes or list(meshes)
+    echo(comm, f"bench cantilever: seed {setup} set-up, scene {args.scene}")
     cases = [
         Case(
             element,
-            f"{ny}x{10 * ny}",
+            f"{aspect * ny}x{ny}" if setup == "3.4.1" else f"{ny}x{aspect * ny}",
             (
                 f"discretization.element={element}",
-                f"geometry.parameters.nx={10 * ny}",
+                f"geometry.parameters.nx={aspect * ny}",
                 f"geometry.parameters.ny={ny}",
             ),
         )
-        for element in parse_elements(args.elements, 2)
-        for ny in args.meshes
+        for element in elements
+        for ny in depths
     ]
     return run_study(
         args,
         comm,
         "cantilever",
-        "Timoshenko cantilever (seed 2.4.1): accuracy vs cost",
+        f"Timoshenko cantilever (seed {setup}): accuracy vs cost",
         cases,
         dim=2,
-        extra={
-            "seed_reference": "Fig. 2.8: R = 2.0 (CST), R = 2.1 (RGNT) in the displacement norm"
-        },
+        extra={"setup": setup, "seed_reference": reference},
     )

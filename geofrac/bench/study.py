@@ -17,7 +17,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-__all__ = ["COLUMNS", "Case", "add_common_arguments", "parse_elements", "run_study", "to_target"]
+__all__ = [
+    "COLUMNS",
+    "Case",
+    "add_common_arguments",
+    "at_time",
+    "equal_time",
+    "parse_elements",
+    "run_study",
+    "to_target",
+]
 
 #: Table columns of every convergence study.
 COLUMNS = (
@@ -50,7 +59,7 @@ class Case:
 
 
 def add_common_arguments(
-    p: argparse.ArgumentParser, name: str, default_elements: str, default_scene: Path
+    p: argparse.ArgumentParser, name: str, default_elements: str, default_scene: Path | None
 ) -> None:
     """Options every convergence bench has: elements, scene, output, repeat, target."""
     from geofrac.elements import available
@@ -62,7 +71,10 @@ def add_common_arguments(
         f"(default: {default_elements})",
     )
     p.add_argument(
-        "--scene", type=Path, default=default_scene, help=f"base scene (default: {default_scene})"
+        "--scene",
+        type=Path,
+        default=default_scene,
+        help=f"base scene (default: {default_scene or 'the set-up s scene'})",
     )
     p.add_argument(
         "--out", type=Path, default=Path(f"results/bench-{name}"), help="output directory"
@@ -132,6 +144,49 @@ def to_target(records: Sequence[dict[str, Any]], target: float) -> dict[str, Any
         s = (np.log(target) - e0) / (e1 - e0) if e1 != e0 else 1.0
         out[name] = float(np.exp(y0 + s * (y1 - y0)))
     return out
+
+
+def at_time(records: Sequence[dict[str, Any]], budget: float) -> float | None:
+    """Relative displacement error one element reaches in wall time ``budget``.
+
+    Interpolated log-log between the two meshes whose assemble+solve times bracket the
+    budget; None when the budget lies outside the element's measured times.
+
+    Args:
+        records: one element's records, ordered by refinement.
+        budget: wall time in seconds.
+    """
+    import numpy as np
+
+    times = np.array([r["time_total_s"] for r in records], dtype=float)
+    errors = np.array([r["error_u_relative"] for r in records], dtype=float)
+    order = np.argsort(times)
+    times, errors = times[order], errors[order]
+    if len(times) == 0 or not times[0] <= budget <= times[-1]:
+        return None
+    i = int(np.searchsorted(times, budget))
+    if i == 0 or times[i] == times[i - 1]:
+        return float(errors[i])
+    s = (np.log(budget) - np.log(times[i - 1])) / (np.log(times[i]) - np.log(times[i - 1]))
+    return float(np.exp(np.log(errors[i - 1]) + s * (np.log(errors[i]) - np.log(errors[i - 1]))))
+
+
+def equal_time(by_element: dict[str, list[dict[str, Any]]]) -> dict[str, Any]:
+    """Each element's relative displacement error at common wall times.
+
+    Two budgets bound the range every element was measured over: the largest of the
+    elements' fastest times and the smallest of their slowest times (when the ranges
+    do not overlap the second is below the first and some errors are None).
+    """
+    low = max(min(r["time_total_s"] for r in rows) for rows in by_element.values())
+    high = min(max(r["time_total_s"] for r in rows) for rows in by_element.values())
+    budgets = [float(low), float(high)]
+    return {
+        "time_s": budgets,
+        "error_u_relative": {
+            e: [at_time(rows, t) for t in budgets] for e, rows in by_element.items()
+        },
+    }
 
 
 def run_study(
@@ -223,6 +278,7 @@ def run_study(
     }
     target = {e: to_target(rows, args.target) for e, rows in by_element.items()}
     reached = sorted((v["time_s"], e) for e, v in target.items() if v["reached"])
+    same_time = equal_time(by_element)
     report = {
         "bench": name,
         "scene": str(args.scene),
@@ -239,12 +295,14 @@ def run_study(
             "fastest": reached[0][1] if reached else None,
             "elements": target,
         },
+        "equal_time": same_time,
     }
     if comm.rank == 0:
         echo(comm, format_table(records, COLUMNS))
         for e, r in rates.items():
             echo(comm, f"rate R ({e}): displacement {r['u']:.2f}, energy {r['energy']:.2f}")
         echo(comm, _target_line(args.target, target, reached))
+        echo(comm, _time_line(same_time))
         args.out.mkdir(parents=True, exist_ok=True)
         write_json(args.out / f"{name}.json", report)
         if args.json is not None:
@@ -252,6 +310,17 @@ def run_study(
         plot_accuracy_cost(records, args.out / f"{name}.png", title)
         echo(comm, f"wrote {args.out / f'{name}.json'} and {args.out / f'{name}.png'}")
     return report
+
+
+def _time_line(same_time: dict[str, Any]) -> str:
+    lines = []
+    for k, t in enumerate(same_time["time_s"]):
+        parts = [
+            f"{e} {errs[k]:.2e}" if errs[k] is not None else f"{e} -"
+            for e, errs in same_time["error_u_relative"].items()
+        ]
+        lines.append(f"relative displacement error in {t:.3g} s: " + "; ".join(parts))
+    return "\n".join(lines)
 
 
 def _target_line(
