@@ -47,6 +47,7 @@ __all__ = [
     "node_stiffness",
     "stiffness",
     "stress_error",
+    "triangle_areas",
 ]
 
 #: Three-point Gauss rule on a triangle, degree 2: barycentric points and weights
@@ -241,6 +242,13 @@ def stiffness(
     return K
 
 
+def triangle_areas(corners: np.ndarray) -> np.ndarray:
+    """Unsigned areas of triangles, corners shape=(..., 3, 2); returns shape=(...)."""
+    a, b, c = corners[..., 0, :], corners[..., 1, :], corners[..., 2, :]
+    return 0.5 * np.abs((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
+                        - (c[..., 0] - a[..., 0]) * (b[..., 1] - a[..., 1]))  # fmt: skip
+
+
 def cell_subtriangles(x: np.ndarray, domain: np.ndarray) -> np.ndarray:
     """The sub-triangles of each cell's three node parts, as the C kernel integrates them.
 
@@ -293,8 +301,7 @@ def stress_error(
     """
     subs = cell_subtriangles(x, domain)  # shape=(nc, 3, 2, 3, 2)
     a, b, c = subs[..., 0, :], subs[..., 1, :], subs[..., 2, :]
-    det = np.abs((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
-                 - (c[..., 0] - a[..., 0]) * (b[..., 1] - a[..., 1]))  # fmt: skip
+    det = 2.0 * triangle_areas(subs)
     pts, wts = rule
     q = (
         a[..., None, :]

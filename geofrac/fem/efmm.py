@@ -162,7 +162,7 @@ class EfmmProblem(ElasticProblem):
         Returns:
             the paths written (rank 0), an empty list elsewhere.
         """
-        from geofrac.elements.efmm_numpy import cell_subtriangles
+        from geofrac.elements.efmm_numpy import cell_subtriangles, triangle_areas
         from geofrac.io.grains import grain_polygons, write_grains
 
         assert self.element.domains is not None
@@ -175,9 +175,7 @@ class EfmmProblem(ElasticProblem):
             np.concatenate([p[k] for p in parts]) for k in ("x", "gid", "domain", "e")
         )
         subs = cell_subtriangles(x, domain)  # shape=(nc, 3, 2, 3, 2)
-        a, b, c = subs[..., 0, :], subs[..., 1, :], subs[..., 2, :]
-        area = 0.5 * np.abs((b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1])
-                            - (c[..., 0] - a[..., 0]) * (b[..., 1] - a[..., 1]))  # fmt: skip
+        area = triangle_areas(subs)  # shape=(nc, 3, 2)
         rel = (subs.mean(axis=3) - x[:, :, None, :]) / self.element.domains.length
         coef = e.reshape(len(e), 3, 3, 3)  # (cell, node, component, monomial)
         at_centroid = coef[..., 0][:, :, None] + np.einsum("cjsm,cjkm->cjsk", rel, coef[..., 1:])
