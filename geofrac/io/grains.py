@@ -45,6 +45,8 @@ import h5py
 import numpy as np
 import pyvista as pv
 
+from geofrac.io.series import hdf_item, write_xml
+
 __all__ = ["XDMF_POLYGON", "Grains", "grain_polygons", "write_grains"]
 
 #: XDMF 3 topology type id of a polygon in a ``Mixed`` topology.
@@ -221,14 +223,7 @@ def _attribute_type(values: np.ndarray) -> str:
 def _data_item(parent: ET.Element, values: np.ndarray, h5_path: str) -> None:
     kind, size = values.dtype.kind, values.dtype.itemsize
     number = _XDMF_BYTE[kind] if size == 1 and kind in _XDMF_BYTE else _XDMF_NUMBER[kind]
-    ET.SubElement(
-        parent,
-        "DataItem",
-        Dimensions=" ".join(str(v) for v in values.shape),
-        NumberType=number,
-        Precision=str(size),
-        Format="HDF",
-    ).text = h5_path
+    hdf_item(parent, " ".join(str(v) for v in values.shape), number, h5_path, size)
 
 
 def _write_vtu(path: Path, xyz: np.ndarray, grains: Grains, arrays: dict) -> None:
@@ -272,8 +267,7 @@ def _write_xdmf(xdmf: Path, h5: Path, xyz: np.ndarray, grains: Grains, arrays: d
             grid, "Attribute", Name=name, AttributeType=_attribute_type(values), Center="Cell"
         )
         _data_item(attr, values, f"{h5.name}:/cell_data/{name}")
-    ET.indent(root)
-    ET.ElementTree(root).write(xdmf, xml_declaration=True, encoding="utf-8")
+    write_xml(root, xdmf)
 
 
 def write_grains(

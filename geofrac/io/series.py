@@ -117,8 +117,15 @@ def write_xml(root: ET.Element, path: Path) -> None:
     tmp.replace(path)
 
 
-def hdf_item(parent: ET.Element, dims: str, number_type: str, path: str) -> None:
-    """An 8-byte HDF5 DataItem ``path`` (``file.h5:/dataset``) of shape ``dims``."""
+def hdf_item(
+    parent: ET.Element, dims: str, number_type: str, path: str, precision: int = 8
+) -> None:
+    """An HDF5 DataItem ``path`` (``file.h5:/dataset``) of shape ``dims``, ``precision`` bytes."""
     ET.SubElement(
-        parent, "DataItem", Dimensions=dims, NumberType=number_type, Precision="8", Format="HDF"
+        parent,
+        "DataItem",
+        Dimensions=dims,
+        NumberType=number_type,
+        Precision=str(precision),
+        Format="HDF",
     ).text = path
