@@ -26,7 +26,6 @@ from geofrac.fem.post import (
     integrate,
     locate_points,
     probe,
-    tensor_fields,
 )
 from geofrac.io.summary import finish_summary, prepare_output, start_summary
 from geofrac.io.xdmf import write_fields, write_meshtags
@@ -156,8 +155,8 @@ def solve_scene(
             results["solver"] = problem.solver.describe() | {"iterations": problem.iterations}  # type: ignore[union-attr]
         if geometry_report:
             results["geometry"] = geometry_report
-        if hasattr(problem, "describe"):  # the element's own facts (EFMM's domains)
-            results[problem.element.name] = problem.describe()
+        if facts := problem.describe():  # the element's own facts (EFMM's domains)
+            results[problem.element.name] = facts
         if problem.exact is not None:
             results["errors"] = problem.error_norms()
             results["exact_probes"] = {
@@ -199,15 +198,10 @@ def _write_xdmf(solution: Solution) -> None:
             uh = u1
         functions.append(uh)
     wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
-    own = {}
-    if hasattr(problem, "write_grains"):  # EFMM: its grains, and its own nodal stress
-        problem.write_grains(scene.output.dir / "grains")
-        if "stress_nodal" in wanted:
-            own["stress_nodal"] = problem.node_stress()
-    rest = [f for f in wanted if f not in own]
-    fields = tensor_fields(problem.uh, problem.lam, problem.mu, scene.material.plane, rest)
-    functions += [own[f] if f in own else fields[f] for f in wanted]
+    fields = problem.tensor_fields(wanted)
+    functions += [fields[f] for f in wanted]
     write_fields(scene.output.dir / "results.xdmf", mesh, functions)
+    problem.write_extra(scene.output.dir)
 
 
 def _write_fractures(solution: Solution) -> None:

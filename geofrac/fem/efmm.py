@@ -149,6 +149,17 @@ class EfmmProblem(ElasticProblem):
         values[T.dofmap.list.ravel()] = _tensor(e[E.dofmap.list.ravel()][:, [0, 3, 6]], self)
         return out
 
+    def tensor_fields(self, names: list[str]) -> dict[str, dolfinx.fem.Function]:
+        """As the base class; ``stress_nodal`` is each node's own stress (node_stress)."""
+        fields = super().tensor_fields([n for n in names if n != "stress_nodal"])
+        if "stress_nodal" in names:
+            fields["stress_nodal"] = self.node_stress()
+        return fields
+
+    def write_extra(self, directory: Path) -> list[Path]:
+        """The grains: ``grains.vtu``, ``grains.xdmf`` + ``grains.h5`` (:meth:`write_grains`)."""
+        return self.write_grains(directory / "grains")
+
     def write_grains(self, stem: Path) -> list[Path]:
         """Write the integration domains as polygons with their mean stress (collective).
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -209,6 +210,21 @@ class ElasticProblem:
             self.A.zeroRowsColumns(rows, 1.0, g, self.b)
         finally:
             g.destroy()
+
+    def tensor_fields(self, names: list[str]) -> dict[str, dolfinx.fem.Function]:
+        """Stress/strain fields of the solution for XDMF (see :func:`post.tensor_fields`)."""
+        from geofrac.fem.post import tensor_fields
+
+        plane = self.scene.material.plane
+        return tensor_fields(self.uh, self.lam, self.mu, plane, names)
+
+    def write_extra(self, directory: Path) -> list[Path]:
+        """Write the discretisation's own output files (collective); none here."""
+        return []
+
+    def describe(self) -> dict[str, Any]:
+        """The discretisation's own facts for the results; none here."""
+        return {}
 
     def error_norms(self) -> dict[str, float]:
         """Error norms against the scene's exact solution (see :func:`post.error_norms`)."""
