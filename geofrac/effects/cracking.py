@@ -1,4 +1,8 @@
-"""Effect ``cracking``: crack propagation on element edges, sequentially linear (seed ch. 2).
+"""Effect ``cracking``: sequentially linear crack propagation (seed ch. 2 and 3.3).
+
+Crack sites are the element edges (``cst``, ``p1``, ``rgnt``, ``gnt``; seed chapter 2) or,
+for ``efmm``, the grain interfaces: each mesh edge ij owns the interface between the
+integration domains (grains) of nodes i and j (seed 3.3, docs/granular.md).
 
 Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference):
 
@@ -11,6 +15,15 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
 - ``neighbours`` (10), ``margin`` (1.1), ``max_radius_factor`` (8): MLS neighbourhood
   (docs/cracking.md).
 - ``precracked`` ([]): facet groups cracked before loading (a notch, DFN ``fractures``).
+  With ``efmm`` a group is a straight line of edges (an embedded notch): the interfaces
+  between its nodes and the nodes on its left side crack, so the grains on the two sides
+  separate along it.
+- ``precracked_fraction`` (0): a random fraction of the interior crack sites that do not
+  touch a Dirichlet node, cracked before loading (seed 3.6: 0.04 of the interfaces),
+  drawn with ``precrack_seed`` (0).
+- ``switch`` (``"patch"``; ``efmm`` only): which nodes a cracked interface switches to
+  C-MultiMLSM: ``"patch"`` the vertices of the triangles it crosses, ``"grain"`` only
+  the two nodes whose grains it separates (the seed's literal rule, docs/granular.md).
 - ``mls_region``: ``[x0, y0, x1, y1]``: cells whose centroid is inside use MLS from the
   start (the patch test's core).
 - ``control``: the Dirichlet group whose prescribed displacement is the load (default:
@@ -44,7 +57,7 @@ from geofrac.scene.errors import SceneError, did_you_mean
 __all__ = ["ELEMENTS", "KEYS", "CrackingConfig", "configure", "driver"]
 
 #: Elements the crack driver supports.
-ELEMENTS = ("cst", "p1", "rgnt", "gnt")
+ELEMENTS = ("cst", "p1", "rgnt", "gnt", "efmm")
 
 #: Keys of the ``[cracking]`` table.
 KEYS = (
@@ -65,6 +78,9 @@ KEYS = (
     "output_every",
     "face",
     "face_origin",
+    "precracked_fraction",
+    "precrack_seed",
+    "switch",
 )
 
 
@@ -90,6 +106,9 @@ class CrackingConfig:
     face: str | None
     face_origin: float
     tensile_strength: float
+    precracked_fraction: float = 0.0
+    precrack_seed: int = 0
+    switch: str = "patch"
 
 
 def _number(
@@ -191,6 +210,13 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "cracking.face",
             f"unknown group {face!r}" + did_you_mean(str(face), list(ctx.groups)),
         )
+    switch = table.get("switch", "patch")
+    if switch not in ("patch", "grain"):
+        raise SceneError(file, "cracking.switch", f"must be 'patch' or 'grain', got {switch!r}")
+    if "switch" in table and ctx.element != "efmm":
+        raise SceneError(
+            file, "cracking.switch", "applies to element 'efmm' (grain interfaces) only"
+        )
     solver = table.get("solver", "update")
     if solver not in SOLVERS:
         raise SceneError(
@@ -215,6 +241,9 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         face=face,
         face_origin=_number(table, file, "face_origin", 0.0, float, -float("inf")),
         tensile_strength=float(ft),
+        precracked_fraction=_number(table, file, "precracked_fraction", 0.0, float, 0.0, 1.0),
+        precrack_seed=_number(table, file, "precrack_seed", 0, int, 0),
+        switch=switch,
     )
 
 
@@ -223,6 +252,10 @@ def driver(config: CrackingConfig, solution: Any, say: Any, write: bool) -> dict
 
     ``write``: write the event log, pictures and XDMF series into ``output.dir``.
     """
+    if solution.scene.discretization.element == "efmm":
+        from geofrac.fracture.grain_driver import GrainDriver
+
+        return GrainDriver(config, solution, say, write).run()
     from geofrac.fracture.driver import CrackDriver
 
     return CrackDriver(config, solution, say, write).run()

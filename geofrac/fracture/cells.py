@@ -32,7 +32,7 @@ __all__ = [
 ]
 
 #: DOFs per vertex of the elements the crack driver supports.
-BLOCK_SIZES = {"cst": 2, "p1": 2, "rgnt": 3, "gnt": 6}
+BLOCK_SIZES = {"cst": 2, "p1": 2, "rgnt": 3, "gnt": 6, "efmm": 2}
 
 #: P2 edge nodes in basix order: edge e joins local vertices P2_EDGES[e].
 P2_EDGES = np.array([[1, 2], [0, 2], [0, 1]])

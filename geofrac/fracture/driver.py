@@ -52,7 +52,7 @@ from geofrac.fracture.cells import (
 from geofrac.fracture.criterion import edge_principal, select_edges
 from geofrac.fracture.incremental import Gather, IncrementalSolver, Stale
 from geofrac.fracture.state import CrackState, MlsSettings
-from geofrac.fracture.topology import edge_mesh, free_motion_pins
+from geofrac.fracture.topology import EdgeMesh, edge_mesh, free_motion_pins, random_sites
 from geofrac.log import format_seconds
 from geofrac.materials import d_matrix, lame
 from geofrac.mls.shape import strain_matrix
@@ -324,15 +324,21 @@ class CrackDriver:
             c = mesh_e.centroids()
             forced = (c[:, 0] > x0) & (c[:, 0] < x1) & (c[:, 1] > y0) & (c[:, 1] < y1)
         settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
-        self.state = CrackState(mesh_e, frozen, forced, settings, self._rank_map)
+        self.state = self._make_state(mesh_e, bc_nodes, frozen, forced, settings)
         keys = mesh_e.edges[:, 0] * len(gm.coords) + mesh_e.edges[:, 1]
         self._edge_keys = keys
         pre = []
         for group in cfg.precracked:
             dim, ents = self.tagged.entities(group)
             pairs = np.sort(_facet_nodes(self.mesh, gm, dim, ents), axis=1)
-            pre.append(self.edges_of(pairs))
+            pre.append(self._group_sites(pairs))
         self.precracked = np.unique(np.concatenate(pre)) if pre else np.zeros(0, dtype=np.int64)
+        self.random_precracked = random_sites(
+            self.state.crackable & ~self.state.mesh.boundary_edges,
+            cfg.precracked_fraction,
+            cfg.precrack_seed,
+        )
+        self.precracked = np.union1d(self.precracked, self.random_precracked)
         # control group: its prescribed, non-zero DOFs
         dim, ents = self.tagged.entities(cfg.control)
         control_nodes = np.unique(_facet_nodes(self.mesh, gm, dim, ents))
@@ -347,6 +353,29 @@ class CrackDriver:
         if cfg.face is not None:
             dim, ents = self.tagged.entities(cfg.face)
             self.face_nodes = np.unique(_facet_nodes(self.mesh, gm, dim, ents))
+
+    def _make_state(
+        self,
+        mesh_e: EdgeMesh,
+        bc_nodes: np.ndarray,
+        frozen: np.ndarray,
+        forced: np.ndarray,
+        settings: MlsSettings,
+    ) -> Any:
+        """The replicated crack state: cracked element edges and MLS cells (chapter 2).
+
+        Args:
+            mesh_e: the global mesh with edges.
+            bc_nodes: nodes with a Dirichlet DOF, shape=(k,).
+            frozen: cells touching a Dirichlet node (they never crack), shape=(nc,).
+            forced: cells that use MLS from the start, shape=(nc,).
+            settings: the MLS neighbourhood settings.
+        """
+        return CrackState(mesh_e, frozen, forced, settings, self._rank_map)
+
+    def _group_sites(self, pairs: np.ndarray) -> np.ndarray:
+        """Crack sites of a ``precracked`` facet group, given as sorted node pairs."""
+        return self.edges_of(pairs)
 
     def edges_of(self, pairs: np.ndarray) -> np.ndarray:
         """Edge ids of sorted node pairs, shape=(n, 2); error if a pair is no edge."""
@@ -427,18 +456,16 @@ class CrackDriver:
         """
         state = self.state
         is_mls = state.is_mls()
-        keep = ~is_mls[self.own_cells]
-        nd = self.fe_dofs.shape[1]
-        rows = [np.repeat(self.fe_dofs[keep], nd, axis=1).ravel()]
-        cols = [np.tile(self.fe_dofs[keep], (1, nd)).ravel()]
-        vals = [self.K_fe[keep].ravel()]
+        r0, c0, v0 = self._intact_coo(~is_mls[self.own_cells])
+        rows, cols, vals = [r0], [c0], [v0]
         for c, fit in state.fits.items():
-            if fit is None or not self.owned_flag[c]:
+            block = self._fit_block(c, fit) if self.owned_flag[c] else None
+            if block is None:
                 continue
-            d = self._mls_dofs(fit.nodes)
+            d, k = block
             rows.append(np.repeat(d, len(d)))
             cols.append(np.tile(d, len(d)))
-            vals.append(self._mls_stiffness(c, fit).ravel())
+            vals.append(k.ravel())
         diag = np.arange(self.row0, self.row0 + self.n_local, dtype=np.int64)
         rows.append(diag)
         cols.append(diag)
@@ -469,6 +496,44 @@ class CrackDriver:
         g.destroy()
         return A, b, held
 
+    def _intact_coo(self, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """COO triplets (rows, cols, values) of the owned units that keep their element field.
+
+        Args:
+            keep: per owned unit (cell), whether it uses its element field,
+                shape=(len(own_cells),).
+        """
+        nd = self.fe_dofs.shape[1]
+        rows = np.repeat(self.fe_dofs[keep], nd, axis=1).ravel()
+        cols = np.tile(self.fe_dofs[keep], (1, nd)).ravel()
+        return rows, cols, self.K_fe[keep].ravel()
+
+    def _fit_block(self, c: int, fit: Any) -> tuple[np.ndarray, np.ndarray] | None:
+        """(DOFs, stiffness) of unit c under an MLS fit; None when it has no stiffness."""
+        if fit is None:
+            return None
+        return self._mls_dofs(fit.nodes), self._mls_stiffness(c, fit)
+
+    def _intact_blocks(self, units: list[int]) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """(DOFs, stiffness) of the element field of any units (cells), by unit."""
+        if not units:
+            return {}
+        x = self.gm.coords[self.gm.cells[units]]
+        ks = fe_matrices(self.element, x, self.D, self.t, self.penalty)
+        return {c: (self._node_dofs(self.gm.cells[c]), k) for c, k in zip(units, ks, strict=True)}
+
+    def _links(self, is_mls: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Node pairs (a, b) joined by a unit with stiffness: the pieces' graph."""
+        a, b = [], []
+        for cell in self.gm.cells[~is_mls]:
+            a += [cell[0], cell[0]]
+            b += [cell[1], cell[2]]
+        for fit in self.state.fits.values():
+            if fit is not None and len(fit.nodes) > 1:
+                a += [fit.nodes[0]] * (len(fit.nodes) - 1)
+                b += list(fit.nodes[1:])
+        return np.array(a, dtype=np.int64), np.array(b, dtype=np.int64)
+
     def _find_fragments(self) -> bool:
         """Hold what the supports no longer hold; True if anything new is held.
 
@@ -482,21 +547,12 @@ class CrackDriver:
         Both choices depend on coordinates only (rank-independent).
         """
         gm, state, bs = self.gm, self.state, self.bs
-        is_mls = state.is_mls()
-        a, b = [], []
-        for cell in gm.cells[~is_mls]:
-            a += [cell[0], cell[0]]
-            b += [cell[1], cell[2]]
-        for fit in state.fits.values():
-            if fit is not None and len(fit.nodes) > 1:
-                a += [fit.nodes[0]] * (len(fit.nodes) - 1)
-                b += list(fit.nodes[1:])
-        labels = _components(
-            len(gm.coords), np.array(a, dtype=np.int64), np.array(b, dtype=np.int64)
-        )
+        a, b = self._links(state.is_mls())
+        labels = _components(len(gm.coords), a, b)
         anchored = np.unique(labels[np.unique(self.bc_row_nodes)])
         touched = np.zeros(len(gm.coords), dtype=bool)
-        touched[np.array(a + b, dtype=np.int64)] = True
+        touched[a] = True
+        touched[b] = True
         loose = np.flatnonzero(touched & ~np.isin(labels, anchored))
         new = np.setdiff1d(loose, self.fragment_nodes)
         if len(new):
@@ -663,7 +719,7 @@ class CrackDriver:
             Stale: the change needs a new factorisation.
         """
         assert self.inc is not None
-        state, gm = self.state, self.gm
+        state = self.state
         pairs = []
         for c in cells.tolist():
             old = self._applied.get(c, self._ref_fits.get(c, _FE))
@@ -671,28 +727,14 @@ class CrackDriver:
             if old is not new:
                 pairs.append((c, old, new))
                 self._applied[c] = new
-        fe_cells = [c for c, old, new in pairs if _FE in (old, new)]
-        fe_k: dict[int, np.ndarray] = {}
-        if fe_cells:
-            x = gm.coords[gm.cells[fe_cells]]
-            fe_k = dict(
-                zip(
-                    fe_cells,
-                    fe_matrices(self.element, x, self.D, self.t, self.penalty),
-                    strict=True,
-                )
-            )
+        fe = self._intact_blocks([c for c, old, new in pairs if _FE in (old, new)])
         blocks = []
         for c, old, new in pairs:
             for fit, sign in ((old, -1.0), (new, 1.0)):
-                if fit is _FE:
-                    dofs = self._node_dofs(gm.cells[c])
-                    k = fe_k[c]
-                elif fit is None:
+                block = fe[c] if fit is _FE else self._fit_block(c, fit)
+                if block is None:
                     continue
-                else:
-                    dofs = self._mls_dofs(fit.nodes)
-                    k = self._mls_stiffness(c, fit)
+                dofs, k = block
                 self._use[dofs] += int(sign)
                 blocks.append((dofs, sign * k))
         if not blocks:
@@ -866,7 +908,7 @@ class CrackDriver:
                     break
                 energy = r * r * energy_unit
                 a, bnode = state.mesh.edges[edges[0]]
-                mid = state.mesh.coords[[a, bnode]].mean(axis=0)
+                mid = self._site_point(int(edges[0]))
                 rows.append(
                     {
                         "event": event,
@@ -888,10 +930,9 @@ class CrackDriver:
                 self._pending = np.union1d(self._pending, changed)
                 self._table_dirty += changed.tolist()
                 if face_hit is None and self.face_nodes is not None:
-                    ends = state.mesh.edges[edges].ravel()
-                    hit = ends[np.isin(ends, self.face_nodes)]
-                    if len(hit):
-                        face_hit = (event, float(state.mesh.coords[hit[0], 0]))
+                    x_hit = self._face_x(edges)
+                    if x_hit is not None:
+                        face_hit = (event, x_hit)
                 if writer is not None and (event % cfg.output_every == 0 or event == 1):
                     self._write_frame(writer, event, r * u_unit)
                 peak = max(peak, energy)
@@ -923,6 +964,16 @@ class CrackDriver:
             f"({results['events_per_s']:.2f} events/s), end: {end}"
         )
         return results
+
+    def _site_point(self, edge: int) -> np.ndarray:
+        """Where crack site ``edge`` lies, for the event log: the edge midpoint, shape=(2,)."""
+        return self.state.mesh.coords[self.state.mesh.edges[edge]].mean(axis=0)
+
+    def _face_x(self, edges: np.ndarray) -> float | None:
+        """X of the first node of the new crack sites on the ``face`` group, or None."""
+        ends = self.state.mesh.edges[edges].ravel()
+        hit = ends[np.isin(ends, self.face_nodes)]
+        return float(self.state.mesh.coords[hit[0], 0]) if len(hit) else None
 
     # -- output ----------------------------------------------------------------------
     def _open_outputs(self) -> Any:
