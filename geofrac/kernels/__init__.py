@@ -14,6 +14,9 @@ ranks wait for it, so ranks never race on one file.
 Kernels:
 - ``efmm``: the Enriched Free Mesh Method's node pieces of A_i and C_i per cell
   (:mod:`geofrac.elements.efmm`; numpy reference :mod:`geofrac.elements.efmm_numpy`).
+- ``cmulti``: the C-MultiMLSM fit A⁻¹C and stiffness of one node, with the order drop
+  (a plain function ``cmulti_node``, not a ufcx kernel; wrapper and numpy reference in
+  :mod:`geofrac.mls.cmulti`).
 """
 
 from __future__ import annotations
