@@ -41,9 +41,11 @@ from geofrac.meshing.distorted import signed_areas
 __all__ = [
     "GAUSS_3",
     "Domains",
+    "NodeOperator",
     "cell_subtriangles",
     "edge_crossings",
     "integration_domains",
+    "node_operator",
     "node_stiffness",
     "stiffness",
     "stress_error",
@@ -69,6 +71,10 @@ class Domains:
             shape=(num_sub, 3, 2).
         inner: the inner point of each mesh triangle, shape=(num_cells, 2).
         clamped: edges whose crossing had to be clamped onto the edge.
+        triangles: the node indices of each triangle, counter-clockwise,
+            shape=(num_cells, 3).
+        crossings: the point X on the edge from corner c to c + 1 of ``triangles`` (the
+            crossing, or the midpoint of a boundary edge), shape=(num_cells, 3, 2).
     """
 
     node: np.ndarray
@@ -76,6 +82,8 @@ class Domains:
     corners: np.ndarray
     inner: np.ndarray
     clamped: int
+    triangles: np.ndarray
+    crossings: np.ndarray
 
 
 def edge_crossings(
@@ -174,6 +182,8 @@ def integration_domains(
         corners=np.concatenate(corners),
         inner=inner,
         clamped=int(np.count_nonzero(was_clamped)),
+        triangles=tri,
+        crossings=cross,
     )
 
 
@@ -193,6 +203,78 @@ def _b_matrices(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
     return B / area2[:, None, None]
 
 
+@dataclass(frozen=True)
+class NodeOperator:
+    """One node's condensed EFMM operators (eqs. 3.4-3.6).
+
+    Attributes:
+        patch: the nodes of its patch, sorted, shape=(m,).
+        K: node stiffness C_iᵀ A_i⁻¹ C_i on the patch's (u, v) pairs, shape=(2m, 2m).
+        stress: A_i⁻¹ C_i, the stress coefficients e_i from the patch displacements,
+            shape=(9, 2m), ordered (σx, σy, τxy) x (1, ξ, η) with
+            (ξ, η) = (x - x_i) / scale.
+        origin: x_i, shape=(2,).
+        scale: the patch size used to scale the monomials.
+    """
+
+    patch: np.ndarray
+    K: np.ndarray
+    stress: np.ndarray
+    origin: np.ndarray
+    scale: float
+
+    def stress_at(self, points: np.ndarray) -> np.ndarray:
+        """The node's stress field's operator at points, shape=(k, 3, 2m) for (k, 2)."""
+        xi = (np.atleast_2d(points) - self.origin) / self.scale
+        mono = np.column_stack([np.ones(len(xi)), xi])  # shape=(k, 3)
+        return np.einsum("km,smd->ksd", mono, self.stress.reshape(3, 3, -1))
+
+
+def node_operator(
+    points: np.ndarray,
+    triangles: np.ndarray,
+    D: np.ndarray,
+    domains: Domains,
+    node: int,
+    mine: np.ndarray | None = None,
+) -> NodeOperator:
+    """The condensed operators of one node (eqs. 3.4, 3.6); see :class:`NodeOperator`.
+
+    Args:
+        points: node coordinates, shape=(num_nodes, 2).
+        triangles: node indices, shape=(num_cells, 3).
+        D: elasticity matrix, shape=(3, 3).
+        domains: the integration domains.
+        node: the node.
+        mine: the node's sub-triangles (indices into ``domains``), shape=(s,); found
+            by a search when absent.
+    """
+    points = np.asarray(points, dtype=float)[:, :2]
+    tri = np.asarray(triangles, dtype=np.int64)
+    if mine is None:
+        mine = np.flatnonzero(domains.node == node)
+    cells = domains.cell[mine]
+    patch = np.unique(tri[cells])
+    B = _b_matrices(points, tri[cells])  # shape=(s, 3, 6)
+    Dinv = np.linalg.inv(D)
+    origin = points[node]
+    scale = max(float(np.abs(points[patch] - origin).max()), 1e-300)
+    bary, weights = GAUSS_3
+    subs = domains.corners[mine]  # shape=(s, 3, 2)
+    wa = triangle_areas(subs)[:, None] * weights  # shape=(s, 3): Gauss weight x area
+    xi = (np.einsum("gk,skd->sgd", bary, subs) - origin) / scale
+    mono = np.concatenate([np.ones((*xi.shape[:2], 1)), xi], axis=2)  # shape=(s, 3, 3)
+    # P = I3 (x) [1, xi, eta]: e index 3 a + m for stress component a and monomial m
+    A = np.kron(Dinv, np.einsum("sg,sgm,sgn->mn", wa, mono, mono))
+    Cs = np.einsum("sg,sgm,sak->samk", wa, mono, B).reshape(len(subs), 9, 6)
+    cols = 2 * np.searchsorted(patch, tri[cells])[:, :, None] + np.arange(2)  # (s, 3, 2)
+    Ct = np.zeros((2 * len(patch), 9))
+    np.add.at(Ct, cols.reshape(-1), Cs.transpose(0, 2, 1).reshape(-1, 9))
+    C = Ct.T
+    S = np.linalg.solve(A, C)
+    return NodeOperator(patch, C.T @ S, S, origin, scale)
+
+
 def node_stiffness(
     points: np.ndarray, triangles: np.ndarray, D: np.ndarray, domains: Domains, node: int
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -201,32 +283,9 @@ def node_stiffness(
     Returns:
         ``K`` shape=(2m, 2m) and ``dofs`` shape=(2m,), m the nodes of the node's patch.
     """
-    points = np.asarray(points, dtype=float)[:, :2]
-    tri = np.asarray(triangles, dtype=np.int64)
-    mine = np.flatnonzero(domains.node == node)
-    cells = domains.cell[mine]
-    patch = np.unique(tri[cells])
-    local = {int(v): k for k, v in enumerate(patch)}
-    B = _b_matrices(points, tri[cells])
-    Dinv = np.linalg.inv(D)
-    origin = points[node]
-    scale = max(float(np.abs(points[patch] - origin).max()), 1e-300)
-    A = np.zeros((9, 9))
-    C = np.zeros((9, 2 * len(patch)))
-    bary, weights = GAUSS_3
-    subs = domains.corners[mine]
-    areas = np.abs(signed_areas(subs.reshape(-1, 2), np.arange(3 * len(subs)).reshape(-1, 3)))
-    for s, (sub, area) in enumerate(zip(subs, areas, strict=True)):
-        gp = bary @ sub
-        cols = np.array([[2 * local[int(v)], 2 * local[int(v)] + 1] for v in tri[cells[s]]]).ravel()
-        for g in range(3):
-            xi = (gp[g] - origin) / scale
-            P = np.kron(np.eye(3), np.array([[1.0, xi[0], xi[1]]]))  # (3, 9)
-            A += weights[g] * area * P.T @ Dinv @ P
-            C[:, cols] += weights[g] * area * P.T @ B[s]
-    K = C.T @ np.linalg.solve(A, C)
-    dofs = np.stack([2 * patch, 2 * patch + 1], axis=1).ravel()
-    return K, dofs
+    op = node_operator(points, triangles, D, domains, node)
+    patch = op.patch
+    return op.K, np.stack([2 * patch, 2 * patch + 1], axis=1).ravel()
 
 
 def stiffness(

@@ -1,0 +1,227 @@
+"""Grain interfaces, their crack state and the event loop on EFMM grains (seed 3.3)."""
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from geofrac.elements import make_element
+from geofrac.elements.efmm_numpy import integration_domains
+from geofrac.fem.elastic import make_problem
+from geofrac.fracture.driver import END_REASONS
+from geofrac.fracture.grain_driver import GrainDriver
+from geofrac.fracture.grains import GrainState, interfaces, side_sites
+from geofrac.fracture.state import MlsSettings
+from geofrac.fracture.topology import edge_mesh, random_sites
+from geofrac.meshing.distribute import build_mesh
+from geofrac.runner import Solution
+from geofrac.scene import load_scene_collective
+from tests.conftest import JOBS
+
+#: The grain beam on a coarse uniform mesh (about 330 nodes).
+SMALL = ("geometry.parameters.h=16", "geometry.parameters.h_fine=16")
+
+
+def grid(n: int = 8, q_rand: float = 0.0) -> tuple:
+    """A structured n x n triangle mesh of the unit square, its edges and grains."""
+    x, y = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1))
+    pts = np.column_stack([x.ravel(), y.ravel()])
+    cells = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            cells += [[a, a + 1, a + n + 2], [a, a + n + 2, a + n + 1]]
+    cells = np.array(cells)
+    mesh = edge_mesh(pts, cells)
+    domains = integration_domains(pts, cells, q_rand, seed=3)
+    return mesh, domains, interfaces(mesh, domains)
+
+
+def state_of(mesh, faces, **kw) -> GrainState:
+    n = len(mesh.coords)
+    return GrainState(mesh, faces, np.zeros(n, bool), np.zeros(n, bool), MlsSettings(), **kw)
+
+
+@pytest.mark.parametrize("q_rand", [0.0, 0.6])
+def test_interfaces_cross_their_edge_and_join_the_inner_points(q_rand):
+    mesh, domains, faces = grid(6, q_rand)
+    a, b = mesh.coords[mesh.edges[:, 0]], mesh.coords[mesh.edges[:, 1]]
+    d = b - a
+    rel = faces.centre - a
+    cross = d[:, 0] * rel[:, 1] - d[:, 1] * rel[:, 0]
+    t = np.sum(rel * d, axis=1) / np.sum(d * d, axis=1)
+    assert np.abs(cross).max() < 1e-12 and t.min() > 0 and t.max() < 1
+    inner = domains.inner
+    assert np.allclose(faces.segments[:, 0, 0], inner[mesh.edge_cells[:, 0]])
+    both = mesh.edge_cells[:, 1] >= 0
+    assert np.allclose(faces.segments[both, 1, 1], inner[mesh.edge_cells[both, 1]])
+    assert np.allclose(faces.segments[:, 0, 1], faces.centre)
+    # the grains tile the square
+    from geofrac.elements.efmm_numpy import triangle_areas
+
+    assert abs(triangle_areas(faces.grain_subs).sum() - 1.0) < 1e-12
+
+
+def test_crack_hides_the_node_across_it_and_the_fit_excludes_it():
+    mesh, _, faces = grid(8)
+    st = state_of(mesh, faces)
+    i = 4 * 9 + 4  # the centre node (0.5, 0.5)
+    j = i + 1  # its right neighbour
+    e = int(np.flatnonzero((mesh.edges == [i, j]).all(axis=1))[0])
+    changed = st.crack_many([e])
+    assert {i, j} <= set(changed.tolist())
+    assert j not in st.fits[i].nodes and i not in st.fits[j].nodes
+    assert st.fits[i].order == 2  # plenty of other satellites
+    # the third vertex of a triangle of the edge (switched too) sees both
+    k = int(np.setdiff1d(mesh.cells[mesh.edge_cells[e, 0]], [i, j])[0])
+    assert {i, j} <= set(st.fits[k].nodes.tolist())
+
+
+def test_patch_switch_changes_the_third_vertices_grain_switch_only_the_two():
+    mesh, _, faces = grid(8)
+    i, j = 40, 41
+    e = int(np.flatnonzero((mesh.edges == [i, j]).all(axis=1))[0])
+    third = set(mesh.cells[mesh.edge_cells[e]].ravel().tolist()) - {i, j}
+    assert len(third) == 2
+    patch = state_of(mesh, faces)
+    patch.crack_many([e])
+    grain = state_of(mesh, faces, switch="grain")
+    grain.crack_many([e])
+    assert set(grain.fits) == {i, j}
+    assert set(patch.fits) == {i, j} | third
+
+
+def test_isolated_grain_becomes_a_fragment_then_orders_drop_with_visibility():
+    mesh, _, faces = grid(8)
+    st = state_of(mesh, faces, switch="grain")
+    i = 40
+    edges = st.edges_of_node(i)
+    st.crack_many([int(e) for e in edges[:-1]])
+    assert st.fits[i].order >= 0  # one uncracked interface: it sees through it
+    st.crack_many([int(edges[-1])])
+    assert st.fits[i].order == -1 and len(st.fits[i].nodes) == 1
+    assert i in st.fragments().tolist() and i in st.void_cells().tolist()
+
+
+def test_corner_node_drops_to_rotation_when_fenced_in():
+    """A corner grain fenced by cracks two rings out sees 1-3 nodes: rotation only."""
+    mesh, _, faces = grid(8)
+    st = state_of(mesh, faces, switch="grain")
+    c = mesh.coords
+    # crack every interface crossing the square [0, 0.13]^2's border: the corner node
+    # (0, 0) then sees only (1/8, 0), (0, 1/8) and (1/8, 1/8)
+    inside = (c[:, 0] < 0.13) & (c[:, 1] < 0.13)
+    e = mesh.edges
+    cut = np.flatnonzero(inside[e[:, 0]] ^ inside[e[:, 1]])
+    st.crack_many(cut.tolist())
+    st.refit(np.array([0]))
+    assert st.fits[0].order == 0
+    assert sorted(st.fits[0].nodes[1:].tolist()) == [1, 9, 10]
+
+
+def test_side_sites_separate_the_two_faces_of_a_notch_line():
+    mesh, _, faces = grid(8)
+    # a horizontal line of edges at y = 0.5 from x = 0.25 to 0.75
+    c = mesh.coords
+    on = (np.abs(c[:, 1] - 0.5) < 1e-12) & (c[:, 0] > 0.2) & (c[:, 0] < 0.8)
+    e = mesh.edges
+    pairs = e[on[e[:, 0]] & on[e[:, 1]]]
+    sites = side_sites(mesh, pairs)
+    st = state_of(mesh, faces)
+    st.start(sites)
+    # every node on the line is hidden from every node straight above it
+    for n in np.flatnonzero(on):
+        above = int(
+            np.flatnonzero((np.abs(c[:, 0] - c[n, 0]) < 1e-12) & (np.abs(c[:, 1] - 0.625) < 1e-12))[
+                0
+            ]
+        )
+        assert above not in st.fits[n].nodes
+        assert n not in st.fits[above].nodes
+
+
+def test_random_sites_are_seeded_and_a_fraction_of_the_candidates():
+    cand = np.zeros(1000, bool)
+    cand[::2] = True
+    a = random_sites(cand, 0.04, 7)
+    assert len(a) == 20 and cand[a].all()
+    assert np.array_equal(a, random_sites(cand, 0.04, 7))
+    assert not np.array_equal(a, random_sites(cand, 0.04, 8))
+    assert len(random_sites(cand, 0.0, 7)) == 0
+
+
+def make_driver(*overrides: str, comm: MPI.Comm = MPI.COMM_WORLD) -> GrainDriver:
+    scene = load_scene_collective(comm, JOBS / "grain_notched_beam.toml", SMALL + overrides)
+    tagged = build_mesh(scene.geometry, comm)
+    element = make_element(scene.discretization.element, tagged.mesh)
+    problem = make_problem(tagged, element, scene)
+    problem.compile()
+    config = next(s.config for s in scene.effects if s.name == "cracking")
+    return GrainDriver(config, Solution(scene, tagged, problem), lambda msg: None)
+
+
+def test_nodes_across_the_notch_slot_do_not_see_each_other():
+    d = make_driver("cracking.max_events=0")
+    st, c = d.state, d.gm.coords
+    left = np.flatnonzero((np.abs(c[:, 0] + 1) < 1e-9) & (c[:, 1] > 10) & (c[:, 1] < 70))
+    right = np.flatnonzero((np.abs(c[:, 0] - 1) < 1e-9) & (c[:, 1] > 10) & (c[:, 1] < 70))
+    assert len(left) and len(right)
+    for i in left:
+        assert not st.through_body(int(i), right).any()
+    up = np.flatnonzero(np.abs(c[:, 0] + 1) < 1e-9)  # along the same face: visible
+    assert st.through_body(int(left[0]), up[up != left[0]]).all()
+    d.destroy()
+
+
+def test_grain_events_are_finite_and_frozen_interfaces_never_crack():
+    d = make_driver("cracking.max_events=25")
+    res = d.run()
+    assert res["events"] == 25 and res["end_reason"] in END_REASONS
+    rows = d.rows
+    assert all(np.isfinite(r["r"]) and r["r"] > 0 for r in rows)
+    assert not (d.state.cracked & ~d.state.crackable).any()
+    assert np.hypot(rows[0]["x"], rows[0]["y"] - 75.0) < 3.0  # at the notch tip
+    assert res["cracked_interfaces"] == 25
+
+
+def test_fully_isolated_grain_is_a_fragment_and_the_run_goes_on():
+    """Pre-crack every interface of an interior node: its grain is a fragment, held."""
+    d = make_driver("cracking.max_events=3", "cracking.switch=grain")
+    c = d.gm.coords
+    i = int(np.argmin(np.hypot(c[:, 0] + 150, c[:, 1] - 75)))  # far from the notch
+    d.precracked = np.union1d(d.precracked, d.state.edges_of_node(i))
+    res = d.run()
+    assert d.state.fits[i].order == -1
+    assert res["grains_by_field"]["fragment"] >= 1
+    assert res["events"] == 3 and res["end_reason"] == "max_events"
+    assert all(np.isfinite(r["reaction"]) for r in d.rows)
+
+
+def test_random_precracks_follow_the_seed():
+    a = make_driver("cracking.max_events=0", "cracking.precracked_fraction=0.04")
+    b = make_driver("cracking.max_events=0", "cracking.precracked_fraction=0.04",
+                    "cracking.precrack_seed=1")  # fmt: skip
+    assert len(a.random_precracked) == len(b.random_precracked) > 0
+    assert not np.array_equal(a.random_precracked, b.random_precracked)
+    interior = a.state.crackable & ~a.state.mesh.boundary_edges
+    assert len(a.random_precracked) == round(0.04 * interior.sum())
+    a.destroy()
+    b.destroy()
+
+
+@pytest.mark.mpi(min_size=2)
+def test_same_grain_events_on_1_and_2_ranks():
+    comm = MPI.COMM_WORLD
+    d2 = make_driver("cracking.max_events=20", "cracking.precracked_fraction=0.04", comm=comm)
+    d2.run()
+    rows2 = d2.rows
+    if comm.rank == 0:
+        d1 = make_driver(
+            "cracking.max_events=20", "cracking.precracked_fraction=0.04", comm=MPI.COMM_SELF
+        )
+        d1.run()
+        rows1 = d1.rows
+        same = [a["edge"] for a in rows1] == [b["edge"] for b in rows2]
+        close = np.allclose([a["r"] for a in rows1], [b["r"] for b in rows2], rtol=1e-9)
+    else:
+        same = close = True
+    assert comm.allreduce(same and close, op=MPI.LAND)
