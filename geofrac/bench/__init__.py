@@ -36,6 +36,10 @@ BENCHES: dict[str, tuple[str, str]] = {
         "geofrac.bench.efmm_qrand",
         "EFMM integration domains (seed Table 3.1): error mean and spread over q_rand and seeds",
     ),
+    "granular": (
+        "geofrac.bench.granular",
+        "crack events along EFMM grain interfaces (seed 3.5-3.6): events/s, phases, patterns",
+    ),
     "mms3d": (
         "geofrac.bench.mms3d",
         "manufactured smooth 3D displacement on a box: error against DOFs and wall time",

@@ -16,7 +16,7 @@ from typing import Any
 
 from geofrac.fracture import SOLVERS
 
-__all__ = ["CASES", "PATCH_H", "add_arguments", "run"]
+__all__ = ["CASES", "PATCH_H", "add_arguments", "event_case", "run"]
 
 _JOBS = Path(__file__).resolve().parents[2] / "jobs"
 
@@ -85,35 +85,52 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
         if case not in CASES:
             raise SystemExit(f"unknown case '{case}'; choose from {', '.join([*CASES, 'patch'])}")
         name, extra = CASES[case]
-        overrides = [*extra, f"cracking.max_events={args.events}", f"cracking.solver={args.solver}"]
-        scene = load_scene_collective(comm, _JOBS / f"{name}.toml", overrides)
-        sol = solve_scene(scene, comm, verbose=False)
-        res = sol.results["cracking"]
-        sol.problem.destroy()
-        record = {
-            "case": case,
-            "element": scene.discretization.element,
-            "ranks": comm.size,
-            "dofs": res["dofs"],
-            "events": res["events"],
-            "events_per_s": res["events_per_s"],
-            "solver": args.solver,
-            "factorizations": res["factorizations"],
-            "cg_iterations": res["cg_iterations"],
-            "refinement_solves": res["refinement_solves"],
-            "end_reason": res["end_reason"],
-            **{f"{k}_s": v for k, v in res["phase_s"].items()},
-        }
-        records.append(record)
-        echo(
-            comm,
-            f"{case}: {record['dofs']} DOFs, {record['events']} events on {comm.size} rank(s): "
-            f"{record['events_per_s']:.2f} events/s; assemble {record['assemble_s']:.1f} s, solve "
-            f"{record['solve_s']:.1f} s, criterion {record['criterion_s']:.1f} s, update "
-            f"{record['update_s']:.1f} s; {record['factorizations']} factorisations, "
-            f"{record['cg_iterations']} CG iterations, "
-            f"{record['refinement_solves']} refinement solves",
-        )
+        records.append(event_case(case, name, extra, args.events, args.solver, comm))
     if args.json is not None and comm.rank == 0:
         write_json(args.json, records)
     return records
+
+
+def event_case(
+    case: str, name: str, extra: tuple[str, ...], events: int, solver: str, comm: Any
+) -> dict[str, Any]:
+    """Run ``events`` events of scene ``jobs/<name>.toml``; print and return its record.
+
+    The record holds the DOFs, events, events/s, solver counts, the end reason, the
+    seconds of each phase (maximum over ranks) and the scene's ``results.cracking``
+    under ``results``.
+    """
+    from geofrac.log import echo
+    from geofrac.runner import solve_scene
+    from geofrac.scene import load_scene_collective
+
+    overrides = [*extra, f"cracking.max_events={events}", f"cracking.solver={solver}"]
+    scene = load_scene_collective(comm, _JOBS / f"{name}.toml", overrides)
+    sol = solve_scene(scene, comm, verbose=False)
+    res = sol.results["cracking"]
+    sol.problem.destroy()
+    record = {
+        "case": case,
+        "element": scene.discretization.element,
+        "ranks": comm.size,
+        "dofs": res["dofs"],
+        "events": res["events"],
+        "events_per_s": res["events_per_s"],
+        "solver": solver,
+        "factorizations": res["factorizations"],
+        "cg_iterations": res["cg_iterations"],
+        "refinement_solves": res["refinement_solves"],
+        "end_reason": res["end_reason"],
+        **{f"{k}_s": v for k, v in res["phase_s"].items()},
+        "results": res,
+    }
+    echo(
+        comm,
+        f"{case}: {record['dofs']} DOFs, {record['events']} events on {comm.size} rank(s): "
+        f"{record['events_per_s']:.2f} events/s; assemble {record['assemble_s']:.1f} s, solve "
+        f"{record['solve_s']:.1f} s, criterion {record['criterion_s']:.1f} s, update "
+        f"{record['update_s']:.1f} s; {record['factorizations']} factorisations, "
+        f"{record['cg_iterations']} CG iterations, "
+        f"{record['refinement_solves']} refinement solves; end {record['end_reason']}",
+    )
+    return record
