@@ -3,9 +3,10 @@
 Cases (``--cases``, default all): ``beam`` (jobs/grain_notched_beam.toml, seed 3.5.1),
 ``holes1``, ``holes3``, ``holes5`` (jobs/grain_holes{1,3,5}.toml, seed 3.5.2), ``dcn0``,
 ``dcn4a``, ``dcn4b`` (jobs/grain_dcn_0pct.toml and the two 4 % layouts, seed 3.6), all at
-seed size (``--set KEY=VALUE`` applies to every case). Each runs ``--events`` events (default: the scene's ``max_events``) with the
-ranks it is started with and reports events/s, the seconds per phase (assemble, solve,
-criterion, update; maximum over ranks), the end reason, the cracked and pre-cracked
+seed size (``--set KEY=VALUE`` applies to every case). Each runs ``--events`` events
+(default: the scene's ``max_events``) with the ranks it is started with and reports
+events/s, the seconds per phase (assemble, solve, criterion, update; maximum over
+ranks), the end reason, the cracked and pre-cracked
 interfaces, the grains per field (EFMM, quadratic, linear, rotation, fragment) and, for
 the beam, where the crack first reaches the top face (``crack_top_x_mm``).
 """
@@ -61,7 +62,8 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
         if events is None:
             with open(_JOBS / f"{name}.toml", "rb") as f:
                 events = int(tomllib.load(f)["cracking"]["max_events"])
-        rec = event_case(case, name, tuple(getattr(args, "overrides", None) or ()), events, args.solver, comm)
+        extra = tuple(getattr(args, "overrides", None) or ())
+        rec = event_case(case, name, extra, events, args.solver, comm)
         res = rec.pop("results")
         rec |= {
             k: res[k]

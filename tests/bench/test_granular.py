@@ -9,8 +9,10 @@ def test_granular_bench_reports_rates_phases_and_fields(tmp_path):
     from geofrac.cli import main
 
     out = tmp_path / "g.json"
-    code = main(["bench", "granular", "--cases", "beam", "--events", "4", "--json", str(out),
-                 "--set", "geometry.parameters.h=16", "--set", "geometry.parameters.h_fine=16"])  # fmt: skip
+    coarse = ["--set", "geometry.parameters.h=16", "--set", "geometry.parameters.h_fine=16"]
+    code = main(
+        ["bench", "granular", "--cases", "beam", "--events", "4", "--json", str(out), *coarse]
+    )
     assert code == 0
     (rec,) = json.loads(out.read_text())
     assert rec["case"] == "beam" and rec["element"] == "efmm"
