@@ -72,6 +72,23 @@ SEPARATED = 1e-9
 #: Options prefix of the crack solver.
 PREFIX = "geofrac_crack_"
 
+#: Six-point Gauss rule of degree 4 on a triangle: barycentric points, shape=(6, 3), and
+#: weights summing to 1 (multiply by the area).
+_A6, _B6 = 0.445948490915965, 0.091576213509771
+GAUSS_6 = (
+    np.array(
+        [
+            [_A6, _A6, 1 - 2 * _A6],
+            [_A6, 1 - 2 * _A6, _A6],
+            [1 - 2 * _A6, _A6, _A6],
+            [_B6, _B6, 1 - 2 * _B6],
+            [_B6, 1 - 2 * _B6, _B6],
+            [1 - 2 * _B6, _B6, _B6],
+        ]
+    ),
+    np.array([0.223381589678011] * 3 + [0.109951743655322] * 3),
+)
+
 #: Marks a cell that uses its element's field (not an MLS fit).
 _FE = "fe"
 
@@ -809,18 +826,7 @@ class CrackDriver:
         """
         exact = self.problem.exact
         gm, state, bs = self.gm, self.state, self.bs
-        a, b = 0.445948490915965, 0.091576213509771
-        bary = np.array(
-            [
-                [a, a, 1 - 2 * a],
-                [a, 1 - 2 * a, a],
-                [1 - 2 * a, a, a],
-                [b, b, 1 - 2 * b],
-                [b, 1 - 2 * b, b],
-                [1 - 2 * b, b, b],
-            ]
-        )
-        w = np.array([0.223381589678011] * 3 + [0.109951743655322] * 3)
+        bary, w = GAUSS_6
         total = 0.0
         for c in self.own_cells:
             x = gm.coords[gm.cells[c]]
@@ -1038,7 +1044,6 @@ class CrackDriver:
         from matplotlib.collections import LineCollection
 
         m, state = self.state.mesh, self.state
-        seg = m.coords[m.edges]
         pre = np.zeros(len(m.edges), dtype=bool)
         pre[self.precracked] = True
         new = state.cracked & ~pre
@@ -1046,9 +1051,13 @@ class CrackDriver:
         x1, y1 = m.coords.max(axis=0)
         width = 7.0
         fig, ax = plt.subplots(figsize=(width, max(2.0, width * (y1 - y0) / (x1 - x0))))
-        ax.add_collection(LineCollection(seg[m.boundary_edges], colors="k", linewidths=0.6))
-        ax.add_collection(LineCollection(seg[pre], colors="0.6", linewidths=0.5))
-        ax.add_collection(LineCollection(seg[new], colors="tab:red", linewidths=1.0))
+        outline = m.coords[m.edges[m.boundary_edges]]
+        ax.add_collection(LineCollection(outline, colors="k", linewidths=0.6))
+        self._draw_extra(ax)
+        ax.add_collection(LineCollection(self._site_segments(pre), colors="0.6", linewidths=0.5))
+        ax.add_collection(
+            LineCollection(self._site_segments(new), colors="tab:red", linewidths=1.0)
+        )
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
@@ -1056,6 +1065,14 @@ class CrackDriver:
         fig.tight_layout()
         fig.savefig(self.out_dir / "cracks.png", dpi=110)
         plt.close(fig)
+
+    def _site_segments(self, sites: np.ndarray) -> np.ndarray:
+        """Line segments drawing the crack sites selected by a mask, shape=(k, 2, 2)."""
+        m = self.state.mesh
+        return m.coords[m.edges[sites]]
+
+    def _draw_extra(self, ax: Any) -> None:
+        """Draw anything else into ``cracks.png`` below the cracks (nothing here)."""
 
     def _results(
         self, rows: list[dict[str, Any]], end: str, elapsed: float, face_hit: Any

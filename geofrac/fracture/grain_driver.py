@@ -36,7 +36,7 @@ from geofrac import kernels
 from geofrac.elements.efmm_numpy import NodeOperator, integration_domains, node_operator
 from geofrac.errors import RunError
 from geofrac.fracture.cells import principal_max
-from geofrac.fracture.driver import CrackDriver
+from geofrac.fracture.driver import GAUSS_6, CrackDriver
 from geofrac.fracture.grains import GrainState, interfaces, side_sites
 from geofrac.fracture.state import MlsSettings
 from geofrac.fracture.topology import EdgeMesh
@@ -100,6 +100,9 @@ class GrainDriver(CrackDriver):
             self.config.switch,
         )
         state.crackable[np.unique(mesh_e.cell_edges[frozen])] = False
+        #: nodes of the triangles around a Dirichlet node (see :meth:`_face_x`).
+        self._near_bc = np.zeros(n, dtype=bool)
+        self._near_bc[mesh_e.cells[frozen].ravel()] = True
         return state
 
     def _group_sites(self, pairs: np.ndarray) -> np.ndarray:
@@ -111,23 +114,14 @@ class GrainDriver(CrackDriver):
         op = self._ops.get(node)
         if op is None:
             f = self.faces
-            mine = np.arange(f.grain_offsets[node], f.grain_offsets[node + 1])
-            op = node_operator(
-                self.gm.coords, self.gm.cells, self.D, self._sorted_domains, node, mine
-            )
+            mine = f.grain_order[f.grain_offsets[node] : f.grain_offsets[node + 1]]
+            op = node_operator(self.gm.coords, self.gm.cells, self.D, self.domains, node, mine)
             self._ops[node] = op
         return op
 
     def _setup_cells(self) -> None:
         """Owned nodes, their EFMM matrices (COO) and stress operators at the interfaces."""
         gm, bs = self.gm, self.bs
-        d = self.domains
-        order = np.argsort(d.node, kind="stable")
-        # the domains with sub-triangles grouped by node (as the interfaces' CSR)
-        self._sorted_domains = type(d)(
-            d.node[order], d.cell[order], d.corners[order], d.inner, d.clamped,
-            d.triangles, d.crossings,
-        )  # fmt: skip
         lo, hi = self.row0 // bs, (self.row0 + self.n_local) // bs
         own = np.flatnonzero((gm.node_block >= lo) & (gm.node_block < hi))
         self.own_cells = own  # the driver's units are nodes
@@ -288,12 +282,7 @@ class GrainDriver(CrackDriver):
         """
         exact = self.problem.exact
         gm = self.gm
-        a, b = 0.445948490915965, 0.091576213509771
-        bary = np.array(
-            [[a, a, 1 - 2 * a], [a, 1 - 2 * a, a], [1 - 2 * a, a, a],
-             [b, b, 1 - 2 * b], [b, 1 - 2 * b, b], [1 - 2 * b, b, b]]
-        )  # fmt: skip
-        w = np.array([0.223381589678011] * 3 + [0.109951743655322] * 3)
+        bary, w = GAUSS_6
         cells = np.flatnonzero(gm.owned)
         x = gm.coords[gm.cells[cells]]  # shape=(n, 3, 2)
         d = u[self._mls_dofs(gm.cells[cells].ravel())].reshape(len(cells), 3, 2)
@@ -316,11 +305,6 @@ class GrainDriver(CrackDriver):
         its concentrated stress, which is not the crack reaching the face.
         """
         m = self.state.mesh
-        if not hasattr(self, "_near_bc"):
-            bc = np.unique(self.bc_row_nodes)
-            cells = np.isin(m.cells, bc).any(axis=1)
-            self._near_bc = np.zeros(len(m.coords), dtype=bool)
-            self._near_bc[m.cells[cells].ravel()] = True
         hit = [
             e
             for e in edges
@@ -359,36 +343,18 @@ class GrainDriver(CrackDriver):
             },
         )
 
-    def _plot_cracks(self, plt: Any) -> None:
-        """``cracks.png``: pre-existing (grey) and new (red) interface cracks, fragments."""
-        from matplotlib.collections import LineCollection, PolyCollection
+    def _site_segments(self, sites: np.ndarray) -> np.ndarray:
+        """The two segments of each selected interface, shape=(2k, 2, 2)."""
+        return self.faces.segments[sites].reshape(-1, 2, 2)
 
-        m, state = self.state.mesh, self.state
-        pre = np.zeros(len(m.edges), dtype=bool)
-        pre[self.precracked] = True
-        new = state.cracked & ~pre
-        seg = self.faces.segments
-        x0, y0 = m.coords.min(axis=0)
-        x1, y1 = m.coords.max(axis=0)
-        width = 7.0
-        fig, ax = plt.subplots(figsize=(width, max(2.0, width * (y1 - y0) / (x1 - x0))))
-        outline = m.coords[m.edges[m.boundary_edges]]
-        ax.add_collection(LineCollection(outline, colors="k", linewidths=0.6))
-        frag = state.fragments()
+    def _draw_extra(self, ax: Any) -> None:
+        """Fill the fragment grains in ``cracks.png``."""
+        from matplotlib.collections import PolyCollection
+
+        frag = self.state.fragments()
         if len(frag):
             polys = [t for i in frag for t in self.faces.grain(int(i))]
             ax.add_collection(PolyCollection(polys, facecolors="0.3", edgecolors="none"))
-        ax.add_collection(LineCollection(seg[pre].reshape(-1, 2, 2), colors="0.6", linewidths=0.5))
-        ax.add_collection(
-            LineCollection(seg[new].reshape(-1, 2, 2), colors="tab:red", linewidths=1.0)
-        )
-        ax.set_xlim(x0, x1)
-        ax.set_ylim(y0, y1)
-        ax.set_aspect("equal")
-        ax.set_axis_off()
-        fig.tight_layout()
-        fig.savefig(self.out_dir / "cracks.png", dpi=110)
-        plt.close(fig)
 
     def _write_log(self, rows: list[dict[str, Any]]) -> None:
         super()._write_log(rows)

@@ -42,7 +42,7 @@ import numpy as np
 from geofrac.elements.efmm_numpy import Domains
 from geofrac.fracture.state import Mapper, MlsSettings, segment_distance, serial_map
 from geofrac.fracture.topology import EdgeMesh
-from geofrac.fracture.visibility import Bins, blocked, visible_nodes
+from geofrac.fracture.visibility import Bins, blocked, orient, visible_nodes
 from geofrac.mls.cmulti import NodeFit, node_fit
 
 __all__ = ["GrainState", "Interfaces", "interfaces", "side_sites"]
@@ -57,12 +57,15 @@ class Interfaces:
         segments: its two segments p_T1–X and X–p_T2 (a boundary edge repeats p_T–X),
             shape=(num_edges, 2, 2, 2): [edge, segment, end, xy].
         grain_offsets: CSR offsets of each node's sub-triangles, shape=(num_nodes + 1,).
+        grain_order: the domains' sub-triangles grouped by node (indices into the
+            :class:`~geofrac.elements.efmm_numpy.Domains`), shape=(num_sub,).
         grain_subs: sub-triangle corners grouped by node, shape=(num_sub, 3, 2).
     """
 
     centre: np.ndarray
     segments: np.ndarray
     grain_offsets: np.ndarray
+    grain_order: np.ndarray
     grain_subs: np.ndarray
 
     def grain(self, node: int) -> np.ndarray:
@@ -96,7 +99,7 @@ def interfaces(mesh: EdgeMesh, domains: Domains) -> Interfaces:
     segments = np.stack([np.stack([p0, centre], 1), np.stack([centre, p1], 1)], 1)
     order = np.argsort(domains.node, kind="stable")
     offsets = np.searchsorted(domains.node[order], np.arange(n + 1))
-    return Interfaces(centre, segments, offsets, domains.corners[order])
+    return Interfaces(centre, segments, offsets, order, domains.corners[order])
 
 
 def side_sites(mesh: EdgeMesh, pairs: np.ndarray) -> np.ndarray:
@@ -323,12 +326,6 @@ class GrainState:
             a, b = self._bnd[near, 0][None], self._bnd[near, 1][None]
             P, Q = p[None, None], q[:, None]
             scale = reach * reach * 1e-9
-
-            def orient(u: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
-                return (v[..., 0] - u[..., 0]) * (w[..., 1] - u[..., 1]) - (
-                    v[..., 1] - u[..., 1]
-                ) * (w[..., 0] - u[..., 0])
-
             o1, o2 = orient(P, Q, a), orient(P, Q, b)
             o3, o4 = orient(a, b, P), orient(a, b, Q)
             cross = (o1 * o2 < -scale * scale) & (o3 * o4 < -scale * scale)

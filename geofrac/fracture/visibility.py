@@ -23,7 +23,7 @@ from collections import defaultdict
 
 import numpy as np
 
-__all__ = ["Bins", "blocked", "visible_nodes"]
+__all__ = ["Bins", "blocked", "orient", "visible_nodes"]
 
 #: Relative tolerance of the segment tests.
 TOLERANCE = 1e-9
@@ -70,7 +70,7 @@ class Bins:
         return np.unique(np.concatenate([np.asarray(f, dtype=np.int64) for f in found]))
 
 
-def _orient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+def orient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Twice the signed area of (a, b, c), broadcasting over leading axes."""
     return (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (
         c[..., 0] - a[..., 0]
@@ -96,8 +96,8 @@ def blocked(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
     scale = np.maximum(np.abs(q - p).max(axis=1), 1e-300)[:, None]
     obst = np.maximum(np.abs(b - a).max(axis=1), 1e-300)[None, :]
     tol = TOLERANCE * scale * np.maximum(scale, obst)
-    o1, o2 = _orient(P, Q, A), _orient(P, Q, B)
-    o3, o4 = _orient(A, B, P), _orient(A, B, Q)
+    o1, o2 = orient(P, Q, A), orient(P, Q, B)
+    o3, o4 = orient(A, B, P), orient(A, B, Q)
     s1, s2 = (
         np.where(np.abs(o1) <= tol, 0, np.sign(o1)),
         np.where(np.abs(o2) <= tol, 0, np.sign(o2)),
