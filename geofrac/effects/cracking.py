@@ -39,7 +39,8 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
 - ``output_every``: write a frame of the XDMF series every this many events (default
   max_events / 50).
 - ``face``, ``face_origin`` (0): report where the crack first reaches the facet group
-  ``face``, as x minus ``face_origin`` (the notched beam's ``crack_top_x_mm``).
+  ``face``, as x minus ``face_origin`` (the notched beam's ``crack_top_x_mm``); on
+  ``efmm`` only the crack joined to the notch (or to the first event's interface) counts.
 
 The event loop is :class:`geofrac.fracture.driver.CrackDriver`; this module only
 validates, and is cheap to import.

@@ -350,6 +350,8 @@ class CrackDriver:
             pairs = np.sort(_facet_nodes(self.mesh, gm, dim, ents), axis=1)
             pre.append(self._group_sites(pairs))
         self.precracked = np.unique(np.concatenate(pre)) if pre else np.zeros(0, dtype=np.int64)
+        #: sites of the ``precracked`` groups (notches), without the random ones.
+        self.group_precracked = self.precracked
         self.random_precracked = random_sites(
             self.state.crackable & ~self.state.mesh.boundary_edges,
             cfg.precracked_fraction,
@@ -863,12 +865,8 @@ class CrackDriver:
         cfg, state, _comm = self.config, self.state, self.comm
         t0 = time.perf_counter()
         state.start(self.precracked)
-        self.say(
-            f"cracking: {len(state.mesh.edges)} edges, {len(self.precracked)} pre-cracked, "
-            f"{len(state.fits)} MLS cells ({len(state.void_cells())} void), "
-            f"{int((~state.crackable).sum())} edges frozen next to Dirichlet nodes; "
-            f"set-up {format_seconds(time.perf_counter() - t0)}"
-        )
+        setup = format_seconds(time.perf_counter() - t0)
+        self.say(f"cracking: {self._state_text()}; set-up {setup}")
         writer = self._open_outputs()
         work = dolfinx.fem.Function(self.unknown.function_space)  # a ghosted vector
         x = work.x.petsc_vec
@@ -970,6 +968,15 @@ class CrackDriver:
             f"({results['events_per_s']:.2f} events/s), end: {end}"
         )
         return results
+
+    def _state_text(self) -> str:
+        """The crack state in a few words, for the start-up message."""
+        state = self.state
+        return (
+            f"{len(state.mesh.edges)} edges, {len(self.precracked)} pre-cracked, "
+            f"{len(state.fits)} MLS cells ({len(state.void_cells())} void), "
+            f"{int((~state.crackable).sum())} edges frozen next to Dirichlet nodes"
+        )
 
     def _site_point(self, edge: int) -> np.ndarray:
         """Where crack site ``edge`` lies, for the event log: the edge midpoint, shape=(2,)."""

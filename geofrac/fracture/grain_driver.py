@@ -37,8 +37,8 @@ from geofrac.elements.efmm_numpy import NodeOperator, integration_domains, node_
 from geofrac.errors import RunError
 from geofrac.fracture.cells import principal_max
 from geofrac.fracture.driver import GAUSS_6, CrackDriver
-from geofrac.fracture.grains import GrainState, interfaces, side_sites
-from geofrac.fracture.state import MlsSettings
+from geofrac.fracture.grains import GrainState, connected_cracks, interfaces, side_sites
+from geofrac.fracture.state import MlsSettings, segment_distance
 from geofrac.fracture.topology import EdgeMesh
 from geofrac.mls import cmulti
 
@@ -56,6 +56,9 @@ class GrainDriver(CrackDriver):
     def __init__(self, config: Any, solution: Any, say: Any, write: bool = False) -> None:
         self._ops: dict[int, NodeOperator] = {}
         self._fit_k: dict[int, tuple[Any, np.ndarray]] = {}
+        # the crack's origin and the interfaces on the face, set at the first event
+        self._origin: np.ndarray | None = None
+        self._face_sites = np.zeros(0, dtype=np.int64)
         super().__init__(config, solution, say, write)
         d = self.scene.discretization
         # the element's own domains and stress coefficients serve results.xdmf and the
@@ -100,9 +103,6 @@ class GrainDriver(CrackDriver):
             self.config.switch,
         )
         state.crackable[np.unique(mesh_e.cell_edges[frozen])] = False
-        #: nodes of the triangles around a Dirichlet node (see :meth:`_face_x`).
-        self._near_bc = np.zeros(n, dtype=bool)
-        self._near_bc[mesh_e.cells[frozen].ravel()] = True
         return state
 
     def _group_sites(self, pairs: np.ndarray) -> np.ndarray:
@@ -138,10 +138,11 @@ class GrainDriver(CrackDriver):
             dd = self._mls_dofs(op.patch)
             m = len(dd)
             dofs[k, :m] = dd
-            K[k, :m, :m] = op.K
+            Kt = self.t * op.K  # per unit thickness in node_operator; t as the C-MultiMLSM K
+            K[k, :m, :m] = Kt
             rows.append(np.repeat(dd, m))
             cols.append(np.tile(dd, m))
-            vals.append(op.K.ravel())
+            vals.append(Kt.ravel())
             unit.append(np.full(m * m, k))
             edges = self.state.edges_of_node(int(i))
             S = op.stress_at(self.faces.centre[edges])  # shape=(k, 3, m)
@@ -176,7 +177,7 @@ class GrainDriver(CrackDriver):
         out = {}
         for i in units:
             op = self._operator(int(i))
-            out[i] = (self._mls_dofs(op.patch), op.K)
+            out[i] = (self._mls_dofs(op.patch), self.t * op.K)
         return out
 
     def _fit_block(self, c: int, fit: Any) -> tuple[np.ndarray, np.ndarray] | None:
@@ -293,24 +294,46 @@ class GrainDriver(CrackDriver):
         total = float(np.sum(area[:, None] * w * np.sum((uh - ue) ** 2, axis=-1)))
         return math.sqrt(self.comm.allreduce(total, op=MPI.SUM))
 
+    def _state_text(self) -> str:
+        """The crack state in a few words, for the start-up message."""
+        state = self.state
+        return (
+            f"{len(state.mesh.edges)} grain interfaces, {len(self.precracked)} pre-cracked "
+            f"({len(self.random_precracked)} at random), {len(state.fits)} C-MultiMLSM "
+            f"grains, {int((~state.crackable).sum())} interfaces frozen next to Dirichlet nodes"
+        )
+
     def _site_point(self, edge: int) -> np.ndarray:
         """The interface's centre X_ij, shape=(2,)."""
         return self.faces.centre[edge]
 
     def _face_x(self, edges: np.ndarray) -> float | None:
-        """The x of the first new interface whose grain touches the ``face`` group.
+        """Where the crack from the notch first reaches the ``face`` group: x or None.
 
-        Interfaces of the nodes of the triangles around a Dirichlet node (a point load
-        or support on the face) do not count: grains next to a point load crack under
-        its concentrated stress, which is not the crack reaching the face.
+        The crack is the set of cracked interfaces joined to its origin (the interfaces
+        of the ``precracked`` groups, else the first event's), see
+        :func:`~geofrac.fracture.grains.connected_cracks`. It reaches the face when it
+        contains the interface of a boundary edge on the face (a grain polyline ends
+        on the surface only there); x is that interface's centre, the one nearest the
+        origin when there are several. Cracks elsewhere (under a point load, say) do
+        not count until they join it.
         """
         m = self.state.mesh
-        hit = [
-            e
-            for e in edges
-            if np.isin(m.edges[e], self.face_nodes).any() and not self._near_bc[m.edges[e]].any()
-        ]
-        return float(self.faces.centre[hit[0], 0]) if hit else None
+        if self._origin is None:
+            group = np.asarray(self.group_precracked, dtype=np.int64)
+            self._origin = group if len(group) else np.asarray(edges, dtype=np.int64)
+            on = np.isin(m.edges, self.face_nodes).all(axis=1) & m.boundary_edges
+            self._face_sites = np.flatnonzero(on)
+        at = self._face_sites[self.state.cracked[self._face_sites]]
+        if not len(at):
+            return None
+        main = connected_cracks(m, self.state.cracked, self._origin)
+        at = at[main[at]]
+        if not len(at):
+            return None
+        centre = self.faces.centre
+        d = np.hypot(*(centre[at] - centre[self._origin].mean(axis=0)).T)
+        return float(centre[at[np.argmin(d)], 0])
 
     # -- output ----------------------------------------------------------------------
     def _open_outputs(self) -> Any:
@@ -381,6 +404,29 @@ class GrainDriver(CrackDriver):
             },
         )
 
+    def _main_crack(self) -> dict[str, Any] | None:
+        """The crack joined to the origin (see :meth:`_face_x`) at the end.
+
+        Its interfaces (the origin's included) and, with a ``face``, its interface
+        centre nearest to the face's boundary edges and that distance: where a crack
+        that stops short of the face ends.
+        """
+        if self._origin is None:
+            return None
+        m, centre = self.state.mesh, self.faces.centre
+        main = np.flatnonzero(connected_cracks(m, self.state.cracked, self._origin))
+        out: dict[str, Any] = {"interfaces": len(main)}
+        if len(self._face_sites) and len(main):
+            ends = m.coords[m.edges[self._face_sites]]  # the face's edges, shape=(f, 2, 2)
+            d = np.min([segment_distance(centre[main], a, b) for a, b in ends], axis=0)
+            k = int(np.argmin(d))
+            out["nearest_to_face"] = {
+                "x": float(centre[main[k], 0]),
+                "y": float(centre[main[k], 1]),
+                "distance": float(d[k]),
+            }
+        return out
+
     def _results(
         self, rows: list[dict[str, Any]], end: str, elapsed: float, face_hit: Any
     ) -> dict[str, Any]:
@@ -398,6 +444,7 @@ class GrainDriver(CrackDriver):
             "precracked_interfaces": len(self.precracked),
             "random_precracked_interfaces": len(self.random_precracked),
             "grains": len(orders),
+            "main_crack": self._main_crack(),
             "grains_by_field": {
                 name: int(np.sum(orders == k))
                 for name, k in (

@@ -9,7 +9,7 @@ from geofrac.elements.efmm_numpy import integration_domains
 from geofrac.fem.elastic import make_problem
 from geofrac.fracture.driver import END_REASONS
 from geofrac.fracture.grain_driver import GrainDriver
-from geofrac.fracture.grains import GrainState, interfaces, side_sites
+from geofrac.fracture.grains import GrainState, connected_cracks, interfaces, side_sites
 from geofrac.fracture.state import MlsSettings
 from geofrac.fracture.topology import edge_mesh, random_sites
 from geofrac.meshing.distribute import build_mesh
@@ -149,6 +149,36 @@ def test_random_sites_are_seeded_and_a_fraction_of_the_candidates():
     assert len(random_sites(cand, 0.0, 7)) == 0
 
 
+def crossed(mesh, x0: float, y_min: float) -> np.ndarray:
+    """Interfaces of the edges a vertical line x = x0 crosses above y_min, bottom up.
+
+    Each triangle the line crosses has two crossed edges, whose interfaces meet at its
+    inner point: the interfaces form one connected chain along the line.
+    """
+    a, b = mesh.coords[mesh.edges[:, 0]], mesh.coords[mesh.edges[:, 1]]
+    hit = (a[:, 0] - x0) * (b[:, 0] - x0) < 0
+    ids = np.flatnonzero(hit & (np.minimum(a[:, 1], b[:, 1]) > y_min))
+    t = (x0 - a[ids, 0]) / (b[ids, 0] - a[ids, 0])
+    return ids[np.argsort(a[ids, 1] + t * (b[ids, 1] - a[ids, 1]))]  # by the crossing's y
+
+
+def test_connected_cracks_follow_shared_triangles_only():
+    mesh, _, _ = grid(8)
+    chain = crossed(mesh, 0.437, 0.3)
+    cracked = np.zeros(len(mesh.edges), bool)
+    cracked[chain] = True
+    far = crossed(mesh, 0.061, 0.7)[0]  # a lone crack, not next to the chain
+    cracked[far] = True
+    main = connected_cracks(mesh, cracked, chain[:1])
+    assert main[chain].all() and not main[far]
+    assert main.sum() == len(chain)
+    cracked[chain[len(chain) // 2]] = False  # a gap splits the chain
+    main = connected_cracks(mesh, cracked, chain[:1])
+    assert main[chain[: len(chain) // 2]].all() and not main[chain[len(chain) // 2 + 1 :]].any()
+    with pytest.raises(ValueError, match="cracked"):
+        connected_cracks(mesh, cracked, [chain[len(chain) // 2]])
+
+
 def make_driver(*overrides: str, comm: MPI.Comm = MPI.COMM_WORLD) -> GrainDriver:
     scene = load_scene_collective(comm, JOBS / "grain_notched_beam.toml", SMALL + overrides)
     tagged = build_mesh(scene.geometry, comm)
@@ -225,3 +255,36 @@ def test_same_grain_events_on_1_and_2_ranks():
     else:
         same = close = True
     assert comm.allreduce(same and close, op=MPI.LAND)
+
+
+def test_crack_reaches_the_face_only_through_the_crack_from_its_origin():
+    """A lone crack on the top face does not count; the chain from the origin does."""
+    d = make_driver("cracking.max_events=0")
+    m = d.state.mesh
+    chain = crossed(m, 30.37, 80.0)
+    top = d.faces.centre[chain[-1]]
+    assert abs(top[1] - 150.0) < 1e-9  # the chain ends on the top face
+    lone = crossed(m, -150.37, 130.0)[-1]  # a top-face interface far from the chain
+    d.state.cracked[lone] = True
+    d.state.cracked[chain[:-1]] = True
+    assert d._face_x(chain[:1]) is None  # stops one interface short; the lone one is apart
+    d.state.cracked[chain[-1]] = True
+    assert d._face_x(chain[-1:]) == pytest.approx(top[0])
+    assert abs(top[0] - 30.37) < 16.0  # within one element of the line
+    main = d._main_crack()
+    assert main["interfaces"] == len(chain) and main["nearest_to_face"]["distance"] < 1e-9
+    d.destroy()
+
+
+def test_zero_width_notch_is_one_chain_of_precracked_interfaces():
+    """meshes/notched_beam.geo with w = 0: an embedded notch line, cracked on one side."""
+    d = make_driver("cracking.max_events=0", "geometry.parameters.w=0",
+                    'cracking.precracked=["notch"]')  # fmt: skip
+    m, sites = d.state.mesh, d.group_precracked
+    assert len(sites) >= 75 / 16 and not m.boundary_edges[sites].all()
+    mask = np.zeros(len(m.edges), bool)
+    mask[sites] = True
+    assert connected_cracks(m, mask, sites[:1]).sum() == len(sites)  # one polyline
+    y = d.faces.centre[sites, 1]
+    assert y.min() < 16 and abs(y.max() - 75) < 16  # from the bottom face to the tip
+    d.destroy()
