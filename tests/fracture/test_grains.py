@@ -288,3 +288,17 @@ def test_zero_width_notch_is_one_chain_of_precracked_interfaces():
     y = d.faces.centre[sites, 1]
     assert y.min() < 16 and abs(y.max() - 75) < 16  # from the bottom face to the tip
     d.destroy()
+
+
+def test_thickness_scales_efmm_and_cmultimlsm_grains_alike():
+    """Thickness t multiplies every grain's stiffness: same events, energy x t."""
+    thick = make_driver("cracking.max_events=6")  # the beam: t = 50
+    thick.run()
+    thin = make_driver("cracking.max_events=6", "material.thickness=1.0")
+    thin.run()
+    assert [r["edge"] for r in thick.rows] == [r["edge"] for r in thin.rows]
+    assert len(thick.state.fits) > 0  # C-MultiMLSM grains take part after event 1
+    e50 = np.array([r["strain_energy"] for r in thick.rows])
+    e1 = np.array([r["strain_energy"] for r in thin.rows])
+    assert np.allclose(e50, 50.0 * e1, rtol=1e-8)
+    assert np.allclose([r["r"] for r in thick.rows], [r["r"] for r in thin.rows], rtol=1e-8)
