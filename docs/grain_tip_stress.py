@@ -1,0 +1,162 @@
+"""Print the interface stresses around a crack tip on EFMM grains (docs/granular.md).
+
+Run from the repository root: ``.venv/bin/python docs/grain_tip_stress.py``. Two cases,
+no event loop, one linear solve each, 1 rank:
+
+1. ``tension``: a 100 x 100 plate (E = 30000, nu = 0.25, h = 4) stretched to
+   sigma_yy = 30, with one interface cracked at its centre, or a chain of
+   ``--chain`` interfaces along y = 50.3. It prints the largest sigma_1 of the intact
+   interfaces, how far each lies from the crack and which of its two grains use
+   C-MultiMLSM, and the strain energy (150 uncracked; Griffith: 150 - pi a^2 sigma^2 / E).
+2. ``beam``: jobs/grain_notched_beam.toml with the notch as a line of pre-cracked
+   interfaces (``w = 0``) before the first event: sigma_1 at the interfaces round the
+   notch tip (from the C-MultiMLSM fits), and the EFMM patch stress of the same
+   displacement at those interfaces for comparison.
+
+``--set KEY=VALUE`` passes scene overrides (``cracking.neighbours=6``, say).
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import numpy as np
+from mpi4py import MPI
+
+from geofrac.elements import make_element
+from geofrac.fem.elastic import make_problem
+from geofrac.fracture.cells import principal_max
+from geofrac.fracture.grain_driver import GrainDriver
+from geofrac.meshing.distribute import build_mesh
+from geofrac.runner import Solution
+from geofrac.scene import load_scene_collective
+
+REPO = Path(__file__).resolve().parent.parent
+
+SQUARE = """
+Point(1) = {0, 0, 0, 4}; Point(2) = {100, 0, 0, 4};
+Point(3) = {100, 100, 0, 4}; Point(4) = {0, 100, 0, 4};
+Line(1) = {1, 2}; Line(2) = {2, 3}; Line(3) = {3, 4}; Line(4) = {4, 1};
+Curve Loop(1) = {1, 2, 3, 4}; Plane Surface(1) = {1};
+Physical Surface("domain") = {1};
+Physical Curve("bottom") = {1}; Physical Curve("top") = {3}; Physical Curve("left") = {4};
+"""
+
+TENSION = """
+name = "grain_tip_tension"
+effects = ["cracking"]
+[geometry]
+file = "square.geo"
+[material]
+E = 30000.0
+nu = 0.25
+plane = "stress"
+tensile_strength = 2.4
+[discretization]
+element = "efmm"
+q_rand = 0.1
+domain_seed = 1
+[[bc]]
+group = "bottom"
+value = [0.0]
+components = ["y"]
+[[bc]]
+group = "left"
+value = [0.0]
+components = ["x"]
+[[bc]]
+group = "top"
+value = [0.1]
+components = ["y"]
+[cracking]
+margin = 1.01
+"""
+
+
+def driver(job: Path, overrides: list[str]) -> GrainDriver:
+    """A grain driver for a scene, without output."""
+    comm = MPI.COMM_SELF
+    scene = load_scene_collective(comm, job, overrides)
+    tagged = build_mesh(scene.geometry, comm)
+    problem = make_problem(tagged, make_element("efmm", tagged.mesh), scene)
+    problem.compile()
+    config = next(s.config for s in scene.effects if s.name == "cracking")
+    return GrainDriver(config, Solution(scene, tagged, problem), lambda msg: None)
+
+
+def solve(d: GrainDriver) -> np.ndarray:
+    """The unit solution of the current crack state, shape=(num_dofs,)."""
+    A, b, _held = d.assemble(np.zeros(d.n_global))
+    x = b.duplicate()
+    try:
+        d.solve(A, b, x)
+        return x.getArray().copy()  # one rank: the local array is the whole vector
+    finally:
+        for obj in (A, b, x):
+            obj.destroy()
+
+
+def report(d: GrainDriver, u: np.ndarray, crack: np.ndarray, near: np.ndarray) -> None:
+    """Print the largest sigma_1 of intact interfaces and the EFMM readout near ``near``."""
+    st, centre = d.state, d.faces.centre
+    s1, energy, _ = d.measures(u)
+    s1[st.cracked] = -np.inf
+    mls = st.is_mls()
+    print(f"strain energy {energy:.6g}")
+    for k in np.argsort(-s1)[:8]:
+        dist = np.hypot(*(centre[crack] - centre[k]).T).min()
+        grains = "".join("M" if mls[i] else "E" for i in st.mesh.edges[k])
+        print(f"  x = ({centre[k, 0]:6.1f}, {centre[k, 1]:6.1f})  sigma_1 = {s1[k]:7.2f}  "
+              f"{dist:5.1f} from the crack  grains {grains}")  # fmt: skip
+    if not len(near):
+        return
+    print("  at the tip: sigma_1 as used | EFMM patch stress of the same u (both grains)")
+    for k in near[np.argsort(-s1[near])][:6]:
+        efmm = []
+        for i in st.mesh.edges[k]:
+            op = d._operator(int(i))
+            stress = op.stress_at(centre[k][None])[0] @ u[d._mls_dofs(op.patch)]
+            efmm.append(float(principal_max(stress[None])[0]))
+        print(f"  x = ({centre[k, 0]:6.1f}, {centre[k, 1]:6.1f})  {s1[k]:6.2f} | "
+              f"{efmm[0]:6.2f} {efmm[1]:6.2f}")  # fmt: skip
+
+
+def main() -> None:
+    """Parse the command line and print one case."""
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("case", choices=["tension", "beam"])
+    parser.add_argument("--chain", type=int, default=1, help="interfaces in the crack")
+    parser.add_argument("--set", action="append", default=[], dest="overrides")
+    args = parser.parse_args()
+    if args.case == "tension":
+        with tempfile.TemporaryDirectory() as tmp:
+            (Path(tmp) / "square.geo").write_text(SQUARE)
+            job = Path(tmp) / "tension.toml"
+            job.write_text(TENSION)
+            d = driver(job, args.overrides)
+        m, centre = d.state.mesh, d.faces.centre
+        a, b = m.coords[m.edges[:, 0]], m.coords[m.edges[:, 1]]
+        crosses = np.flatnonzero((a[:, 1] - 50.3) * (b[:, 1] - 50.3) < 0)
+        crack = crosses[np.argsort(np.abs(centre[crosses, 0] - 50.0))][: args.chain]
+        d.state.start(np.sort(crack))
+        x = centre[crack, 0]
+        print(f"tension: {len(crack)} cracked interface(s), x from {x.min():.1f} to {x.max():.1f}")
+        report(d, solve(d), crack, np.zeros(0, dtype=np.int64))
+    else:
+        overrides = ["geometry.parameters.w=0", 'cracking.precracked=["notch"]', *args.overrides]
+        d = driver(REPO / "jobs" / "grain_notched_beam.toml", overrides)
+        d.state.start(d.precracked)
+        centre = d.faces.centre
+        near = np.flatnonzero(np.hypot(centre[:, 0], centre[:, 1] - 75.0) < 9.0)
+        near = near[~d.state.cracked[near]]
+        print(f"beam: {len(d.precracked)} interfaces along the notch, before the first event")
+        report(d, solve(d), d.precracked, near)
+    d.destroy()
+
+
+if __name__ == "__main__":
+    main()
