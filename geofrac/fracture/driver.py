@@ -52,7 +52,13 @@ from geofrac.fracture.cells import (
 from geofrac.fracture.criterion import edge_principal, select_edges
 from geofrac.fracture.incremental import Gather, IncrementalSolver, Stale
 from geofrac.fracture.state import CrackState, MlsSettings
-from geofrac.fracture.topology import EdgeMesh, edge_mesh, free_motion_pins, random_sites
+from geofrac.fracture.topology import (
+    EdgeMesh,
+    components,
+    edge_mesh,
+    free_motion_pins,
+    random_sites,
+)
 from geofrac.log import format_seconds
 from geofrac.materials import d_matrix, lame
 from geofrac.mls.shape import strain_matrix
@@ -200,20 +206,6 @@ def _matvecs(M: np.ndarray, x: np.ndarray) -> np.ndarray:
     for j in range(1, x.shape[0]):
         out += M[:, j] * x[j]
     return out
-
-
-def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Connected-component label (smallest node id) of n nodes joined by pairs a–b."""
-    labels = np.arange(n)
-    while True:
-        m = np.minimum(labels[a], labels[b])
-        new = labels.copy()
-        np.minimum.at(new, a, m)
-        np.minimum.at(new, b, m)
-        new = new[new]  # pointer jumping
-        if np.array_equal(new, labels):
-            return labels
-        labels = new
 
 
 class _ReferencePC:
@@ -567,7 +559,7 @@ class CrackDriver:
         """
         gm, state, bs = self.gm, self.state, self.bs
         a, b = self._links(state.is_mls())
-        labels = _components(len(gm.coords), a, b)
+        labels = components(len(gm.coords), a, b)
         anchored = np.unique(labels[np.unique(self.bc_row_nodes)])
         touched = np.zeros(len(gm.coords), dtype=bool)
         touched[a] = True

@@ -41,7 +41,7 @@ import numpy as np
 
 from geofrac.elements.efmm_numpy import Domains
 from geofrac.fracture.state import Mapper, MlsSettings, segment_distance, serial_map
-from geofrac.fracture.topology import EdgeMesh
+from geofrac.fracture.topology import EdgeMesh, components
 from geofrac.fracture.visibility import Bins, blocked, orient, visible_nodes
 from geofrac.mls.cmulti import NodeFit, node_fit
 
@@ -106,8 +106,8 @@ def connected_cracks(mesh: EdgeMesh, cracked: np.ndarray, seeds: np.ndarray) -> 
     """Cracked interfaces joined to ``seeds`` by a path of cracked interfaces.
 
     The interfaces of a triangle's three edges meet at its inner point p_T, so two
-    cracked interfaces are joined when their edges share a triangle. Pure numpy and
-    the standard library (a union-find over the cracked interfaces).
+    cracked interfaces are joined when their edges share a triangle. Pure numpy
+    (:func:`~geofrac.fracture.topology.components` over the cracked interfaces).
 
     Args:
         mesh: the triangle mesh with edges.
@@ -121,28 +121,12 @@ def connected_cracks(mesh: EdgeMesh, cracked: np.ndarray, seeds: np.ndarray) -> 
     seeds = np.asarray(seeds, dtype=np.int64)
     if len(seeds) and not cracked[seeds].all():
         raise ValueError("connected_cracks: every seed must be a cracked interface")
-    parent = np.arange(len(cracked))
-
-    def root(a: int) -> int:
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = int(parent[a])
-        return a
-
     ce = mesh.cell_edges
     on = cracked[ce]  # shape=(num_cells, 3)
-    for a, b in ((0, 1), (1, 2), (0, 2)):
-        both = on[:, a] & on[:, b]
-        for e, f in zip(ce[both, a].tolist(), ce[both, b].tolist(), strict=True):
-            ra, rb = root(e), root(f)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
-    ids = np.flatnonzero(cracked)
-    roots = np.array([root(int(e)) for e in ids], dtype=np.int64)
-    mine = {root(int(e)) for e in seeds}
-    out = np.zeros(len(cracked), dtype=bool)
-    out[ids[np.isin(roots, list(mine))]] = True
-    return out
+    pairs = [ce[on[:, a] & on[:, b]][:, [a, b]] for a, b in ((0, 1), (1, 2), (0, 2))]
+    a, b = np.concatenate(pairs).T
+    labels = components(len(cracked), a, b)
+    return cracked & np.isin(labels, labels[seeds])
 
 
 def side_sites(mesh: EdgeMesh, pairs: np.ndarray) -> np.ndarray:

@@ -11,7 +11,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["EdgeMesh", "constraint_rank", "edge_mesh", "free_motion_pins", "random_sites"]
+__all__ = [
+    "EdgeMesh",
+    "components",
+    "constraint_rank",
+    "edge_mesh",
+    "free_motion_pins",
+    "random_sites",
+]
 
 #: Local vertex pairs of the three edges of a triangle; edge j is opposite vertex j.
 LOCAL_EDGES = np.array([[1, 2], [2, 0], [0, 1]])
@@ -186,3 +193,21 @@ def random_sites(candidates: np.ndarray, fraction: float, seed: int) -> np.ndarr
         return np.zeros(0, dtype=np.int64)
     rng = np.random.default_rng(seed)
     return np.sort(rng.choice(ids, size=k, replace=False)).astype(np.int64)
+
+
+def components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Connected-component label (smallest node id) of n nodes joined by pairs a–b.
+
+    ``a`` and ``b`` shape=(k,); returns shape=(n,). Vectorised label propagation with
+    pointer jumping.
+    """
+    labels = np.arange(n)
+    while True:
+        m = np.minimum(labels[a], labels[b])
+        new = labels.copy()
+        np.minimum.at(new, a, m)
+        np.minimum.at(new, b, m)
+        new = new[new]  # pointer jumping
+        if np.array_equal(new, labels):
+            return labels
+        labels = new
