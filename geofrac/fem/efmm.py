@@ -1,11 +1,12 @@
 """The elastic problem with the EFMM element: condensed node stiffness, patch stresses.
 
-The stiffness is :meth:`geofrac.elements.efmm.EfmmElement.stiffness` (K = Cᵀ A⁻¹ C,
-seed eq. 3.6); the load vector is the CST one (eq. 3.4c, N^u the CST shape functions),
-assembled from the scene's UFL loads; Dirichlet conditions are imposed on K by symmetric
-elimination. The stress of the solution is each node's own linear field σ = P_i e_i
-with e = A⁻¹ C u (eq. 3.3): the energy error of the results is measured with it
-(seed eq. 3.30b), and it is what the grains and the nodal stress show.
+The stiffness is t × :meth:`geofrac.elements.efmm.EfmmElement.stiffness` (K = Cᵀ A⁻¹ C,
+seed eq. 3.6, per unit thickness); the load vector is the CST one (eq. 3.4c, N^u the
+CST shape functions), assembled from the scene's UFL loads, which carry t; Dirichlet
+conditions are imposed on K by symmetric elimination. The stress of the solution is each
+node's own linear field σ = P_i e_i with e = A⁻¹ C u (eq. 3.3): the energy error of the
+results is measured with it (seed eq. 3.30b), and it is what the grains and the nodal
+stress show.
 """
 
 from __future__ import annotations
@@ -74,7 +75,8 @@ class EfmmProblem(ElasticProblem):
         self._free_operators()
         d = self.scene.discretization
         self.element.setup(self.D, d.q_rand, d.domain_seed)
-        self.A = self.element.stiffness()
+        self.A = self.element.stiffness()  # per unit thickness (A and C integrate over areas)
+        self.A.scale(float(self.thickness.value))  # as the loads, which carry t (forms/)
         self.b = self.load_vector()
         self._constrain()
 

@@ -145,6 +145,22 @@ def test_efmm_beats_cst_on_the_seed_cantilever():
     assert errors["efmm"]["energy"] < errors["cst"]["energy"]
 
 
+def test_thickness_scales_the_stiffness_as_the_traction_load():
+    """A traction load carries t, so K must too: the same u for t = 1 and t = 4.
+
+    As with the UFL elements the strain energy is 4 times as large. Before the fix EFMM's
+    K = Cᵀ A⁻¹ C was per unit thickness and t = 4 gave 4 times the deflection.
+    """
+    out = {}
+    for t in (1.0, 4.0):
+        solution = solve_job("cantilever_efmm", f"material.thickness={t}", comm=MPI.COMM_SELF)
+        solution.problem.destroy()
+        out[t] = (solution.results["probes"]["tip"][1], solution.results["strain_energy"])
+    assert out[1.0][0] > 0.1  # the unit load bends the 8 x 2 cantilever by about 0.2
+    assert out[4.0][0] == pytest.approx(out[1.0][0], rel=1e-9)
+    assert out[4.0][1] == pytest.approx(4.0 * out[1.0][1], rel=1e-9)
+
+
 @pytest.mark.mpi
 def test_an_inverted_mesh_is_a_clear_error_on_every_rank():
     from geofrac.errors import RunError
