@@ -119,7 +119,7 @@ def report(d: GrainDriver, u: np.ndarray, crack: np.ndarray, near: np.ndarray) -
         efmm = []
         for i in st.mesh.edges[k]:
             op = d._operator(int(i))
-            stress = op.stress_at(centre[k][None])[0] @ u[d._mls_dofs(op.patch)]
+            stress = op.stress_at(d.faces.point[k][None])[0] @ u[d._mls_dofs(op.patch)]
             efmm.append(float(principal_max(stress[None])[0]))
         print(f"  x = ({centre[k, 0]:6.1f}, {centre[k, 1]:6.1f})  {s1[k]:6.2f} | "
               f"{efmm[0]:6.2f} {efmm[1]:6.2f}")  # fmt: skip

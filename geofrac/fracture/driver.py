@@ -58,6 +58,7 @@ from geofrac.fracture.topology import (
     edge_mesh,
     free_motion_pins,
     random_sites,
+    zero_energy_rows,
 )
 from geofrac.log import format_seconds
 from geofrac.materials import d_matrix, lame
@@ -586,7 +587,56 @@ class CrackDriver:
             dofs = gm.node_block[pn] * bs + np.array([p[1] for p in pinned])
             self.pinned_dofs = np.concatenate([self.pinned_dofs, dofs])
             self.say(f"cracking: {len(pinned)} DOFs pinned to stop free rigid motions")
-        return len(new) > 0 or len(pinned) > 0
+        held = self._hold_zero_energy_modes()
+        return len(new) > 0 or len(pinned) > 0 or held
+
+    def _stiffless_nodes(self) -> np.ndarray:
+        """Nodes whose own unit gives no stiffness, shape=(k,); none for element cells.
+
+        Their DOFs are held only through other units (a grain's satellites), which the
+        pieces' graph of :meth:`_find_fragments` counts as joined even when those
+        units leave some motion of the DOFs without strain energy.
+        """
+        return np.zeros(0, dtype=np.int64)
+
+    def _hold_zero_energy_modes(self) -> bool:
+        """Pin the DOFs of :meth:`_stiffless_nodes` that move without strain energy.
+
+        The block of the assembled stiffness on those DOFs (Dirichlet, held and pinned
+        ones left out) is gathered to every rank; the rows in its zero-energy modes
+        (:func:`~geofrac.fracture.topology.zero_energy_rows`, eigenvalues below 1e-10 of
+        the mean diagonal entry) are pinned at their last displacement, as a piece's free
+        rigid motion is. True if any DOF was pinned. Collective.
+        """
+        nodes = np.setdiff1d(self._stiffless_nodes(), self.fragment_nodes)
+        if not len(nodes):
+            return False
+        A, b, held = self.assemble(np.zeros(self.n_global))
+        dofs = self._node_dofs(nodes)
+        dofs = dofs[~np.isin(dofs, np.concatenate([self.bc_rows, held, self.pinned_dofs]))]
+        index = PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        diag = A.createVecLeft()
+        try:
+            A.getDiagonal(diag)
+            scale = diag.norm(PETSc.NormType.NORM_1) / self.n_global
+            (sub,) = A.createSubMatrices(index)
+            K = sub.convert(PETSc.Mat.Type.DENSE).getDenseArray().copy()
+            sub.destroy()
+        finally:
+            for obj in (A, b, index, diag):
+                obj.destroy()
+        free = dofs[zero_energy_rows(K, 1e-10 * scale)]
+        if not len(free):
+            return False
+        owner = np.empty(len(self.gm.node_block), dtype=np.int64)
+        owner[self.gm.node_block] = np.arange(len(self.gm.node_block))
+        self._pinned_nodes = np.concatenate([self._pinned_nodes, owner[free // self.bs]])
+        self.pinned_dofs = np.concatenate([self.pinned_dofs, free])
+        self.say(
+            f"cracking: {len(free)} DOFs of grains without stiffness of their own pinned "
+            "(they moved without strain energy)"
+        )
+        return True
 
     def solve(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> int:
         """Solve with reuse of the reference factorisation; returns CG iterations (0 = direct)."""

@@ -145,7 +145,7 @@ class GrainDriver(CrackDriver):
             vals.append(Kt.ravel())
             unit.append(np.full(m * m, k))
             edges = self.state.edges_of_node(int(i))
-            S = op.stress_at(self.faces.centre[edges])  # shape=(k, 3, m)
+            S = op.stress_at(self.faces.point[edges])  # shape=(k, 3, m)
             Sp = np.zeros((len(edges), 3, nd))
             Sp[:, :, :m] = S
             pair_unit.append(np.full(len(edges), k))
@@ -225,6 +225,11 @@ class GrainDriver(CrackDriver):
             use[self.gm.node_block * self.bs + k] = counts
         return use
 
+    def _stiffless_nodes(self) -> np.ndarray:
+        """Switched nodes with a rotation-only or no field: their grain has no strain."""
+        nodes = [i for i, f in self.state.fits.items() if f is None or f.order <= 0]
+        return np.array(sorted(nodes), dtype=np.int64)
+
     def _links(self, is_mls: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         e = self.state.mesh.edges
         on = ~is_mls[e[:, 0]] | ~is_mls[e[:, 1]]
@@ -263,7 +268,7 @@ class GrainDriver(CrackDriver):
             d = self._mls_dofs(fit.nodes)
             uf = u[d]
             if fit.order > 0:
-                B = fit.strain_matrix(self.faces.centre[edges])  # shape=(k, 3, nd)
+                B = fit.strain_matrix(self.faces.point[edges])  # shape=(k, 3, nd)
                 sig = np.einsum("ij,kjd,d->ki", self.D, B, uf)
                 slot = (state.mesh.edges[edges, 1] == i).astype(np.int64)
                 s1[edges, slot] = principal_max(sig)

@@ -54,6 +54,9 @@ class Interfaces:
 
     Attributes:
         centre: the interface's centre X_ij (on edge ij), shape=(num_edges, 2).
+        point: where its σ1 is evaluated (seed 3.3.1, "the central part of the grain
+            interface"): X_ij for an interior interface p_T1–X–p_T2, the middle of
+            p_T–X for a boundary one (X lies on the boundary), shape=(num_edges, 2).
         segments: its two segments p_T1–X and X–p_T2 (a boundary edge repeats p_T–X),
             shape=(num_edges, 2, 2, 2): [edge, segment, end, xy].
         grain_offsets: CSR offsets of each node's sub-triangles, shape=(num_nodes + 1,).
@@ -63,6 +66,7 @@ class Interfaces:
     """
 
     centre: np.ndarray
+    point: np.ndarray
     segments: np.ndarray
     grain_offsets: np.ndarray
     grain_order: np.ndarray
@@ -97,9 +101,10 @@ def interfaces(mesh: EdgeMesh, domains: Domains) -> Interfaces:
     p0 = inner[c0]
     p1 = np.where((c1 >= 0)[:, None], inner[np.maximum(c1, 0)], p0)
     segments = np.stack([np.stack([p0, centre], 1), np.stack([centre, p1], 1)], 1)
+    point = np.where((c1 >= 0)[:, None], centre, 0.5 * (p0 + centre))
     order = np.argsort(domains.node, kind="stable")
     offsets = np.searchsorted(domains.node[order], np.arange(n + 1))
-    return Interfaces(centre, segments, offsets, order, domains.corners[order])
+    return Interfaces(centre, point, segments, offsets, order, domains.corners[order])
 
 
 def connected_cracks(mesh: EdgeMesh, cracked: np.ndarray, seeds: np.ndarray) -> np.ndarray:

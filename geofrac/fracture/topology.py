@@ -18,6 +18,7 @@ __all__ = [
     "edge_mesh",
     "free_motion_pins",
     "random_sites",
+    "zero_energy_rows",
 ]
 
 #: Local vertex pairs of the three edges of a triangle; edge j is opposite vertex j.
@@ -169,6 +170,29 @@ def free_motion_pins(
                 pts, comps, rank = p2, c2, r2
                 pins.append((node, comp))
     return pins
+
+
+def zero_energy_rows(K: np.ndarray, tol: float) -> np.ndarray:
+    """Rows of a symmetric positive semi-definite block that move in its zero-energy modes.
+
+    With the other DOFs fixed, a vector v on the block's DOFs has no strain energy when
+    vᵀ K v = 0, i.e. K v = 0; for the whole (semi-definite) stiffness it is then a null
+    vector too. Row i takes part when some null vector of K has a non-zero entry i
+    (independent of the basis the eigensolver picks).
+
+    Args:
+        K: the block, shape=(n, n).
+        tol: eigenvalues below it count as zero (absolute).
+
+    Returns:
+        whether each row takes part, shape=(n,) bool.
+    """
+    K = np.asarray(K, dtype=float)
+    if not len(K):
+        return np.zeros(0, dtype=bool)
+    w, v = np.linalg.eigh(0.5 * (K + K.T))
+    null = v[:, w < tol]  # orthonormal columns
+    return np.linalg.norm(null, axis=1) > 1e-8
 
 
 def random_sites(candidates: np.ndarray, fraction: float, seed: int) -> np.ndarray:

@@ -6,6 +6,7 @@ from mpi4py import MPI
 
 from geofrac.elements import make_element
 from geofrac.elements.efmm_numpy import integration_domains
+from geofrac.errors import RunError
 from geofrac.fem.elastic import make_problem
 from geofrac.fracture.driver import END_REASONS
 from geofrac.fracture.grain_driver import GrainDriver
@@ -55,6 +56,10 @@ def test_interfaces_cross_their_edge_and_join_the_inner_points(q_rand):
     both = mesh.edge_cells[:, 1] >= 0
     assert np.allclose(faces.segments[both, 1, 1], inner[mesh.edge_cells[both, 1]])
     assert np.allclose(faces.segments[:, 0, 1], faces.centre)
+    # σ1 is read at the interface's middle: X inside, halfway along p_T–X on the boundary
+    assert np.array_equal(faces.point[both], faces.centre[both])
+    half = 0.5 * (inner[mesh.edge_cells[~both, 0]] + faces.centre[~both])
+    assert (~both).sum() == 4 * 6 and np.allclose(faces.point[~both], half)
     # the grains tile the square
     from geofrac.elements.efmm_numpy import triangle_areas
 
@@ -179,8 +184,12 @@ def test_connected_cracks_follow_shared_triangles_only():
         connected_cracks(mesh, cracked, [chain[len(chain) // 2]])
 
 
-def make_driver(*overrides: str, comm: MPI.Comm = MPI.COMM_WORLD) -> GrainDriver:
-    scene = load_scene_collective(comm, JOBS / "grain_notched_beam.toml", SMALL + overrides)
+def make_driver(
+    *overrides: str, comm: MPI.Comm = MPI.COMM_WORLD, job: str = "grain_notched_beam"
+) -> GrainDriver:
+    """The grain driver of ``jobs/<job>.toml`` (the beam on the SMALL mesh), no output."""
+    small = SMALL if job == "grain_notched_beam" else ()
+    scene = load_scene_collective(comm, JOBS / f"{job}.toml", small + overrides)
     tagged = build_mesh(scene.geometry, comm)
     element = make_element(scene.discretization.element, tagged.mesh)
     problem = make_problem(tagged, element, scene)
@@ -224,6 +233,70 @@ def test_fully_isolated_grain_is_a_fragment_and_the_run_goes_on():
     assert res["grains_by_field"]["fragment"] >= 1
     assert res["events"] == 3 and res["end_reason"] == "max_events"
     assert all(np.isfinite(r["reaction"]) for r in d.rows)
+
+
+#: Centres of 55 interfaces of the DCN plate cracked at event 326 of
+#: jobs/grain_dcn_4pct_seed2.toml (2026-11-24, before the fix), within 8 mm of (36, 48.7).
+#: They fence in the grains of the nodes at (36.02, 49.88) and (36.02, 47.54), which drop
+#: to rotation-only fields; the one fit that still sees both leaves one joint motion of
+#: theirs without strain energy, and that run ended ``singular``.
+MECHANISM = [
+    (30.97, 52.81), (31.99, 53.4), (32.98, 51.64), (32.0, 51.12), (31.02, 51.69),
+    (41.35, 49.94), (41.3, 48.79), (42.33, 45.94), (41.32, 46.51), (41.27, 47.66),
+    (30.82, 42.92), (34.0, 52.24), (35.0, 52.84), (33.0, 50.49), (34.01, 49.85),
+    (37.06, 55.17), (37.1, 54.04), (37.04, 56.32), (33.05, 49.33), (34.99, 49.28),
+    (34.99, 48.15), (34.02, 47.55), (33.01, 48.2), (39.06, 55.27), (37.05, 49.29),
+    (37.04, 50.52), (36.03, 51.11), (41.17, 54.31), (35.0, 46.95), (36.02, 46.35),
+    (37.05, 48.14), (37.03, 46.99), (33.96, 45.25), (32.98, 45.86), (33.04, 47.03),
+    (35.01, 44.71), (34.86, 43.67), (32.88, 44.78), (32.83, 43.75), (37.08, 43.66),
+    (35.91, 42.05), (34.87, 42.61), (38.16, 52.42), (39.2, 51.91), (31.84, 44.41),
+    (39.14, 43.86), (32.83, 41.73), (31.8, 42.32), (37.11, 52.9), (41.3, 51.06),
+    (41.28, 52.15), (41.24, 53.2), (40.28, 51.53), (30.84, 43.97), (32.74, 42.71),
+]  # fmt: skip
+
+
+def check_mechanism_is_pinned(comm: MPI.Comm) -> None:
+    """Two rotation-only grains seen by one fit: singular until their free DOFs are pinned."""
+    d = make_driver("cracking.max_events=0", comm=comm, job="grain_dcn_0pct")
+    centre = d.faces.centre
+    pts = np.array(MECHANISM)
+    ids = np.array([np.argmin(np.hypot(*(centre - p).T)) for p in pts])
+    assert np.hypot(*(centre[ids] - pts).T).max() < 0.01
+    d.state.start(np.sort(ids))
+    coords = d.gm.coords[:, :2]
+    pair = [int(np.argmin(np.hypot(*(coords - p).T))) for p in [(36.02, 49.88), (36.02, 47.54)]]
+    assert [d.state.fits[i].order for i in pair] == [0, 0]
+    assert set(pair) <= set(d._stiffless_nodes().tolist())
+
+    def solve() -> float:
+        A, b, _ = d.assemble(np.zeros(d.n_global))
+        x = b.duplicate()
+        try:
+            d.solve(A, b, x)
+            return x.norm()
+        finally:
+            for obj in (A, b, x):
+                obj.destroy()
+
+    with pytest.raises(RunError, match="singular"):
+        solve()
+    assert d._find_fragments()  # no piece is cut free: only the new check acts
+    assert not len(d.fragment_nodes)
+    assert set(d._pinned_nodes.tolist()) == set(pair) and len(d.pinned_dofs) == 4
+    pinned = sorted(d.pinned_dofs.tolist())
+    assert comm.allgather(pinned) == [pinned] * comm.size
+    norm = solve()
+    assert np.isfinite(norm) and norm > 0
+    d.destroy()
+
+
+def test_grains_that_move_without_strain_energy_are_pinned():
+    check_mechanism_is_pinned(MPI.COMM_SELF)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_grains_that_move_without_strain_energy_are_pinned_on_every_rank():
+    check_mechanism_is_pinned(MPI.COMM_WORLD)
 
 
 def test_random_precracks_follow_the_seed():

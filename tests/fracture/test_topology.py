@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from geofrac.fracture.topology import constraint_rank, free_motion_pins
+from geofrac.fracture.topology import constraint_rank, free_motion_pins, zero_energy_rows
 
 NO_EXTRA = np.zeros(0)
 RGNT = np.array([0.5])  # θ = ½ ω under a rigid rotation ω
@@ -55,3 +55,22 @@ def test_free_motion_pins_do_not_depend_on_candidate_order():
     assert [(tuple(cand[i]), k) for i, k in pins] == [(tuple(cand[perm][i]), k) for i, k in again]
     p = np.vstack([pts, cand[[i for i, _ in pins]]])
     assert constraint_rank(p, np.append(comps, [k for _, k in pins]), NO_EXTRA) == 3
+
+
+def test_zero_energy_rows_are_those_of_the_null_modes():
+    """Two DOFs joined by a spring and held by nothing else move freely together.
+
+    One null vector, (1, 1); a DOF with its own spring, or tied to one that has, does not
+    move; the answer does not depend on how the DOFs are ordered.
+    """
+    k = 30.0
+    K = np.zeros((4, 4))
+    K[np.ix_([0, 1], [0, 1])] = k * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    K[2, 2] = k
+    K[np.ix_([2, 3], [2, 3])] += k * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    assert zero_energy_rows(K, 1e-10 * k).tolist() == [True, True, False, False]
+    perm = np.array([3, 1, 2, 0])
+    assert zero_energy_rows(K[np.ix_(perm, perm)], 1e-10 * k).tolist() == [False, True, False, True]
+    K[0, 0] += 1e-3 * k  # a weak spring is still stiffness
+    assert not zero_energy_rows(K, 1e-10 * k).any()
+    assert zero_energy_rows(np.zeros((0, 0)), 1.0).shape == (0,)
