@@ -13,6 +13,11 @@ no event loop, one linear solve each, 1 rank:
    notch tip (from the C-MultiMLSM fits), and the EFMM patch stress of the same
    displacement at those interfaces for comparison.
 
+3. ``holes``: jobs/grain_holes3.toml (``--holes 5``: grain_holes5) before the first
+   event: the largest interface sigma_1 of the EFMM grains beside sigma_1 of a P2
+   solution on a mesh of size ``--h-ref`` (0.4) at the same points, and the P2 sigma_xx
+   above and below each hole.
+
 ``--set KEY=VALUE`` passes scene overrides (``cracking.neighbours=6``, say).
 """
 
@@ -21,6 +26,7 @@ from __future__ import annotations
 import argparse
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -125,11 +131,72 @@ def report(d: GrainDriver, u: np.ndarray, crack: np.ndarray, near: np.ndarray) -
               f"{efmm[0]:6.2f} {efmm[1]:6.2f}")  # fmt: skip
 
 
+def p2_stress(job: Path, h: float) -> Any:
+    """A function (x, y) -> (sigma_xx, sigma_yy, tau_xy) of the P2 solution of a hole plate.
+
+    The plate of ``job`` meshed with size h: bottom u_y = 0, u_x = 0 at the bottom-left
+    corner, top u_y = -0.1 (the unit event load), plane stress.
+    """
+    import ufl
+    from dolfinx import fem, geometry
+    from dolfinx.fem.petsc import LinearProblem
+
+    comm = MPI.COMM_SELF
+    scene = load_scene_collective(comm, job, [f"geometry.parameters.h={h}"])
+    msh = build_mesh(scene.geometry, comm).mesh
+    mat = scene.material
+    mu = mat.E / (2 * (1 + mat.nu))
+    lam = mat.E * mat.nu / (1 - mat.nu**2)  # plane stress
+
+    def sigma(w: Any) -> Any:
+        eps = ufl.sym(ufl.grad(w))
+        return 2 * mu * eps + lam * ufl.tr(eps) * ufl.Identity(2)
+
+    V = fem.functionspace(msh, ("Lagrange", 2, (2,)))
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    L = ufl.inner(fem.Constant(msh, np.zeros(2)), v) * ufl.dx
+    bcs = []
+    for where, comp, value in [
+        (lambda x: np.isclose(x[1], 0.0), 1, 0.0),
+        (lambda x: np.isclose(x[1], 200.0), 1, -0.1),
+        (lambda x: np.isclose(x[0], 0.0) & np.isclose(x[1], 0.0), 0, 0.0),
+    ]:
+        dofs = fem.locate_dofs_geometrical((V.sub(comp), V.sub(comp).collapse()[0]), where)
+        bcs.append(fem.dirichletbc(np.float64(value), dofs[0], V.sub(comp)))
+    problem = LinearProblem(
+        ufl.inner(sigma(u), ufl.sym(ufl.grad(v))) * ufl.dx,
+        L,
+        bcs=bcs,
+        petsc_options_prefix="grain_tip_p2_",
+        petsc_options={"ksp_type": "preonly", "pc_type": "lu"},
+    )
+    uh = problem.solve()
+    s = sigma(uh[0] if isinstance(uh, tuple) else uh)
+    T = fem.functionspace(msh, ("DG", 1, (3,)))
+    expr = fem.Expression(
+        ufl.as_vector([s[0, 0], s[1, 1], s[0, 1]]), T.element.interpolation_points
+    )
+    out = fem.Function(T)
+    out.interpolate(expr)
+    tree = geometry.bb_tree(msh, 2)
+
+    def at(x: float, y: float) -> np.ndarray:
+        p = np.array([[x, y, 0.0]])
+        cells = geometry.compute_colliding_cells(
+            msh, geometry.compute_collisions_points(tree, p), p
+        )
+        return out.eval(p, cells.links(0)[:1])
+
+    return at
+
+
 def main() -> None:
     """Parse the command line and print one case."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("case", choices=["tension", "beam"])
+    parser.add_argument("case", choices=["tension", "beam", "holes"])
     parser.add_argument("--chain", type=int, default=1, help="interfaces in the crack")
+    parser.add_argument("--holes", type=int, default=3, choices=[3, 5])
+    parser.add_argument("--h-ref", type=float, default=0.4, help="P2 reference mesh size")
     parser.add_argument("--set", action="append", default=[], dest="overrides")
     args = parser.parse_args()
     if args.case == "tension":
@@ -146,6 +213,24 @@ def main() -> None:
         x = centre[crack, 0]
         print(f"tension: {len(crack)} cracked interface(s), x from {x.min():.1f} to {x.max():.1f}")
         report(d, solve(d), crack, np.zeros(0, dtype=np.int64))
+    elif args.case == "holes":
+        job = REPO / "jobs" / f"grain_holes{args.holes}.toml"
+        d = driver(job, args.overrides)
+        d.state.start(np.zeros(0, dtype=np.int64))
+        s1, _, _ = d.measures(solve(d))
+        point = d.faces.point
+        at = p2_stress(job, args.h_ref)
+        print(f"holes: {args.holes} holes, unit load, sigma_1 at the interfaces' points")
+        print(f"  EFMM grains | P2 (h = {args.h_ref:g}) at the same point")
+        for k in np.argsort(-s1)[:8]:
+            ref = float(principal_max(at(*point[k]).reshape(1, 3))[0])
+            print(f"  ({point[k, 0]:6.2f}, {point[k, 1]:6.2f})  {s1[k]:6.2f} | {ref:6.2f}")
+        print("  P2 sigma_xx at 0.05, 0.3, 1, 2 mm above and below each hole:")
+        holes = [(50, 100, 10), (30, 60, 6), (70, 140, 6), (72, 68, 4), (28, 132, 4)]
+        for cx, cy, r in holes[: args.holes]:
+            for side, name in ((1, "above"), (-1, "below")):
+                sxx = [float(at(cx, cy + side * (r + g))[0]) for g in (0.05, 0.3, 1.0, 2.0)]
+                print(f"  hole ({cx}, {cy}) r = {r} {name}: " + " ".join(f"{v:6.2f}" for v in sxx))
     else:
         overrides = ["geometry.parameters.w=0", 'cracking.precracked=["notch"]', *args.overrides]
         d = driver(REPO / "jobs" / "grain_notched_beam.toml", overrides)
