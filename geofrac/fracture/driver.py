@@ -614,6 +614,10 @@ class CrackDriver:
         A, b, held = self.assemble(np.zeros(self.n_global))
         dofs = self._node_dofs(nodes)
         dofs = dofs[~np.isin(dofs, np.concatenate([self.bc_rows, held, self.pinned_dofs]))]
+        if not len(dofs):  # the same on every rank
+            A.destroy()
+            b.destroy()
+            return False
         index = PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
         diag = A.createVecLeft()
         try:
