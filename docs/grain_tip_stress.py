@@ -33,12 +33,10 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 import numpy as np
 from mpi4py import MPI
 
-from geofrac.elements import make_element
-from geofrac.fem.elastic import make_problem
+from geofrac.effects.cracking import scene_driver
 from geofrac.fracture.cells import principal_max
 from geofrac.fracture.grain_driver import GrainDriver
 from geofrac.meshing.distribute import build_mesh
-from geofrac.runner import Solution
 from geofrac.scene import load_scene_collective
 
 REPO = Path(__file__).resolve().parent.parent
@@ -86,12 +84,7 @@ margin = 1.01
 def driver(job: Path, overrides: list[str]) -> GrainDriver:
     """A grain driver for a scene, without output."""
     comm = MPI.COMM_SELF
-    scene = load_scene_collective(comm, job, overrides)
-    tagged = build_mesh(scene.geometry, comm)
-    problem = make_problem(tagged, make_element("efmm", tagged.mesh), scene)
-    problem.compile()
-    config = next(s.config for s in scene.effects if s.name == "cracking")
-    return GrainDriver(config, Solution(scene, tagged, problem), lambda msg: None)
+    return scene_driver(load_scene_collective(comm, job, overrides), comm)
 
 
 def solve(d: GrainDriver) -> np.ndarray:

@@ -55,7 +55,15 @@ from geofrac.effects import ConfigureContext
 from geofrac.fracture import SOLVERS
 from geofrac.scene.errors import SceneError, did_you_mean
 
-__all__ = ["ELEMENTS", "KEYS", "CrackingConfig", "configure", "driver"]
+__all__ = [
+    "ELEMENTS",
+    "KEYS",
+    "CrackingConfig",
+    "configure",
+    "driver",
+    "make_driver",
+    "scene_driver",
+]
 
 #: Elements the crack driver supports.
 ELEMENTS = ("cst", "p1", "rgnt", "gnt", "efmm")
@@ -248,15 +256,43 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
     )
 
 
-def driver(config: CrackingConfig, solution: Any, say: Any, write: bool) -> dict[str, Any]:
-    """Run the event loop on a set-up problem; return the results (see the driver).
+def make_driver(config: CrackingConfig, solution: Any, say: Any, write: bool = False) -> Any:
+    """The event loop of a set-up problem, not yet run.
 
+    A :class:`~geofrac.fracture.grain_driver.GrainDriver` (grain interfaces) on element
+    ``efmm``, else a :class:`~geofrac.fracture.driver.CrackDriver` (element edges).
     ``write``: write the event log, pictures and XDMF series into ``output.dir``.
     """
     if solution.scene.discretization.element == "efmm":
         from geofrac.fracture.grain_driver import GrainDriver
 
-        return GrainDriver(config, solution, say, write).run()
+        return GrainDriver(config, solution, say, write)
     from geofrac.fracture.driver import CrackDriver
 
-    return CrackDriver(config, solution, say, write).run()
+    return CrackDriver(config, solution, say, write)
+
+
+def driver(config: CrackingConfig, solution: Any, say: Any, write: bool) -> dict[str, Any]:
+    """Run the event loop on a set-up problem; return the results (see the driver)."""
+    return make_driver(config, solution, say, write).run()
+
+
+def scene_driver(scene: Any, comm: Any, say: Any = None) -> Any:
+    """The driver of a loaded scene with ``cracking``: meshed, compiled, not run, no output.
+
+    For tests and diagnostics that step the crack state themselves
+    (docs/grain_tip_stress.py); ``say`` receives the driver's messages (default: none).
+    The caller destroys the driver or its problem.
+    """
+    from geofrac.elements import make_element
+    from geofrac.fem.elastic import make_problem
+    from geofrac.meshing.distribute import build_mesh
+    from geofrac.runner import Solution
+
+    config = next((s.config for s in scene.effects if s.name == "cracking"), None)
+    if config is None:
+        raise ValueError(f"scene {scene.name!r} does not declare the effect 'cracking'")
+    tagged = build_mesh(scene.geometry, comm)
+    problem = make_problem(tagged, make_element(scene.discretization.element, tagged.mesh), scene)
+    problem.compile()
+    return make_driver(config, Solution(scene, tagged, problem), say or (lambda msg: None))

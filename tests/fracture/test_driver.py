@@ -4,11 +4,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from geofrac.elements import make_element
-from geofrac.fem.elastic import make_problem
+from geofrac.effects.cracking import scene_driver
 from geofrac.fracture.driver import END_REASONS, CrackDriver
-from geofrac.meshing.distribute import build_mesh
-from geofrac.runner import Solution
 from geofrac.scene import load_scene_collective
 from tests.conftest import JOBS
 
@@ -18,13 +15,7 @@ SMALL_BEAM = ("geometry.parameters.h_fine=8", "geometry.parameters.h=30")
 
 def make_driver(name: str, *overrides: str, comm: MPI.Comm = MPI.COMM_WORLD) -> CrackDriver:
     """A driver for ``jobs/<name>.toml`` ready to run (the caller destroys the problem)."""
-    scene = load_scene_collective(comm, JOBS / f"{name}.toml", overrides)
-    tagged = build_mesh(scene.geometry, comm)
-    element = make_element(scene.discretization.element, tagged.mesh)
-    problem = make_problem(tagged, element, scene)
-    problem.compile()
-    config = next(s.config for s in scene.effects if s.name == "cracking")
-    return CrackDriver(config, Solution(scene, tagged, problem), lambda msg: None)
+    return scene_driver(load_scene_collective(comm, JOBS / f"{name}.toml", overrides), comm)
 
 
 def run_beam(*overrides: str, comm: MPI.Comm = MPI.COMM_WORLD) -> tuple[CrackDriver, dict]:

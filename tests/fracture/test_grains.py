@@ -4,17 +4,14 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from geofrac.elements import make_element
+from geofrac.effects.cracking import scene_driver
 from geofrac.elements.efmm_numpy import integration_domains
 from geofrac.errors import RunError
-from geofrac.fem.elastic import make_problem
 from geofrac.fracture.driver import END_REASONS
 from geofrac.fracture.grain_driver import GrainDriver
 from geofrac.fracture.grains import GrainState, connected_cracks, interfaces, side_sites
 from geofrac.fracture.state import MlsSettings
 from geofrac.fracture.topology import edge_mesh, random_sites
-from geofrac.meshing.distribute import build_mesh
-from geofrac.runner import Solution
 from geofrac.scene import load_scene_collective
 from tests.conftest import JOBS
 
@@ -189,13 +186,7 @@ def make_driver(
 ) -> GrainDriver:
     """The grain driver of ``jobs/<job>.toml`` (the beam on the SMALL mesh), no output."""
     small = SMALL if job == "grain_notched_beam" else ()
-    scene = load_scene_collective(comm, JOBS / f"{job}.toml", small + overrides)
-    tagged = build_mesh(scene.geometry, comm)
-    element = make_element(scene.discretization.element, tagged.mesh)
-    problem = make_problem(tagged, element, scene)
-    problem.compile()
-    config = next(s.config for s in scene.effects if s.name == "cracking")
-    return GrainDriver(config, Solution(scene, tagged, problem), lambda msg: None)
+    return scene_driver(load_scene_collective(comm, JOBS / f"{job}.toml", small + overrides), comm)
 
 
 def test_nodes_across_the_notch_slot_do_not_see_each_other():
