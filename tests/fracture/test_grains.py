@@ -14,6 +14,7 @@ from geofrac.fracture.state import MlsSettings
 from geofrac.fracture.topology import edge_mesh, random_sites
 from geofrac.scene import load_scene_collective
 from tests.conftest import JOBS
+from tests.fracture.helpers import grid_mesh
 
 #: The grain beam on a coarse uniform mesh (about 330 nodes).
 SMALL = ("geometry.parameters.h=16", "geometry.parameters.h_fine=16")
@@ -21,14 +22,8 @@ SMALL = ("geometry.parameters.h=16", "geometry.parameters.h_fine=16")
 
 def grid(n: int = 8, q_rand: float = 0.0) -> tuple:
     """A structured n x n triangle mesh of the unit square, its edges and grains."""
-    x, y = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1))
-    pts = np.column_stack([x.ravel(), y.ravel()])
-    cells = []
-    for j in range(n):
-        for i in range(n):
-            a = j * (n + 1) + i
-            cells += [[a, a + 1, a + n + 2], [a, a + n + 2, a + n + 1]]
-    cells = np.array(cells)
+    pts, cells = grid_mesh(n)
+    pts = pts / n
     mesh = edge_mesh(pts, cells)
     domains = integration_domains(pts, cells, q_rand, seed=3)
     return mesh, domains, interfaces(mesh, domains)

@@ -5,18 +5,7 @@ import numpy as np
 from geofrac.fracture.state import CrackState, MlsSettings
 from geofrac.fracture.topology import edge_mesh
 from geofrac.fracture.visibility import Bins, blocked, visible_nodes
-
-
-def grid_mesh(n=8):
-    """Structured triangles on [0, n]^2, shape=(nodes, 2), (cells, 3)."""
-    x, y = np.meshgrid(np.arange(n + 1.0), np.arange(n + 1.0))
-    coords = np.column_stack([x.ravel(), y.ravel()])
-    cells = []
-    for j in range(n):
-        for i in range(n):
-            a = j * (n + 1) + i
-            cells += [[a, a + 1, a + n + 2], [a, a + n + 2, a + n + 1]]
-    return coords, np.array(cells)
+from tests.fracture.helpers import grid_mesh
 
 
 def test_blocked_touching_and_crossing():
