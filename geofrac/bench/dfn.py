@@ -197,8 +197,8 @@ def _plot(tagged: Any, path: Path, title: str) -> None:
 
 def run(args: argparse.Namespace, comm: Any) -> None:
     """Mesh every model at every scale, print the table, write the JSON and pictures."""
-    from geofrac.bench.report import format_table
-    from geofrac.io.summary import versions, write_json
+    from geofrac.bench.report import format_table, save_report
+    from geofrac.io.summary import versions
     from geofrac.log import echo
 
     if comm.rank == 0:
@@ -236,7 +236,5 @@ def run(args: argparse.Namespace, comm: Any) -> None:
             )
     report = {"bench": "dfn", "ranks": comm.size, "versions": versions(), "records": records}
     if comm.rank == 0:
-        write_json(args.out / "dfn.json", report)
-        if args.json is not None:
-            write_json(args.json, report)
+        save_report(report, args.out / "dfn.json", args.json)
     echo(comm, f"wrote {args.out / 'dfn.json'}")

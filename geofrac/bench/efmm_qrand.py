@@ -100,8 +100,8 @@ def _rows(records: list[dict[str, Any]], depths: list[int]) -> list[dict[str, An
 
 def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
-    from geofrac.bench.report import format_table
-    from geofrac.io.summary import versions, write_json
+    from geofrac.bench.report import format_table, save_report
+    from geofrac.io.summary import versions
     from geofrac.log import Progress, echo
     from geofrac.runner import solve_scene
     from geofrac.scene import SceneError, load_scene_collective
@@ -184,10 +184,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
             f"std at least 10x below the mean on every mesh: displacement {ok['u']}, "
             f"energy {ok['energy']}",
         )
-        args.out.mkdir(parents=True, exist_ok=True)
-        write_json(args.out / "efmm-qrand.json", report)
-        if args.json is not None:
-            write_json(args.json, report)
+        save_report(report, args.out / "efmm-qrand.json", args.json)
         _plot(rows, args.out / "efmm-qrand.png")
         echo(comm, f"wrote {args.out / 'efmm-qrand.json'} and {args.out / 'efmm-qrand.png'}")
     return report

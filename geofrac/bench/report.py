@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["fit_rate", "format_table", "plot_accuracy_cost", "save_figure"]
+__all__ = ["fit_rate", "format_table", "plot_accuracy_cost", "save_figure", "save_report"]
 
 
 def fit_rate(nodes: Sequence[float], errors: Sequence[float], dim: int = 2) -> float:
@@ -100,3 +100,16 @@ def save_figure(fig: Any, axes: Sequence[Any], path: Path, title: str, ylabel: s
     fig.suptitle(title)
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def save_report(report: dict[str, Any], path: Path, copy: Path | None = None) -> None:
+    """Write a bench's JSON ``report`` to ``path`` (its folder is created) and to ``copy``.
+
+    ``copy`` is the ``--json`` path of the command line, if given.
+    """
+    from geofrac.io.summary import write_json
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_json(path, report)
+    if copy is not None:
+        write_json(copy, report)

@@ -278,9 +278,9 @@ def _summary_lines(records: list[dict[str, Any]], worst_angle: float, nu_max: fl
 
 def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
-    from geofrac.bench.report import format_table
+    from geofrac.bench.report import format_table, save_report
     from geofrac.bench.study import parse_elements
-    from geofrac.io.summary import versions, write_json
+    from geofrac.io.summary import versions
     from geofrac.log import Progress, echo
     from geofrac.scene import SceneError
 
@@ -360,10 +360,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
                 f"  {r['element']} {r['angle_target']:g}° ν={r['nu']:g} plane {r['plane']}: "
                 f"{r['status']}",
             )
-        args.out.mkdir(parents=True, exist_ok=True)
-        write_json(args.out / "stability.json", report)
-        if args.json is not None:
-            write_json(args.json, report)
+        save_report(report, args.out / "stability.json", args.json)
         _plot(
             records,
             args.out / "stability.png",

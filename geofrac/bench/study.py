@@ -213,8 +213,8 @@ def run_study(
     Returns:
         the report, identical on every rank.
     """
-    from geofrac.bench.report import fit_rate, format_table, plot_accuracy_cost
-    from geofrac.io.summary import versions, write_json
+    from geofrac.bench.report import fit_rate, format_table, plot_accuracy_cost, save_report
+    from geofrac.io.summary import versions
     from geofrac.log import Progress, echo
     from geofrac.runner import solve_scene
     from geofrac.scene import SceneError, load_scene_collective
@@ -303,10 +303,7 @@ def run_study(
             echo(comm, f"rate R ({e}): displacement {r['u']:.2f}, energy {r['energy']:.2f}")
         echo(comm, _target_line(args.target, target, reached))
         echo(comm, _time_line(same_time))
-        args.out.mkdir(parents=True, exist_ok=True)
-        write_json(args.out / f"{name}.json", report)
-        if args.json is not None:
-            write_json(args.json, report)
+        save_report(report, args.out / f"{name}.json", args.json)
         plot_accuracy_cost(records, args.out / f"{name}.png", title)
         echo(comm, f"wrote {args.out / f'{name}.json'} and {args.out / f'{name}.png'}")
     return report
