@@ -27,6 +27,7 @@ from geofrac.fem.post import (
     locate_points,
     probe,
 )
+from geofrac.io.checkpoint import RunControl
 from geofrac.io.summary import finish_summary, prepare_output, start_summary
 from geofrac.io.xdmf import write_fields, write_meshtags
 from geofrac.log import echo, format_seconds
@@ -75,6 +76,8 @@ class Solution:
     problem: ElasticProblem
     results: dict[str, Any] = field(default_factory=dict)
     timings: Timings = field(default_factory=Timings)
+    #: checkpoints, signal stop and resume data for an effect's loop (None: a plain run).
+    control: RunControl | None = None
 
     def mesh_counts(self) -> dict[str, int]:
         """Global numbers of cells and vertices, and the topological dimension."""
