@@ -38,6 +38,11 @@ def _set_option(p: argparse.ArgumentParser, example: str) -> None:
 def _scene_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("scene", help="scene file (TOML), e.g. jobs/quickstart.toml")
     _set_option(p, "discretization.element=cst")
+    p.add_argument(
+        "--allow-large",
+        action="store_true",
+        help="run a scene whose estimated size is beyond the caps of docs/scenes.md",
+    )
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -52,6 +57,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "-q", "--quiet", action="store_true", help="print only errors and the output path"
+    )
+    run.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the interrupted run in the output directory from its newest checkpoint",
     )
     run.set_defaults(func=_run)
 
@@ -71,7 +81,8 @@ def _parser() -> argparse.ArgumentParser:
 
 def _load(args: argparse.Namespace, comm: Any, out: str | None = None) -> Scene:
     """Validate the scene on every rank and print its warnings (rank 0)."""
-    scene = load_scene_collective(comm, args.scene, args.overrides, out)
+    large = {"allow_large": True} if args.allow_large else {}  # TODO(lead): plain kwarg
+    scene = load_scene_collective(comm, args.scene, args.overrides, out, **large)
     for warning in scene.warnings:
         echo(comm, f"warning: {warning}", err=True)
     return scene
@@ -103,33 +114,52 @@ def _check(args: argparse.Namespace, comm: Any) -> int:
 
 
 def _run(args: argparse.Namespace, comm: Any) -> int:
+    from geofrac import interrupt
     from geofrac.timing import Timings
 
     timings = Timings()
     with timings.phase("load"):
         scene = _load(args, comm, args.out)
     echo(comm, f"geofrac {__version__}: scene '{scene.name}' ({args.scene}) on {comm.size} rank(s)")
-    if scene.method == "mpm":  # no DOLFINx needed
-        from geofrac.mpm.driver import run_mpm_scene
+    quiet = args.quiet
+    interrupt.install()
+    try:
+        if scene.method == "mpm":  # no DOLFINx needed
+            from geofrac.mpm.driver import run_mpm_scene
 
-        summary = run_mpm_scene(scene, comm, timings, verbose=not args.quiet)
-        if not args.quiet:
-            _report_mpm(comm, summary)
-        echo(comm, f"output: {scene.output.dir}")
-        return 0
-    if scene.method == "blocks":
-        from geofrac.blocks.driver import run_blocks_scene
+            summary = run_mpm_scene(scene, comm, timings, not quiet, args.resume)
+            report = _report_mpm
+        elif scene.method == "blocks":
+            from geofrac.blocks.driver import run_blocks_scene
 
-        summary = run_blocks_scene(scene, comm, timings, verbose=not args.quiet)
-        if not args.quiet:
-            _report_blocks(comm, summary)
-        echo(comm, f"output: {scene.output.dir}")
-        return 0
-    from geofrac.runner import run_scene
+            summary = run_blocks_scene(scene, comm, timings, not quiet, args.resume)
+            report = _report_blocks
+        else:
+            from geofrac.runner import run_scene
 
-    summary = run_scene(scene, comm, timings, verbose=not args.quiet)
-    if not args.quiet:
-        _report(comm, summary)
+            summary = run_scene(scene, comm, timings, not quiet, args.resume)
+            report = _report
+    except interrupt.Interrupted as exc:
+        stage = scene.output.dir / "incomplete"
+        echo(comm, f"interrupted: {exc}; partial results in {stage}", err=True)
+        if (stage / "checkpoint").is_dir() or comm.rank != 0:  # echo prints on rank 0 only
+            echo(
+                comm,
+                f"resume with: geofrac run {args.scene} --resume"
+                + "".join(f" --set {o}" for o in args.overrides)
+                + (f" --out {args.out}" if args.out else ""),
+                err=True,
+            )
+        return 128 + exc.signum if exc.signum else 1
+    except RunError as exc:
+        echo(comm, f"error: {exc}", err=True)
+        if getattr(exc, "partial", None) is not None:
+            echo(comm, f"the failed run's files and summary.json: {exc.partial}", err=True)  # type: ignore[attr-defined]
+        return 1
+    finally:
+        interrupt.uninstall()
+    if not quiet:
+        report(comm, summary)
     echo(comm, f"output: {scene.output.dir}")
     return 0
 

@@ -28,7 +28,7 @@ from geofrac.fem.post import (
     probe,
 )
 from geofrac.io.checkpoint import RunControl
-from geofrac.io.summary import finish_summary, prepare_output, start_summary
+from geofrac.io.summary import start_summary
 from geofrac.io.xdmf import write_fields, write_meshtags
 from geofrac.log import echo, format_seconds
 from geofrac.meshing.distribute import TaggedMesh, build_mesh, check_fracture_cover
@@ -69,6 +69,7 @@ class Solution:
         problem: the elastic problem (call ``problem.destroy()`` when done).
         results: JSON-ready results (probes, errors, energy, solver).
         timings: per-phase wall times of this rank.
+        control: checkpoints, signal stop and resume data for an effect's loop, or None.
     """
 
     scene: Scene
@@ -95,11 +96,13 @@ def solve_scene(
     timings: Timings | None = None,
     verbose: bool = True,
     write: bool = False,
+    control: RunControl | None = None,
 ) -> Solution:
     """Mesh, discretise, assemble and solve ``scene``; compute probes and error norms.
 
     ``write``: an effect's driver may write its own files into ``output.dir`` (the
     cracking event log and series); :func:`run_scene` sets it, benchmarks do not.
+    ``control``: checkpoints, signal stop and resume data for an effect's loop.
 
     Raises:
         RunError: collectively, when the run cannot continue.
@@ -125,7 +128,7 @@ def solve_scene(
         except RunError as exc:
             raise RunError(f"output.probes: {exc}") from None
         problem = make_problem(tagged, element, scene)
-    solution = Solution(scene, tagged, problem, timings=timings)
+    solution = Solution(scene, tagged, problem, timings=timings, control=control)
     counts = solution.mesh_counts()
     say(
         f"mesh: {counts['vertices']} vertices, {counts['cells']} cells; "
@@ -231,59 +234,45 @@ def _write_fractures(solution: Solution) -> None:
     write_meshtags(solution.scene.output.dir / "fractures.xdmf", tagged.mesh, tags)
 
 
-def _prepare_output(scene: Scene, comm: MPI.Comm) -> None:
-    """Create the output directory and remove a previous run's files (rank 0)."""
-    error = prepare_output(scene.output.dir, OUTPUT_FILES, comm)
-    if error is not None:
-        raise RunError(error)
-
-
 def run_scene(
-    scene: Scene, comm: MPI.Comm, timings: Timings | None = None, verbose: bool = True
+    scene: Scene,
+    comm: MPI.Comm,
+    timings: Timings | None = None,
+    verbose: bool = True,
+    resume: bool = False,
 ) -> dict[str, Any]:
-    """Solve ``scene`` and write its output directory; return the summary.
+    """Solve ``scene`` in its owned output directory; publish on success; return the summary.
 
-    On a :class:`RunError` the XDMF files are removed and ``summary.json`` records
-    ``status`` = ``"error: ..."`` before the error propagates, so no directory looks
-    like a complete run when it is not.
+    The run writes into ``output.dir/incomplete`` and moves its files into ``output.dir``
+    only when it succeeds (:func:`geofrac.io.outdir.owned_run`): on a :class:`RunError`
+    or a signal, ``output.dir`` keeps the previous complete results and
+    ``incomplete/summary.json`` records ``status`` = ``"error: ..."`` or
+    ``"interrupted"``. ``resume`` continues an effect's loop from its newest checkpoint.
     """
+    from geofrac.io.outdir import owned_run
+
     timings = timings or Timings()
-    _prepare_output(scene, comm)
-    summary = start_summary(scene, comm, element=scene.discretization.element)
-    solution = None
-    try:
-        solution = solve_scene(scene, comm, timings, verbose, write=True)
-        if scene.output.xdmf:
-            with timings.phase("output"):
-                _write_xdmf(solution)
-                if solution.tagged.fractures is not None:
-                    _write_fractures(solution)
-        if solution.tagged.fractures is not None and comm.rank == 0:
-            from geofrac.dfn.io import save_network
+    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
+    start = start_summary(scene, comm, element=scene.discretization.element)
 
-            save_network(solution.tagged.fractures.network, scene.output.dir / "network.csv")
-        summary |= {
-            "mesh": solution.mesh_counts(),
-            "dofs": solution.problem.element.num_dofs,
-            "results": solution.results,
-            "status": "ok",
-        }
-    except RunError as exc:  # raised collectively, so the collective finish below is safe
-        summary["status"] = f"error: {exc}"
-        if comm.rank == 0:
-            for name in OUTPUT_FILES:
-                if name == "summary.json":
-                    continue
-                (scene.output.dir / name).unlink(missing_ok=True)
-        _finish(summary, scene, comm, timings)
-        raise
-    finally:
-        if solution is not None:
+    def body(staged: Scene, control: RunControl) -> dict[str, Any]:
+        solution = solve_scene(staged, comm, timings, verbose, write=True, control=control)
+        try:
+            if staged.output.xdmf:
+                with timings.phase("output"):
+                    _write_xdmf(solution)
+                    if solution.tagged.fractures is not None:
+                        _write_fractures(solution)
+            if solution.tagged.fractures is not None and comm.rank == 0:
+                from geofrac.dfn.io import save_network
+
+                save_network(solution.tagged.fractures.network, staged.output.dir / "network.csv")
+            return {
+                "mesh": solution.mesh_counts(),
+                "dofs": solution.problem.element.num_dofs,
+                "results": solution.results,
+            }
+        finally:
             solution.problem.destroy()
-    _finish(summary, scene, comm, timings)
-    return summary
 
-
-def _finish(summary: dict[str, Any], scene: Scene, comm: MPI.Comm, timings: Timings) -> None:
-    """Add timings and write summary.json (collective)."""
-    finish_summary(summary, scene.output.dir / "summary.json", comm, timings)
+    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "fem", resume, say)

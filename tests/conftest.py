@@ -18,6 +18,18 @@ JOBS = REPO / "jobs"
 BROKEN = Path(__file__).resolve().parent / "scenes" / "broken"
 
 
+def subprocess_env() -> dict[str, str]:
+    """This environment without the MPI launcher's variables, for a child process.
+
+    A child started from a test running under ``mpiexec`` would otherwise try to join
+    the parent's job and fail in ``PMI_Init``.
+    """
+    import os
+
+    launcher = ("PMI_", "PMIX_", "HYDRA_", "MPIR_", "MPI_LOCALNRANKS", "MPI_LOCALRANKID")
+    return {k: v for k, v in os.environ.items() if not k.startswith(launcher)}
+
+
 @pytest.fixture
 def cli(capsys):
     """Run ``geofrac`` in-process; return (exit code, stdout, stderr)."""

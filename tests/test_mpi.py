@@ -107,7 +107,7 @@ def test_run_errors_stop_every_rank(mpi_tmp_path):
     with pytest.raises(RunError, match="singular"):
         run_scene(scene, WORLD, verbose=False)
     WORLD.barrier()
-    summary = json.loads((mpi_tmp_path / "singular" / "summary.json").read_text())
+    summary = json.loads((mpi_tmp_path / "singular" / "incomplete" / "summary.json").read_text())
     assert summary["status"].startswith("error:") and summary["ranks"] == WORLD.size
 
 

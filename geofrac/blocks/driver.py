@@ -20,7 +20,7 @@ from mpi4py import MPI
 from geofrac.blocks.distributed import build_blocks, gather_blocks, owned_measure
 from geofrac.blocks.model import Blocks
 from geofrac.errors import RunError
-from geofrac.io.summary import finish_summary, prepare_output, start_summary
+from geofrac.io.summary import start_summary
 from geofrac.log import echo
 from geofrac.scene.model import Geometry, Scene
 from geofrac.timing import Timings
@@ -114,40 +114,38 @@ def build(
 
 
 def run_blocks_scene(
-    scene: Scene, comm: MPI.Comm, timings: Timings | None = None, verbose: bool = True
+    scene: Scene,
+    comm: MPI.Comm,
+    timings: Timings | None = None,
+    verbose: bool = True,
+    resume: bool = False,
 ) -> dict[str, Any]:
-    """Run a block scene and write its output directory; return the summary.
+    """Run a block scene in its owned output directory; publish on success; return the summary.
 
-    On a :class:`RunError` the outputs are removed and ``summary.json`` records
-    ``status`` = ``"error: ..."`` before the error propagates.
+    See :func:`geofrac.io.outdir.owned_run`: on a :class:`RunError` the previous results
+    stay and ``incomplete/summary.json`` records ``status`` = ``"error: ..."``. A block
+    run has no loop to checkpoint, so ``resume`` finds nothing to continue.
     """
+    from geofrac.io.outdir import owned_run
+
     timings = timings or Timings()
-    out = scene.output.dir
-    error = prepare_output(out, OUTPUT_FILES, comm)
-    if error is not None:
-        raise RunError(error)
-    summary = start_summary(scene, comm, method="blocks")
-    try:
-        blocks, record = build(scene, comm, timings, verbose)
+    start = start_summary(scene, comm, method="blocks")
+
+    def body(staged: Scene, control: Any) -> dict[str, Any]:
+        blocks, record = build(staged, comm, timings, verbose)
         with timings.phase("checks"):
-            validator = _validate(scene, blocks, comm)
+            validator = _validate(staged, blocks, comm)
             whole = gather_blocks(blocks, comm)
             del blocks
-            record["quality"] = _checks(scene, whole, record["domain_volume"], validator, comm)
+            record["quality"] = _checks(staged, whole, record["domain_volume"], validator, comm)
         with timings.phase("output"):
             if comm.rank == 0:
                 assert whole is not None
-                _write(scene, whole)
-        summary |= {"results": record, "status": "ok"}
-    except RunError as exc:
-        summary["status"] = f"error: {exc}"
-        if comm.rank == 0:
-            for name in OUTPUT_FILES[:-1]:
-                (out / name).unlink(missing_ok=True)
-        finish_summary(summary, out / "summary.json", comm, timings)
-        raise
-    finish_summary(summary, out / "summary.json", comm, timings)
-    return summary
+                _write(staged, whole)
+        return {"results": record}
+
+    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
+    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "blocks", resume, say)
 
 
 def _validate(scene: Scene, blocks: Blocks, comm: MPI.Comm) -> dict[str, Any] | None:

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import os
 import platform
-from collections.abc import Sequence
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -18,11 +19,14 @@ import geofrac
 
 __all__ = [
     "finish_summary",
-    "prepare_output",
     "start_summary",
     "versions",
     "write_json",
 ]
+
+
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
 
 
 def versions(fem: bool = True) -> dict[str, str]:
@@ -59,26 +63,15 @@ def versions(fem: bool = True) -> dict[str, str]:
 def write_json(path: Path, data: dict[str, Any]) -> None:
     """Write ``data`` as indented JSON atomically (a reader never sees half a file)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2, default=str) + "\n")
-    tmp.replace(path)
-
-
-def prepare_output(directory: Path, names: Sequence[str], comm: Any) -> str | None:
-    """Create ``directory`` and remove a previous run's ``names`` in it (rank 0; collective).
-
-    Returns:
-        None, or on every rank the message of the failure (``output.dir: ...``).
-    """
-    error = None
-    if comm.rank == 0:
-        try:
-            directory.mkdir(parents=True, exist_ok=True)
-            for name in names:
-                (directory / name).unlink(missing_ok=True)
-        except OSError as exc:
-            error = f"output.dir: cannot prepare {directory}: {exc.strerror}"
-    return comm.bcast(error, root=0)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        os.fchmod(fd, 0o666 & ~_UMASK)  # as a plain open() would create it
+        with os.fdopen(fd, "w") as f:
+            f.write(json.dumps(data, indent=2, default=str) + "\n")
+        os.replace(name, path)
+    except BaseException:
+        Path(name).unlink(missing_ok=True)
+        raise
 
 
 def start_summary(scene: Any, comm: Any, fem: bool = True, **details: Any) -> dict[str, Any]:

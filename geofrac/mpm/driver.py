@@ -32,7 +32,7 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.errors import RunError
-from geofrac.io.summary import finish_summary, prepare_output, start_summary
+from geofrac.io.summary import start_summary
 from geofrac.log import echo, format_seconds
 from geofrac.mpm.boundaries import held, scene_grid
 from geofrac.mpm.grid import Grid
@@ -378,27 +378,25 @@ def _probe(p: Particles | None, pid: int, x0: np.ndarray | None) -> dict[str, li
 
 
 def run_mpm_scene(
-    scene: Scene, comm: MPI.Comm, timings: Timings | None = None, verbose: bool = True
+    scene: Scene,
+    comm: MPI.Comm,
+    timings: Timings | None = None,
+    verbose: bool = True,
+    resume: bool = False,
 ) -> dict[str, Any]:
-    """Run an MPM scene and write its output directory; return the summary.
+    """Run an MPM scene in its owned output directory; publish on success; return the summary.
 
-    On a :class:`RunError` the particle series and energies are removed and
-    ``summary.json`` records ``status`` = ``"error: ..."`` before the error propagates.
+    See :func:`geofrac.io.outdir.owned_run`: on a :class:`RunError` or a signal the
+    previous results stay and ``incomplete/summary.json`` records the status; the time
+    loop checkpoints into ``incomplete/checkpoint`` and ``resume`` continues from there.
     """
+    from geofrac.io.outdir import owned_run
+
     timings = timings or Timings()
-    error = prepare_output(scene.output.dir, OUTPUT_FILES, comm)
-    if error is not None:
-        raise RunError(error)
-    summary = start_summary(scene, comm, fem=False, method="mpm")
-    try:
-        results = simulate(scene, comm, timings, verbose, write=True)
-        summary |= {"results": results, "status": "ok"}
-    except RunError as exc:
-        summary["status"] = f"error: {exc}"
-        if comm.rank == 0:
-            for name in OUTPUT_FILES[:-1]:
-                (scene.output.dir / name).unlink(missing_ok=True)
-        finish_summary(summary, scene.output.dir / "summary.json", comm, timings)
-        raise
-    finish_summary(summary, scene.output.dir / "summary.json", comm, timings)
-    return summary
+    start = start_summary(scene, comm, fem=False, method="mpm")
+
+    def body(staged: Scene, control: Any) -> dict[str, Any]:
+        return {"results": simulate(staged, comm, timings, verbose, write=True, control=control)}
+
+    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
+    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "mpm", resume, say)

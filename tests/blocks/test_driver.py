@@ -85,7 +85,10 @@ def test_bad_quality_fails_the_run_and_leaves_no_outputs(tmp_path, monkeypatch):
         _run(tmp_path, "blocks_square.toml", ["geometry.parameters.h=0.3"])
     out = tmp_path / "out"
     assert not (out / "blocks.vtu").exists()
-    assert json.loads((out / "summary.json").read_text())["status"].startswith("error")
+    assert json.loads((out / "incomplete" / "summary.json").read_text())["status"].startswith(
+        "error"
+    )
+    assert not (out / "summary.json").exists()
 
 
 @pytest.mark.mpi(min_size=2)
@@ -126,5 +129,5 @@ def test_a_mesh_with_a_non_manifold_vertex_is_refused_with_a_clear_error(tmp_pat
     scene.write_text(f'method = "blocks"\n[geometry]\nfile = "{geo.as_posix()}"\n[blocks]\n')
     with pytest.raises(RunError, match="do not form one fan"):
         run_blocks_scene(load_scene(scene, out=tmp_path / "out"), MPI.COMM_SELF, verbose=False)
-    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    summary = json.loads((tmp_path / "out" / "incomplete" / "summary.json").read_text())
     assert summary["status"].startswith("error: cannot build blocks")

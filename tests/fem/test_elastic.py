@@ -148,9 +148,10 @@ def test_singular_system_is_an_error_not_a_result(mpi_tmp_path, preset):
         run_scene(scene, MPI.COMM_WORLD, verbose=False)
 
     MPI.COMM_WORLD.barrier()
-    summary = json.loads((mpi_tmp_path / "run" / "summary.json").read_text())
+    summary = json.loads((mpi_tmp_path / "run" / "incomplete" / "summary.json").read_text())
     assert summary["status"].startswith("error: linear solver")
     assert not (mpi_tmp_path / "run" / "results.xdmf").exists()
+    assert not (mpi_tmp_path / "run" / "summary.json").exists()
 
 
 @pytest.mark.mpi

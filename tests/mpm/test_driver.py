@@ -59,10 +59,11 @@ def test_a_particle_leaving_the_grid_stops_the_run_and_says_so(tmp_path):
     )
     with pytest.raises(RunError, match="left the background grid"):
         run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)
-    summary = json.loads((tmp_path / "summary.json").read_text())
+    summary = json.loads((tmp_path / "incomplete" / "summary.json").read_text())
     assert (
         summary["status"].startswith("error: ") and "left the background grid" in summary["status"]
     )
+    assert not (tmp_path / "summary.json").exists()
     assert not (tmp_path / "particles.xdmf").exists()
     assert not (tmp_path / "energies.csv").exists()
 

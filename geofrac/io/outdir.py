@@ -1,0 +1,317 @@
+"""Owned output directories: one run at a time, staged writes, publication on success.
+
+Layout of an output directory ``OUT`` (docs/guide.md, "Running on a cluster")::
+
+    OUT/                  the last complete run: its files and its summary.json (status ok)
+    OUT/.lock             locked (``flock``) by the run that owns OUT while it runs
+    OUT/incomplete/       the run in progress, or the last one that failed, was
+                          interrupted or was killed: its files so far, its summary.json
+                          (status "running", "interrupted" or "error: ..."), checkpoint/
+
+A run writes only into ``OUT/incomplete/``. On success it publishes: the previous run's
+files (listed in its ``summary.json`` under ``files``) are removed, ``summary.json``
+first, the new files moved in and the new ``summary.json`` written last, so ``OUT``
+never holds one run's files beside another run's summary. A run that fails or is
+interrupted leaves ``OUT`` as it was. A second run into the same ``OUT`` while the first
+holds the lock is refused. The lock is an advisory ``flock``, released by the kernel
+when the process dies, so a killed run never leaves a stale lock.
+
+Collective functions return the same result or raise the same :class:`RunError` on
+every rank; only rank 0 touches the file system.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import datetime as dt
+import fcntl
+import json
+import os
+import shutil
+import socket
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from geofrac import interrupt
+from geofrac.errors import RunError
+from geofrac.io.checkpoint import CheckpointPolicy, RunControl, latest
+from geofrac.io.summary import finish_summary, write_json
+
+__all__ = ["INCOMPLETE", "OutputDir", "claim", "owned_run"]
+
+#: The staging directory's name inside the output directory.
+INCOMPLETE = "incomplete"
+_LOCK = ".lock"
+_CHECKPOINT = "checkpoint"
+
+
+@dataclasses.dataclass
+class OutputDir:
+    """An output directory this run owns (rank 0 holds the lock).
+
+    Attributes:
+        final: where complete results are published.
+        stage: where this run writes (``final / "incomplete"``).
+        notes: messages for the user about what was found (rank 0; e.g. a killed run).
+        resume_from: the checkpoint directory to resume from, or None.
+    """
+
+    final: Path
+    stage: Path
+    comm: Any
+    notes: list[str] = dataclasses.field(default_factory=list)
+    resume_from: Path | None = None
+    _lock: Any = None
+
+    @property
+    def checkpoints(self) -> Path:
+        """The checkpoint directory of this run."""
+        return self.stage / _CHECKPOINT
+
+    def staged(self, scene: Any) -> Any:
+        """``scene`` with its output directory set to the staging directory."""
+        return dataclasses.replace(scene, output=dataclasses.replace(scene.output, dir=self.stage))
+
+    def keep(self, summary: dict[str, Any], timings: Any) -> None:
+        """Finish ``summary`` into the staging directory and leave ``final`` as it is."""
+        finish_summary(summary, self.stage / "summary.json", self.comm, timings)
+
+    def publish(self, summary: dict[str, Any], timings: Any, legacy: Sequence[str]) -> None:
+        """Move the staged files into ``final``, replacing the previous run's (collective).
+
+        Args:
+            summary: the run's summary (``files`` is added).
+            timings: the run's timings (reduced into the summary).
+            legacy: file names a previous run may have left without a ``files`` list.
+        """
+        error = None
+        if self.comm.rank == 0:
+            try:
+                new = sorted(
+                    p.name
+                    for p in self.stage.iterdir()
+                    if p.is_file() and p.name != "summary.json" and not _is_temporary(p.name)
+                )
+                summary["files"] = new
+                old = _published_files(self.final, legacy)
+                (self.final / "summary.json").unlink(missing_ok=True)  # first: never stale
+                for name in old:
+                    target = self.final / name
+                    if target.is_file() or target.is_symlink():
+                        target.unlink()
+                for name in new:
+                    os.replace(self.stage / name, self.final / name)
+            except OSError as exc:
+                error = f"output.dir: cannot publish the results into {self.final}: {exc}"
+        error = self.comm.bcast(error, root=0)
+        if error is not None:
+            raise RunError(error)
+        finish_summary(summary, self.final / "summary.json", self.comm, timings)
+        if self.comm.rank == 0:
+            shutil.rmtree(self.stage, ignore_errors=True)
+
+    def release(self) -> None:
+        """Unlock (rank 0); the lock file stays (removing it would race a waiting run)."""
+        if self._lock is not None:
+            fcntl.flock(self._lock, fcntl.LOCK_UN)
+            self._lock.close()
+            self._lock = None
+
+
+def _is_temporary(name: str) -> bool:
+    return name.endswith(".tmp") or name.startswith(".")
+
+
+def _published_files(final: Path, legacy: Sequence[str]) -> list[str]:
+    """The files of the run published in ``final``: its summary's ``files``, else ``legacy``."""
+    try:
+        files = json.loads((final / "summary.json").read_text()).get("files")
+    except (OSError, ValueError, AttributeError):
+        files = None
+    if not isinstance(files, list):
+        files = list(legacy)
+    # only plain names: a summary.json edited by hand must not delete anything else
+    return [f for f in files if isinstance(f, str) and f and f == Path(f).name and f[0] != "."]
+
+
+def _describe_holder(lock: Path) -> str:
+    try:
+        info = json.loads(lock.read_text())
+        return f" (pid {info['pid']} on {info['host']}, started {info['started']})"
+    except (OSError, ValueError, KeyError, TypeError):
+        return ""
+
+
+def _claim_rank0(final: Path, resume: bool) -> tuple[Any, list[str], Path | None]:
+    """Lock ``final`` and prepare its staging directory (rank 0). Raises RunError."""
+    try:
+        final.mkdir(parents=True, exist_ok=True)
+        handle = open(final / _LOCK, "a+")  # noqa: SIM115 - held for the whole run
+    except OSError as exc:
+        raise RunError(f"output.dir: cannot create {final}: {exc.strerror}") from None
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        handle.close()
+        raise RunError(
+            f"output.dir: {final} is in use by another run{_describe_holder(final / _LOCK)}; "
+            "wait for it to finish or choose another directory with --out"
+        ) from None
+    try:
+        handle.seek(0)
+        handle.truncate()
+        started = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
+        holder = {"pid": os.getpid(), "host": socket.gethostname(), "started": started}
+        handle.write(json.dumps(holder))
+        handle.flush()
+        stage = final / INCOMPLETE
+        notes: list[str] = []
+        previous = _previous_status(stage)
+        checkpoint = latest(stage / _CHECKPOINT)
+        if resume:
+            if checkpoint is None:
+                raise RunError(
+                    f"--resume: no complete checkpoint in {stage / _CHECKPOINT}; "
+                    "nothing to resume (run without --resume to start afresh)"
+                )
+            if previous == "running":
+                notes.append(f"the run in {stage} was killed; resuming from its last checkpoint")
+            return handle, notes, checkpoint.path
+        if stage.exists():
+            if previous == "running":
+                notes.append(f"the previous run in {stage} was killed before it finished")
+            if checkpoint is not None:
+                notes.append(
+                    f"discarding the unfinished run in {stage} and its checkpoint at "
+                    f"{checkpoint.meta.get('kind')} step/event {checkpoint.k} "
+                    "(use --resume to continue such a run)"
+                )
+            shutil.rmtree(stage)
+        stage.mkdir()
+        return handle, notes, None
+    except RunError:
+        fcntl.flock(handle, fcntl.LOCK_UN)
+        handle.close()
+        raise
+    except OSError as exc:
+        fcntl.flock(handle, fcntl.LOCK_UN)
+        handle.close()
+        raise RunError(f"output.dir: cannot prepare {final}: {exc}") from None
+
+
+def _previous_status(stage: Path) -> str | None:
+    try:
+        return json.loads((stage / "summary.json").read_text()).get("status")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def claim(final: Path, comm: Any, resume: bool = False) -> OutputDir:
+    """Lock ``final`` for this run and prepare ``final/incomplete`` (collective).
+
+    Without ``resume`` an earlier unfinished run's staging directory is removed (with a
+    note); with it, the newest complete checkpoint there is kept for the run to continue.
+
+    Raises:
+        RunError: on every rank: the directory is in use, cannot be written, or
+            ``resume`` finds no checkpoint.
+    """
+    result: tuple[str | None, list[str], Path | None] = (None, [], None)
+    handle = None
+    if comm.rank == 0:
+        try:
+            handle, notes, resume_from = _claim_rank0(final, resume)
+            result = (None, notes, resume_from)
+        except RunError as exc:
+            result = (str(exc), [], None)
+    error, notes, resume_from = comm.bcast(result, root=0)
+    if error is not None:
+        raise RunError(error)
+    return OutputDir(final, final / INCOMPLETE, comm, notes, resume_from, handle)
+
+
+def owned_run(
+    scene: Any,
+    comm: Any,
+    timings: Any,
+    start: dict[str, Any],
+    body: Callable[[Any, RunControl], dict[str, Any]],
+    legacy: Sequence[str],
+    kind: str,
+    resume: bool = False,
+    say: Callable[[str], None] = lambda msg: None,
+) -> dict[str, Any]:
+    """Run ``body`` in an owned, staged output directory; publish on success (collective).
+
+    Args:
+        scene: the validated scene (its ``output.dir`` is the directory to own).
+        comm: the communicator.
+        timings: the run's :class:`~geofrac.timing.Timings`.
+        start: the head of the summary (:func:`~geofrac.io.summary.start_summary`).
+        body: ``body(staged_scene, control)`` does the work, writing into the staged
+            scene's ``output.dir``, and returns the summary entries to add (``results``...).
+        legacy: names of files an older geofrac wrote into the directory.
+        kind: the checkpoint kind (``"fem"``, ``"mpm"``, ``"blocks"``).
+        resume: continue from the newest checkpoint in ``output.dir/incomplete``.
+        say: progress printer (rank 0).
+
+    Returns:
+        the summary as written to ``summary.json``.
+
+    Raises:
+        RunError: collectively; :class:`~geofrac.interrupt.Interrupted` after a signal,
+            with ``incomplete/summary.json`` saying ``status = "interrupted"``.
+    """
+    out = claim(scene.output.dir, comm, resume)
+    try:
+        for note in out.notes:
+            say(f"note: {note}")
+        output = scene.output
+        policy = CheckpointPolicy(
+            int(getattr(output, "checkpoint_every", 0)),
+            float(getattr(output, "checkpoint_minutes", 10.0)),
+        )
+        control = RunControl(comm, out.checkpoints, scene.sha256, kind, policy)
+        if out.resume_from is not None:
+            control.resume = latest(out.checkpoints)
+            if control.resume is None:  # pragma: no cover - claim found it just before
+                raise RunError(f"--resume: the checkpoint in {out.checkpoints} disappeared")
+            control.check_resume(ranks_must_match=False)
+            start["resumed_from"] = {"checkpoint": str(control.resume.path), "k": control.resume.k}
+        summary = dict(start) | {"status": "running"}
+        if comm.rank == 0:
+            write_json(out.stage / "summary.json", summary)
+        staged = out.staged(scene)
+        try:
+            summary |= body(staged, control)
+            _, stop = control.poll(0)  # a signal during a run without a loop
+            if stop:
+                control.interrupt("the last phase")
+            summary["status"] = "ok"
+        except interrupt.Interrupted as exc:
+            summary["status"] = "interrupted"
+            summary["interrupted"] = {
+                "signal": exc.signum,
+                "after": exc.where,
+                "checkpoint": None if control.saved is None else str(control.saved),
+            }
+            out.keep(summary, timings)
+            exc.partial = out.stage  # type: ignore[attr-defined]
+            raise
+        except RunError as exc:
+            summary["status"] = f"error: {exc}"
+            out.keep(summary, timings)
+            exc.partial = out.stage  # type: ignore[attr-defined]  # for the CLI's message
+            raise
+        except BaseException as exc:  # a bug: record it without collectives, then re-raise
+            if comm.rank == 0:
+                summary["status"] = f"error: internal error {exc!r}"
+                with contextlib.suppress(OSError):
+                    write_json(out.stage / "summary.json", summary)
+            raise
+        out.publish(summary, timings, legacy)
+        return summary
+    finally:
+        out.release()
