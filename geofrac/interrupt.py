@@ -5,7 +5,10 @@ SIGTERM before a time limit (``--signal``). :func:`install` turns both signals i
 flag; the long loops ask :func:`geofrac.io.checkpoint.RunControl.poll` after each
 completed step or event, which reduces the flag over all ranks so that every rank stops
 at the same step, writes a checkpoint and raises :class:`Interrupted`. A second signal
-of the same kind restores the default action, so pressing Ctrl-C twice still kills.
+of the same kind more than :data:`REPEAT_S` seconds after the first takes the default
+action, so pressing Ctrl-C again still kills; repeats within that time are the same
+request arriving twice (Ctrl-C reaches both ``mpiexec``, which forwards it, and the
+ranks of its process group) and are ignored.
 
 No MPI and no DOLFINx here.
 """
@@ -13,14 +16,18 @@ No MPI and no DOLFINx here.
 from __future__ import annotations
 
 import signal
+import time
 from types import FrameType
 
 from geofrac.errors import RunError
 
-__all__ = ["Interrupted", "install", "received", "reset", "uninstall"]
+__all__ = ["REPEAT_S", "Interrupted", "install", "received", "reset", "uninstall"]
 
 _SIGNALS = (signal.SIGTERM, signal.SIGINT)
+#: Seconds after a signal during which the same signal again is taken as a duplicate.
+REPEAT_S = 5.0
 _received: list[int] = []
+_first: dict[int, float] = {}
 _previous: dict[int, object] = {}
 
 
@@ -43,10 +50,13 @@ class Interrupted(RunError):
 
 
 def _handler(signum: int, frame: FrameType | None) -> None:
-    if signum in _received:  # the second one: fall back to the default action
-        signal.signal(signum, signal.SIG_DFL)
-        signal.raise_signal(signum)
+    now = time.monotonic()
+    if signum in _first:
+        if now - _first[signum] > REPEAT_S:  # asked again: fall back to the default action
+            signal.signal(signum, signal.SIG_DFL)
+            signal.raise_signal(signum)
         return
+    _first[signum] = now
     _received.append(signum)
 
 
@@ -68,6 +78,7 @@ def uninstall() -> None:
 def reset() -> None:
     """Forget signals received so far."""
     _received.clear()
+    _first.clear()
 
 
 def received() -> int:
