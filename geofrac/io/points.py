@@ -62,8 +62,42 @@ class PointSeries:
                     raise ValueError(f"field {name!r}: {values.shape[1]} components")
                 f[f"frame_{i}/{name}"] = values if values.shape[1] > 1 else values[:, 0]
                 kinds.append((name, values.shape[1]))
+            f[f"frame_{i}"].attrs["t"] = float(t)
+            f[f"frame_{i}"].attrs["fields"] = ",".join(name for name, _ in kinds)
         self.frames.append((float(t), kinds))
         self._write_xml()
+
+    @classmethod
+    def reopen(cls, path: Path, count: int, t_max: float) -> PointSeries:
+        """The series in ``path`` with its frames of time <= ``t_max`` (later ones dropped).
+
+        A resumed run continues the series of the interrupted one; frames that run wrote
+        after its checkpoint are removed, so each time appears once.
+
+        Raises:
+            ValueError: the file holds another number of particles.
+        """
+        self = cls.__new__(cls)
+        self.path, self.h5, self.count = Path(path), Path(path).with_suffix(".h5"), int(count)
+        self.frames = []
+        if not self.h5.exists():
+            return cls(path, count)
+        with h5py.File(self.h5, "a") as f:
+            if len(f["topology"]) != self.count:
+                raise ValueError(f"{self.h5.name}: {len(f['topology'])} particles, not {count}")
+            i = 0
+            while f"frame_{i}" in f:
+                group = f[f"frame_{i}"]
+                t = float(group.attrs.get("t", np.inf))
+                if t > t_max * (1 + 1e-12) or len(self.frames) < i:
+                    del f[f"frame_{i}"]
+                else:
+                    names = str(group.attrs.get("fields", "")).split(",")
+                    kinds = [(n, group[n].shape[1] if group[n].ndim > 1 else 1) for n in names if n]
+                    self.frames.append((t, kinds))
+                i += 1
+        self._write_xml()
+        return self
 
     def _write_xml(self) -> None:
         h5, n = self.h5.name, self.count

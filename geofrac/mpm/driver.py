@@ -23,6 +23,7 @@ imported.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -32,6 +33,7 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.errors import RunError
+from geofrac.io.checkpoint import RunControl
 from geofrac.io.summary import start_summary
 from geofrac.log import echo, format_seconds
 from geofrac.mpm.boundaries import held, scene_grid
@@ -255,15 +257,24 @@ def simulate(
     timings: Timings | None = None,
     verbose: bool = True,
     write: bool = False,
+    control: RunControl | None = None,
 ) -> dict[str, Any]:
     """Prepare and step ``scene`` to its end time; return the JSON-ready results.
 
     ``write``: write ``particles.xdmf`` and ``energies.csv`` into ``output.dir`` (which
-    must exist).
+    must exist); ``energies.csv`` gets a line per step as it completes.
+
+    ``control``: after each step the loop asks ``control.poll`` whether to write a
+    checkpoint (this rank's particles in their local order, and the loop's state) or to
+    stop on a signal; with ``control.resume`` it continues from that checkpoint, on the
+    same number of ranks, and gives the same particle state as an uninterrupted run.
+    None: no checkpoints, no polling.
 
     Raises:
         RunError: collectively, when the run cannot continue (a particle left the grid,
-            a non-finite state).
+            a non-finite state, a checkpoint of another scene or rank count);
+            :class:`~geofrac.interrupt.Interrupted` after a signal, once the
+            checkpoint is written.
     """
     timings = timings or Timings()
     say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
@@ -278,35 +289,30 @@ def simulate(
         f"{run.steps} steps to t = {spec.t_end:g} on {comm.size} rank(s)"
     )
     out = scene.output
-    first = _gather(run, comm)
-    x0 = None if first is None else first.x.copy()
+    resume = control.resume if control is not None else None
+    if resume is not None:
+        assert control is not None
+        control.check_resume(ranks_must_match=True)
+        loop = _restore(run, resume, comm)
+        say(
+            f"mpm: resuming from step {loop['k']} (t = {loop['k'] * s.dt:.6g}) of checkpoint "
+            f"{resume.path}"
+        )
+    else:
+        loop = _start(run, comm)
+    x0 = loop["x0"]
     series = csv = None
     if write and comm.rank == 0:
-        assert first is not None
-        if out.xdmf:
-            from geofrac.io.points import PointSeries
-
-            series = PointSeries(out.dir / "particles.xdmf", first.n)
-            series.write(0.0, first.x, _fields(first, x0, out.fields))  # type: ignore[arg-type]
-        csv = (out.dir / "energies.csv").open("w")
-        csv.write("step,t,kinetic,strain,gravity,total,dissipated\n")
-    k0, s0, u0 = _energies(run, comm)
-    e0 = k0 + s0
-    front0 = _front(run, comm)
-    history: dict[str, list[Any]] = {"t": [0.0], "front_x": [front0]}
-    probes: dict[str, list[Any]] = {name: [] for name in run.probes}
-    if first is not None:
-        for name, pid in run.probes.items():
-            probes[name].append(_probe(first, pid, x0))
-    drift = 0.0
+        series, csv = _open_logs(run, out, loop, resume is not None)
     every = max(1, run.steps // spec.frames)
+    drift, e0, u0 = loop["drift"], loop["e0"], loop["u0"]
+    history, probes = loop["history"], loop["probes"]
     t_wall = time.perf_counter()
     last_say = t_wall
+    first_step = loop["k"] + 1
     try:
-        if csv is not None:
-            csv.write(f"0,0,{k0!r},{s0!r},0.0,{e0!r},0.0\n")
         with timings.phase("steps"):
-            for k in range(1, run.steps + 1):
+            for k in range(first_step, run.steps + 1):
                 step(run.local, run.particles, run.material, s)
                 kin, strain, pot = _energies(run, comm)
                 total = kin + strain + (pot - u0)
@@ -316,6 +322,7 @@ def simulate(
                         f"{k},{k * s.dt!r},{kin!r},{strain!r},{pot - u0!r},{total!r},"
                         f"{e0 - total!r}\n"
                     )
+                    csv.flush()  # a killed run keeps every completed step
                 if k % every == 0 or k == run.steps:
                     t = k * s.dt
                     history["t"].append(t)
@@ -326,38 +333,144 @@ def simulate(
                             probes[name].append(_probe(gathered, pid, x0))
                         if series is not None:
                             series.write(t, gathered.x, _fields(gathered, x0, out.fields))  # type: ignore[arg-type]
-                        if csv is not None:
-                            csv.flush()
                 now = time.perf_counter()
                 if now - last_say > PROGRESS_EVERY_S or k == run.steps:
                     last_say = now
-                    rate = k * run.total / (now - t_wall)
+                    done = k - first_step + 1
+                    rate = done * run.total / (now - t_wall)
                     say(
                         f"mpm [{k}/{run.steps}] t = {k * s.dt:.4g}: kinetic {kin:.4g}, "
                         f"strain {strain:.4g}, front x {history['front_x'][-1]:.4g} "
                         f"({rate:.3g} particle-steps/s, elapsed "
                         f"{format_seconds(now - t_wall)}, left "
-                        f"~{format_seconds((run.steps - k) * (now - t_wall) / k)})"
+                        f"~{format_seconds((run.steps - k) * (now - t_wall) / done)})"
                     )
+                if control is not None:
+                    save, stop = control.poll(k)
+                    if save and k < run.steps:
+                        state = {"k": k, "drift": drift, "e0": e0, "u0": u0}
+                        state |= {"front0": loop["front0"], "history": history, "probes": probes}
+                        control.save(
+                            k,
+                            state,
+                            shared=None if x0 is None else {"x0": x0},
+                            local=_particle_arrays(run.particles),
+                        )
+                    if stop and k < run.steps:
+                        control.interrupt(f"step {k}")
     finally:
         if csv is not None:
             csv.close()
     seconds = time.perf_counter() - t_wall
+    steps_done = run.steps - first_step + 1
     probes = comm.bcast(probes, root=0)  # rank 0 gathered them; every rank returns the same
     results: dict[str, Any] = {
         "particles": run.total,
         "steps": run.steps,
         "dt": s.dt,
         "t_end": spec.t_end,
-        "runout_m": history["front_x"][-1] - front0,
+        "runout_m": history["front_x"][-1] - loop["front0"],
         "energy_drift_max": drift / e0 if e0 > 0 else None,
-        "particle_steps_per_s": run.total * run.steps / seconds if seconds > 0 else None,
+        "particle_steps_per_s": run.total * steps_done / seconds if seconds > 0 else None,
         "history": history,
         "probes": probes,
     }
+    if resume is not None:
+        results["resumed_at_step"] = resume.k
     if run.friction_angle is not None:
         results["friction_angle_deg"] = run.friction_angle
     return results
+
+
+def _start(run: MpmRun, comm: MPI.Comm) -> dict[str, Any]:
+    """The loop's state at t = 0 (collective): initial energies, front, probes, x0."""
+    first = _gather(run, comm)
+    x0 = None if first is None else first.x.copy()
+    k0, s0, u0 = _energies(run, comm)
+    front0 = _front(run, comm)
+    probes: dict[str, list[Any]] = {name: [] for name in run.probes}
+    if first is not None:
+        for name, pid in run.probes.items():
+            probes[name].append(_probe(first, pid, x0))
+    return {
+        "k": 0,
+        "drift": 0.0,
+        "e0": k0 + s0,
+        "u0": u0,
+        "front0": front0,
+        "history": {"t": [0.0], "front_x": [front0]},
+        "probes": probes,
+        "x0": x0,
+        "first": first,
+        "k0": k0,
+        "s0": s0,
+    }
+
+
+def _particle_arrays(p: Particles) -> dict[str, np.ndarray]:
+    """Every array of the particle state, by field name (a checkpoint's ``local``)."""
+    return {f.name: getattr(p, f.name) for f in dataclasses.fields(Particles)}
+
+
+def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
+    """Put checkpoint ``ck``'s particles into ``run`` and return the loop's saved state."""
+    arrays = ck.local(comm.rank)
+    names = [f.name for f in dataclasses.fields(Particles)]
+    missing = [n for n in names if n not in arrays]
+    if missing:
+        raise RunError(f"--resume: the checkpoint {ck.path} lacks particle arrays {missing}")
+    run.particles = Particles(**{n: np.array(arrays[n]) for n in names})
+    loop = dict(ck.data)
+    loop["x0"] = ck.shared().get("x0") if comm.rank == 0 else None
+    broken = comm.rank == 0 and loop["x0"] is None
+    if comm.allreduce(int(broken)) or comm.allreduce(run.particles.n) != run.total:
+        raise RunError(f"--resume: the checkpoint {ck.path} does not match this scene's particles")
+    return loop
+
+
+_ENERGY_HEADER = "step,t,kinetic,strain,gravity,total,dissipated\n"
+
+
+def _open_logs(run: MpmRun, out: Any, loop: dict[str, Any], resumed: bool) -> tuple[Any, Any]:
+    """``particles.xdmf`` and ``energies.csv`` (rank 0): new, or cut back to step ``k``.
+
+    A resumed run drops what the interrupted one wrote after its checkpoint (a run
+    killed by SIGKILL goes on writing after its last checkpoint), so every step and
+    frame time appears once.
+    """
+    from geofrac.io.points import PointSeries
+
+    path = out.dir / "energies.csv"
+    series = None
+    if resumed:
+        k = loop["k"]
+        if out.xdmf:
+            series = PointSeries.reopen(out.dir / "particles.xdmf", run.total, k * run.settings.dt)
+        rows = []
+        if path.exists():
+            with path.open() as f:
+                rows = [line for line in f if (step := _csv_step(line)) is not None and step <= k]
+        csv = path.open("w")
+        csv.write(_ENERGY_HEADER)
+        csv.writelines(rows)
+        csv.flush()
+        return series, csv
+    first = loop["first"]
+    if out.xdmf:
+        series = PointSeries(out.dir / "particles.xdmf", first.n)
+        series.write(0.0, first.x, _fields(first, loop["x0"], out.fields))  # type: ignore[arg-type]
+    csv = path.open("w")
+    csv.write(_ENERGY_HEADER)
+    k0, s0 = loop["k0"], loop["s0"]
+    csv.write(f"0,0,{k0!r},{s0!r},0.0,{loop['e0']!r},0.0\n")
+    csv.flush()
+    return series, csv
+
+
+def _csv_step(line: str) -> int | None:
+    """The step of an ``energies.csv`` row; None for the header or a torn last line."""
+    head = line.split(",", 1)[0]
+    return int(head) if head.isdigit() and line.endswith("\n") else None
 
 
 def _front(run: MpmRun, comm: MPI.Comm) -> float:
