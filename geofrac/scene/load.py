@@ -31,6 +31,7 @@ from geofrac.scene.model import (
     Solver,
 )
 from geofrac.scene.table import Table as _Table
+from geofrac.scene.table import checkpoint_keys
 
 __all__ = [
     "DEFAULT_OUTPUT_FIELDS",
@@ -77,7 +78,7 @@ SECTION_KEYS: dict[str, tuple[str, ...]] = {
     "bc": ("group", "value", "components"),
     "load": ("type", "group", "value"),
     "solver": ("preset", "options"),
-    "output": ("dir", "fields", "xdmf", "probes"),
+    "output": ("dir", "fields", "xdmf", "probes", "checkpoint_every", "checkpoint_minutes"),
 }
 #: Field names ``output.fields`` may list.
 OUTPUT_FIELDS = ("displacement", "stress", "strain", "von_mises", "stress_nodal", "strain_nodal")
@@ -330,7 +331,10 @@ def _output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> Outp
     probes_raw = t.data.get("probes", {})
     p = _Table(file, "output.probes", probes_raw, list(probes_raw))
     probes = {k: p.vector(k, dim) for k in probes_raw}
-    return Output(directory.resolve(), tuple(fields), t.boolean("xdmf", True), probes)
+    every, minutes = checkpoint_keys(t)
+    return Output(
+        directory.resolve(), tuple(fields), t.boolean("xdmf", True), probes, every, minutes
+    )
 
 
 def _declared(file: Path, data: dict[str, Any]) -> list[str]:

@@ -172,12 +172,16 @@ class Output:
         fields: field names written to XDMF.
         xdmf: whether to write XDMF at all.
         probes: name -> point, shape=(gdim,), where the displacement is reported.
+        checkpoint_every: events or steps between checkpoints of a long loop (0: off).
+        checkpoint_minutes: wall-time minutes between checkpoints (0: off).
     """
 
     dir: Path
     fields: tuple[str, ...]
     xdmf: bool
     probes: dict[str, tuple[float, ...]]
+    checkpoint_every: int = 0
+    checkpoint_minutes: float = 10.0
 
 
 @dataclass(frozen=True)

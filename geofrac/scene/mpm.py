@@ -13,7 +13,7 @@ from typing import Any
 
 from geofrac.scene.errors import SceneError, did_you_mean
 from geofrac.scene.model import Geometry, Material, MpmSpec, Output, ParticleSource
-from geofrac.scene.table import Table, is_number
+from geofrac.scene.table import Table, checkpoint_keys, is_number
 
 __all__ = [
     "FEM_ONLY_TABLES",
@@ -238,7 +238,12 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
 
 def mpm_output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> Output:
     """``[output]`` of an MPM scene: particle fields; probes are particles nearest a point."""
-    t = Table(file, "output", raw, ("dir", "fields", "xdmf", "probes"))
+    t = Table(
+        file,
+        "output",
+        raw,
+        ("dir", "fields", "xdmf", "probes", "checkpoint_every", "checkpoint_minutes"),
+    )
     directory = Path(t.string("dir", default=f"results/{name}")) if out is None else out
     fields = t.data.get("fields", list(MPM_OUTPUT_FIELDS))
     if not isinstance(fields, list) or len(set(fields)) != len(fields):
@@ -251,4 +256,7 @@ def mpm_output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> O
     probes_raw = t.data.get("probes", {})
     p = Table(file, "output.probes", probes_raw, list(probes_raw))
     probes = {k: p.vector(k, dim) for k in probes_raw}
-    return Output(directory.resolve(), tuple(fields), t.boolean("xdmf", True), probes)
+    every, minutes = checkpoint_keys(t)
+    return Output(
+        directory.resolve(), tuple(fields), t.boolean("xdmf", True), probes, every, minutes
+    )

@@ -9,7 +9,34 @@ from typing import Any
 
 from geofrac.scene.errors import SceneError, did_you_mean
 
-__all__ = ["Table", "is_number"]
+__all__ = [
+    "MAX_CHECKPOINT_EVERY",
+    "MAX_CHECKPOINT_MINUTES",
+    "Table",
+    "checkpoint_keys",
+    "is_number",
+]
+
+#: Upper limits of ``output.checkpoint_every`` (events or steps) and ``checkpoint_minutes``.
+MAX_CHECKPOINT_EVERY = 10**9
+MAX_CHECKPOINT_MINUTES = 1e6
+
+
+def _short(value: Any, limit: int = 80) -> str:
+    """``repr(value)`` cut to ``limit`` characters (a huge list makes no readable error)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def checkpoint_keys(t: Table) -> tuple[int, float]:
+    """``checkpoint_every`` (default 0: off), ``checkpoint_minutes`` (default 10) of ``t``."""
+    every = t.number("checkpoint_every", default=0, integer=True, minimum=0)
+    if every is not None and every > MAX_CHECKPOINT_EVERY:
+        raise t.error("checkpoint_every", f"must be <= {MAX_CHECKPOINT_EVERY}, got {every!r}")
+    minutes = t.number(
+        "checkpoint_minutes", default=10.0, minimum=0.0, maximum=MAX_CHECKPOINT_MINUTES
+    )
+    return int(every), float(minutes)  # type: ignore[arg-type]
 
 
 def is_number(value: Any) -> bool:
@@ -48,8 +75,10 @@ class Table:
         required: bool = False,
         positive: bool = False,
         integer: bool = False,
+        minimum: float | None = None,
+        maximum: float | None = None,
     ) -> float | None:
-        """A finite number (optionally > 0, an integer, required), or ``default``."""
+        """A finite number (optionally > 0, >= minimum, <= maximum, an integer), or ``default``."""
         if name not in self.data:
             if required:
                 raise self.error(name, "missing (required)")
@@ -62,6 +91,10 @@ class Table:
             raise self.error(name, f"must be finite, got {value!r}")
         if positive and value <= 0:
             raise self.error(name, f"must be > 0, got {value!r}")
+        if minimum is not None and value < minimum:
+            raise self.error(name, f"must be >= {minimum:g}, got {value!r}")
+        if maximum is not None and value > maximum:
+            raise self.error(name, f"must be <= {maximum:g}, got {value!r}")
         return value
 
     def string(
@@ -83,7 +116,10 @@ class Table:
         """A list of ``length`` numbers (``value`` if given, else the entry)."""
         value = self.data[name] if value is None else value
         if not isinstance(value, list) or len(value) != length or not all(map(is_number, value)):
-            raise self.error(name, f"must be a list of {length} numbers, got {value!r}")
+            raise self.error(name, f"must be a list of {length} numbers, got {_short(value)}")
+        for i, c in enumerate(value):
+            if not math.isfinite(c):
+                raise self.error(name, f"entry {i} must be finite, got {c!r}")
         return tuple(float(c) for c in value)
 
     def boolean(self, name: str, default: bool) -> bool:
