@@ -23,7 +23,6 @@ imported.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -38,7 +37,7 @@ from geofrac.io.summary import start_summary
 from geofrac.log import echo, format_seconds
 from geofrac.mpm.boundaries import held, scene_grid
 from geofrac.mpm.grid import Grid
-from geofrac.mpm.particles import Particles
+from geofrac.mpm.particles import Particles, concat, take
 from geofrac.mpm.schemes import Elastic, StepSettings, step, strain_energy, time_step
 from geofrac.scene.model import Scene
 from geofrac.timing import Timings
@@ -266,13 +265,16 @@ def simulate(
 
     ``control``: after each step the loop asks ``control.poll`` whether to write a
     checkpoint (this rank's particles in their local order, and the loop's state) or to
-    stop on a signal; with ``control.resume`` it continues from that checkpoint, on the
-    same number of ranks, and gives the same particle state as an uninterrupted run.
-    None: no checkpoints, no polling.
+    stop on a signal; with ``control.resume`` it continues from that checkpoint. On the
+    same number of ranks that gives the uninterrupted run's particle state bit for bit;
+    on another number the particles are redistributed by position and the run agrees
+    with an uninterrupted one to round-off (docs/mpm.md). None: no checkpoints, no
+    polling.
 
     Raises:
         RunError: collectively, when the run cannot continue (a particle left the grid,
-            a non-finite state, a checkpoint of another scene or rank count);
+            a non-finite state, a checkpoint of another scene, output files that cannot
+            be continued);
             :class:`~geofrac.interrupt.Interrupted` after a signal, once the
             checkpoint is written.
     """
@@ -292,18 +294,31 @@ def simulate(
     resume = control.resume if control is not None else None
     if resume is not None:
         assert control is not None
-        control.check_resume(ranks_must_match=True)
+        control.check_resume(ranks_must_match=False)
         loop = _restore(run, resume, comm)
+        moved = (
+            f"; written on {resume.ranks()} rank(s), its particles are redistributed over "
+            f"{comm.size} (the result agrees with an uninterrupted run to round-off only)"
+            if resume.ranks() != comm.size
+            else ""
+        )
         say(
             f"mpm: resuming from step {loop['k']} (t = {loop['k'] * s.dt:.6g}) of checkpoint "
-            f"{resume.path}"
+            f"{resume.path}{moved}"
         )
     else:
         loop = _start(run, comm)
     x0 = loop["x0"]
     series = csv = None
+    error = None
     if write and comm.rank == 0:
-        series, csv = _open_logs(run, out, loop, resume is not None)
+        try:
+            series, csv = _open_logs(run, out, loop, resume is not None)
+        except (OSError, ValueError) as exc:  # e.g. an unreadable particles.h5 on --resume
+            error = f"cannot {'continue' if resume else 'write'} the output in {out.dir}: {exc}"
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise RunError(error)
     every = max(1, run.steps // spec.frames)
     drift, e0, u0 = loop["drift"], loop["e0"], loop["u0"]
     history, probes = loop["history"], loop["probes"]
@@ -354,7 +369,7 @@ def simulate(
                             k,
                             state,
                             shared=None if x0 is None else {"x0": x0},
-                            local=_particle_arrays(run.particles),
+                            local=run.particles.state(),
                         )
                     if stop and k < run.steps:
                         control.interrupt(f"step {k}")
@@ -407,24 +422,48 @@ def _start(run: MpmRun, comm: MPI.Comm) -> dict[str, Any]:
     }
 
 
-def _particle_arrays(p: Particles) -> dict[str, np.ndarray]:
-    """Every array of the particle state, by field name (a checkpoint's ``local``)."""
-    return {f.name: getattr(p, f.name) for f in dataclasses.fields(Particles)}
-
-
 def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
-    """Put checkpoint ``ck``'s particles into ``run`` and return the loop's saved state."""
-    arrays = ck.local(comm.rank)
-    names = [f.name for f in dataclasses.fields(Particles)]
-    missing = [n for n in names if n not in arrays]
-    if missing:
-        raise RunError(f"--resume: the checkpoint {ck.path} lacks particle arrays {missing}")
-    run.particles = Particles(**{n: np.array(arrays[n]) for n in names})
-    loop = dict(ck.data)
-    loop["x0"] = ck.shared().get("x0") if comm.rank == 0 else None
-    broken = comm.rank == 0 and loop["x0"] is None
-    if comm.allreduce(int(broken)) or comm.allreduce(run.particles.n) != run.total:
-        raise RunError(f"--resume: the checkpoint {ck.path} does not match this scene's particles")
+    """Put checkpoint ``ck``'s particles into ``run`` and return the loop's saved state.
+
+    On the checkpoint's number of ranks each rank takes back its own particles in their
+    local order. On another number rank 0 reads every rank's particles, sorts them by id
+    and broadcasts them, and each rank keeps those in its slab (as :func:`prepare`
+    distributes the initial ones). Collective.
+
+    Raises:
+        RunError: on every rank, when the checkpoint's particles are incomplete or do not
+            match the scene's.
+    """
+    error, particles = None, None
+    same = ck.ranks() == comm.size
+    try:
+        if same:
+            particles = Particles.from_state(ck.local(comm.rank))
+        elif comm.rank == 0:
+            parts = [Particles.from_state(ck.local(r)) for r in range(ck.ranks())]
+            whole = concat(parts, run.grid.dim)
+            particles = take(whole, np.argsort(whole.ids, kind="stable"))
+    except (OSError, ValueError) as exc:
+        error = f"--resume: the checkpoint {ck.path} holds unusable particles ({exc})"
+    errors = comm.allgather(error)
+    error = next((e for e in errors if e), None)
+    if error is None and not same:
+        particles = comm.bcast(particles, root=0)
+        assert particles is not None
+        if run.domain is not None:
+            particles = run.domain.distribute(particles)
+    if error is None:
+        assert particles is not None
+        loop = dict(ck.data)
+        loop["x0"] = ck.shared().get("x0") if comm.rank == 0 else None
+        broken = comm.rank == 0 and (loop["x0"] is None or len(loop["x0"]) != run.total)
+        count = comm.allreduce(particles.n)
+        if comm.allreduce(int(broken)) or count != run.total:
+            error = f"--resume: the checkpoint {ck.path} does not match this scene's particles"
+    if error is not None:
+        raise RunError(error)
+    assert particles is not None
+    run.particles = particles
     return loop
 
 

@@ -69,6 +69,30 @@ class Particles:
         """Σ m_p v_p, shape=(dim,)."""
         return self.mass @ self.v
 
+    def state(self) -> dict[str, np.ndarray]:
+        """Every array of the particles by field name (a checkpoint's content; not copies).
+
+        This is the whole state a step carries to the next: the schemes, plasticity,
+        smoothing and friction keep nothing else between steps.
+        """
+        return {f.name: getattr(self, f.name) for f in fields(Particles)}
+
+    @classmethod
+    def from_state(cls, arrays: dict[str, np.ndarray]) -> Particles:
+        """The particles of :meth:`state`'s arrays (copied, in their order).
+
+        Raises:
+            ValueError: an array is missing or the arrays disagree in length.
+        """
+        names = [f.name for f in fields(Particles)]
+        missing = [n for n in names if n not in arrays]
+        if missing:
+            raise ValueError(f"particle arrays {missing} are missing")
+        lengths = {n: len(arrays[n]) for n in names}
+        if len(set(lengths.values())) > 1:
+            raise ValueError(f"particle arrays of different lengths: {lengths}")
+        return cls(**{n: np.array(arrays[n], order="C") for n in names})
+
 
 def particles(
     x: np.ndarray, volume: np.ndarray, density: np.ndarray | float, lp0: np.ndarray
