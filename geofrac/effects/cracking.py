@@ -54,10 +54,12 @@ from typing import Any
 from geofrac.effects import ConfigureContext
 from geofrac.fracture import SOLVERS
 from geofrac.scene.errors import SceneError, did_you_mean
+from geofrac.scene.table import finite, short
 
 __all__ = [
     "ELEMENTS",
     "KEYS",
+    "LIMITS",
     "CrackingConfig",
     "configure",
     "driver",
@@ -91,6 +93,22 @@ KEYS = (
     "precrack_seed",
     "switch",
 )
+
+
+#: Upper limits of the open-ended keys (``max_events``: the size cap of
+#: :mod:`geofrac.scene.size`, 1e6, applies first unless ``--allow-large``).
+LIMITS: dict[str, float] = {
+    "max_events": 1e9,
+    "neighbours": 1000,
+    "margin": 10.0,
+    "max_radius_factor": 1000.0,
+    "edges_per_event": 1e6,
+    "batch_tolerance": 1.0,
+    "reuse_iterations": 1e5,
+    "output_every": 1e9,
+    "precrack_seed": 2**63 - 1,
+    "face_origin": 1e12,
+}
 
 
 @dataclass(frozen=True)
@@ -133,13 +151,16 @@ def _number(
     value = table.get(key, default)
     if value is None:
         return None
-    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    hi = min(hi, LIMITS.get(key, hi))
+    ok = isinstance(value, int | float) and not isinstance(value, bool) and finite(value)
     if kind is int:
         ok = ok and isinstance(value, int)
     if not ok or not (lo <= value if closed else lo < value) or not value <= hi:
-        span = f"{'≥' if closed else '>'} {lo}" + (f" and ≤ {hi}" if hi != float("inf") else "")
-        what = "an integer" if kind is int else "a number"
-        raise SceneError(file, f"cracking.{key}", f"must be {what} {span}, got {value!r}")
+        low = f"{'≥' if closed else '>'} {lo:g}" if lo != -float("inf") else ""
+        high = f"≤ {hi:g}" if hi != float("inf") else ""
+        span = " and ".join(s for s in (low, high) if s)
+        what = "an integer" if kind is int else "a finite number"
+        raise SceneError(file, f"cracking.{key}", f"must be {what} {span}, got {short(value)}")
     return kind(value)
 
 
@@ -165,14 +186,14 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
     method = table.get("method", "sequentially-linear")
     if method != "sequentially-linear":
         raise SceneError(
-            file, "cracking.method", f"unknown method {method!r}; use 'sequentially-linear'"
+            file, "cracking.method", f"unknown method {short(method)}; use 'sequentially-linear'"
         )
     max_events = _number(table, file, "max_events", 100, int, 0)
     energy_drop = _number(table, file, "energy_drop", None, float, 0.0, 1.0, closed=False)
     precracked = table.get("precracked", [])
     if not isinstance(precracked, list) or not all(isinstance(g, str) for g in precracked):
         raise SceneError(
-            file, "cracking.precracked", f"must be a list of group names, got {precracked!r}"
+            file, "cracking.precracked", f"must be a list of group names, got {short(precracked)}"
         )
     for g in precracked:
         if ctx.groups.get(g) != 1:
@@ -188,13 +209,22 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             not isinstance(region, list)
             or len(region) != 4
             or not all(isinstance(c, int | float) and not isinstance(c, bool) for c in region)
-            or region[0] >= region[2]
-            or region[1] >= region[3]
         ):
             raise SceneError(
                 file,
                 "cracking.mls_region",
-                f"must be [x0, y0, x1, y1] with x0 < x1, y0 < y1, got {region!r}",
+                f"must be [x0, y0, x1, y1] with x0 < x1, y0 < y1, got {short(region)}",
+            )
+        for i, c in enumerate(region):
+            if not finite(c):
+                raise SceneError(
+                    file, "cracking.mls_region", f"entry {i} must be finite, got {short(c)}"
+                )
+        if region[0] >= region[2] or region[1] >= region[3]:
+            raise SceneError(
+                file,
+                "cracking.mls_region",
+                f"must be [x0, y0, x1, y1] with x0 < x1, y0 < y1, got {short(region)}",
             )
         region = tuple(float(c) for c in region)
     nonzero = [bc.group for bc in ctx.bcs if bc.value != "exact" and any(v != 0 for v in bc.value)]
@@ -221,15 +251,17 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         )
     switch = table.get("switch", "patch")
     if switch not in ("patch", "grain"):
-        raise SceneError(file, "cracking.switch", f"must be 'patch' or 'grain', got {switch!r}")
+        raise SceneError(
+            file, "cracking.switch", f"must be 'patch' or 'grain', got {short(switch)}"
+        )
     if "switch" in table and ctx.element != "efmm":
         raise SceneError(
             file, "cracking.switch", "applies to element 'efmm' (grain interfaces) only"
         )
     solver = table.get("solver", "update")
-    if solver not in SOLVERS:
+    if not isinstance(solver, str) or solver not in SOLVERS:
         raise SceneError(
-            file, "cracking.solver", f"must be one of {', '.join(SOLVERS)}, got {solver!r}"
+            file, "cracking.solver", f"must be one of {', '.join(SOLVERS)}, got {short(solver)}"
         )
     return CrackingConfig(
         method=method,

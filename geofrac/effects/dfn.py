@@ -33,6 +33,7 @@ from geofrac.dfn.polygon import (
 from geofrac.dfn.sampling import FractureSet, Network, generate_network
 from geofrac.meshing.dfn import ALGORITHMS, DOMAIN_GROUP, FRACTURE_GROUP, MeshSpec
 from geofrac.scene.errors import SceneError, did_you_mean
+from geofrac.scene.table import MAX_INTEGER, finite, short
 
 __all__ = [
     "RECTANGLE_CORNERS",
@@ -204,8 +205,8 @@ def _check_keys(file: str, prefix: str, table: Any, allowed: tuple[str, ...]) ->
 
 
 def _number(file: str, key: str, value: Any, positive: bool = False) -> float:
-    if not isinstance(value, int | float) or isinstance(value, bool) or not math.isfinite(value):
-        raise _error(file, key, f"must be a finite number, got {value!r}")
+    if not isinstance(value, int | float) or isinstance(value, bool) or not finite(value):
+        raise _error(file, key, f"must be a finite number, got {short(value)}")
     if positive and value <= 0:
         raise _error(file, key, f"must be > 0, got {value!r}")
     return float(value)
@@ -227,9 +228,9 @@ def _polygon(file: str, key: str, value: Any, kinds: tuple[str, ...]) -> np.ndar
             return rectangle(*(float(v) for v in value))
         if "polygon" in kinds and not four_numbers:
             return as_polygon(np.asarray(value, dtype=float))
-    except (DfnError, ValueError, TypeError) as exc:
-        raise _error(file, key, f"must be {expected}: {exc}") from None
-    raise _error(file, key, f"must be {expected}, got {value!r}")
+    except (DfnError, ValueError, TypeError, OverflowError) as exc:
+        raise _error(file, key, f"must be {expected}: {short(str(exc))}") from None
+    raise _error(file, key, f"must be {expected}, got {short(value)}")
 
 
 def _distance(a: np.ndarray, b: np.ndarray) -> float:
@@ -276,8 +277,10 @@ def _fracture_set(file: str, i: int, raw: Any) -> FractureSet:
     if len(density) != 1:
         raise _error(file, key, f"give exactly one density, 'count' or 'p21', got {density}")
     count = t.get("count")
-    if count is not None and (not isinstance(count, int) or isinstance(count, bool)):
-        raise _error(file, f"{key}.count", f"must be an integer, got {count!r}")
+    if count is not None and (
+        not isinstance(count, int) or isinstance(count, bool) or not 0 <= count <= MAX_INTEGER
+    ):
+        raise _error(file, f"{key}.count", f"must be an integer >= 0, got {short(count)}")
     p21 = None if "p21" not in t else _number(file, f"{key}.p21", t["p21"])
     name = t.get("name", f"set{i + 1}")
     if not isinstance(name, str) or not name or "," in name:
@@ -373,8 +376,8 @@ def _configure(table: dict[str, Any], file: str) -> DfnConfig:
                 "no fracture centred in it can reach the domain",
             )
     seed = t.get("seed", 0)
-    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        raise _error(file, "seed", f"must be a non-negative integer, got {seed!r}")
+    if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed <= MAX_INTEGER:
+        raise _error(file, "seed", f"must be an integer in [0, 2^63), got {short(seed)}")
     return DfnConfig(
         domain=domain,
         region=region,

@@ -20,14 +20,16 @@ from typing import Any
 
 from geofrac.effects import ConfigureContext
 from geofrac.scene.errors import did_you_mean
-from geofrac.scene.table import Table
+from geofrac.scene.table import Table, short
 
-__all__ = ["KEYS", "METHODS", "FrictionConfig", "configure"]
+__all__ = ["KEYS", "MAX_MU", "METHODS", "FrictionConfig", "configure"]
 
 #: Methods this effect serves.
 METHODS = ("mpm",)
 #: Keys of ``[friction]``.
 KEYS = ("mu", "boundaries")
+#: Largest Coulomb coefficient (rock joints: about 0.6 ... 1; 100 is a glued wall).
+MAX_MU = 100.0
 
 
 @dataclass(frozen=True)
@@ -46,12 +48,17 @@ class FrictionConfig:
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> FrictionConfig:
     """Validate ``[friction]``; the boundaries must exist (``ctx.groups``)."""
     t = Table(ctx.file, "friction", table, KEYS)
-    mu = float(t.number("mu", required=True))  # type: ignore[arg-type]
-    if mu < 0:
-        raise t.error("mu", f"must be >= 0, got {mu}")
+    mu = float(t.number("mu", required=True, minimum=0.0, maximum=MAX_MU))  # type: ignore[arg-type]
     names = t.data.get("boundaries", ["bed"])
-    if not isinstance(names, list) or not names or len(set(names)) != len(names):
-        raise t.error("boundaries", f"must be a list of distinct boundary names, got {names!r}")
+    if (
+        not isinstance(names, list)
+        or not names
+        or not all(isinstance(n, str) for n in names)
+        or len(set(names)) != len(names)
+    ):
+        raise t.error(
+            "boundaries", f"must be a list of distinct boundary names, got {short(names)}"
+        )
     for name in names:
         if name not in ctx.groups:
             where = ", ".join(sorted(ctx.groups)) or "none: set mpm.walls or mpm.bed"

@@ -12,11 +12,14 @@ from typing import Any
 
 from geofrac.effects import ConfigureContext
 from geofrac.scene.errors import SceneError, did_you_mean
+from geofrac.scene.table import finite, short
 
-__all__ = ["METHODS", "GravityConfig", "configure", "linear_form"]
+__all__ = ["MAX_ACCELERATION", "METHODS", "GravityConfig", "configure", "linear_form"]
 
 #: Gravity is a body force in FEM scenes and a nodal force per mass in MPM scenes.
 METHODS = ("fem", "mpm")
+#: Largest magnitude of an acceleration component (1e6 g: far beyond any planet).
+MAX_ACCELERATION = 1e7
 
 
 @dataclass(frozen=True)
@@ -50,8 +53,18 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> GravityConfig:
         or not all(isinstance(c, int | float) and not isinstance(c, bool) for c in g)
     ):
         raise SceneError(
-            ctx.file, "gravity.acceleration", f"must be a list of {ctx.gdim} numbers, got {g!r}"
+            ctx.file,
+            "gravity.acceleration",
+            f"must be a list of {ctx.gdim} numbers, got {short(g)}",
         )
+    for i, c in enumerate(g):
+        if not finite(c) or abs(c) > MAX_ACCELERATION:
+            raise SceneError(
+                ctx.file,
+                "gravity.acceleration",
+                f"entry {i} must be finite and at most {MAX_ACCELERATION:.0e} in magnitude, "
+                f"got {short(c)}",
+            )
     return GravityConfig(acceleration=tuple(float(c) for c in g), density=float(density))
 
 

@@ -18,7 +18,7 @@ from typing import Any
 from geofrac.effects import ConfigureContext
 from geofrac.scene.table import Table
 
-__all__ = ["DEFAULT_RADIUS", "KEYS", "METHODS", "SmoothingConfig", "configure"]
+__all__ = ["DEFAULT_RADIUS", "KEYS", "MAX_RADIUS", "METHODS", "SmoothingConfig", "configure"]
 
 #: Methods this effect serves.
 METHODS = ("mpm",)
@@ -26,6 +26,8 @@ METHODS = ("mpm",)
 KEYS = ("radius",)
 #: Default influence radius in cells.
 DEFAULT_RADIUS = 2.0
+#: Largest influence radius in cells (a particle's neighbours grow as radius^dim).
+MAX_RADIUS = 20.0
 
 
 @dataclass(frozen=True)
@@ -42,5 +44,5 @@ class SmoothingConfig:
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> SmoothingConfig:
     """Validate ``[mls_smoothing]``."""
     t = Table(ctx.file, "mls_smoothing", table, KEYS)
-    radius = float(t.number("radius", default=DEFAULT_RADIUS, positive=True))  # type: ignore[arg-type]
+    radius = float(t.number("radius", default=DEFAULT_RADIUS, positive=True, maximum=MAX_RADIUS))  # type: ignore[arg-type]
     return SmoothingConfig(radius)

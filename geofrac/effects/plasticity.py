@@ -22,12 +22,14 @@ from geofrac.effects import ConfigureContext
 from geofrac.scene.errors import SceneError
 from geofrac.scene.table import Table
 
-__all__ = ["KEYS", "METHODS", "PlasticityConfig", "configure"]
+__all__ = ["KEYS", "MAX_COHESION", "METHODS", "PlasticityConfig", "configure"]
 
 #: Methods this effect serves.
 METHODS = ("mpm",)
 #: Keys of ``[plasticity]``.
 KEYS = ("friction_angle", "cohesion", "dilatancy_angle")
+#: Largest cohesion (stress units; the bound of ``material.E``).
+MAX_COHESION = 1e15
 
 
 @dataclass(frozen=True)
@@ -53,9 +55,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
     phi = float(t.number("friction_angle", required=True))  # type: ignore[arg-type]
     if not 0 <= phi < 90:
         raise t.error("friction_angle", f"must lie in [0, 90) degrees, got {phi}")
-    c = float(t.number("cohesion", default=0.0))  # type: ignore[arg-type]
-    if c < 0:
-        raise t.error("cohesion", f"must be >= 0, got {c}")
+    c = float(t.number("cohesion", default=0.0, minimum=0.0, maximum=MAX_COHESION))  # type: ignore[arg-type]
     psi = float(t.number("dilatancy_angle", default=0.0))  # type: ignore[arg-type]
     if not 0 <= psi <= phi:
         raise t.error("dilatancy_angle", f"must lie in [0, friction_angle = {phi}], got {psi}")

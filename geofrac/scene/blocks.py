@@ -14,7 +14,7 @@ from typing import Any
 
 from geofrac.scene.errors import SceneError
 from geofrac.scene.model import BlocksSpec, Geometry, Output
-from geofrac.scene.table import Table
+from geofrac.scene.table import Table, output_directory, short
 
 __all__ = ["BLOCKS_KEYS", "BLOCKS_OUTPUT_KEYS", "FEM_ONLY_TABLES", "blocks_output", "blocks_spec"]
 
@@ -36,6 +36,12 @@ BLOCKS_OUTPUT_KEYS = ("dir", "vtu", "block_file", "histogram")
 FEM_ONLY_TABLES = ("material", "discretization", "exact", "bc", "load", "solver", "mpm")
 #: ``[blocks.terrain]`` keys that are lists of numbers, with their lengths.
 _TERRAIN_VECTORS = {"extent": 4, "footprint_centre": 2, "footprint_axes": 2}
+#: Most gmsh threads ``blocks.terrain.threads`` may ask for (0 and negative crash OpenMP).
+MAX_THREADS = 256
+#: Most ``[blocks.terrain]`` zones, histogram bins and validated sample blocks.
+MAX_ZONES = 1000
+MAX_BINS = 10_000
+MAX_VALIDATE = 10**9
 
 
 def _terrain(file: Path, raw: Any) -> dict[str, Any]:
@@ -53,6 +59,8 @@ def _terrain(file: Path, raw: Any) -> dict[str, Any]:
             values[name] = _zones(t, value)
         elif isinstance(default, bool):
             values[name] = t.boolean(name, default)
+        elif name == "threads":
+            values[name] = int(t.number(name, integer=True, minimum=1, maximum=MAX_THREADS))  # type: ignore[arg-type]
         elif isinstance(default, int):
             values[name] = int(t.number(name, integer=True))  # type: ignore[arg-type]
         elif isinstance(default, float):
@@ -68,8 +76,11 @@ def _terrain(file: Path, raw: Any) -> dict[str, Any]:
 
 def _zones(t: Table, value: Any) -> tuple[tuple[tuple[float, ...], float, float], ...]:
     """``zones = [{centre = [x, y, z], radius = r, h = size}, ...]``."""
-    if not isinstance(value, list):
-        raise t.error("zones", "must be a list of tables {centre = [x, y, z], radius, h}")
+    if not isinstance(value, list) or len(value) > MAX_ZONES:
+        raise t.error(
+            "zones",
+            f"must be a list of at most {MAX_ZONES} tables {{centre = [x, y, z], radius, h}}",
+        )
     zones = []
     for i, raw in enumerate(value):
         z = Table(t.file, f"blocks.terrain.zones[{i}]", raw, ("centre", "radius", "h"))
@@ -129,19 +140,26 @@ def blocks_spec(file: Path, raw: Any, geometry: Geometry | None, warnings: list[
     validate = t.data.get("validate", "all")
     if not (
         validate in ("all", "none")
-        or (isinstance(validate, int) and not isinstance(validate, bool) and validate > 0)
+        or (
+            isinstance(validate, int)
+            and not isinstance(validate, bool)
+            and 0 < validate <= MAX_VALIDATE
+        )
     ):
         raise t.error(
-            "validate", f"must be 'all', 'none' or a number of blocks to sample, got {validate!r}"
+            "validate",
+            f"must be 'all', 'none' or a number of blocks to sample (1 ... {MAX_VALIDATE:.0e}), "
+            f"got {short(validate)}",
         )
-    bins = int(t.number("histogram_bins", default=40, integer=True, positive=True))  # type: ignore[arg-type]
+    bins = t.number("histogram_bins", default=40, integer=True, positive=True, maximum=MAX_BINS)
+    bins = int(bins)  # type: ignore[arg-type]
     return BlocksSpec(
         source=source,
         dim=dim,
         inner_point=inner,
         radius=radius,
         convex=convex,
-        seed=int(t.number("seed", default=0, integer=True)),  # type: ignore[arg-type]
+        seed=int(t.number("seed", default=0, integer=True, minimum=0, maximum=2**32 - 1)),  # type: ignore[arg-type]
         immobile=immobile,
         validate=validate,
         histogram_bins=bins,
@@ -149,9 +167,15 @@ def blocks_spec(file: Path, raw: Any, geometry: Geometry | None, warnings: list[
     )
 
 
-def blocks_output(file: Path, raw: Any, name: str, out: Path | None) -> Output:
-    """``[output]`` of a block scene: ``vtu``, ``block_file`` and ``histogram`` switches."""
+def blocks_output(
+    file: Path, raw: Any, name: str, out: Path | None, trusted: bool = False
+) -> Output:
+    """``[output]`` of a block scene: ``vtu``, ``block_file`` and ``histogram`` switches.
+
+    ``trusted``: ``output.dir`` was set on the command line (see
+    :func:`~geofrac.scene.table.output_directory`).
+    """
     t = Table(file, "output", raw, BLOCKS_OUTPUT_KEYS)
-    directory = Path(t.string("dir", default=f"results/{name}")) if out is None else out
+    directory = output_directory(t, name, out, trusted)
     fields = tuple(k for k in ("vtu", "block_file", "histogram") if t.boolean(k, True))
-    return Output(directory.resolve(), fields, "vtu" in fields, {})
+    return Output(directory, fields, "vtu" in fields, {})

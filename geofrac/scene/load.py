@@ -7,8 +7,10 @@ scene uses is checked before any mesh or solve. See ``docs/scenes.md`` for the s
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
+import math
 import tomllib
 from collections.abc import Sequence
 from pathlib import Path
@@ -30,8 +32,10 @@ from geofrac.scene.model import (
     Scene,
     Solver,
 )
+from geofrac.scene.size import Extent, check_size, estimate
+from geofrac.scene.table import MAX_DEPTH, check_name, checkpoint_keys, first_too_deep, short
 from geofrac.scene.table import Table as _Table
-from geofrac.scene.table import checkpoint_keys
+from geofrac.scene.table import output_directory as _output_directory
 
 __all__ = [
     "DEFAULT_OUTPUT_FIELDS",
@@ -60,6 +64,7 @@ TOP_LEVEL_KEYS = (
     "output",
     "mpm",
     "blocks",
+    "allow_large",
 )
 #: Simulation methods a scene may name (``method``).
 METHODS = ("fem", "mpm", "blocks")
@@ -85,6 +90,12 @@ OUTPUT_FIELDS = ("displacement", "stress", "strain", "von_mises", "stress_nodal"
 #: Fields written when ``output.fields`` is not given.
 DEFAULT_OUTPUT_FIELDS = ("displacement", "stress", "von_mises")
 _AXES = ("x", "y", "z")
+#: Upper limits of material constants (any unit system: E of diamond is 1.2e12 Pa).
+MAX_MODULUS = 1e15
+MAX_LENGTH = 1e9
+MAX_DENSITY = 1e6
+#: Highest forced quadrature degree (a degree-20 rule in 3D already has ~1800 points).
+MAX_QUADRATURE_DEGREE = 20
 
 
 def apply_overrides(data: dict[str, Any], overrides: Sequence[str], file: Path) -> None:
@@ -96,13 +107,20 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str], file: Path) 
         key, sep, text = item.partition("=")
         key = key.strip()
         if not sep or not key:
-            raise SceneError(file, key or item, f"--set expects KEY=VALUE, got {item!r}")
+            message = f"--set expects KEY=VALUE, got {short(item)}"
+            raise SceneError(file, short(key or item), message)
+        parts = key.split(".")
+        if len(parts) > MAX_DEPTH:
+            raise SceneError(
+                file, short(key), f"--set key is nested deeper than {MAX_DEPTH} levels"
+            )
         try:
             value = tomllib.loads(f"v = {text.strip()}")["v"]
         except tomllib.TOMLDecodeError:
             value = text.strip()
+        except (RecursionError, MemoryError):
+            raise SceneError(file, key, "--set value is nested too deeply") from None
         node: Any = data
-        parts = key.split(".")
         for depth, part in enumerate(parts[:-1]):
             if isinstance(node, list):
                 if not part.isdigit() or int(part) >= len(node):
@@ -155,7 +173,7 @@ def _geometry(file: Path, raw: Any) -> Geometry:
 
 def _material(file: Path, raw: Any, dim: int) -> Material:
     t = _Table(file, "material", raw, SECTION_KEYS["material"])
-    E = t.number("E", required=True, positive=True)
+    E = t.number("E", required=True, positive=True, maximum=MAX_MODULUS)
     nu = t.number("nu", required=True)
     assert E is not None and nu is not None
     if not -1.0 < nu < 0.5:
@@ -167,9 +185,9 @@ def _material(file: Path, raw: Any, dim: int) -> Material:
         E=float(E),
         nu=float(nu),
         plane=plane,  # type: ignore[arg-type]
-        thickness=float(t.number("thickness", default=1.0, positive=True)),  # type: ignore[arg-type]
-        density=t.number("density", positive=True),
-        tensile_strength=t.number("tensile_strength", positive=True),
+        thickness=float(t.number("thickness", default=1.0, positive=True, maximum=MAX_LENGTH)),  # type: ignore[arg-type]
+        density=t.number("density", positive=True, maximum=MAX_DENSITY),
+        tensile_strength=t.number("tensile_strength", positive=True, maximum=MAX_MODULUS),
     )
 
 
@@ -179,7 +197,7 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
     dims, _ = elements.describe(element)
     if dim not in dims:
         raise t.error("element", f"'{element}' supports dimensions {dims}, the geometry is {dim}D")
-    q = t.number("quadrature_degree", positive=True, integer=True)
+    q = t.number("quadrature_degree", positive=True, integer=True, maximum=MAX_QUADRATURE_DEGREE)
     for key in ("zero_mode_penalty", "gradient_bc"):
         if t.has(key) and element not in elements.GRADIENT_DOF_ELEMENTS:
             raise t.error(
@@ -195,11 +213,11 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
     q_rand = t.number("q_rand", default=0.0)
     if not 0.0 <= q_rand <= 1.0:  # type: ignore[operator]
         raise t.error("q_rand", f"must lie in [0, 1], got {q_rand!r}")
-    domain_seed = t.number("domain_seed", default=0, integer=True)
+    domain_seed = t.number("domain_seed", default=0, integer=True, maximum=2**32 - 1)
     if domain_seed < 0:  # type: ignore[operator]
         raise t.error("domain_seed", f"must be >= 0, got {domain_seed!r}")
     alpha_default = elements.GRADIENT_DOF_DEFAULTS.get(element, 0.0)
-    alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True)
+    alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True, maximum=1e6)
     gradient_bc = t.string("gradient_bc", default="fixed", choices=("fixed", "free"))
     return Discretization(
         element,
@@ -314,16 +332,24 @@ def _solver(file: Path, raw: Any) -> Solver:
         if k.startswith("-"):
             raise o.error(k, "write PETSc option names without the leading '-'")
         if not isinstance(v, str | int | float):
-            raise o.error(k, f"must be a string, number or boolean, got {v!r}")
+            raise o.error(k, f"must be a string, number or boolean, got {short(v)}")
+        if isinstance(v, int | float) and not isinstance(v, bool):
+            o.number(k)  # finite
         options[k] = ("true" if v else "false") if isinstance(v, bool) else str(v)
     return Solver(preset, options)  # type: ignore[arg-type]
 
 
-def _output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> Output:
+def _output(
+    file: Path, raw: Any, name: str, dim: int, out: Path | None, trusted: bool = False
+) -> Output:
     t = _Table(file, "output", raw, SECTION_KEYS["output"])
-    directory = Path(t.string("dir", default=f"results/{name}")) if out is None else out
+    directory = _output_directory(t, name, out, trusted)
     fields = t.data.get("fields", list(DEFAULT_OUTPUT_FIELDS))
-    if not isinstance(fields, list) or len(set(fields)) != len(fields):
+    if (
+        not isinstance(fields, list)
+        or not all(isinstance(f, str) for f in fields)
+        or len(set(fields)) != len(fields)
+    ):
         raise t.error("fields", f"must be a list of distinct names from {list(OUTPUT_FIELDS)}")
     for f in fields:
         if f not in OUTPUT_FIELDS:
@@ -332,9 +358,7 @@ def _output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> Outp
     p = _Table(file, "output.probes", probes_raw, list(probes_raw))
     probes = {k: p.vector(k, dim) for k in probes_raw}
     every, minutes = checkpoint_keys(t)
-    return Output(
-        directory.resolve(), tuple(fields), t.boolean("xdmf", True), probes, every, minutes
-    )
+    return Output(directory, tuple(fields), t.boolean("xdmf", True), probes, every, minutes)
 
 
 def _declared(file: Path, data: dict[str, Any]) -> list[str]:
@@ -412,6 +436,7 @@ def _mpm_scene(
     declared: list[str],
     common: dict[str, Any],
     out: str | Path | None,
+    trusted: bool = False,
 ) -> Scene:
     """The rest of an ``method = "mpm"`` scene (see :mod:`geofrac.scene.mpm`)."""
     from geofrac.scene.mpm import FEM_ONLY_TABLES, mpm_material, mpm_output, mpm_spec
@@ -426,7 +451,12 @@ def _mpm_scene(
         raise SceneError(file, "material", "missing (required table)")
     material = mpm_material(file, data["material"], spec.dim)
     output = mpm_output(
-        file, data.get("output", {}), common["name"], spec.dim, None if out is None else Path(out)
+        file,
+        data.get("output", {}),
+        common["name"],
+        spec.dim,
+        None if out is None else Path(out),
+        trusted,
     )
     has_bed = bool(spec.bed) or spec.bed_group is not None
     sides = {side: 1 for side in spec.walls} | ({"bed": 1} if has_bed else {})
@@ -469,6 +499,7 @@ def _blocks_scene(
     declared: list[str],
     common: dict[str, Any],
     out: str | Path | None,
+    trusted: bool = False,
 ) -> Scene:
     """The rest of a ``method = "blocks"`` scene (see :mod:`geofrac.scene.blocks`)."""
     from geofrac.scene.blocks import FEM_ONLY_TABLES, blocks_output, blocks_spec
@@ -482,7 +513,7 @@ def _blocks_scene(
     warnings: list[str] = []
     spec = blocks_spec(file, data["blocks"], geometry, warnings)
     output = blocks_output(
-        file, data.get("output", {}), common["name"], None if out is None else Path(out)
+        file, data.get("output", {}), common["name"], None if out is None else Path(out), trusted
     )
     return Scene(
         **common,
@@ -536,18 +567,73 @@ def _warnings(file: Path, material: Material, disc: Discretization, dim: int) ->
     return tuple(out)
 
 
+def _extent(geometry: Geometry | None) -> Extent | None:
+    """Bounding box and mesh sizes of a geometry file, read in gmsh without meshing.
+
+    A geometry whose inspection already carries them (an ``extent`` attribute with the
+    fields of :class:`Extent`) is not opened again. Otherwise the file is opened once
+    more in this process: only after :func:`_geometry` accepted it (its scan and time
+    limit passed with the same parameters), so this open ends as that one did.
+    """
+    if geometry is None or geometry.file is None:
+        return None
+    known = getattr(geometry, "extent", None)
+    if known is not None:
+        return known if isinstance(known, Extent) else Extent(**known)
+    from geofrac.meshing.geo import gmsh_session
+
+    try:
+        with gmsh_session(geometry.file, geometry.parameters) as gmsh:
+            model, option = gmsh.model, gmsh.option  # type: ignore[attr-defined]
+            box = model.getBoundingBox(-1, -1)
+            points = model.getEntities(0)
+            sizes = [float(v) for v in model.mesh.getSizes(points)] if points else []
+            size_max = float(option.getNumber("Mesh.MeshSizeMax"))
+            factor = float(option.getNumber("Mesh.MeshSizeFactor"))
+            variables = {}
+            for name in gmsh.parser.getNames():  # type: ignore[attr-defined]
+                value = gmsh.parser.getNumber(name)  # type: ignore[attr-defined]
+                if len(value) == 1 and math.isfinite(value[0]):
+                    variables[name] = float(value[0])
+            cells = None
+            if geometry.file.suffix == ".msh":
+                types, _, _ = model.mesh.getElements(geometry.dim)
+                cells = sum(len(model.mesh.getElementsByType(int(t))[0]) for t in types)
+    except RuntimeError as exc:
+        raise SceneError("", "geometry.file", f"gmsh cannot read the file: {exc}") from None
+    return Extent(
+        lower=tuple(box[:3]),
+        upper=tuple(box[3:]),
+        point_size=min((v for v in sizes if v > 0), default=None),
+        size_max=size_max if size_max < 1e21 else None,
+        size_factor=factor if factor > 0 else 1.0,
+        cells=cells,
+        variables=variables,
+    )
+
+
 def load_scene(
-    path: str | Path, overrides: Sequence[str] = (), out: str | Path | None = None
+    path: str | Path,
+    overrides: Sequence[str] = (),
+    out: str | Path | None = None,
+    *,
+    allow_large: bool = False,
+    ranks: int = 1,
 ) -> Scene:
-    """Read and validate a scene.
+    """Read and validate a scene, and estimate its size.
 
     Args:
         path: scene TOML file.
         overrides: ``KEY=VALUE`` strings applied before validation.
         out: output directory replacing ``output.dir``.
+        allow_large: run a scene beyond the size caps (``--allow-large``); the scene's
+            own ``allow_large`` does the same.
+        ranks: MPI ranks of the run (the per-rank caps scale with it).
 
     Raises:
-        SceneError: on the first problem found, naming the file and key.
+        SceneError: on the first problem found, naming the file and key. Malformed input
+            never ends in another exception: a nesting, size or number that Python
+            cannot handle becomes a SceneError naming the file.
     """
     file = Path(path)
     try:
@@ -558,7 +644,47 @@ def load_scene(
         data = tomllib.loads(raw_bytes.decode("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise SceneError(file, "", f"not valid TOML: {exc}") from None
-    apply_overrides(data, overrides, file)
+    except (RecursionError, MemoryError):
+        raise SceneError(file, "", "not readable: nested too deeply for the TOML reader") from None
+    try:
+        apply_overrides(data, overrides, file)
+        deep = first_too_deep(data)
+        if deep is not None:
+            raise SceneError(file, short(deep), f"nested deeper than {MAX_DEPTH} levels")
+        trusted = any(o.partition("=")[0].strip() == "output.dir" for o in overrides)
+        scene = _validate(file, data, raw_bytes, overrides, out, trusted)
+        scene = dataclasses.replace(
+            scene,
+            allow_large=scene.allow_large or allow_large,
+            size=estimate(scene, _extent(scene.geometry)),
+        )
+        check_size(file, scene.size, ranks, scene.allow_large)
+    except SceneError as exc:
+        if not exc.file:  # raised without the file (the gmsh extent)
+            raise SceneError(file, exc.key, exc.message) from None
+        raise
+    except (
+        RecursionError,
+        MemoryError,
+        OverflowError,
+        ValueError,
+        TypeError,
+        LookupError,
+    ) as exc:  # malformed input that a check above missed: still one line, exit 2
+        kind = type(exc).__name__
+        raise SceneError(file, "", f"malformed input ({kind}: {short(str(exc))})") from None
+    return scene
+
+
+def _validate(
+    file: Path,
+    data: dict[str, Any],
+    raw_bytes: bytes,
+    overrides: Sequence[str],
+    out: str | Path | None,
+    trusted: bool,
+) -> Scene:
+    """Validate parsed ``data`` (see :func:`load_scene`); the size is not yet estimated."""
     digest = hashlib.sha256(raw_bytes + json.dumps(list(overrides)).encode()).hexdigest()
 
     declared = data.get("effects", [])
@@ -579,9 +705,10 @@ def load_scene(
     schema = top.number("schema", default=SCHEMA_VERSION, integer=True)
     if schema != SCHEMA_VERSION:
         raise top.error("schema", f"this geofrac reads schema {SCHEMA_VERSION}, got {schema}")
-    name = top.string("name", default=file.stem)
+    name = check_name(file, top.string("name", default=file.stem), top.has("name"))
     description = top.string("description", default="")
     method = top.string("method", default="fem", choices=METHODS)
+    allow_large = top.boolean("allow_large", False)
     declared = _declared(file, data)
     if method in ("mpm", "blocks"):
         common = {
@@ -589,9 +716,10 @@ def load_scene(
             "sha256": digest,
             "name": name,
             "description": description,
+            "allow_large": allow_large,
         }
         build = _mpm_scene if method == "mpm" else _blocks_scene
-        return build(file, data, declared, common, out)
+        return build(file, data, declared, common, out, trusted)
     for key in ("mpm", "blocks"):
         if key in data:
             raise SceneError(file, key, f"applies to method '{key}' only; set method = \"{key}\"")
@@ -612,7 +740,12 @@ def load_scene(
     loads = _loads(file, data.get("load", []), geometry, exact)
     solver = _solver(file, data.get("solver", {}))
     output = _output(
-        file, data.get("output", {}), name, geometry.dim, None if out is None else Path(out)
+        file,
+        data.get("output", {}),
+        name,
+        geometry.dim,
+        None if out is None else Path(out),
+        trusted,
     )
     specs = _effects(file, data, declared, geometry, material, discretization, bcs, configured)
     return Scene(
@@ -631,4 +764,5 @@ def load_scene(
         solver=solver,
         output=output,
         raw=data,
+        allow_large=allow_large,
     )

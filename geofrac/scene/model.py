@@ -320,6 +320,10 @@ class Scene:
         blocks: the ``[blocks]`` settings of a block scene, else None.
         raw: the input tables after overrides (for the run summary).
         warnings: valid but risky choices, each naming file and key (printed, recorded).
+        allow_large: the scene's ``allow_large`` (or ``--allow-large``): run even when
+            the size estimate is beyond the caps of :mod:`geofrac.scene.size`.
+        size: the :class:`~geofrac.scene.size.SizeEstimate` of the scene's work (None
+            only for a scene built by hand).
     """
 
     path: Path
@@ -340,6 +344,8 @@ class Scene:
     method: Literal["fem", "mpm", "blocks"] = "fem"
     mpm: MpmSpec | None = None
     blocks: BlocksSpec | None = None
+    allow_large: bool = False
+    size: Any = None
 
     @property
     def effect_names(self) -> tuple[str, ...]:

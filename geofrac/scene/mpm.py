@@ -13,7 +13,14 @@ from typing import Any
 
 from geofrac.scene.errors import SceneError, did_you_mean
 from geofrac.scene.model import Geometry, Material, MpmSpec, Output, ParticleSource
-from geofrac.scene.table import Table, checkpoint_keys, is_number
+from geofrac.scene.table import (
+    Table,
+    checkpoint_keys,
+    finite,
+    is_number,
+    output_directory,
+    short,
+)
 
 __all__ = [
     "FEM_ONLY_TABLES",
@@ -57,12 +64,21 @@ FEM_ONLY_TABLES = ("discretization", "exact", "bc", "load", "solver")
 DEFAULT_COURANT = 0.1
 #: Default number of output frames.
 DEFAULT_FRAMES = 50
+#: Upper limits: grid cells along one axis, padding cells, frames, bed points,
+#: E (any unit system), density.
+MAX_AXIS_CELLS = 10**7
+MAX_AXIS_PARTICLES = 10**9
+MAX_PADDING = 100
+MAX_FRAMES = 100_000
+MAX_BED_POINTS = 100_000
+MAX_MODULUS = 1e15
+MAX_DENSITY = 1e6
 
 
 def mpm_material(file: Path, raw: Any, dim: int) -> Material:
     """``[material]`` of an MPM scene: E, ν (not in 1D), density; 2D is plane strain."""
     t = Table(file, "material", raw, ("E", "nu", "plane", "density"))
-    E = t.number("E", required=True, positive=True)
+    E = t.number("E", required=True, positive=True, maximum=MAX_MODULUS)
     nu = t.number("nu", required=dim > 1, default=0.0)
     assert E is not None and nu is not None
     if dim == 1 and t.has("nu"):
@@ -71,7 +87,7 @@ def mpm_material(file: Path, raw: Any, dim: int) -> Material:
         raise t.error("nu", f"must lie in (-1, 0.5), got {nu!r}")
     if t.has("plane") and (dim != 2 or t.data["plane"] != "strain"):
         raise t.error("plane", "MPM in 2D is plane strain; only 'strain' is accepted, in 2D")
-    density = t.number("density", required=True, positive=True)
+    density = t.number("density", required=True, positive=True, maximum=MAX_DENSITY)
     return Material(E=float(E), nu=float(nu), plane="strain", density=density)
 
 
@@ -82,18 +98,16 @@ def _grid(file: Path, raw: Any) -> tuple[tuple[float, ...], tuple[float, ...], f
             raise t.error(key, "missing (required)")
     lower_raw = t.data["lower"]
     if not isinstance(lower_raw, list) or not 1 <= len(lower_raw) <= 3:
-        raise t.error("lower", f"must be a list of 1 to 3 numbers, got {lower_raw!r}")
+        raise t.error("lower", f"must be a list of 1 to 3 numbers, got {short(lower_raw)}")
     dim = len(lower_raw)
     lower, upper = t.vector("lower", dim), t.vector("upper", dim)
     if any(u <= lo for lo, u in zip(lower, upper, strict=True)):
         raise t.error("upper", f"must exceed lower {list(lower)} in every direction")
     spacing = float(t.number("spacing", positive=True))  # type: ignore[arg-type]
-    padding = int(t.number("padding", default=2, integer=True))  # type: ignore[arg-type]
-    if padding < 0:
-        raise t.error("padding", f"must be >= 0, got {padding}")
+    padding = int(t.number("padding", default=2, integer=True, minimum=0, maximum=MAX_PADDING))  # type: ignore[arg-type]
     for a, (lo, u) in enumerate(zip(lower, upper, strict=True)):
-        if (u - lo) / spacing > 1e7:
-            raise t.error("spacing", f"gives over 1e7 cells along axis {a}")
+        if not (u - lo) / spacing <= MAX_AXIS_CELLS:  # also an overflow to inf
+            raise t.error("spacing", f"gives over {MAX_AXIS_CELLS:.0e} cells along axis {a}")
         if (u - lo) / spacing < 1:
             raise t.error("spacing", f"is larger than the box along axis {a}")
     return lower, upper, spacing, padding
@@ -120,7 +134,7 @@ def _particles(
                 )
             if geometry.groups[group] != geometry.dim:
                 raise d.error(group, f"group '{group}' is not a {geometry.dim}D region")
-        densities = {g: float(d.number(g, positive=True)) for g in dens}  # type: ignore[arg-type]
+        densities = {g: float(d.number(g, positive=True, maximum=MAX_DENSITY)) for g in dens}  # type: ignore[arg-type]
         return ParticleSource("geometry", densities=densities), geometry.dim
     if t.has("density"):
         raise t.error("density", "per-group densities need particles from a [geometry]")
@@ -135,7 +149,10 @@ def _particles(
         or len(counts) != n
         or not all(isinstance(c, int) and not isinstance(c, bool) and c > 0 for c in counts)
     ):
-        raise t.error("counts", f"must be a list of {n} positive integers, got {counts!r}")
+        raise t.error("counts", f"must be a list of {n} positive integers, got {short(counts)}")
+    for i, c in enumerate(counts):
+        if c > MAX_AXIS_PARTICLES:
+            raise t.error("counts", f"entry {i} must be <= 1e9, got {short(c)}")
     spacing = float(t.number("spacing", positive=True))  # type: ignore[arg-type]
     return ParticleSource("lattice", lower, tuple(counts), spacing), n
 
@@ -170,14 +187,19 @@ def _bed(
         return raw
     if (
         not isinstance(raw, list)
-        or len(raw) < 2
+        or not 2 <= len(raw) <= MAX_BED_POINTS
         or not all(isinstance(p, list) and len(p) == 2 and all(map(is_number, p)) for p in raw)
     ):
         raise SceneError(
             file,
             "mpm.bed",
-            f"must be a physical curve group or a list of at least two [x, y] points, got {raw!r}",
+            f"must be a physical curve group or a list of 2 to {MAX_BED_POINTS} [x, y] points, "
+            f"got {short(raw)}",
         )
+    for i, point in enumerate(raw):
+        for j, c in enumerate(point):
+            if not finite(c):
+                raise SceneError(file, "mpm.bed", f"entry [{i}][{j}] must be finite, got {c!r}")
     xs = [float(p[0]) for p in raw]
     if any(b <= a for a, b in itertools.pairwise(xs)):
         raise SceneError(file, "mpm.bed", "x must increase strictly along the polyline")
@@ -208,7 +230,9 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
         if not 0 < courant < 1:
             raise t.error("courant", f"must lie in (0, 1) (eq. 4.72), got {courant}")
     t_end = float(t.number("t_end", required=True, positive=True))  # type: ignore[arg-type]
-    frames = int(t.number("frames", default=DEFAULT_FRAMES, positive=True, integer=True))  # type: ignore[arg-type]
+    frames = int(
+        t.number("frames", default=DEFAULT_FRAMES, positive=True, integer=True, maximum=MAX_FRAMES)  # type: ignore[arg-type]
+    )
     velocity = t.vector("velocity", dim) if t.has("velocity") else (0.0,) * dim
     initial_stress = t.string("initial_stress", default="none", choices=("none", "geostatic"))
     if initial_stress == "geostatic" and dim == 1:
@@ -236,17 +260,27 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     )
 
 
-def mpm_output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> Output:
-    """``[output]`` of an MPM scene: particle fields; probes are particles nearest a point."""
+def mpm_output(
+    file: Path, raw: Any, name: str, dim: int, out: Path | None, trusted: bool = False
+) -> Output:
+    """``[output]`` of an MPM scene: particle fields; probes are particles nearest a point.
+
+    ``trusted``: ``output.dir`` was set on the command line (see
+    :func:`~geofrac.scene.table.output_directory`).
+    """
     t = Table(
         file,
         "output",
         raw,
         ("dir", "fields", "xdmf", "probes", "checkpoint_every", "checkpoint_minutes"),
     )
-    directory = Path(t.string("dir", default=f"results/{name}")) if out is None else out
+    directory = output_directory(t, name, out, trusted)
     fields = t.data.get("fields", list(MPM_OUTPUT_FIELDS))
-    if not isinstance(fields, list) or len(set(fields)) != len(fields):
+    if (
+        not isinstance(fields, list)
+        or not all(isinstance(f, str) for f in fields)
+        or len(set(fields)) != len(fields)
+    ):
         raise t.error("fields", f"must be a list of distinct names from {list(MPM_OUTPUT_FIELDS)}")
     for f in fields:
         if f not in MPM_OUTPUT_FIELDS:
@@ -257,6 +291,4 @@ def mpm_output(file: Path, raw: Any, name: str, dim: int, out: Path | None) -> O
     p = Table(file, "output.probes", probes_raw, list(probes_raw))
     probes = {k: p.vector(k, dim) for k in probes_raw}
     every, minutes = checkpoint_keys(t)
-    return Output(
-        directory.resolve(), tuple(fields), t.boolean("xdmf", True), probes, every, minutes
-    )
+    return Output(directory, tuple(fields), t.boolean("xdmf", True), probes, every, minutes)

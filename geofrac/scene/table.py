@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -12,20 +13,68 @@ from geofrac.scene.errors import SceneError, did_you_mean
 __all__ = [
     "MAX_CHECKPOINT_EVERY",
     "MAX_CHECKPOINT_MINUTES",
+    "MAX_DEPTH",
+    "MAX_INTEGER",
+    "MAX_NAME_LENGTH",
     "Table",
+    "check_name",
     "checkpoint_keys",
+    "finite",
+    "first_too_deep",
     "is_number",
+    "output_directory",
+    "short",
 ]
 
 #: Upper limits of ``output.checkpoint_every`` (events or steps) and ``checkpoint_minutes``.
 MAX_CHECKPOINT_EVERY = 10**9
 MAX_CHECKPOINT_MINUTES = 1e6
+#: Largest magnitude of a TOML integer (TOML's own range: signed 64 bits).
+MAX_INTEGER = 2**63 - 1
+#: Deepest nesting of tables and lists a scene may have (the deepest valid key,
+#: ``blocks.terrain.zones[i].centre[j]``, is 5 levels down).
+MAX_DEPTH = 16
+#: Longest scene name.
+MAX_NAME_LENGTH = 100
+_NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]*")
 
 
-def _short(value: Any, limit: int = 80) -> str:
+def short(value: Any, limit: int = 80) -> str:
     """``repr(value)`` cut to ``limit`` characters (a huge list makes no readable error)."""
-    text = repr(value)
+    if isinstance(value, list | dict) and len(value) > limit:
+        return f"a {type(value).__name__} of {len(value)} entries"
+    try:
+        text = repr(value)
+    except (RecursionError, ValueError):  # nested too deeply; int too long to print
+        return f"a {type(value).__name__} nested too deeply"
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def finite(value: Any) -> bool:
+    """Whether a TOML number is finite and within TOML's integer range (no NaN, no inf)."""
+    if isinstance(value, int):
+        return abs(value) <= MAX_INTEGER
+    return math.isfinite(value)
+
+
+def first_too_deep(data: Any, limit: int = MAX_DEPTH) -> str | None:
+    """The dotted key of the first entry nested deeper than ``limit``, or None.
+
+    Iterative, so a TOML file of 10,000 nested lists does not exhaust Python's stack.
+    """
+    stack: list[tuple[str, Any, int]] = [("", data, 0)]
+    while stack:
+        key, node, depth = stack.pop()
+        if depth > limit:
+            return key or "(top level)"
+        if isinstance(node, dict):
+            items = [(f"{key}.{k}" if key else str(k), v) for k, v in node.items()]
+        elif isinstance(node, list):
+            items = [(f"{key}[{i}]", v) for i, v in enumerate(node)]
+        else:
+            continue
+        stack.extend((k, v, depth + 1) for k, v in reversed(items))
+    return None
 
 
 def checkpoint_keys(t: Table) -> tuple[int, float]:
@@ -37,6 +86,48 @@ def checkpoint_keys(t: Table) -> tuple[int, float]:
         "checkpoint_minutes", default=10.0, minimum=0.0, maximum=MAX_CHECKPOINT_MINUTES
     )
     return int(every), float(minutes)  # type: ignore[arg-type]
+
+
+def check_name(file: Path, name: str, given: bool) -> str:
+    """A scene name is a name, not a path: letters, digits, ``-``, ``_``, ``.``.
+
+    No leading dot (so neither ``.`` nor ``..``), no ``/``, 1 to 100 characters.
+    ``given``: the scene sets ``name`` (else it is the file's stem).
+    """
+    if len(name) <= MAX_NAME_LENGTH and _NAME.fullmatch(name):
+        return name
+    what = f"{short(name)}" if given else f"the file stem {short(name)} (the default)"
+    raise SceneError(
+        file,
+        "name",
+        f"{what} is not a scene name: use 1 to {MAX_NAME_LENGTH} letters, digits, '-', '_' "
+        "or '.', not starting with '.' (the name becomes results/<name>)",
+    )
+
+
+def output_directory(t: Table, name: str, out: Path | None, trusted: bool = False) -> Path:
+    """The absolute output directory: ``out``, else ``[output] dir``, else ``results/<name>``.
+
+    ``out`` is ``--out``. A ``dir`` from the scene file must be relative without ``..``
+    (it stays inside the working directory tree: a scene cannot write over ``~/.ssh`` or
+    ``/etc``); one set on the command line (``--set output.dir=...``, ``trusted``) may be
+    anything.
+    """
+    if out is not None:
+        return out.resolve()
+    if not t.has("dir"):
+        return (Path("results") / name).resolve()
+    text = t.string("dir")
+    if not text.strip() or "\0" in text:
+        raise t.error("dir", f"must be a directory path, got {short(text)}")
+    path = Path(text)
+    if not trusted and (path.is_absolute() or ".." in path.parts or text.startswith("~")):
+        raise t.error(
+            "dir",
+            f"{short(text)} leaves the working directory; a scene's output.dir must be "
+            "relative without '..' (pass --out DIR for any other place)",
+        )
+    return path.resolve()
 
 
 def is_number(value: Any) -> bool:
@@ -86,9 +177,9 @@ class Table:
         value = self.data[name]
         if not is_number(value) or (integer and not isinstance(value, int)):
             kind = "an integer" if integer else "a number"
-            raise self.error(name, f"must be {kind}, got {value!r}")
-        if not math.isfinite(value):
-            raise self.error(name, f"must be finite, got {value!r}")
+            raise self.error(name, f"must be {kind}, got {short(value)}")
+        if not finite(value):
+            raise self.error(name, f"must be finite, got {short(value)}")
         if positive and value <= 0:
             raise self.error(name, f"must be > 0, got {value!r}")
         if minimum is not None and value < minimum:
@@ -107,24 +198,27 @@ class Table:
             return default
         value = self.data[name]
         if not isinstance(value, str):
-            raise self.error(name, f"must be a string, got {value!r}")
+            raise self.error(name, f"must be a string, got {short(value)}")
         if choices is not None and value not in choices:
-            raise self.error(name, f"unknown value '{value}'" + did_you_mean(value, choices))
+            raise self.error(name, f"unknown value {short(value)}" + did_you_mean(value, choices))
         return value
 
     def vector(self, name: str, length: int, value: Any = None) -> tuple[float, ...]:
-        """A list of ``length`` numbers (``value`` if given, else the entry)."""
+        """A list of ``length`` finite numbers (``value`` if given, else the entry).
+
+        A NaN or infinite entry is an error naming the key and the entry's index.
+        """
         value = self.data[name] if value is None else value
         if not isinstance(value, list) or len(value) != length or not all(map(is_number, value)):
-            raise self.error(name, f"must be a list of {length} numbers, got {_short(value)}")
+            raise self.error(name, f"must be a list of {length} numbers, got {short(value)}")
         for i, c in enumerate(value):
-            if not math.isfinite(c):
-                raise self.error(name, f"entry {i} must be finite, got {c!r}")
+            if not finite(c):
+                raise self.error(name, f"entry {i} must be finite, got {short(c)}")
         return tuple(float(c) for c in value)
 
     def boolean(self, name: str, default: bool) -> bool:
         """True or false, ``default`` when absent."""
         value = self.data.get(name, default)
         if not isinstance(value, bool):
-            raise self.error(name, f"must be true or false, got {value!r}")
+            raise self.error(name, f"must be true or false, got {short(value)}")
         return value
