@@ -13,7 +13,7 @@ from dolfinx.io import gmsh as gmshio
 from mpi4py import MPI
 
 from geofrac.errors import RunError
-from geofrac.meshing.geo import gmsh_session
+from geofrac.meshing.geo import failure_message, gmsh_session, meshed_model
 from geofrac.scene.model import Geometry
 
 __all__ = ["TaggedMesh", "build_mesh", "check_fracture_cover"]
@@ -25,14 +25,21 @@ class TaggedMesh:
     Attributes:
         mesh: the DOLFINx mesh.
         groups: physical group name -> (dimension, tag).
-        tags: dimension -> ``dolfinx.mesh.MeshTags`` for that dimension (or None).
+        tags: dimension -> ``dolfinx.mesh.MeshTags`` for that dimension (or None). Where
+            physical groups of one dimension overlap (``left`` inside ``boundary``), an
+            entity appears once per group: ``tags[d].find(tag)`` and ``ds(tag)`` see each
+            group whole.
         report: what the geometry builder reported (JSON-ready; empty for a file).
         fractures: the builder's payload, the same on every rank (the ``dfn`` effect's
             :class:`~geofrac.dfn.clean.CleanNetwork`), or None.
     """
 
     def __init__(
-        self, data: gmshio.MeshData, report: dict[str, Any] | None = None, fractures: Any = None
+        self,
+        data: gmshio.MeshData,
+        report: dict[str, Any] | None = None,
+        fractures: Any = None,
+        tags: dict[int, Any] | None = None,
     ) -> None:
         self.mesh = data.mesh
         self.report = report or {}
@@ -41,6 +48,7 @@ class TaggedMesh:
         tdim = self.mesh.topology.dim
         by_codim = [data.cell_tags, data.facet_tags, data.ridge_tags, data.peak_tags]
         self.tags = {tdim - c: t for c, t in enumerate(by_codim) if tdim - c >= 0}
+        self.tags.update(tags or {})
 
     def entities(self, group: str) -> tuple[int, np.ndarray]:
         """Return (dimension, local entity indices, shape=(n,)) of a physical group."""
@@ -97,6 +105,95 @@ def _check_groups_on_cells(model: object, dim: int) -> None:
             )
 
 
+def _overlaps(model: Any, tdim: int) -> tuple[str | None, dict[int, int]]:
+    """Overlapping physical groups of ``model`` (rank 0).
+
+    Returns:
+        (a message when cell groups overlap, which DOLFINx cannot mesh, else None;
+        dimension < tdim with overlapping groups -> nodes per element of its groups,
+        or 0 when they mix element types and cannot be retagged).
+    """
+    owners: dict[tuple[int, int], str] = {}
+    dims: dict[int, int] = {}
+    for d, tag in model.getPhysicalGroups():
+        name = model.getPhysicalName(d, tag)
+        for entity in model.getEntitiesForPhysicalGroup(d, tag):
+            other = owners.setdefault((d, int(entity)), name)
+            if other == name:
+                continue
+            if d == tdim:
+                return (
+                    f"physical groups '{other}' and '{name}' share the {d}D entity {entity}; "
+                    "DOLFINx gives each cell one group, so cell groups must not overlap",
+                    {},
+                )
+            dims[d] = 0
+    for d in dims:
+        types = {
+            int(t)
+            for _, tag in model.getPhysicalGroups(d)
+            for e in model.getEntitiesForPhysicalGroup(d, tag)
+            for t in model.mesh.getElements(d, e)[0]
+        }
+        if len(types) == 1:
+            dims[d] = int(model.mesh.getElementProperties(types.pop())[3])
+    return None, dims
+
+
+def _group_tags(model: Any, data: gmshio.MeshData, dims: dict[int, int]) -> dict[int, Any]:
+    """Mesh tags in which each physical group of the dimensions ``dims`` has all its entities.
+
+    ``model_to_mesh`` keeps one tag per entity, so of two overlapping groups one loses the
+    shared entities. Here each group is distributed and located on its own, and the tags
+    of one dimension hold an (entity, group tag) pair per membership, sorted by entity.
+    Collective.
+
+    Args:
+        model: the gmsh model on rank 0, None elsewhere.
+        data: what ``model_to_mesh`` made of it.
+        dims: dimension -> nodes per element (from :func:`_overlaps`, the same on every
+            rank); dimensions with 0 are left as ``model_to_mesh`` tagged them.
+    """
+    from dolfinx.graph import adjacencylist
+    from dolfinx.io.utils import distribute_entity_data
+    from dolfinx.mesh import meshtags, meshtags_from_entities
+
+    mesh = data.mesh
+    tdim = mesh.topology.dim
+    out = {}
+    groups = sorted((g.dim, g.tag) for g in data.physical_groups.values())
+    for d, nodes in sorted(dims.items()):
+        if nodes == 0:
+            continue
+        mesh.topology.create_connectivity(d, tdim)
+        indices, values = [], []
+        for gd, tag in groups:
+            if gd != d:
+                continue
+            marked = np.empty((0, nodes), dtype=np.int64)
+            if model is not None:
+                blocks = [
+                    conn.reshape(-1, nodes).astype(np.int64) - 1
+                    for e in model.getEntitiesForPhysicalGroup(d, tag)
+                    for conn in model.mesh.getElements(d, e)[2]
+                ]
+                marked = np.concatenate(blocks) if blocks else marked
+            local, local_values = distribute_entity_data(
+                mesh, d, marked, np.full(len(marked), tag, dtype=np.int32)
+            )
+            group = meshtags_from_entities(
+                mesh, d, adjacencylist(local), local_values.astype(np.int32, copy=False)
+            )
+            indices.append(group.indices)
+            values.append(group.values)
+        index, value = np.concatenate(indices), np.concatenate(values)
+        order = np.lexsort((value, index))
+        tags = meshtags(mesh, d, index[order].astype(np.int32), value[order].astype(np.int32))
+        tags.name = f"dim{d}_tags"
+        out[d] = tags
+    return out
+
+
 def _idle_until_rank0(comm: MPI.Comm, poll: float = 0.005) -> None:
     """Wait for rank 0's meshing without spinning a core.
 
@@ -108,50 +205,81 @@ def _idle_until_rank0(comm: MPI.Comm, poll: float = 0.005) -> None:
         time.sleep(poll)
 
 
+def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: Any) -> str:
+    """One line saying what failed, never an empty message."""
+    from geofrac.meshing.geo import GmshTimeout, MeshingFailed
+
+    if isinstance(exc, GmshTimeout | MeshingFailed):
+        return str(exc)
+    detail = failure_message(exc, gmsh)
+    if detail:
+        return f"meshing {source} failed: {detail}"
+    if geometry.builder is not None:
+        return f"meshing {source} failed ({type(exc).__name__} with no message)"
+    return (
+        f"meshing {source} with parameters {geometry.parameters} failed (gmsh gave no "
+        f"message; run gmsh {geometry.file} -{geometry.dim} to see its log)"
+    )
+
+
 def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> TaggedMesh:
     """Mesh ``geometry`` with gmsh on rank 0 and distribute the mesh over ``comm``.
 
-    A ``geometry.builder`` creates and meshes the model itself; its report and payload
-    reach every rank (:attr:`TaggedMesh.report`, :attr:`TaggedMesh.fractures`).
+    A ``.geo`` file is checked and meshed in a child process under the geometry's time
+    limit (:func:`~geofrac.meshing.geo.meshed_model`); a ``geometry.builder`` creates and
+    meshes the model itself in-process; its report and payload reach every rank
+    (:attr:`TaggedMesh.report`, :attr:`TaggedMesh.fractures`). Physical groups of a
+    lower dimension may overlap (each keeps all its entities); cell groups may not.
 
     Raises:
-        RunError: gmsh (or the builder) failed (raised on every rank).
+        RunError: gmsh (or the builder) failed or timed out, or cell groups overlap
+            (raised on every rank).
     """
     if comm.rank != 0:
         _idle_until_rank0(comm)
-        message, report, payload = comm.bcast(None, root=0)
+        message, report, payload, dims = comm.bcast(None, root=0)
         if message is not None:
             raise RunError(message)
         data = gmshio.model_to_mesh(None, comm, 0, gdim=geometry.dim)
-        return TaggedMesh(data, report, payload)
+        return TaggedMesh(data, report, payload, _group_tags(None, data, dims))
     builder = geometry.builder
     with ExitStack() as stack:
-        message, report, payload = None, None, None
+        message, report, payload, dims = None, None, None, {}
+        gmsh: Any = None
         try:
-            gmsh = stack.enter_context(
-                gmsh_session(
-                    None if builder else geometry.file,
-                    geometry.parameters,
-                    geometry.mesh_size,
-                    verbose,
-                )
-            )
             if builder is not None:
+                gmsh = stack.enter_context(
+                    gmsh_session(None, geometry.parameters, geometry.mesh_size, verbose)
+                )
                 report, payload = builder.build(gmsh)
-            elif geometry.file.suffix == ".geo":  # type: ignore[union-attr]  # .msh: as it is
-                gmsh.model.mesh.generate(geometry.dim)  # type: ignore[attr-defined]
-            if len(gmsh.model.mesh.getNodes()[0]) == 0:  # type: ignore[attr-defined]
+            else:
+                assert geometry.file is not None
+                gmsh = stack.enter_context(
+                    meshed_model(
+                        geometry.file,
+                        geometry.parameters,
+                        geometry.mesh_size,
+                        geometry.dim,
+                        time_limit=geometry.time_limit,
+                        trusted=geometry.trusted,
+                        verbose=verbose,
+                    )
+                )
+            if len(gmsh.model.mesh.getNodes()[0]) == 0:
                 raise RuntimeError("gmsh produced no nodes")
-            _check_groups_on_cells(gmsh.model, geometry.dim)  # type: ignore[attr-defined]
+            _check_groups_on_cells(gmsh.model, geometry.dim)
+            overlap, dims = _overlaps(gmsh.model, geometry.dim)
+            if overlap is not None:
+                raise RuntimeError(overlap)
         except Exception as exc:  # gmsh raises bare Exceptions
             source = builder.name if builder else geometry.file.name  # type: ignore[union-attr]
-            message = f"meshing {source} failed: {exc}"
+            message = _failure(source, geometry, exc, gmsh)
         comm.Ibarrier().Wait()  # releases the ranks idling in _idle_until_rank0
-        comm.bcast((message, report, payload), root=0)
+        comm.bcast((message, report, payload, dims), root=0)
         if message is not None:
             raise RunError(message)
-        data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=geometry.dim)  # type: ignore[attr-defined]
-        return TaggedMesh(data, report, payload)
+        data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=geometry.dim)
+        return TaggedMesh(data, report, payload, _group_tags(gmsh.model, data, dims))
 
 
 def check_fracture_cover(tagged: TaggedMesh, group: str = "fractures") -> dict[str, Any]:

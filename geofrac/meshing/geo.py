@@ -1,24 +1,83 @@
-"""gmsh sessions on one process: read a parametrised ``.geo``, inspect it, mesh it.
+"""gmsh on one process: read a parametrised ``.geo``, inspect it, mesh it.
 
 No MPI here. :mod:`geofrac.meshing.distribute` hands the meshed model to DOLFINx.
 Parameters reach the ``.geo`` file as parser variables set before the file is merged, so
 they override the defaults of its ``DefineConstant[...]`` block and a specimen file stays
 runnable on its own in the gmsh GUI. (gmsh's ``-setnumber`` does the same but its values
 outlive ``gmsh.finalize()``, so a later scene in the same process would inherit them.)
+
+Geometry files are data: a ``.geo`` file is checked by
+:func:`~geofrac.meshing.geo_guard.scan_geo` (unless the scene trusts it) and then read or
+meshed by gmsh in a child process (:mod:`geofrac.meshing.geo_worker`, a fresh Python
+that loads no MPI) under a time limit, so an endless loop cannot hang ``geofrac check``
+or a run, and an ``Exit`` ends only the child. A meshed ``.geo`` comes back as a binary
+``.msh`` in a temporary directory (exact coordinates), which :func:`meshed_model` reads
+in-process (a ``.msh`` is data) and deletes. :func:`gmsh_session` is the in-process tool
+the worker and the Python-API builders (DFN, terrain) use.
 """
 
 from __future__ import annotations
 
+import json
+import os
 import re
+import subprocess
+import sys
+import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
-__all__ = ["GeoInfo", "define_constants", "gmsh_session", "inspect_geometry"]
+from geofrac.meshing.geo_guard import scan_geo
+
+__all__ = [
+    "DEFAULT_MESH_TIME_LIMIT",
+    "DEFAULT_READ_TIME_LIMIT",
+    "MAX_TIME_LIMIT",
+    "GeoInfo",
+    "GmshTimeout",
+    "MeshingFailed",
+    "define_constants",
+    "failure_message",
+    "gmsh_session",
+    "inspect_geometry",
+    "inspect_model",
+    "meshed_model",
+]
+
+#: Seconds gmsh may take to read a ``.geo`` file (``geofrac check``) by default.
+DEFAULT_READ_TIME_LIMIT = 60.0
+#: Seconds gmsh may take to read and mesh a ``.geo`` file (a run) by default.
+DEFAULT_MESH_TIME_LIMIT = 600.0
+#: Largest ``geometry.time_limit`` a scene may set (one day).
+MAX_TIME_LIMIT = 86400.0
 
 _DEFINE = re.compile(r"DefineConstant\s*\[(.*?)\]\s*;", re.DOTALL)
 _NAME = re.compile(r"(?:^|,)\s*([A-Za-z_]\w*)\s*=")
+#: Options that make the worker's ``.msh`` an exact copy of the meshed model, whatever the
+#: ``.geo`` file set: binary (no rounding of coordinates), every entity and node (node tags
+#: stay 1..N as DOLFINx expects), no scaling on save.
+_WRITE_OPTIONS = {
+    "Mesh.MshFileVersion": 4.1,
+    "Mesh.Binary": 1,
+    "Mesh.SaveAll": 1,
+    "Mesh.SaveParametric": 0,
+    "Mesh.SaveTopology": 0,
+    "Mesh.PartitionSplitMeshFiles": 0,
+    "Mesh.ScalingFactor": 1,
+    "Mesh.SaveGroupsOfNodes": 0,
+    "Mesh.SaveWithoutOrphans": 0,
+}
+
+
+class GmshTimeout(RuntimeError):
+    """gmsh did not finish reading or meshing a geometry within its time limit."""
+
+
+class MeshingFailed(RuntimeError):
+    """gmsh failed without a message; this one says what was being done."""
 
 
 @dataclass(frozen=True)
@@ -28,10 +87,13 @@ class GeoInfo:
     Attributes:
         dim: highest dimension of an entity in the model.
         groups: physical group name -> dimension.
+        overlaps: physical groups of one dimension that share a model entity, as
+            (dimension, group, other group, entity tag), one per pair.
     """
 
     dim: int
     groups: dict[str, int]
+    overlaps: tuple[tuple[int, str, str, int], ...] = ()
 
 
 def define_constants(text: str) -> list[str]:
@@ -53,10 +115,12 @@ def gmsh_session(
     parameters: dict[str, float],
     mesh_size: float | None = None,
     verbose: bool = False,
-) -> Iterator[object]:
+) -> Iterator[Any]:
     """Initialise gmsh, open ``path`` with ``parameters`` set, yield the gmsh module, finalise.
 
-    With ``path`` None the session starts empty (a builder adds the model).
+    In-process and unchecked: production code opens scene ``.geo`` files through
+    :func:`inspect_geometry` and :func:`meshed_model`. With ``path`` None the session
+    starts empty (a builder adds the model).
 
     Raises:
         RuntimeError: gmsh could not read the file (message from gmsh).
@@ -66,6 +130,7 @@ def gmsh_session(
     gmsh.initialize(["geofrac", "-nopopup"], readConfigFiles=False)
     try:
         gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
+        gmsh.logger.start()
         if mesh_size is not None:
             gmsh.option.setNumber("Mesh.MeshSizeMax", mesh_size)
         for name, value in parameters.items():
@@ -74,15 +139,180 @@ def gmsh_session(
             if path is not None:
                 gmsh.merge(str(path))
         except Exception as exc:  # gmsh raises a bare Exception with its parser message
-            raise RuntimeError(str(exc)) from exc
+            raise RuntimeError(failure_message(exc, gmsh)) from exc
         yield gmsh
     finally:
         gmsh.finalize()
 
 
-def inspect_geometry(path: Path, parameters: dict[str, float]) -> GeoInfo:
-    """Open a geometry file (no meshing) and report its dimension and physical groups."""
-    with gmsh_session(path, parameters) as gmsh:
-        model = gmsh.model  # type: ignore[attr-defined]
-        groups = {model.getPhysicalName(d, t): d for d, t in model.getPhysicalGroups()}
-        return GeoInfo(dim=int(model.getDimension()), groups=groups)
+def failure_message(exc: BaseException, gmsh: Any = None) -> str:
+    """The message of gmsh error ``exc``; if it is empty, the last error gmsh logged, or ``""``."""
+    text = str(exc).strip()
+    if text or gmsh is None:
+        return text
+    try:
+        log = gmsh.logger.get()
+    except Exception:  # the session may be gone
+        return ""
+    errors = [line for line in log if line.startswith("Error")]
+    return errors[-1].split(":", 1)[-1].strip() if errors else ""
+
+
+def inspect_model(model: Any) -> GeoInfo:
+    """Dimension, physical groups and overlapping groups of the gmsh ``model``."""
+    groups: dict[str, int] = {}
+    owners: dict[tuple[int, int], str] = {}
+    overlaps: dict[tuple[int, str, str], int] = {}
+    for d, tag in model.getPhysicalGroups():
+        name = model.getPhysicalName(d, tag)
+        groups[name] = d
+        for entity in model.getEntitiesForPhysicalGroup(d, tag):
+            other = owners.setdefault((d, int(entity)), name)
+            if other != name:
+                overlaps.setdefault((d, other, name), int(entity))
+    return GeoInfo(
+        dim=int(model.getDimension()),
+        groups=groups,
+        overlaps=tuple((d, a, b, e) for (d, a, b), e in overlaps.items()),
+    )
+
+
+def _python_path() -> str:
+    """PYTHONPATH for the worker: this package's parent first."""
+    here = str(Path(__file__).resolve().parents[2])
+    rest = os.environ.get("PYTHONPATH")
+    return here if not rest else here + os.pathsep + rest
+
+
+def _run_worker(request: dict[str, Any], limit: float, what: str, verbose: bool) -> dict[str, Any]:
+    """Run :mod:`geofrac.meshing.geo_worker` on ``request``; its JSON answer.
+
+    Raises:
+        GmshTimeout: the child did not finish within ``limit`` seconds (it is killed).
+        RuntimeError: gmsh failed (its message), or the child ended without an answer.
+    """
+    with tempfile.TemporaryDirectory(prefix="geofrac-gmsh-") as tmp:
+        answer = Path(tmp) / "answer.json"
+        (Path(tmp) / "request.json").write_text(json.dumps({**request, "answer": str(answer)}))
+        env = {**os.environ, "PYTHONPATH": _python_path()}
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "geofrac.meshing.geo_worker", str(Path(tmp) / "request.json")],
+            stdin=subprocess.DEVNULL,
+            stdout=None if verbose else subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            cwd=tmp,
+            env=env,
+        )
+        try:
+            _, err = proc.communicate(timeout=limit)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.communicate()
+            raise GmshTimeout(
+                f"gmsh did not finish {what} within {limit:g} s (geometry.time_limit)"
+            ) from None
+        finally:
+            if proc.poll() is None:  # interrupted while waiting: take the child with us
+                proc.kill()
+                proc.wait()
+        if answer.is_file():
+            result: dict[str, Any] = json.loads(answer.read_text())
+            if not result.get("ok"):
+                raise RuntimeError(result.get("error", ""))
+            return result
+        if proc.returncode == 0:
+            raise RuntimeError(f"gmsh stopped {what} without finishing (an 'Exit' in the file?)")
+        if proc.returncode < 0:
+            raise RuntimeError(f"gmsh was killed by signal {-proc.returncode} while {what}")
+        lines = (err or b"").decode(errors="replace").strip().splitlines()
+        detail = f": {lines[-1]}" if lines else ""
+        raise RuntimeError(f"gmsh failed while {what} (exit status {proc.returncode}){detail}")
+
+
+def inspect_geometry(
+    path: Path,
+    parameters: dict[str, float],
+    time_limit: float | None = None,
+    trusted: bool = False,
+) -> GeoInfo:
+    """Open a geometry file (no meshing) and report its dimension and physical groups.
+
+    A ``.geo`` file is checked (unless ``trusted``) and read by gmsh in a child process
+    within ``time_limit`` seconds (default :data:`DEFAULT_READ_TIME_LIMIT`); a ``.msh`` is
+    read in-process.
+
+    Raises:
+        GeoRefused: the file does more than describe a geometry.
+        GmshTimeout: gmsh did not finish in time.
+        RuntimeError: gmsh could not read the file (message from gmsh).
+    """
+    if path.suffix != ".geo":
+        with gmsh_session(path, {}) as gmsh:
+            return inspect_model(gmsh.model)
+    if not trusted:
+        scan_geo(path)
+    limit = DEFAULT_READ_TIME_LIMIT if time_limit is None else time_limit
+    request = {"mode": "inspect", "path": str(path), "parameters": parameters}
+    result = _run_worker(request, limit, f"reading '{path.name}'", verbose=False)
+    return GeoInfo(
+        dim=result["dim"],
+        groups=dict(result["groups"]),
+        overlaps=tuple(tuple(o) for o in result["overlaps"]),  # type: ignore[misc]
+    )
+
+
+@contextmanager
+def meshed_model(
+    path: Path,
+    parameters: dict[str, float],
+    mesh_size: float | None,
+    dim: int,
+    *,
+    time_limit: float | None = None,
+    trusted: bool = False,
+    verbose: bool = False,
+) -> Iterator[Any]:
+    """A gmsh session holding the meshed model of ``path``; yields the gmsh module.
+
+    A ``.msh`` file is read as it is. A ``.geo`` file is checked (unless ``trusted``),
+    meshed to dimension ``dim`` by gmsh in a child process within ``time_limit`` seconds
+    (default :data:`DEFAULT_MESH_TIME_LIMIT`) and written as a binary ``.msh`` to a
+    temporary directory, which is read here and deleted.
+
+    Raises:
+        GeoRefused: the file does more than describe a geometry.
+        GmshTimeout: gmsh did not finish in time.
+        RuntimeError: gmsh failed (its message, or what was being done when it gave none).
+    """
+    if path.suffix != ".geo":
+        with gmsh_session(path, {}, None, verbose) as gmsh:
+            yield gmsh
+        return
+    if not trusted:
+        scan_geo(path)
+    limit = DEFAULT_MESH_TIME_LIMIT if time_limit is None else time_limit
+    with tempfile.TemporaryDirectory(prefix="geofrac-mesh-") as tmp:
+        out = Path(tmp) / "mesh.msh"
+        request = {
+            "mode": "mesh",
+            "path": str(path),
+            "parameters": parameters,
+            "mesh_size": mesh_size,
+            "dim": dim,
+            "out": str(out),
+            "options": _WRITE_OPTIONS,
+            "verbose": verbose,
+        }
+        try:
+            _run_worker(request, limit, f"meshing '{path.name}'", verbose)
+        except GmshTimeout:
+            raise
+        except RuntimeError as exc:
+            if str(exc).strip():
+                raise
+            raise MeshingFailed(
+                f"meshing {path.name} with parameters {parameters} failed (gmsh gave no "
+                f"message; run gmsh {path} -{dim} to see its log)"
+            ) from None
+        with gmsh_session(out, {}) as gmsh:
+            yield gmsh

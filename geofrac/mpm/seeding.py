@@ -51,8 +51,14 @@ def mesh_cells(
     mesh_size: float | None,
     dim: int,
     curve: str | None = None,
+    *,
+    time_limit: float | None = None,
+    trusted: bool = False,
 ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], np.ndarray | None]:
     """Mesh a gmsh geometry; the simplices of each ``dim``-D physical group, and a curve.
+
+    A ``.geo`` file is checked (unless ``trusted``) and meshed by gmsh in a child process
+    within ``time_limit`` seconds (:func:`geofrac.meshing.geo.meshed_model`).
 
     Returns:
         (group name -> (vertex coordinates shape=(num_points, dim), simplices
@@ -60,16 +66,18 @@ def mesh_cells(
         group ``curve`` sorted by x, shape=(k, 2), or None without ``curve``).
 
     Raises:
-        RuntimeError: gmsh failed, or a group holds cells other than simplices.
+        RuntimeError: gmsh failed or timed out, or a group holds cells other than simplices.
+        ValueError: the ``.geo`` file does more than describe a geometry
+            (:class:`~geofrac.meshing.geo_guard.GeoRefused`).
     """
-    from geofrac.meshing.geo import gmsh_session
+    from geofrac.meshing.geo import meshed_model
 
     simplex = {2: 2, 3: 4}[dim]  # gmsh element types: 3-node triangle, 4-node tetrahedron
     out = {}
-    with gmsh_session(file, parameters, mesh_size) as gmsh:
+    with meshed_model(
+        file, parameters, mesh_size, dim, time_limit=time_limit, trusted=trusted
+    ) as gmsh:
         model = gmsh.model  # type: ignore[attr-defined]
-        if file.suffix == ".geo":
-            model.mesh.generate(dim)
         tags, coords, _ = model.mesh.getNodes()
         xyz = coords.reshape(-1, 3)[:, :dim]
         index = np.zeros(int(tags.max()) + 1, dtype=np.int64)

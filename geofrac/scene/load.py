@@ -70,7 +70,7 @@ TOP_LEVEL_KEYS = (
 METHODS = ("fem", "mpm", "blocks")
 #: Keys each table accepts (the single source for validation and for docs/scenes.md).
 SECTION_KEYS: dict[str, tuple[str, ...]] = {
-    "geometry": ("file", "parameters", "mesh_size"),
+    "geometry": ("file", "parameters", "mesh_size", "trusted", "time_limit"),
     "material": ("E", "nu", "plane", "thickness", "density", "tensile_strength"),
     "discretization": (
         "element",
@@ -136,6 +136,14 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str], file: Path) 
 
 
 def _geometry(file: Path, raw: Any) -> Geometry:
+    from geofrac.meshing.geo import MAX_TIME_LIMIT, GmshTimeout
+    from geofrac.meshing.geo_guard import (
+        GeoRefused,
+        check_parameters,
+        count_parameters,
+        parameter_specs,
+    )
+
     t = _Table(file, "geometry", raw, SECTION_KEYS["geometry"])
     name = t.string("file")
     path = (file.parent / name).resolve()
@@ -143,21 +151,34 @@ def _geometry(file: Path, raw: Any) -> Geometry:
         raise t.error("file", f"cannot read mesh file '{name}' (looked for {path})")
     if path.suffix not in (".geo", ".msh"):
         raise t.error("file", f"must be a gmsh .geo or .msh file, got '{path.name}'")
+    trusted = t.boolean("trusted", False)
+    time_limit = t.number("time_limit", positive=True, maximum=MAX_TIME_LIMIT)
     params_raw = t.data.get("parameters", {})
     p = _Table(file, "geometry.parameters", params_raw, list(params_raw))
     parameters = {k: float(p.number(k, required=True)) for k in params_raw}  # type: ignore[arg-type]
     if parameters:
         if path.suffix != ".geo":
             raise t.error("parameters", "parameters apply only to .geo files")
-        declared = define_constants(path.read_text(errors="replace"))
+        text = path.read_text(errors="replace")
+        declared = define_constants(text)
         for k in parameters:
             if k not in declared:
                 raise p.error(
                     k, f"'{path.name}' declares no DefineConstant '{k}'" + did_you_mean(k, declared)
                 )
+        try:
+            specs, counts = parameter_specs(text), count_parameters(text)
+        except GeoRefused as exc:
+            if not trusted:
+                raise t.error("file", str(exc)) from None
+            specs, counts = {}, {}
+        for k, message in check_parameters(parameters, specs, counts):
+            raise p.error(k, message)
     mesh_size = t.number("mesh_size", positive=True)
     try:
-        info = inspect_geometry(path, parameters)
+        info = inspect_geometry(path, parameters, time_limit, trusted)
+    except (GeoRefused, GmshTimeout) as exc:
+        raise t.error("file", str(exc)) from None
     except RuntimeError as exc:
         raise t.error("file", f"gmsh cannot read '{path.name}': {exc}") from None
     if info.dim not in (2, 3):
@@ -168,7 +189,18 @@ def _geometry(file: Path, raw: Any) -> Geometry:
             f"'{path.name}' has no physical group of dimension {info.dim}; "
             "DOLFINx meshes only the cells of physical groups",
         )
-    return Geometry(path, parameters, mesh_size, info.dim, info.groups)
+    for dim, a, b, entity in info.overlaps:
+        if dim == info.dim:
+            kind = {2: "surface", 3: "volume"}[dim]
+            raise t.error(
+                "file",
+                f"physical groups '{a}' and '{b}' of '{path.name}' share {kind} {entity}; "
+                "DOLFINx gives each cell one group, so cell groups must not overlap "
+                "(groups of lower dimension may)",
+            )
+    return Geometry(
+        path, parameters, mesh_size, info.dim, info.groups, trusted=trusted, time_limit=time_limit
+    )
 
 
 def _material(file: Path, raw: Any, dim: int) -> Material:

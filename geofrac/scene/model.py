@@ -45,6 +45,10 @@ class Geometry:
             that creates and meshes the gmsh model on one rank (the ``dfn`` effect's
             :class:`~geofrac.effects.dfn.DfnGeometry`): ``report`` is a JSON-ready dict,
             ``payload`` is broadcast to every rank as ``TaggedMesh.fractures``.
+        trusted: skip the check that the ``.geo`` file only describes a geometry
+            (:mod:`geofrac.meshing.geo_guard`).
+        time_limit: seconds gmsh may take to read (check) or read and mesh (run) the
+            ``.geo`` file; None: 60 s to read, 600 s to mesh.
     """
 
     file: Path | None
@@ -53,6 +57,8 @@ class Geometry:
     dim: int
     groups: dict[str, int]
     builder: Any = None
+    trusted: bool = False
+    time_limit: float | None = None
 
 
 @dataclass(frozen=True)
