@@ -122,23 +122,23 @@ def _run(args: argparse.Namespace, comm: Any) -> int:
         scene = _load(args, comm, args.out)
     echo(comm, f"geofrac {__version__}: scene '{scene.name}' ({args.scene}) on {comm.size} rank(s)")
     quiet = args.quiet
+    if scene.method == "mpm":  # no DOLFINx needed
+        from geofrac.mpm.driver import run_mpm_scene as run_method
+
+        report = _report_mpm
+    elif scene.method == "blocks":
+        from geofrac.blocks.driver import run_blocks_scene as run_method
+
+        report = _report_blocks
+    else:
+        from geofrac.runner import run_scene as run_method
+
+        report = _report
+    # after the imports: PETSc's initialisation installs its own SIGTERM handler (which
+    # aborts), and the handlers installed last are the ones that act
     interrupt.install()
     try:
-        if scene.method == "mpm":  # no DOLFINx needed
-            from geofrac.mpm.driver import run_mpm_scene
-
-            summary = run_mpm_scene(scene, comm, timings, not quiet, args.resume)
-            report = _report_mpm
-        elif scene.method == "blocks":
-            from geofrac.blocks.driver import run_blocks_scene
-
-            summary = run_blocks_scene(scene, comm, timings, not quiet, args.resume)
-            report = _report_blocks
-        else:
-            from geofrac.runner import run_scene
-
-            summary = run_scene(scene, comm, timings, not quiet, args.resume)
-            report = _report
+        summary = run_method(scene, comm, timings, not quiet, args.resume)
     except interrupt.Interrupted as exc:
         stage = scene.output.dir / "incomplete"
         echo(comm, f"interrupted: {exc}; partial results in {stage}", err=True)

@@ -53,6 +53,16 @@ CASES = {
         "energies.csv",
     ),
 }
+#: On 2 ranks MUMPS's factorisation is not bitwise reproducible (its parallel scheduling
+#: is dynamic): two uninterrupted 2-rank runs of the cracking case with the default
+#: ``update`` solver drift apart from 1e-15 at event 1 to 2e-8 by event 95, so no
+#: resume can match one of them to 1e-10. On 2 ranks the crack cases therefore
+#: factorise with SuperLU_DIST (``refactor``), which repeats its arithmetic exactly, and
+#: the comparison checks that resuming adds no difference of its own.
+DETERMINISTIC_2_RANKS = (
+    "cracking.solver=refactor",
+    "solver.options.pc_factor_mat_solver_type=superlu_dist",
+)
 #: columns that describe the solver's work rather than the answer (a resumed run starts
 #: with a fresh factorisation, so its iteration counts may differ).
 WORK_COLUMNS = {"iterations"}
@@ -162,6 +172,12 @@ def _same_series(a: Path, b: Path, rtol: float) -> None:
         assert float(np.abs(x - y).max(initial=0.0)) <= rtol * scale, name
 
 
+def _overrides(case: str, overrides: tuple[str, ...], ranks: int) -> tuple[str, ...]:
+    if case != "mpm" and ranks > 1:
+        return (*overrides, *DETERMINISTIC_2_RANKS)
+    return overrides
+
+
 @pytest.fixture(scope="module")
 def references(tmp_path_factory):
     """The uninterrupted runs, once per case and rank count."""
@@ -170,6 +186,7 @@ def references(tmp_path_factory):
     def get(case: str, ranks: int) -> Path:
         if (case, ranks) not in done:
             scene, overrides, _ = CASES[case]
+            overrides = _overrides(case, overrides, ranks)
             out = tmp_path_factory.mktemp(f"ref-{case}-{ranks}")
             _run(_command(scene, out / "out", overrides, ranks), out)
             done[case, ranks] = out / "out"
@@ -183,6 +200,7 @@ def references(tmp_path_factory):
 @pytest.mark.parametrize("case", list(CASES))
 def test_a_killed_run_resumes_to_the_uninterrupted_result(tmp_path, references, case, sig, ranks):
     scene, overrides, log = CASES[case]
+    overrides = _overrides(case, overrides, ranks)
     reference = references(case, ranks)
     total = _lines(reference / log)
     rng = np.random.default_rng(zlib.crc32(f"{case}-{int(sig)}-{ranks}".encode()))

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -239,6 +240,45 @@ class _Timing:
         return t1
 
 
+#: Seconds between two ``fsync`` of the streamed event log (it is flushed every event).
+FSYNC_S = 1.0
+
+
+@dataclass
+class _EventLog:
+    """``events.csv`` open for appending rows (rank 0).
+
+    Each row is flushed to the operating system as its event completes, which a killed
+    process (SIGKILL) cannot undo; ``fsync`` (against a crash of the machine) costs about
+    0.3 ms on the development machine, up to 1 % of a small model's event, so it runs at
+    most once per :data:`FSYNC_S` seconds, at checkpoints and on closing.
+    """
+
+    handle: Any
+    writer: Any
+    synced: float = field(default_factory=time.monotonic)
+
+    def writerow(self, row: dict[str, Any]) -> None:
+        """Append one event's row and flush it."""
+        self.writer.writerow(row)
+        self.handle.flush()
+        if time.monotonic() - self.synced >= FSYNC_S:
+            self.sync()
+
+    def sync(self) -> None:
+        """Flush and ``fsync`` the file."""
+        self.handle.flush()
+        os.fsync(self.handle.fileno())
+        self.synced = time.monotonic()
+
+    def close(self) -> None:
+        """Sync and close."""
+        try:
+            self.sync()
+        finally:
+            self.handle.close()
+
+
 class CrackDriver:
     """Sequentially linear crack propagation for one scene.
 
@@ -252,9 +292,14 @@ class CrackDriver:
             log stay in :attr:`rows`).
     """
 
+    #: the loop's kind in its checkpoints (:class:`~geofrac.io.checkpoint.RunControl`).
+    CHECKPOINT_KIND = "cracking"
+
     def __init__(self, config: Any, solution: Any, say: Any, write: bool = False) -> None:
         self.config, self.say, self.write = config, say, write
         self.scene, self.problem, self.tagged = solution.scene, solution.problem, solution.tagged
+        #: checkpoints, signal stop and resume data (:class:`~geofrac.io.checkpoint.RunControl`)
+        self.control = getattr(solution, "control", None)
         self.out_dir = self.scene.output.dir
         mesh = self.tagged.mesh
         self.mesh, self.comm = mesh, mesh.comm
@@ -907,19 +952,51 @@ class CrackDriver:
 
     # -- the loop --------------------------------------------------------------------
     def run(self) -> dict[str, Any]:
-        """Run events until an end condition; write the outputs; return the results."""
-        cfg, state, _comm = self.config, self.state, self.comm
+        """Run events until an end condition; write the outputs; return the results.
+
+        With a :class:`~geofrac.io.checkpoint.RunControl` (``solution.control``) the loop
+        asks it after each event whether to write a checkpoint or to stop on a signal,
+        and continues from ``control.resume`` when given (:meth:`_restore`).
+        """
+        try:
+            return self._run()
+        except RunError:  # raised on every rank (Interrupted too): free the solvers
+            self.destroy()
+            raise
+
+    def _run(self) -> dict[str, Any]:
+        cfg, state, control = self.config, self.state, self.control
         t0 = time.perf_counter()
         state.start(self.precracked)
-        setup = format_seconds(time.perf_counter() - t0)
-        self.say(f"cracking: {self._state_text()}; set-up {setup}")
-        writer = self._open_outputs()
         work = dolfinx.fem.Function(self.unknown.function_space)  # a ghosted vector
         x = work.x.petsc_vec
         self._gather = Gather(x)
         u_unit = np.zeros(self.n_global)
         rows: list[dict[str, Any]] = []
+        #: the edges cracked by each event, in order (what a checkpoint replays).
+        batches: list[list[int]] = []
         end, peak, face_hit, first_energy = "max_events", 0.0, None, 0.0
+        first = 1  # the first event to compute
+        done = 0  # events already in the log (a resumed run recomputes those after first)
+        resume = control.resume if control is not None else None
+        if resume is not None:
+            assert control is not None
+            control.check_resume()  # the same scene and number of ranks
+            loop = self._restore(resume)
+            rows, batches, u_unit = loop["rows"], loop["batches"], loop["u_unit"]
+            first, done = int(loop["replay_from"]), len(rows)
+            first_energy = loop["first_energy"]
+            peak = max((r["strain_energy"] for r in rows[: first - 1]), default=0.0)
+            face_hit = None if loop["face_hit"] is None else tuple(loop["face_hit"])
+        setup = format_seconds(time.perf_counter() - t0)
+        self.say(f"cracking: {self._state_text()}; set-up {setup}")
+        if resume is not None:
+            self.say(
+                f"cracking: resuming after event {done} from {resume.path} (events {first}-"
+                f"{done} are recomputed from the factorisation they used)"
+            )
+        writer = self._open_outputs(keep_until=None if resume is None else float(done))
+        log = self._open_event_log(rows)
         timing = self.timing
         started = time.perf_counter()
         error = None
@@ -929,14 +1006,24 @@ class CrackDriver:
                 error = self.l2_error(u_unit)
                 self.say(f"cracking: displacement error (2.22) {error:.4e}")
             end = "max_events"
+        #: the loop's state at the start of the event whose solve factorised last: a
+        #: checkpoint restarts from there, so that a resumed run repeats the solver's
+        #: arithmetic (the ``update`` and ``reuse`` solvers reuse that factorisation).
+        ref: dict[str, Any] | None = None
         try:
-            for event in range(1, cfg.max_events + 1):
+            for event in range(first, cfg.max_events + 1):
+                replay = event <= done
+                start = self._event_start(event, u_unit, face_hit)
                 try:
                     u_unit, its = self._solve_event(u_unit, x)
                 except RunError as exc:
+                    if replay:
+                        raise RunError(f"--resume: event {event} failed on replay: {exc}") from None
                     end = "singular"
                     self.say(f"cracking: event {event}: the system is singular ({exc})")
                     break
+                if timing.factorizations > start["timing"]["factorizations"] or ref is None:
+                    ref = start
                 timing.iterations += its
                 t = time.perf_counter()
                 sigma1, energy_unit, reaction_unit = self.measures(u_unit)
@@ -957,10 +1044,17 @@ class CrackDriver:
                     end = "no_tensile_edge"
                     break
                 energy = r * r * energy_unit
-                a, bnode = state.mesh.edges[edges[0]]
-                mid = self._site_point(int(edges[0]))
-                rows.append(
-                    {
+                cracked = [int(e) for e in edges]
+                if replay:
+                    if cracked != batches[event - 1]:
+                        raise RunError(
+                            f"--resume: event {event} cracked edges {cracked}, the interrupted "
+                            f"run {batches[event - 1]}; the checkpoint does not reproduce it"
+                        )
+                else:
+                    a, bnode = state.mesh.edges[edges[0]]
+                    mid = self._site_point(int(edges[0]))
+                    row = {
                         "event": event,
                         "edge": int(edges[0]),
                         "node_a": int(self.gm.input_ids[a]),
@@ -975,20 +1069,25 @@ class CrackDriver:
                         "edges_cracked": len(edges),
                         "iterations": its,
                     }
-                )
-                changed = state.crack_many([int(e) for e in edges])
+                    rows.append(row)
+                    batches.append(cracked)
+                changed = state.crack_many(cracked)
                 self._pending = np.union1d(self._pending, changed)
                 self._table_dirty += changed.tolist()
                 if face_hit is None and self.face_nodes is not None:
                     x_hit = self._face_x(edges)
                     if x_hit is not None:
                         face_hit = (event, x_hit)
-                if writer is not None and (event % cfg.output_every == 0 or event == 1):
-                    self._write_frame(writer, event, r * u_unit)
                 peak = max(peak, energy)
                 timing.add("update", t)
+                if replay:
+                    continue
+                if writer is not None and (event % cfg.output_every == 0 or event == 1):
+                    self._write_frame(writer, event, r * u_unit)
+                if log is not None:
+                    log.writerow(row)  # flushed: a killed run keeps every completed event
                 if event % max(1, cfg.max_events // 20) == 0:
-                    rate = event / (time.perf_counter() - started)
+                    rate = (event - first + 1) / (time.perf_counter() - started)
                     self.say(
                         f"cracking: event {event}/{cfg.max_events}, r = {r:.4g}, energy "
                         f"{energy:.4g}, {rate:.2f} events/s, {timing.factorizations} factorisations"
@@ -996,17 +1095,32 @@ class CrackDriver:
                 if cfg.energy_drop is not None and energy < (1.0 - cfg.energy_drop) * peak:
                     end = "energy_drop"
                     break
+                if control is not None and event < cfg.max_events:
+                    save, stop = control.poll(event)
+                    if save:
+                        assert ref is not None
+                        if log is not None:
+                            log.sync()  # the log on disk holds the checkpoint's rows
+                        self._checkpoint(control, event, rows, batches, first_energy, ref)
+                    if stop:
+                        control.interrupt(f"event {event}")
         finally:
             self._drop_reference()
+            if log is not None:
+                log.close()
         elapsed = time.perf_counter() - started
         if writer is not None and rows:
+            # the final pattern; it replaces a frame already written for this event, so
+            # each time appears once in the series
             self._write_frame(
                 writer, rows[-1]["event"], rows[-1]["load_factor"] * u_unit, final=True
             )
         self._finish_field(rows[-1]["load_factor"] * u_unit if rows else u_unit)
         self._write_log(rows)
         self.destroy()
-        results = self._results(rows, end, elapsed, face_hit)
+        results = self._results(rows, end, elapsed, face_hit, len(rows) - first + 1)
+        if resume is not None:
+            results["resumed_after_event"] = done
         if error is not None:
             results["displacement_error_l2"] = error
         self.say(
@@ -1014,6 +1128,99 @@ class CrackDriver:
             f"({results['events_per_s']:.2f} events/s), end: {end}"
         )
         return results
+
+    # -- checkpoints -----------------------------------------------------------------
+    def _event_start(self, event: int, u_prev: np.ndarray, face_hit: Any) -> dict[str, Any]:
+        """What a checkpoint needs to restart at ``event``: the state before its solve.
+
+        ``u_prev`` is kept by reference (the loop replaces, never changes, the array).
+        """
+        t = self.timing
+        return {
+            "event": event,
+            "u_prev": u_prev,
+            "fragment_nodes": self.fragment_nodes,
+            "pinned_dofs": self.pinned_dofs,
+            "pinned_nodes": self._pinned_nodes,
+            "face_hit": face_hit,
+            "extra": self._checkpoint_extra(),
+            "timing": {
+                "factorizations": t.factorizations,
+                "iterations": t.iterations,
+                "refinements": t.refinements,
+                "stale": dict(t.stale),
+            },
+        }
+
+    def _checkpoint(
+        self,
+        control: Any,
+        event: int,
+        rows: list[dict[str, Any]],
+        batches: list[list[int]],
+        first_energy: float,
+        ref: dict[str, Any],
+    ) -> None:
+        """Write checkpoint ``event`` (collective).
+
+        It holds the event log and each event's cracked edges up to ``event`` (JSON),
+        and the state at the start of event ``ref["event"]``, whose solve factorised
+        last: the unit solution before it and the held and pinned DOFs (arrays alike on
+        every rank, written once). A resumed run recomputes the events from there with
+        the same factorisation, so it repeats the interrupted run's arithmetic.
+        """
+        data = {
+            "rows": rows,
+            "batches": batches,
+            "first_energy": first_energy,
+            "replay_from": ref["event"],
+            "face_hit": ref["face_hit"],
+            "timing": ref["timing"],
+            "extra": ref["extra"],
+        }
+        arrays = {
+            "u_prev": ref["u_prev"],
+            "fragment_nodes": ref["fragment_nodes"],
+            "pinned_dofs": ref["pinned_dofs"],
+            "pinned_nodes": ref["pinned_nodes"],
+        }
+        control.save(event, data, shared=arrays)
+
+    def _restore(self, ck: Any) -> dict[str, Any]:
+        """Bring the driver to the start of checkpoint ``ck``'s replay event.
+
+        The crack state is rebuilt by cracking the edges of each event before it again,
+        in event order (the MLS fits are a function of the cracked edges); the held and
+        pinned DOFs and the unit solution before that event (whose values held DOFs
+        keep) are read back. Returns the loop's variables (``rows``, ``batches``,
+        ``replay_from``, ``u_unit``, ...).
+        """
+        data, arrays = ck.data, ck.shared()
+        replay_from = int(data.get("replay_from", 0))
+        u_prev = arrays.get("u_prev")
+        if u_prev is None or len(u_prev) != self.n_global or replay_from < 1:
+            raise RunError(f"--resume: the checkpoint {ck.path} does not match this mesh")
+        for batch in data["batches"][: replay_from - 1]:
+            self.state.crack_many([int(e) for e in batch])
+        self.fragment_nodes = arrays["fragment_nodes"].astype(np.int64)
+        self.pinned_dofs = arrays["pinned_dofs"].astype(np.int64)
+        self._pinned_nodes = arrays["pinned_nodes"].astype(np.int64)
+        self._pending = np.zeros(0, dtype=np.int64)
+        self._table, self._table_dirty = None, []
+        t = data["timing"]
+        self.timing.factorizations = int(t["factorizations"])
+        self.timing.iterations = int(t["iterations"])
+        self.timing.refinements = int(t["refinements"])
+        self.timing.stale = {k: int(v) for k, v in t["stale"].items()}
+        self._restore_extra(data.get("extra", {}))
+        return dict(data) | {"u_unit": np.array(u_prev, dtype=float)}
+
+    def _checkpoint_extra(self) -> dict[str, Any]:
+        """JSON-ready state a subclass keeps across events (nothing here)."""
+        return {}
+
+    def _restore_extra(self, extra: dict[str, Any]) -> None:
+        """Restore what :meth:`_checkpoint_extra` saved (nothing here)."""
 
     def _state_text(self) -> str:
         """The crack state in a few words, for the start-up message."""
@@ -1035,16 +1242,40 @@ class CrackDriver:
         return float(self.state.mesh.coords[hit[0], 0]) if len(hit) else None
 
     # -- output ----------------------------------------------------------------------
-    def _open_outputs(self) -> Any:
+    def _open_outputs(self, keep_until: float | None = None) -> Any:
+        """The XDMF series (rank 0, when writing): new, or continued up to ``keep_until``."""
         if not (self.write and self.scene.output.xdmf) or self.comm.rank != 0:
             return None
-        from geofrac.io.series import XdmfSeries
-
         gm, m = self.gm, self.state.mesh
         return (
-            XdmfSeries(self.out_dir / "cracks.xdmf", gm.coords, m.edges),
-            XdmfSeries(self.out_dir / "damage.xdmf", gm.coords, gm.cells),
+            self._series("cracks.xdmf", gm.coords, m.edges, keep_until),
+            self._series("damage.xdmf", gm.coords, gm.cells, keep_until),
         )
+
+    def _series(
+        self, name: str, coords: np.ndarray, cells: np.ndarray, keep_until: float | None
+    ) -> Any:
+        """Series ``name`` in the output directory; a resumed run keeps steps <= keep_until."""
+        from geofrac.io.series import XdmfSeries
+
+        series = XdmfSeries(self.out_dir / name, coords, cells, keep_until=keep_until)
+        if series.note is not None:
+            self.say(f"cracking: {series.note}")
+        return series
+
+    def _open_event_log(self, rows: list[dict[str, Any]]) -> Any:
+        """``events.csv`` (rank 0, when writing) with ``rows`` written; None elsewhere.
+
+        Rows are appended and flushed as events complete, so a killed run keeps them.
+        """
+        if self.comm.rank != 0 or not self.write:
+            return None
+        handle = open(self.out_dir / "events.csv", "w", newline="")  # noqa: SIM115
+        writer = csv.DictWriter(handle, fieldnames=EVENT_COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+        handle.flush()
+        return _EventLog(handle, writer)
 
     def _write_frame(self, writer: Any, event: int, u: np.ndarray, final: bool = False) -> None:
         state = self.state
@@ -1067,13 +1298,13 @@ class CrackDriver:
         self.problem._to_field()
 
     def _write_log(self, rows: list[dict[str, Any]]) -> None:
+        """Keep the rows; draw the load-displacement curve and ``cracks.png`` (rank 0).
+
+        ``events.csv`` was written event by event (:meth:`_open_event_log`).
+        """
         self.rows = rows
         if self.comm.rank != 0 or not self.write:
             return
-        with open(self.out_dir / "events.csv", "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=EVENT_COLUMNS)
-            w.writeheader()
-            w.writerows(rows)
         if rows:
             import matplotlib
 
@@ -1128,9 +1359,16 @@ class CrackDriver:
         """Draw anything else into ``cracks.png`` below the cracks (nothing here)."""
 
     def _results(
-        self, rows: list[dict[str, Any]], end: str, elapsed: float, face_hit: Any
+        self,
+        rows: list[dict[str, Any]],
+        end: str,
+        elapsed: float,
+        face_hit: Any,
+        done: int | None = None,
     ) -> dict[str, Any]:
+        """The loop's JSON results; ``done``: events this run computed (default all)."""
         state, t = self.state, self.timing
+        done = len(rows) if done is None else done
         new = int(state.cracked.sum()) - len(self.precracked)
         out: dict[str, Any] = {
             "events": len(rows),
@@ -1144,7 +1382,7 @@ class CrackDriver:
             "pinned_dofs": len(self.pinned_dofs),
             "edges": len(state.mesh.edges),
             "dofs": self.n_global,
-            "events_per_s": len(rows) / elapsed if elapsed > 0 else float("nan"),
+            "events_per_s": done / elapsed if elapsed > 0 else float("nan"),
             "phase_s": {k: self.comm.allreduce(v, op=MPI.MAX) for k, v in t.seconds.items()},
             "factorizations": t.factorizations,
             "refactor_reasons": dict(sorted(t.stale.items())),

@@ -52,6 +52,7 @@ class GrainDriver(CrackDriver):
     """
 
     state: GrainState
+    CHECKPOINT_KIND = "grains"
 
     def __init__(self, config: Any, solution: Any, say: Any, write: bool = False) -> None:
         self._ops: dict[int, NodeOperator] = {}
@@ -341,17 +342,25 @@ class GrainDriver(CrackDriver):
         return float(centre[at[np.argmin(d)], 0])
 
     # -- output ----------------------------------------------------------------------
-    def _open_outputs(self) -> Any:
+    def _open_outputs(self, keep_until: float | None = None) -> Any:
         if not (self.write and self.scene.output.xdmf) or self.comm.rank != 0:
             return None
-        from geofrac.io.series import XdmfSeries
-
         seg = self.faces.segments.reshape(-1, 2)  # 4 points per interface
         lines = np.arange(len(seg)).reshape(-1, 2)
         return (
-            XdmfSeries(self.out_dir / "cracks.xdmf", seg, lines),
-            XdmfSeries(self.out_dir / "damage.xdmf", self.gm.coords, self.gm.cells),
+            self._series("cracks.xdmf", seg, lines, keep_until),
+            self._series("damage.xdmf", self.gm.coords, self.gm.cells, keep_until),
         )
+
+    def _checkpoint_extra(self) -> dict[str, Any]:
+        """The crack origin that ``face`` reports follow (set at the first event)."""
+        origin = None if self._origin is None else [int(e) for e in self._origin]
+        return {"origin": origin, "face_sites": [int(e) for e in self._face_sites]}
+
+    def _restore_extra(self, extra: dict[str, Any]) -> None:
+        if extra.get("origin") is not None:
+            self._origin = np.asarray(extra["origin"], dtype=np.int64)
+            self._face_sites = np.asarray(extra.get("face_sites", []), dtype=np.int64)
 
     def _write_frame(self, writer: Any, event: int, u: np.ndarray, final: bool = False) -> None:
         state = self.state
@@ -433,9 +442,14 @@ class GrainDriver(CrackDriver):
         return out
 
     def _results(
-        self, rows: list[dict[str, Any]], end: str, elapsed: float, face_hit: Any
+        self,
+        rows: list[dict[str, Any]],
+        end: str,
+        elapsed: float,
+        face_hit: Any,
+        done: int | None = None,
     ) -> dict[str, Any]:
-        out = super()._results(rows, end, elapsed, face_hit)
+        out = super()._results(rows, end, elapsed, face_hit, done)
         orders = self.state.orders()
         for key in ("mls_cells", "void_cells", "cracked_edges", "new_cracked_edges",
                     "precracked_edges", "edges"):  # fmt: skip

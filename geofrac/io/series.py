@@ -4,10 +4,17 @@ The crack driver keeps the whole crack state on every rank, so rank 0 writes the
 picture itself: one HDF5 file with the mesh once and a dataset per field and step, and an
 XDMF temporal collection that ParaView, pyvista and meshio read. The XML is rewritten
 after every step, so an interrupted run leaves a readable series of the steps done.
+
+Each time appears once: writing a step at the time of the last one replaces it (VTK's
+XDMF reader shows an empty mesh for a time listed twice). A resumed run continues a
+series with ``keep_until``: the steps after that time, which the interrupted run may have
+written after its checkpoint, are dropped.
 """
 
 from __future__ import annotations
 
+import os
+import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -26,19 +33,75 @@ class XdmfSeries:
         path: the ``.xdmf`` file; the data go to the sibling ``.h5``.
         coords: node coordinates, shape=(num_nodes, 2).
         cells: node ids per cell, shape=(num_cells, 2) (lines) or (num_cells, 3).
+        keep_until: continue the series in ``path`` with its steps of time <= this
+            (a resumed run); None starts a new series.
     """
 
-    def __init__(self, path: Path, coords: np.ndarray, cells: np.ndarray) -> None:
+    def __init__(
+        self,
+        path: Path,
+        coords: np.ndarray,
+        cells: np.ndarray,
+        keep_until: float | None = None,
+    ) -> None:
         self.path = Path(path)
         self.h5 = self.path.with_suffix(".h5")
         self.num_nodes, self.num_cells = len(coords), len(cells)
         self.nv = cells.shape[1]
+        self.steps: list[tuple[float, list[tuple[str, str, int]]]] = []
+        #: why an existing series could not be continued (it was started anew), or None.
+        self.note: str | None = None
+        if keep_until is not None and self.h5.exists():
+            try:
+                self._continue(np.asarray(coords), np.asarray(cells), keep_until)
+                return
+            except (OSError, KeyError, ValueError) as exc:
+                self.steps = []
+                self.note = f"{self.path.name}: cannot continue the series ({exc}); started anew"
         xyz = np.zeros((len(coords), 3))
         xyz[:, : coords.shape[1]] = coords
         with h5py.File(self.h5, "w") as f:
             f["mesh/geometry"] = xyz
             f["mesh/topology"] = np.asarray(cells, dtype=np.int64)
-        self.steps: list[tuple[float, list[tuple[str, str, int]]]] = []
+        if self.note is not None:
+            self._write_xml()  # no step: the old XML named data that is gone
+
+    def _continue(self, coords: np.ndarray, cells: np.ndarray, keep_until: float) -> None:
+        """Reopen the series, dropping its steps after ``keep_until``.
+
+        A step is kept when its group holds the attributes :meth:`write` sets last (its
+        time, field names and centres) and every step before it is kept.
+
+        Raises:
+            OSError, KeyError, ValueError: the files are unreadable or of another mesh.
+        """
+        with h5py.File(self.h5, "a") as f:
+            geometry, topology = f["mesh/geometry"][()], f["mesh/topology"][()]
+            if not (
+                np.array_equal(topology, cells)
+                and geometry.shape == (len(coords), 3)
+                and np.array_equal(geometry[:, : coords.shape[1]], coords)
+            ):
+                raise ValueError(f"{self.h5.name} holds another mesh")
+            steps = sorted(
+                (int(name[5:]), name)
+                for name in f
+                if name.startswith("step_") and name[5:].isdigit()
+            )
+            for i, name in steps:
+                group = f[name]
+                t = float(group.attrs.get("t", np.inf))
+                if t > keep_until or i != len(self.steps):
+                    del f[name]
+                    continue
+                names = [n for n in str(group.attrs.get("fields", "")).split(",") if n]
+                centres = str(group.attrs.get("centres", "")).split(",")
+                fields = [
+                    (n, c, group[n].shape[1] if group[n].ndim == 2 else 1)
+                    for n, c in zip(names, centres, strict=True)
+                ]
+                self.steps.append((t, fields))
+        self._write_xml()
 
     def write(
         self,
@@ -46,16 +109,21 @@ class XdmfSeries:
         point_data: dict[str, np.ndarray] | None = None,
         cell_data: dict[str, np.ndarray] | None = None,
     ) -> None:
-        """Append a step at time ``t``.
+        """Append a step at time ``t`` (or replace the last step, if it has that time).
 
         Args:
             t: the step's time value (the event number for the crack driver).
             point_data: name -> values, shape=(num_nodes,) or (num_nodes, k).
             cell_data: name -> values, shape=(num_cells,) or (num_cells, k).
         """
+        t = float(t)
+        if self.steps and self.steps[-1][0] == t:
+            self.steps.pop()
         i = len(self.steps)
         fields = []
         with h5py.File(self.h5, "a") as f:
+            if f"step_{i}" in f:
+                del f[f"step_{i}"]
             for centre, data in (("Node", point_data or {}), ("Cell", cell_data or {})):
                 for name, given in data.items():
                     values = np.asarray(given, dtype=float)
@@ -63,7 +131,11 @@ class XdmfSeries:
                         values = np.column_stack([values, np.zeros(len(values))])
                     f[f"step_{i}/{name}"] = values
                     fields.append((name, centre, values.shape[1] if values.ndim == 2 else 1))
-        self.steps.append((float(t), fields))
+            group = f.require_group(f"step_{i}")
+            group.attrs["t"] = t
+            group.attrs["fields"] = ",".join(n for n, _, _ in fields)
+            group.attrs["centres"] = ",".join(c for _, c, _ in fields)
+        self.steps.append((t, fields))
         self._write_xml()
 
     def _write_xml(self) -> None:
@@ -110,11 +182,20 @@ def temporal_collection(name: str) -> tuple[ET.Element, ET.Element]:
 
 
 def write_xml(root: ET.Element, path: Path) -> None:
-    """Write an XML tree atomically (a reader never sees half a file)."""
+    """Write an XML tree atomically (a reader never sees half a file).
+
+    The temporary file has a unique name beside ``path`` and is removed on any error.
+    """
     ET.indent(root)
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8")
-    tmp.replace(path)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            ET.ElementTree(root).write(f, xml_declaration=True, encoding="utf-8")
+        os.chmod(name, 0o644)
+        os.replace(name, path)
+    except BaseException:
+        Path(name).unlink(missing_ok=True)
+        raise
 
 
 def hdf_item(

@@ -19,6 +19,8 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 import dolfinx
 from dolfinx.io import XDMFFile
 
+from geofrac.io.series import write_xml
+
 __all__ = ["regroup_xdmf", "write_fields", "write_meshtags"]
 
 
@@ -98,10 +100,7 @@ def _tags_as_collection(path: Path, mesh_name: str, names: Sequence[str]) -> Non
     ET.SubElement(grid, "Time", Value="0")
     for name in names:
         grid.append(grids[name].find("Attribute"))  # type: ignore[arg-type]
-    ET.indent(root)
-    tmp = path.with_suffix(".xdmf.tmp")
-    ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8")
-    tmp.replace(path)
+    write_xml(root, path)
 
 
 def regroup_xdmf(path: Path) -> None:
@@ -137,7 +136,4 @@ def regroup_xdmf(path: Path) -> None:
         ET.SubElement(grid, "Time", Value=time_value)
         for attribute in attributes:
             grid.append(attribute)
-    ET.indent(root)
-    tmp = path.with_suffix(".xdmf.tmp")
-    ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8")
-    tmp.replace(path)
+    write_xml(root, path)
