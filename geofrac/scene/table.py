@@ -113,11 +113,9 @@ def output_directory(t: Table, name: str, out: Path | None, trusted: bool = Fals
     ``/etc``); one set on the command line (``--set output.dir=...``, ``trusted``) may be
     anything.
     """
-    if out is not None:
-        return out.resolve()
     if not t.has("dir"):
-        return (Path("results") / name).resolve()
-    text = t.string("dir")
+        return (out if out is not None else Path("results") / name).resolve()
+    text = t.string("dir")  # checked even when --out replaces it: check and run agree
     if not text.strip() or "\0" in text:
         raise t.error("dir", f"must be a directory path, got {short(text)}")
     path = Path(text)
@@ -127,7 +125,7 @@ def output_directory(t: Table, name: str, out: Path | None, trusted: bool = Fals
             f"{short(text)} leaves the working directory; a scene's output.dir must be "
             "relative without '..' (pass --out DIR for any other place)",
         )
-    return path.resolve()
+    return (out if out is not None else path).resolve()
 
 
 def is_number(value: Any) -> bool:
