@@ -62,8 +62,9 @@ class PointSeries:
                     raise ValueError(f"field {name!r}: {values.shape[1]} components")
                 f[f"frame_{i}/{name}"] = values if values.shape[1] > 1 else values[:, 0]
                 kinds.append((name, values.shape[1]))
-            f[f"frame_{i}"].attrs["t"] = float(t)
+            # the time last: a frame with a time is complete (reopen drops any other)
             f[f"frame_{i}"].attrs["fields"] = ",".join(name for name, _ in kinds)
+            f[f"frame_{i}"].attrs["t"] = float(t)
         self.frames.append((float(t), kinds))
         self._write_xml()
 
