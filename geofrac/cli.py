@@ -81,8 +81,9 @@ def _parser() -> argparse.ArgumentParser:
 
 def _load(args: argparse.Namespace, comm: Any, out: str | None = None) -> Scene:
     """Validate the scene on every rank and print its warnings (rank 0)."""
-    large = {"allow_large": True} if args.allow_large else {}  # TODO(lead): plain kwarg
-    scene = load_scene_collective(comm, args.scene, args.overrides, out, **large)
+    scene = load_scene_collective(
+        comm, args.scene, args.overrides, out, allow_large=args.allow_large
+    )
     for warning in scene.warnings:
         echo(comm, f"warning: {warning}", err=True)
     return scene
@@ -90,6 +91,8 @@ def _load(args: argparse.Namespace, comm: Any, out: str | None = None) -> Scene:
 
 def _check(args: argparse.Namespace, comm: Any) -> int:
     scene = _load(args, comm)
+    if scene.size is not None:
+        echo(comm, f"size: {scene.size.summary()} (estimate; caps in docs/scenes.md)")
     effects = ", ".join(scene.effect_names) or "none"
     if scene.mpm is not None:
         m = scene.mpm
