@@ -15,6 +15,11 @@ validated :class:`~geofrac.scene.model.Scene`, decomposes them over the communic
   ``plasticity``), ``energy_drift_max`` (max |E(t) − E₀| / E₀ with E the total above;
   None when E₀ = 0, a body starting at rest), front and probe histories.
 
+With a :class:`~geofrac.io.checkpoint.RunControl` the loop checkpoints (every rank's
+particles in their local order and the loop's state) and stops cleanly on a signal;
+``--resume`` continues from the newest checkpoint (docs/mpm.md, "Checkpoints and
+resume").
+
 Effects: ``gravity`` sets the body force, ``mls_smoothing`` the strain-increment
 smoothing (4.50-4.58), ``plasticity`` the Drucker-Prager material (4.39-4.43),
 ``friction`` the frictional boundaries (4.44-4.47); an undeclared effect's code is never
