@@ -108,6 +108,8 @@ def _all_particles(
                     geometry.mesh_size,
                     geometry.dim,
                     spec.bed_group,
+                    time_limit=geometry.time_limit,
+                    trusted=geometry.trusted,
                 )
                 points = next(xyz for xyz, _ in groups.values())
                 # a cell in several groups is seeded once, with a density its groups name
