@@ -313,10 +313,12 @@ def _smoothed(deps: np.ndarray, smooth_at: tuple[np.ndarray, float], s: StepSett
 
     x0, h = smooth_at
     n = len(deps)
-    values = deps.reshape(n, -1)
+    values = deps.reshape(n, deps.shape[1] * deps.shape[2])
     if s.domain is not None:
-        gx, gv = s.domain.ghosts(x0, values, h)
+        gx, gv = s.domain.ghosts(x0, values, h)  # collective: every rank takes part
         x0, values = np.concatenate([x0, gx]), np.concatenate([values, gv])
+    if n == 0:  # a rank whose slab holds no particle (yet) has nothing to smooth
+        return values[:0]
     return smooth(x0, values, h, s.backend)[0][:n]
 
 

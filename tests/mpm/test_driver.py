@@ -11,7 +11,7 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.mpm.bar import impact_bar, self_weight_stress
-from geofrac.mpm.driver import run_mpm_scene
+from geofrac.mpm.driver import run_mpm_scene, simulate
 from geofrac.scene import load_scene
 from tests.conftest import JOBS, run_and_list_modules
 
@@ -152,3 +152,23 @@ def test_a_declared_smoothing_is_imported(tmp_path):
     modules = _modules(tmp_path, 'effects=["mls_smoothing"]')
     assert "geofrac.mpm.smoothing" in modules
     assert "geofrac.effects.mls_smoothing" in modules
+
+
+@pytest.mark.mpi(min_size=2)
+def test_mls_smoothing_with_a_rank_that_holds_no_particle(tmp_path_factory):
+    """MLS smoothing on a rank that holds no particle, then the whole bar.
+
+    The bar starts in rank 0's slab and crosses into rank 1's: the empty rank takes part
+    in the ghost exchange and smooths nothing (it crashed in a reshape of zero rows); the
+    decomposed run equals the serial one.
+    """
+    comm = MPI.COMM_WORLD
+    overrides = ['effects=["mls_smoothing"]', "mpm.t_end=30", "mpm.particles.lower=[2.5]"]
+    base = comm.bcast(str(tmp_path_factory.mktemp("mls")) if comm.rank == 0 else None)
+    bar = JOBS / "mpm_translating_bar.toml"
+    serial = simulate(load_scene(bar, overrides), MPI.COMM_SELF, verbose=False)
+    parallel = simulate(load_scene(bar, overrides, out=f"{base}/par"), comm, verbose=False)
+    assert parallel["runout_m"] > 20.0  # the bar crossed the slab boundary at x = 25
+    assert parallel["runout_m"] == pytest.approx(serial["runout_m"], rel=1e-10)
+    front = parallel["probes"]["front"][-1]["x"]
+    np.testing.assert_allclose(front, serial["probes"]["front"][-1]["x"], rtol=1e-10)
