@@ -135,6 +135,8 @@ class TerrainSpec:
             raise ValueError("footprint axes, h, h_immobile and zone_transition must be > 0")
         if self.algorithm_3d not in ALGORITHMS_3D:
             raise ValueError(f"algorithm_3d must be one of {sorted(ALGORITHMS_3D)}")
+        if self.a == 0:  # eq. 5.1 divides by a
+            raise ValueError("a must not be 0 (eq. 5.1 divides by it; < 0 gives a hill)")
         for centre, radius, size in self.zones:
             if len(centre) != 3 or radius <= 0 or size <= 0:
                 raise ValueError(f"zone {(centre, radius, size)}: need (x, y, z), r > 0, h > 0")
