@@ -1024,6 +1024,10 @@ class CrackDriver:
                     break
                 if timing.factorizations > start["timing"]["factorizations"] or ref is None:
                     ref = start
+                    # a resumed run factorises this event without a stale reference to
+                    # drop: it keeps the reasons and refinements counted by this solve
+                    ref["timing"]["stale"] = dict(timing.stale)
+                    ref["timing"]["refinements"] = timing.refinements
                 timing.iterations += its
                 t = time.perf_counter()
                 sigma1, energy_unit, reaction_unit = self.measures(u_unit)
