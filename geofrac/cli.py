@@ -91,29 +91,30 @@ def _load(args: argparse.Namespace, comm: Any, out: str | None = None) -> Scene:
 
 def _check(args: argparse.Namespace, comm: Any) -> int:
     scene = _load(args, comm)
+    echo(comm, f"ok: {args.scene}: {_describe(scene)}")
     if scene.size is not None:
         echo(comm, f"size: {scene.size.summary()} (estimate; caps in docs/scenes.md)")
+    return 0
+
+
+def _describe(scene: Scene) -> str:
+    """What a validated scene is, in one line."""
     effects = ", ".join(scene.effect_names) or "none"
     if scene.mpm is not None:
         m = scene.mpm
-        echo(
-            comm,
-            f"ok: {args.scene}: MPM {m.dim}D, {m.scheme}/{m.shape}, particles from "
-            f"{m.particles.kind}, t_end {m.t_end:g}; effects: {effects}",
+        return (
+            f"MPM {m.dim}D, {m.scheme}/{m.shape}, particles from {m.particles.kind}, "
+            f"t_end {m.t_end:g}; effects: {effects}"
         )
-        return 0
     if scene.blocks is not None:
         b = scene.blocks
         source = "the terrain of seed 5.4" if b.source == "terrain" else "its geometry"
-        echo(comm, f"ok: {args.scene}: {b.dim}D blocks from {source}")
-        return 0
+        return f"{b.dim}D blocks from {source}"
     groups = ", ".join(f"{n} ({d}D)" for n, d in scene.geometry.groups.items())  # type: ignore[union-attr]
-    echo(
-        comm,
-        f"ok: {args.scene}: {scene.gdim}D, element {scene.discretization.element}, "  # type: ignore[union-attr]
-        f"effects: {effects}; groups: {groups}",
+    return (
+        f"{scene.gdim}D, element {scene.discretization.element}, "  # type: ignore[union-attr]
+        f"effects: {effects}; groups: {groups}"
     )
-    return 0
 
 
 def _run(args: argparse.Namespace, comm: Any) -> int:

@@ -300,6 +300,8 @@ class CrackDriver:
         self.scene, self.problem, self.tagged = solution.scene, solution.problem, solution.tagged
         #: checkpoints, signal stop and resume data (:class:`~geofrac.io.checkpoint.RunControl`)
         self.control = getattr(solution, "control", None)
+        if self.control is not None:  # checkpoints name the loop that wrote them
+            self.control.kind = self.CHECKPOINT_KIND
         self.out_dir = self.scene.output.dir
         mesh = self.tagged.mesh
         self.mesh, self.comm = mesh, mesh.comm

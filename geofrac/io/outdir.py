@@ -278,7 +278,6 @@ def owned_run(
             control.resume = latest(out.checkpoints)
             if control.resume is None:  # pragma: no cover - claim found it just before
                 raise RunError(f"--resume: the checkpoint in {out.checkpoints} disappeared")
-            control.check_resume(ranks_must_match=False)
             start["resumed_from"] = {"checkpoint": str(control.resume.path), "k": control.resume.k}
         summary = dict(start) | {"status": "running"}
         if comm.rank == 0:

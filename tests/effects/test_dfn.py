@@ -52,7 +52,7 @@ def test_seed_models_declare_table_2_1():
         ("dfn.sets.0.distribution=cauchy", "dfn.sets[0].distribution", "unknown value"),
         ("dfn.sets.0.color=1", "dfn.sets[0].color", "unknown key"),
         ("dfn.sets=[]", "dfn.sets", "at least one"),
-        ("dfn.seed=-1", "dfn.seed", "non-negative integer"),
+        ("dfn.seed=-1", "dfn.seed", r"integer in \[0, 2\^63\)"),
         ("dfn.mesh_size=-1", "dfn.mesh_size", "> 0"),
         ("dfn.mesh_size=1e-5", "dfn.mesh_size", "too fine"),
         ("dfn.fracture_mesh_size=2.0", "dfn.fracture_mesh_size", "must not exceed"),
@@ -182,7 +182,7 @@ def test_dfn_scene_imports_dfn_and_no_other_effect(tmp_path):
     )
     assert "geofrac.effects.dfn" in modules and "geofrac.meshing.dfn" in modules
     assert "geofrac.effects.gravity" not in modules
-    written = {p.name for p in (tmp_path / "out").iterdir()}
+    written = {p.name for p in (tmp_path / "out").iterdir() if not p.name.startswith(".")}
     assert written == {"summary.json", "network.csv"}  # output.xdmf = false: no XDMF
 
 
