@@ -245,7 +245,7 @@ class RunControl:
         """Raise :class:`~geofrac.interrupt.Interrupted` (after :meth:`poll` said stop)."""
         raise interrupt.Interrupted(self._signum, where)
 
-    def check_resume(self, ranks_must_match: bool = True) -> None:
+    def check_resume(self, ranks_must_match: bool = True, check_kind: bool = True) -> None:
         """Refuse a resume checkpoint of another scene, loop or (optionally) rank count."""
         ck = self.resume
         if ck is None:
@@ -255,7 +255,7 @@ class RunControl:
                 f"--resume: the checkpoint {ck.path} is of another scene or other --set "
                 "overrides (its sha256 differs); run without --resume to start afresh"
             )
-        if ck.meta.get("kind") != self.kind:
+        if check_kind and ck.meta.get("kind") != self.kind:
             raise RunError(
                 f"--resume: the checkpoint {ck.path} is of a '{ck.meta.get('kind')}' loop, "
                 f"this run is '{self.kind}'"

@@ -278,6 +278,8 @@ def owned_run(
             control.resume = latest(out.checkpoints)
             if control.resume is None:  # pragma: no cover - claim found it just before
                 raise RunError(f"--resume: the checkpoint in {out.checkpoints} disappeared")
+            # the scene before any heavy work; the loop checks its kind and rank count
+            control.check_resume(ranks_must_match=False, check_kind=False)
             start["resumed_from"] = {"checkpoint": str(control.resume.path), "k": control.resume.k}
         summary = dict(start) | {"status": "running"}
         if comm.rank == 0:
