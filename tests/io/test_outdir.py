@@ -183,3 +183,15 @@ def test_ranks_agree_on_ownership_and_publish_once(mpi_tmp_path):
     if comm.rank == 0:
         assert _summary(out / "summary.json")["status"] == "ok"
         assert _summary(out / INCOMPLETE / "summary.json")["status"] == "interrupted"
+
+
+def test_resume_refuses_a_checkpoint_of_another_scene_before_any_work(tmp_path):
+    ck = tmp_path / INCOMPLETE / "checkpoint" / "ckpt-000000003"
+    ck.mkdir(parents=True)
+    meta = {"k": 3, "kind": "cracking", "sha256": "0" * 64, "ranks": 1, "data": {}}
+    (ck / "meta.json").write_text(json.dumps(meta))
+    scene = load_scene(JOBS / "quickstart.toml", out=tmp_path)
+    with pytest.raises(RunError, match="another scene"):
+        run_scene(scene, MPI.COMM_SELF, verbose=False, resume=True)
+    assert (ck / "meta.json").exists()  # the refused resume leaves the checkpoint alone
+    assert not (tmp_path / INCOMPLETE / "summary.json").exists()
