@@ -86,18 +86,41 @@ def test_a_run_of_another_kind_leaves_no_file_of_the_previous_one(tmp_path):
     assert not (tmp_path / INCOMPLETE).exists()
 
 
-def test_a_signal_during_a_run_keeps_the_previous_results_and_says_interrupted(tmp_path):
-    run_scene(load_scene(JOBS / "quickstart.toml", out=tmp_path), MPI.COMM_SELF, verbose=False)
+BEAM = (
+    "geometry.parameters.h_fine=8",
+    "geometry.parameters.h=30",
+    "cracking.max_events=6",
+    "output.checkpoint_minutes=0",
+)
+
+
+def test_a_signal_stops_a_loop_keeps_the_previous_results_and_says_interrupted(tmp_path):
+    beam = JOBS / "notched_beam.toml"
+    run_scene(load_scene(beam, BEAM, out=tmp_path), MPI.COMM_SELF, verbose=False)
+    before = (tmp_path / "events.csv").read_text()
     interrupt.reset()
     interrupt._received.append(signal.SIGTERM)  # as the handler does on SIGTERM
     try:
-        with pytest.raises(interrupt.Interrupted, match="SIGTERM"):
-            run_scene(load_scene(JOBS / "quickstart.toml", out=tmp_path), MPI.COMM_SELF, False)
+        with pytest.raises(interrupt.Interrupted, match="SIGTERM after event 1"):
+            run_scene(load_scene(beam, BEAM, out=tmp_path), MPI.COMM_SELF, verbose=False)
     finally:
         interrupt.reset()
     assert _summary(tmp_path / "summary.json")["status"] == "ok"
+    assert (tmp_path / "events.csv").read_text() == before
     stopped = _summary(tmp_path / INCOMPLETE / "summary.json")
     assert stopped["status"] == "interrupted" and stopped["interrupted"]["signal"] == 15
+    assert stopped["interrupted"]["checkpoint"].endswith("ckpt-000000001")
+    assert len((tmp_path / INCOMPLETE / "events.csv").read_text().splitlines()) == 2
+
+
+def test_a_signal_after_the_work_is_done_publishes_it(tmp_path):
+    """A run without a loop has nothing to stop: its finished results are published."""
+    interrupt._received.append(signal.SIGTERM)
+    try:
+        summary = run_scene(load_scene(JOBS / "quickstart.toml", out=tmp_path), MPI.COMM_SELF)
+    finally:
+        interrupt.reset()
+    assert summary["status"] == "ok" and (tmp_path / "results.xdmf").exists()
 
 
 def test_publication_deletes_only_plain_names_the_previous_summary_lists(tmp_path):
@@ -175,8 +198,9 @@ def test_ranks_agree_on_ownership_and_publish_once(mpi_tmp_path):
     if comm.rank == 1:  # the signal reaches one rank only: every rank must stop
         interrupt._received.append(signal.SIGTERM)
     try:
-        with pytest.raises(interrupt.Interrupted):
-            run_scene(load_scene_collective(comm, JOBS / "quickstart.toml", out=out), comm, False)
+        with pytest.raises(interrupt.Interrupted, match="after event 1"):
+            beam = load_scene_collective(comm, JOBS / "notched_beam.toml", BEAM, out=out)
+            run_scene(beam, comm, False)
     finally:
         interrupt.reset()
     comm.barrier()
