@@ -16,7 +16,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from geofrac.io.series import hdf_item, temporal_collection, write_xml
+from geofrac.io.series import hdf_item, kept_steps, temporal_collection, write_xml
 
 __all__ = ["PointSeries"]
 
@@ -86,17 +86,10 @@ class PointSeries:
         with h5py.File(self.h5, "a") as f:
             if len(f["topology"]) != self.count:
                 raise ValueError(f"{self.h5.name}: {len(f['topology'])} particles, not {count}")
-            i = 0
-            while f"frame_{i}" in f:
-                group = f[f"frame_{i}"]
-                t = float(group.attrs.get("t", np.inf))
-                if t > t_max * (1 + 1e-12) or len(self.frames) < i:
-                    del f[f"frame_{i}"]
-                else:
-                    names = str(group.attrs.get("fields", "")).split(",")
-                    kinds = [(n, group[n].shape[1] if group[n].ndim > 1 else 1) for n in names if n]
-                    self.frames.append((t, kinds))
-                i += 1
+            for t, group in kept_steps(f, "frame_", t_max * (1 + 1e-12)):
+                names = str(group.attrs.get("fields", "")).split(",")
+                kinds = [(n, group[n].shape[1] if group[n].ndim > 1 else 1) for n in names if n]
+                self.frames.append((t, kinds))
         self._write_xml()
         return self
 

@@ -21,7 +21,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-__all__ = ["XdmfSeries", "hdf_item", "temporal_collection", "write_xml"]
+__all__ = ["XdmfSeries", "hdf_item", "kept_steps", "temporal_collection", "write_xml"]
 
 _TOPOLOGY = {2: "Polyline", 3: "Triangle"}
 
@@ -83,17 +83,7 @@ class XdmfSeries:
                 and np.array_equal(geometry[:, : coords.shape[1]], coords)
             ):
                 raise ValueError(f"{self.h5.name} holds another mesh")
-            steps = sorted(
-                (int(name[5:]), name)
-                for name in f
-                if name.startswith("step_") and name[5:].isdigit()
-            )
-            for i, name in steps:
-                group = f[name]
-                t = float(group.attrs.get("t", np.inf))
-                if t > keep_until or i != len(self.steps):
-                    del f[name]
-                    continue
+            for t, group in kept_steps(f, "step_", keep_until):
                 names = [n for n in str(group.attrs.get("fields", "")).split(",") if n]
                 centres = str(group.attrs.get("centres", "")).split(",")
                 fields = [
@@ -166,6 +156,31 @@ class XdmfSeries:
                 dims = f"{n} {k}" if k > 1 else f"{n}"
                 hdf_item(attr, dims, "Float", f"{h5}:/step_{i}/{name}")
         write_xml(root, self.path)
+
+
+def kept_steps(f: h5py.File, prefix: str, keep_until: float) -> list[tuple[float, h5py.Group]]:
+    """The steps ``<prefix>0, <prefix>1, ...`` of an open series file that a resumed run keeps.
+
+    A step is kept when its group carries its time (written last, so the step is
+    complete), the time is <= ``keep_until`` and every step before it is kept; every
+    other step group is deleted from ``f``.
+
+    Returns:
+        (time, group) of the kept steps, in order.
+    """
+    numbered = sorted(
+        (int(name[len(prefix) :]), name)
+        for name in f
+        if name.startswith(prefix) and name[len(prefix) :].isdigit()
+    )
+    kept: list[tuple[float, h5py.Group]] = []
+    for i, name in numbered:
+        t = float(f[name].attrs.get("t", np.inf))
+        if t > keep_until or i != len(kept):
+            del f[name]
+        else:
+            kept.append((t, f[name]))
+    return kept
 
 
 def temporal_collection(name: str) -> tuple[ET.Element, ET.Element]:
