@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
 from typing import Protocol
 
-__all__ = ["Progress", "echo", "format_seconds"]
+__all__ = ["Progress", "echo", "format_seconds", "sayer"]
 
 
 class _Comm(Protocol):
@@ -24,6 +25,13 @@ def echo(comm: _Comm | None, message: str, *, err: bool = False) -> None:
         return
     stream = sys.stderr if err else sys.stdout
     print(message, file=stream, flush=True)
+
+
+def sayer(comm: _Comm | None, verbose: bool = True) -> Callable[[str], None]:
+    """A progress printer: :func:`echo` on ``comm``'s rank 0, or silence when not ``verbose``."""
+    if not verbose:
+        return lambda message: None
+    return lambda message: echo(comm, message)
 
 
 def format_seconds(seconds: float) -> str:

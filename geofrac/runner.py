@@ -30,7 +30,7 @@ from geofrac.fem.post import (
 from geofrac.io.checkpoint import RunControl
 from geofrac.io.summary import start_summary
 from geofrac.io.xdmf import write_fields, write_meshtags
-from geofrac.log import echo, format_seconds
+from geofrac.log import format_seconds, sayer
 from geofrac.meshing.distribute import TaggedMesh, build_mesh, check_fracture_cover
 from geofrac.scene.model import Scene
 from geofrac.timing import Timings
@@ -108,7 +108,7 @@ def solve_scene(
         RunError: collectively, when the run cannot continue.
     """
     timings = timings or Timings()
-    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
+    say = sayer(comm, verbose)
     with timings.phase("mesh"):
         tagged = build_mesh(scene.geometry, comm)
         geometry_report = dict(tagged.report)
@@ -252,7 +252,6 @@ def run_scene(
     from geofrac.io.outdir import owned_run
 
     timings = timings or Timings()
-    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
     start = start_summary(scene, comm, element=scene.discretization.element)
 
     def body(staged: Scene, control: RunControl) -> dict[str, Any]:
@@ -275,4 +274,4 @@ def run_scene(
         finally:
             solution.problem.destroy()
 
-    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "fem", resume, say)
+    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "fem", resume, verbose)

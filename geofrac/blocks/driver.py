@@ -144,8 +144,7 @@ def run_blocks_scene(
                 _write(staged, whole)
         return {"results": record}
 
-    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
-    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "blocks", resume, say)
+    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "blocks", resume, verbose)
 
 
 def _validate(scene: Scene, blocks: Blocks, comm: MPI.Comm) -> dict[str, Any] | None:

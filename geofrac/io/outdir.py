@@ -38,6 +38,7 @@ from geofrac import interrupt
 from geofrac.errors import RunError
 from geofrac.io.checkpoint import CheckpointPolicy, RunControl, latest
 from geofrac.io.summary import finish_summary, write_json
+from geofrac.log import sayer
 
 __all__ = ["INCOMPLETE", "OutputDir", "claim", "owned_run"]
 
@@ -241,7 +242,7 @@ def owned_run(
     legacy: Sequence[str],
     kind: str,
     resume: bool = False,
-    say: Callable[[str], None] = lambda msg: None,
+    verbose: bool = False,
 ) -> dict[str, Any]:
     """Run ``body`` in an owned, staged output directory; publish on success (collective).
 
@@ -255,7 +256,7 @@ def owned_run(
         legacy: names of files an older geofrac wrote into the directory.
         kind: the checkpoint kind (``"fem"``, ``"mpm"``, ``"blocks"``).
         resume: continue from the newest checkpoint in ``output.dir/incomplete``.
-        say: progress printer (rank 0).
+        verbose: print notes about the directory (rank 0).
 
     Returns:
         the summary as written to ``summary.json``.
@@ -266,6 +267,7 @@ def owned_run(
     """
     out = claim(scene.output.dir, comm, resume)
     try:
+        say = sayer(comm, verbose)
         for note in out.notes:
             say(f"note: {note}")
         output = scene.output

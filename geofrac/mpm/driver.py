@@ -39,7 +39,7 @@ from mpi4py import MPI
 from geofrac.errors import RunError
 from geofrac.io.checkpoint import RunControl
 from geofrac.io.summary import start_summary
-from geofrac.log import echo, format_seconds
+from geofrac.log import format_seconds, sayer
 from geofrac.mpm.boundaries import held, scene_grid
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles, concat, take
@@ -286,7 +286,7 @@ def simulate(
             checkpoint is written.
     """
     timings = timings or Timings()
-    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
+    say = sayer(comm, verbose)
     spec = scene.mpm
     assert spec is not None
     with timings.phase("setup"):
@@ -557,5 +557,4 @@ def run_mpm_scene(
     def body(staged: Scene, control: Any) -> dict[str, Any]:
         return {"results": simulate(staged, comm, timings, verbose, write=True, control=control)}
 
-    say = (lambda msg: echo(comm, msg)) if verbose else (lambda msg: None)
-    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "mpm", resume, say)
+    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "mpm", resume, verbose)
