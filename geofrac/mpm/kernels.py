@@ -432,7 +432,11 @@ def elastic_update(
     lp: np.ndarray,
     cpgimp: bool,
 ) -> None:
-    """Elastic stress (D.8), volume (D.9), G_p (4.70) and cpGIMP half-widths (4.69).
+    """Elastic stress (D.8, D.30), volume (D.9), G_p (4.70), cpGIMP half-widths (4.69).
+
+    In 2D and 3D the stress is first turned by the Jaumann rate (D.30-D.31),
+    σ ← σ + σ Δω − Δω σ with Δω = −Δt/2 (L − Lᵀ), then Δσ = D : Δε is added (as
+    :func:`geofrac.mpm.schemes.rotate_stress` does); plane strain's σ_zz does not turn.
 
     Args:
         deps: strain increments, shape=(n, dim, dim).
@@ -452,6 +456,8 @@ def elastic_update(
     n, dim, _ = deps.shape
     two_mu = 2 * mu
     Fn = np.empty((dim, dim))
+    spin = np.empty((dim, dim))
+    turned = np.empty((dim, dim))
     for i in range(n):
         tr = deps[i, 0, 0]
         for a in range(1, dim):
@@ -459,6 +465,18 @@ def elastic_update(
         if dim == 1:
             stress[i, 0, 0] += E * deps[i, 0, 0]
         else:
+            for a in range(dim):  # the seed's Δω (D.31)
+                for b in range(dim):
+                    spin[a, b] = -0.5 * dt * (L[i, a, b] - L[i, b, a])
+            for a in range(dim):  # σ + σ Δω − Δω σ (D.30)
+                for b in range(dim):
+                    acc = stress[i, a, b]
+                    for c in range(dim):
+                        acc += stress[i, a, c] * spin[c, b] - spin[a, c] * stress[i, c, b]
+                    turned[a, b] = acc
+            for a in range(dim):
+                for b in range(dim):
+                    stress[i, a, b] = turned[a, b]
             lt = lam * tr
             for a in range(dim):
                 for b in range(dim):

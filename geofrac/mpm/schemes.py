@@ -18,7 +18,9 @@ Schemes (``scheme``):
   USAVG, which the seed cites, and apply half of the step to each (Δt/2 in D.19 and
   D.27), so the stress over a step averages the two velocity fields.
 
-The stress update is the elastic increment Δσ = D : Δε (D.8; ``Elastic``), the volume
+The stress update turns σ by the Jaumann rate (D.30-D.31; :func:`rotate_stress`, in
+2D and 3D, elastic as well as Drucker-Prager, so a spinning body's stress turns with it)
+and adds the elastic increment Δσ = D : Δε (D.8; ``Elastic``), the volume
 follows ρ^{k+1} = ρ^k / (1 + tr Δε) (D.9), and the deformation gradient
 G^{k+1} = (I + ∇v Δt) G^k (4.70) drives ``cpgimp``'s half-widths (4.69).
 
@@ -57,6 +59,9 @@ __all__ = [
     "Elastic",
     "ParticlesLeftGrid",
     "StepSettings",
+    "local_damping",
+    "rotate_stress",
+    "spin_increment",
     "step",
     "strain_energy",
     "time_step",
@@ -168,6 +173,12 @@ class StepSettings:
             cell size (:mod:`~geofrac.mpm.smoothing`), or None for no smoothing (the
             smoothing code is then not even imported).
         friction: a Coulomb friction boundary (:mod:`~geofrac.mpm.friction`), or None.
+        damping: Cundall's local (non-viscous) damping coefficient α in [0, 1): each
+            component of the nodal force becomes f − α |f| sign(v), v the nodal velocity
+            at the step's start (:func:`local_damping`); 0 (the default): no damping,
+            and the step does no extra work. For quasi-static starts (a body settling
+            under its own weight); it removes energy from every motion, so it is wrong
+            for dynamics (waves, a sliding body).
         backend: one of :data:`BACKENDS`.
         domain: this rank's part of a decomposed grid (:func:`geofrac.mpm.parallel.
             decompose`); the step is then given ``domain.local`` and this rank's
@@ -184,6 +195,7 @@ class StepSettings:
     friction: Friction | None = None
     backend: str = "numba"
     domain: Domain | None = field(default=None, repr=False)
+    damping: float = 0.0
 
     def __post_init__(self) -> None:
         """Check the names and the step."""
@@ -195,8 +207,43 @@ class StepSettings:
             raise ValueError(f"dt must be > 0, got {self.dt}")
         if self.smoothing is not None and not self.smoothing > 0:
             raise ValueError(f"smoothing radius factor must be > 0, got {self.smoothing}")
+        if not 0 <= self.damping < 1:
+            raise ValueError(f"the local damping α must lie in [0, 1), got {self.damping}")
         if self.backend not in BACKENDS:
             raise ValueError(f"backend {self.backend!r} is not one of {', '.join(BACKENDS)}")
+
+
+def local_damping(f: np.ndarray, v: np.ndarray, alpha: float) -> np.ndarray:
+    """Cundall's local damping force −α |f| sign(v), per node and component.
+
+    The force of each component opposes the velocity with a fraction α of the
+    unbalanced force (Cundall 1987; the "local damping" of geotechnical MPM codes such
+    as Anura3D). A node at rest (v = 0) is not damped; a body in equilibrium (f = 0)
+    feels none, so the static state is not shifted.
+
+    Args:
+        f: the nodal force (internal + external), shape=(N, dim).
+        v: the nodal velocity at the step's start, shape=(N, dim).
+        alpha: α in [0, 1).
+
+    Returns:
+        The damping force, shape=(N, dim) (add it to f).
+    """
+    return -alpha * np.abs(f) * np.sign(v)
+
+
+def _owned_nodes(dom: Domain | None, num_nodes: int) -> np.ndarray | slice:
+    """The nodes this rank counts in a sum over the grid (each node on one rank).
+
+    A node plane along axis 0 belongs to the rank whose slab starts at or below it (the
+    last plane to the last rank); halo planes are another rank's.
+    """
+    if dom is None:
+        return slice(None)
+    r, per = dom.rank, num_nodes // (dom.planes[dom.rank][1] - dom.planes[dom.rank][0] + 1)
+    plane = dom.planes[r][0] + np.arange(num_nodes) // per
+    last = r == len(dom.planes) - 1
+    return (plane >= dom.cuts[r]) & ((plane < dom.cuts[r + 1]) | (last & (plane == dom.cuts[-1])))
 
 
 def _scatter(w: Weights, contrib: np.ndarray, num_nodes: int) -> np.ndarray:
@@ -292,6 +339,8 @@ def _update_stress(
         )  # fmt: skip
         return
     if isinstance(material, Elastic):
+        if d > 1:
+            p.stress = rotate_stress(p.stress, spin_increment(L, dt))
         p.stress += material.increment(deps)
         if p.dim == 2:
             p.stress_zz += material.lame()[0] * np.trace(deps, axis1=1, axis2=2)
@@ -322,6 +371,37 @@ def _smoothed(deps: np.ndarray, smooth_at: tuple[np.ndarray, float], s: StepSett
     return smooth(x0, values, h, s.backend)[0][:n]
 
 
+def spin_increment(L: np.ndarray, dt: float) -> np.ndarray:
+    """The seed's spin increment Δω = Δt/2 (∂v_j/∂x_i − ∂v_i/∂x_j) (D.31).
+
+    With L_ij = ∂v_i/∂x_j this is −Δt W, W = ½ (L − Lᵀ) the usual spin: a rigid
+    rotation at rate ω about z has W = ω [[0, −1], [1, 0]].
+
+    Args:
+        L: velocity gradients ∇v, shape=(n, dim, dim).
+        dt: the step of this update.
+
+    Returns:
+        shape=(n, dim, dim).
+    """
+    return -0.5 * dt * (L - np.swapaxes(L, 1, 2))
+
+
+def rotate_stress(stress: np.ndarray, spin: np.ndarray) -> np.ndarray:
+    """The Jaumann-rotated stress σ + σ Δω − Δω σ (D.30), before D : Δε is added.
+
+    Applied to every 2D and 3D stress update, elastic and Drucker-Prager: a rigidly
+    rotating body keeps its stress turning with it, σ = R σ₀ Rᵀ, to first order in Δt
+    (explicit: over a rotation θ in steps of Δθ the deviator grows by about 2 θ Δθ
+    relative, docs/mpm_physics.md).
+
+    Args:
+        stress: shape=(n, d, d).
+        spin: Δω of :func:`spin_increment`, shape=(n, d, d).
+    """
+    return stress + np.matmul(stress, spin) - np.matmul(spin, stress)
+
+
 def _plastic_update(
     p: Particles, material: DruckerPrager, deps: np.ndarray, L: np.ndarray, dt: float
 ) -> None:
@@ -329,30 +409,39 @@ def _plastic_update(
 
     Plane strain in 2D: the strain increment has no zz part, σ_zz is the stored one.
     """
-    from geofrac.mpm.plasticity import jaumann
-
     n, d = p.n, p.dim
     full = np.zeros((n, 3, 3))
     full[:, :d, :d] = p.stress
     if d == 2:
         full[:, 2, 2] = p.stress_zz
     spin = np.zeros((n, 3, 3))
-    spin[:, :d, :d] = -0.5 * dt * (L - np.swapaxes(L, 1, 2))  # the seed's Δω (D.31)
+    spin[:, :d, :d] = spin_increment(L, dt)
     deps3 = np.zeros((n, 3, 3))
     deps3[:, :d, :d] = deps
-    new, dlam = material.update(jaumann(full, spin), deps3)
+    new, dlam = material.update(rotate_stress(full, spin), deps3)
     p.stress = new[:, :d, :d].copy()
     if d == 2:
         p.stress_zz = new[:, 2, 2].copy()
     p.plastic += dlam
 
 
-def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettings) -> None:
+def step(
+    g: Grid,
+    p: Particles,
+    material: Elastic | DruckerPrager,
+    s: StepSettings,
+    work: dict[str, float] | None = None,
+) -> None:
     """Advance the particles by one step of ``s.scheme`` (in place).
 
     With ``s.domain``, ``g`` is ``s.domain.local`` and ``p`` this rank's particles; every
     rank calls the step, and at its end ``p``'s arrays hold the particles the rank owns
     then.
+
+    ``work``: an accumulator for energy terms; with ``s.damping`` > 0 the step adds to
+    ``work["damping"]`` the energy the local damping took out of the grid this step,
+    −Δt Σ_i f_damp,i · ½ (v_i + v*_i) over the nodes this rank owns (each node counted
+    on one rank: sum over the ranks for the whole).
 
     Raises:
         ParticlesLeftGrid: a particle (or its GIMP box) is outside the grid; nothing
@@ -415,6 +504,9 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
             f = _forces(w, p, s.gravity, N)
         if dom is not None:
             f = dom.sum_halo(f)
+    if s.damping > 0:  # a branch: no extra work without damping
+        f_damp = local_damping(f, v, s.damping)
+        f = f + f_damp
     if fast:
         a, v_new = kernels.scratch("a", (N, dim)), kernels.scratch("v_new", (N, dim))
         kernels.nodal_acceleration(f, mass, MASS_FLOOR * peak, s.fixed, dt, v, a, v_new)
@@ -423,6 +515,10 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
         a[active] = f[active] / mass[active, None]
         a[s.fixed] = 0.0
         v_new = v + dt * a
+    if s.damping > 0 and work is not None:
+        held = s.fixed | ~active[:, None]  # held components and inactive nodes do not move
+        power = np.where(held, 0.0, f_damp * (v + v_new))[_owned_nodes(dom, N)]
+        work["damping"] = work.get("damping", 0.0) - 0.5 * dt * float(power.sum())
     if s.friction is not None:
         from geofrac.mpm.friction import apply_friction
 
