@@ -143,3 +143,115 @@ def test_plasticity_is_refused_in_1d():
     s = StepSettings("musl", "mpm", 1e-3, np.zeros(1), np.zeros((g.num_nodes, 1), bool))
     with pytest.raises(ValueError, match="2D or 3D"):
         step(g, p, DruckerPrager(1.0, 0.3, 20.0), s)
+
+
+# --- pure shear beyond the cone: the closed-form return (Edo (2016), eqs. 4.39-4.43) ----
+
+PHI, COHESION, E_DP, NU_DP = 30.0, 10.0, 1000.0, 0.25
+
+
+def _pure_shear_return(p_trial: float, tau_trial: float, psi: float) -> tuple[float, float]:
+    """The return of σ* = p* I + τ* (e_x ⊗ e_y + e_y ⊗ e_x), by hand.
+
+    For this σ*, I₁ = 3p* and √J₂ = |τ*| (s : s = 2τ*²), so the yield function (4.39) is
+    f* = 3β p* + |τ*| − k. The flow rule's potential β_ψ I₁ + √J₂ gives the plastic
+    strain increment Δλ (β_ψ I + s/(2√J₂)); elastically that is Δp = −3K β_ψ Δλ and
+    Δτ = −G Δλ sign τ*. f = 0 afterwards: Δλ = f* / (9K β β_ψ + G). So
+
+    - ψ = 0: p = p*, |τ| = k − 3β p* (the deviator scales radially to the cone at the
+      same mean stress);
+    - ψ = φ (associated): Δλ = f* / (9K β² + G), p = p* − 3K β Δλ, |τ| = |τ*| − G Δλ.
+
+    (de Souza Neto, Perić & Owen 2008, box 8.9, with η = 3β, η̄ = 3β_ψ, ξ c = k.)
+    """
+    t = np.tan(np.radians(PHI))
+    beta, k = t / np.sqrt(9 + 12 * t * t), 3 * COHESION / np.sqrt(9 + 12 * t * t)
+    tp = np.tan(np.radians(psi))
+    beta_psi = tp / np.sqrt(9 + 12 * tp * tp)
+    K, G = E_DP / (3 * (1 - 2 * NU_DP)), E_DP / (2 * (1 + NU_DP))
+    f = 3 * beta * p_trial + abs(tau_trial) - k
+    if f <= 0:
+        return p_trial, tau_trial
+    dlam = f / (9 * K * beta * beta_psi + G)
+    assert abs(tau_trial) - G * dlam > 0  # on the cone, not at the apex
+    return p_trial - 3 * K * beta_psi * dlam, np.sign(tau_trial) * (abs(tau_trial) - G * dlam)
+
+
+@pytest.mark.parametrize("psi", [0.0, PHI])
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_pure_shear_returns_to_the_analytic_point_on_the_cone(psi, sign):
+    """A pure shear increment from a hydrostatic stress: the return of eqs. 4.39-4.43.
+
+    Numbers (φ = 30°, c = 10, E = 1000, ν = 0.25, p₀ = −20): β = 1/√39, k = 30/√13,
+    the cone at p₀ is at τ = k − 3β p₀ = 17.93; the trial τ* = 30.
+    """
+    m = DruckerPrager(E_DP, NU_DP, friction_angle=PHI, cohesion=COHESION, dilatancy_angle=psi)
+    p0, tau_star = -20.0, 30.0 * sign
+    _, G = m.moduli()
+    deps = np.zeros((1, 3, 3))
+    deps[0, 0, 1] = deps[0, 1, 0] = tau_star / (2 * G)
+    new, dlam = m.update(p0 * np.eye(3)[None], deps)
+    p, tau = _pure_shear_return(p0, tau_star, psi)
+    if psi == 0:
+        assert p == p0
+        assert abs(tau) == pytest.approx(30 / np.sqrt(13) + 60 / np.sqrt(39), rel=1e-12)
+    expected = p * np.eye(3)
+    expected[0, 1] = expected[1, 0] = tau
+    np.testing.assert_allclose(new[0], expected, rtol=1e-12, atol=1e-12)
+    assert dlam[0] > 0
+    assert yield_function(new, m.beta, m.k)[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def _pure_shear_step(scheme: str, psi: float):
+    """One 2D plane-strain step of a prestressed block in pure shear.
+
+    The block starts at σ = −20 I (σ_zz too) with the velocity v = γ̇ (y − y_c, x − x_c):
+    a pure shear, no spin; ρ = 1e4 makes the free faces' unloading negligible in a step.
+
+    Returns the stresses (3 × 3 with σ_zz) of the particles two cells or more inside
+    the block, whose nodes see the exact linear field, and the strain increment Δε_xy.
+    """
+    from geofrac.mpm.grid import grid
+    from geofrac.mpm.particles import lattice
+    from geofrac.mpm.schemes import StepSettings, step
+
+    centre = np.array([8.0, 8.0])
+    p = lattice(centre - 4.0, [16, 16], 0.5, 1.0e4)
+    p.stress[:] = -20.0 * np.eye(2)
+    p.stress_zz[:] = -20.0
+    rate, dt = 37.5, 1e-3  # Δε_xy = 0.0375: τ* = 2G Δε_xy = 30 (USAVG: twice 15)
+    p.v = rate * (p.x - centre)[:, ::-1]
+    inner = np.all(np.abs(p.x - centre) < 2.0, axis=1)
+    g = grid([0.0, 0.0], 1.0, [16, 16])
+    s = StepSettings(
+        scheme, "ugimp", dt, np.zeros(2), np.zeros((g.num_nodes, 2), bool), backend="numpy"
+    )
+    m = DruckerPrager(E_DP, NU_DP, friction_angle=PHI, cohesion=COHESION, dilatancy_angle=psi)
+    step(g, p, m, s)
+    full = np.zeros((int(inner.sum()), 3, 3))
+    full[:, :2, :2] = p.stress[inner]
+    full[:, 2, 2] = p.stress_zz[inner]
+    return full, rate * dt
+
+
+@pytest.mark.parametrize("psi", [0.0, PHI])
+@pytest.mark.parametrize("scheme", ["musl", "usf", "usavg"])
+def test_pure_shear_step_lands_on_the_cone_at_the_analytic_point(scheme, psi):
+    """Through one step, the interior particles land on the closed-form point, σ_zz too.
+
+    The trial τ* = 2G Δε_xy = 30 from p₀ = −20 is beyond the cone (τ = 17.93 there).
+
+    USAVG updates the stress twice with half the increment (elastic to τ = 15, then a
+    trial of 30 returned); the closed form is applied to each half.
+    """
+    full, de = _pure_shear_step(scheme, psi)
+    _, G = DruckerPrager(E_DP, NU_DP, PHI).moduli()
+    if scheme == "usavg":
+        p, tau = _pure_shear_return(-20.0, G * de, psi)
+        p, tau = _pure_shear_return(p, tau + G * de, psi)
+    else:
+        p, tau = _pure_shear_return(-20.0, 2 * G * de, psi)
+    expected = p * np.eye(3)
+    expected[0, 1] = expected[1, 0] = tau
+    np.testing.assert_allclose(full, np.broadcast_to(expected, full.shape), rtol=1e-9, atol=1e-9)
+    assert abs(tau) < 2 * G * de  # it did yield
