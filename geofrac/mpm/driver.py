@@ -213,6 +213,7 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
         None if smoothing is None else smoothing.radius,
         friction,
         **({"domain": domain} if domain is not None else {}),
+        damping=spec.damping,
     )
     return MpmRun(g, local, p, material, settings, steps, domain, probes, phi, total)
 

@@ -241,6 +241,8 @@ class MpmSpec:
         frames: particle output frames written over the run (plus the initial one).
         velocity: initial velocity of every particle, shape=(dim,).
         particles: where the particles come from.
+        damping: Cundall's local damping coefficient α in [0, 1) of ``mpm.damping``
+            (0: none; :class:`geofrac.mpm.schemes.StepSettings`).
     """
 
     dim: int
@@ -260,6 +262,7 @@ class MpmSpec:
     particles: ParticleSource
     bed_group: str | None = None
     initial_stress: str = "none"
+    damping: float = 0.0
 
 
 @dataclass(frozen=True)

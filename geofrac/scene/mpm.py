@@ -48,8 +48,10 @@ MPM_KEYS: dict[str, tuple[str, ...]] = {
         "frames",
         "velocity",
         "initial_stress",
+        "damping",
     ),
     "mpm.grid": ("lower", "upper", "spacing", "padding"),
+    "mpm.damping": ("kind", "alpha"),
     "mpm.particles": ("lower", "counts", "spacing", "density"),
 }
 #: Grid box sides a wall (or friction) may name.
@@ -60,6 +62,8 @@ MPM_OUTPUT_FIELDS = ("displacement", "velocity", "stress", "plastic_strain", "de
 MPM_EFFECTS = ("gravity", "mls_smoothing", "plasticity", "friction")
 #: Tables of finite-element scenes that an MPM scene must not have.
 FEM_ONLY_TABLES = ("discretization", "exact", "bc", "load", "solver")
+#: Kinds of ``mpm.damping``: Cundall's local (non-viscous) damping of the nodal forces.
+DAMPING_KINDS = ("local",)
 #: Default Courant number (the seed's benchmarks use 0.1, eq. 4.72).
 DEFAULT_COURANT = 0.1
 #: Default number of output frames.
@@ -206,6 +210,18 @@ def _bed(
     return tuple((float(p[0]), float(p[1])) for p in raw)
 
 
+def _damping(file: Path, raw: Any) -> float:
+    """``mpm.damping = { kind = "local", alpha = α }``: Cundall's local damping, α in [0, 1)."""
+    t = Table(file, "mpm.damping", raw, MPM_KEYS["mpm.damping"])
+    t.string("kind", default="local", choices=DAMPING_KINDS)
+    alpha = float(t.number("alpha", required=True, minimum=0.0))  # type: ignore[arg-type]
+    if not alpha < 1:
+        raise t.error(
+            "alpha", f"must be < 1 (1 would cancel every unbalanced force), got {alpha!r}"
+        )
+    return alpha
+
+
 def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     """Validate ``[mpm]`` (with the geometry, when particles come from one)."""
     t = Table(file, "mpm", raw, MPM_KEYS["mpm"])
@@ -237,6 +253,7 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     initial_stress = t.string("initial_stress", default="none", choices=("none", "geostatic"))
     if initial_stress == "geostatic" and dim == 1:
         raise t.error("initial_stress", "'geostatic' applies to 2D and 3D scenes")
+    damping = _damping(file, t.data["damping"]) if t.has("damping") else 0.0
     walls = _walls(file, t.data.get("walls", {}), dim)
     bed = _bed(file, t.data["bed"], dim, geometry) if t.has("bed") else ()
     return MpmSpec(
@@ -257,6 +274,7 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
         velocity=velocity,
         particles=source,
         initial_stress=initial_stress,
+        damping=damping,
     )
 
 

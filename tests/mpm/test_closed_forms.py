@@ -268,3 +268,29 @@ def test_damped_column_on_two_ranks():
             failure = str(e)
     failure = comm.bcast(failure, root=0)
     assert failure is None, failure
+
+
+def test_the_settling_column_scene_reaches_its_weight(tmp_path):
+    """jobs/mpm_settling_column.toml: `mpm.damping` reaches the step.
+
+    The last frame is the settled column, within the tolerance argued in
+    test_damped_column_settles_to_its_weight.
+    """
+    import h5py
+    from mpi4py import MPI
+
+    from geofrac.mpm.driver import run_mpm_scene
+    from geofrac.scene import load_scene
+    from tests.conftest import JOBS
+
+    scene = load_scene(JOBS / "mpm_settling_column.toml", out=tmp_path)
+    assert scene.mpm.damping == 0.2
+    assert run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)["status"] == "ok"
+    with h5py.File(tmp_path / "particles.h5") as f:
+        last = f[f"frame_{max(int(k.split('_')[1]) for k in f if k.startswith('frame_'))}"]
+        x, u, stress = last["geometry"][()], last["displacement"][()], last["stress"][()]
+    y0, H = x[:, 1] - u[:, 1], 1.0
+    sxx, syy = stress[:, 0], stress[:, 4]
+    err = np.abs(syy + RHO * G_ACC * (H - y0))
+    assert err.max() <= RHO * G_ACC * CELL / 4 + 0.01 * RHO * G_ACC * H
+    np.testing.assert_allclose(sxx, NU / (1 - NU) * syy, rtol=1e-9)

@@ -113,3 +113,21 @@ def test_geostatic_initial_stress_needs_2d_and_vertical_gravity(tmp_path):
         load_scene(slide, tilted)
     assert info.value.key == "mpm.initial_stress"
     assert load_scene(slide, ["mpm.initial_stress=geostatic"]).mpm.initial_stress == "geostatic"
+
+
+def test_local_damping_is_read_and_checked(tmp_path):
+    """``mpm.damping = { kind = "local", alpha = α }``, α in [0, 1); absent: 0."""
+    assert load_scene(_bar(tmp_path)).mpm.damping == 0.0
+    damped = _bar(tmp_path, extra='damping = { kind = "local", alpha = 0.2 }')
+    assert load_scene(damped).mpm.damping == 0.2
+    for extra, key, text in [
+        ("damping = { alpha = 1.0 }", "mpm.damping.alpha", "must be < 1"),
+        ("damping = { alpha = -0.1 }", "mpm.damping.alpha", ">= 0"),
+        ("damping = { kind = 'viscous', alpha = 0.1 }", "mpm.damping.kind", "unknown value"),
+        ("damping = { kind = 'local' }", "mpm.damping.alpha", "missing"),
+        ("damping = { alpha = 0.1, ratio = 0.1 }", "mpm.damping.ratio", "unknown key"),
+    ]:
+        with pytest.raises(SceneError) as info:
+            load_scene(_bar(tmp_path, extra=extra))
+        assert info.value.key == key, extra
+        assert text in info.value.message, extra
