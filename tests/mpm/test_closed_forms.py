@@ -87,9 +87,9 @@ def test_spinning_prestressed_body_keeps_its_stress_turning_with_it(scheme, shap
     """σ = R(θ) σ₀ R(θ)ᵀ after θ = 0.5 rad, to the explicit update's first-order error.
 
     The error is the closed form of the explicit rate (≈ 2 θ ω Δt τ₀, 0.0085 at 50
-    steps) within 5 %, and halves when Δt halves; a flipped spin would give
-    2 sin 2θ τ₀ = 1.4, no rotation (the elastic path before the Jaumann rate was added
-    to it) 2 sin θ τ₀ = 0.81. The mean stress and σ_zz do not change.
+    steps) within 5 %, and halves when Δt halves. With the spin's sign flipped the
+    largest component is off by 1.02, with no rotation (the elastic path before the
+    Jaumann rate was added to it) by 0.78. The mean stress and σ_zz do not change.
     """
     mat = MATERIALS[material]
     errors = []
