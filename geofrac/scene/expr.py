@@ -145,8 +145,8 @@ def _check(node: ast.AST, names: tuple[str, ...]) -> None:
     if isinstance(node, ast.Call):
         func = node.func
         if not isinstance(func, ast.Name) or func.id not in FUNCTIONS:
-            what = func.id if isinstance(func, ast.Name) else type(func).__name__
-            raise ExpressionError(f"calls {what!r:.40}; only {', '.join(FUNCTIONS)} may be called")
+            what = repr(func.id)[:40] if isinstance(func, ast.Name) else type(func).__name__
+            raise ExpressionError(f"calls {what}; only {', '.join(FUNCTIONS)} may be called")
         if node.keywords:
             raise ExpressionError(f"passes keyword arguments to {func.id}()")
         arity = FUNCTIONS[func.id][1]

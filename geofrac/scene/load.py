@@ -138,6 +138,8 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str], file: Path) 
 
 #: ``--set`` keys that do not change what a scene describes (where its output goes).
 UNMARKED_KEYS = ("description", "output.dir")
+#: Longest override quoted in full in a marked description.
+MAX_OVERRIDE_TEXT = 200
 
 
 def marked_description(description: str, overrides: Sequence[str]) -> str:
@@ -150,7 +152,10 @@ def marked_description(description: str, overrides: Sequence[str]) -> str:
     changed = [o.strip() for o in overrides if o.partition("=")[0].strip() not in UNMARKED_KEYS]
     if not changed:
         return description
-    note = "(modified by " + ", ".join(f"--set {short(o, 200)}" for o in changed) + ")"
+    cut = [
+        o if len(o) <= MAX_OVERRIDE_TEXT else o[: MAX_OVERRIDE_TEXT - 3] + "..." for o in changed
+    ]
+    note = "(modified by " + ", ".join(f"--set {o}" for o in cut) + ")"
     return f"{description} {note}" if description else note
 
 
