@@ -211,6 +211,8 @@ def test_a_huge_velocity_expression_is_refused_quickly(tmp_path):
 def test_touching_boxes_are_not_an_overlap(tmp_path):
     scene = load_scene(_two(tmp_path), ["mpm.bodies.1.lower=[0.9, 0.5]"])  # a ends at x = 0.9
     assert len(scene.mpm.bodies) == 2
+    above = ["mpm.bodies.1.lower=[0.5, 1.0]", "mpm.bodies.1.upper=[1.0, 1.5]"]  # same x, apart in y
+    assert len(load_scene(_two(tmp_path), above).mpm.bodies) == 2
 
 
 def test_gravity_ramp_is_validated(tmp_path):
