@@ -13,7 +13,12 @@ validated :class:`~geofrac.scene.model.Scene`, decomposes them over the communic
 - ``summary.json`` (by :func:`run_mpm_scene`): ``results`` with ``runout_m`` (the
   largest particle x at the end minus at the start), ``friction_angle_deg`` (with
   ``plasticity``), ``energy_drift_max`` (max |E(t) − E₀| / E₀ with E the total above;
-  None when E₀ = 0, a body starting at rest), front and probe histories.
+  None when E₀ = 0, a body starting at rest), front and probe histories, and ``bodies``
+  (per body of ``[[mpm.bodies]]``, or one ``"body"``: particles, first id, mass).
+
+Particles come from ``[mpm.particles]`` or from the bodies of ``[[mpm.bodies]]``, ids
+numbered body after body before the decomposition; initial velocities may be expressions
+of the position (:mod:`geofrac.scene.expr`); ``[gravity] ramp`` scales gravity per step.
 
 With a :class:`~geofrac.io.checkpoint.RunControl` the loop checkpoints (every rank's
 particles in their local order and the loop's state) and stops cleanly on a signal;
