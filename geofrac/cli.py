@@ -102,8 +102,9 @@ def _describe(scene: Scene) -> str:
     effects = ", ".join(scene.effect_names) or "none"
     if scene.mpm is not None:
         m = scene.mpm
+        source = f"{len(m.bodies)} bodies" if m.bodies else m.particles.kind
         return (
-            f"MPM {m.dim}D, {m.scheme}/{m.shape}, particles from {m.particles.kind}, "
+            f"MPM {m.dim}D, {m.scheme}/{m.shape}, particles from {source}, "
             f"t_end {m.t_end:g}; effects: {effects}"
         )
     if scene.blocks is not None:

@@ -62,7 +62,7 @@ def test_every_mpm_key_has_a_row():
 
     start = TEXT.index("## MPM scenes")
     body = TEXT[start:]
-    for key in (*MPM_KEYS["mpm"], *MPM_KEYS["mpm.particles"]):
+    for key in (*MPM_KEYS["mpm"], *MPM_KEYS["mpm.particles"], *MPM_KEYS["mpm.bodies"]):
         assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), key
     for key in MPM_KEYS["mpm.grid"]:
         assert f"`{key}`" in body, key
@@ -71,6 +71,14 @@ def test_every_mpm_key_has_a_row():
             assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), key
     for name in MPM_OUTPUT_FIELDS:
         assert f"`{name}`" in body, name
+
+
+def test_every_gravity_key_is_documented():
+    from geofrac.effects.gravity import KEYS
+
+    row = next(line for line in TEXT.splitlines() if line.startswith("| `gravity` |"))
+    for key in KEYS:
+        assert f"`{key}`" in row, key
 
 
 def test_every_blocks_key_has_a_row():

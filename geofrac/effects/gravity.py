@@ -1,7 +1,9 @@
 """Effect ``gravity``: self-weight ρ·g as a body force on the whole domain.
 
 Scene table ``[gravity]`` (optional): ``acceleration`` = vector of length gdim,
-default ``[-9.81]`` in 1D (MPM bars), ``[0, -9.81]`` in 2D and ``[0, 0, -9.81]`` in 3D.
+default ``[-9.81]`` in 1D (MPM bars), ``[0, -9.81]`` in 2D and ``[0, 0, -9.81]`` in 3D;
+MPM scenes only: ``ramp`` = seconds over which gravity rises linearly from 0 to
+``acceleration`` (default 0: full gravity from the start), for quasi-static starts.
 Needs ``material.density``.
 """
 
@@ -14,12 +16,25 @@ from geofrac.effects import ConfigureContext
 from geofrac.scene.errors import SceneError, did_you_mean
 from geofrac.scene.table import finite, short
 
-__all__ = ["MAX_ACCELERATION", "METHODS", "GravityConfig", "configure", "linear_form"]
+__all__ = [
+    "KEYS",
+    "MAX_ACCELERATION",
+    "MAX_RAMP",
+    "METHODS",
+    "GravityConfig",
+    "configure",
+    "linear_form",
+    "ramp_factor",
+]
 
 #: Gravity is a body force in FEM scenes and a nodal force per mass in MPM scenes.
 METHODS = ("fem", "mpm")
 #: Largest magnitude of an acceleration component (1e6 g: far beyond any planet).
 MAX_ACCELERATION = 1e7
+#: Longest gravity ramp (seconds, any unit system).
+MAX_RAMP = 1e15
+#: Keys of ``[gravity]``.
+KEYS = ("acceleration", "ramp")
 
 
 @dataclass(frozen=True)
@@ -29,19 +44,35 @@ class GravityConfig:
     Attributes:
         acceleration: gravitational acceleration, shape=(gdim,).
         density: mass density taken from the material.
+        ramp: MPM: gravity rises linearly from 0 at t = 0 to ``acceleration`` at
+            t = ``ramp`` (0: full gravity from the start).
     """
 
     acceleration: tuple[float, ...]
     density: float
+    ramp: float = 0.0
+
+
+def ramp_factor(ramp: float, t0: float, t1: float) -> float:
+    """The mean of the ramp's factor min(1, t / ramp) over the step [t0, t1].
+
+    Used as gravity's factor for that step, so that the impulse m g ∫ min(1, t/ramp) dt
+    a particle receives over the run is exact, whatever the step.
+    """
+    if ramp <= 0 or t0 >= ramp:
+        return 1.0
+
+    def integral(t: float) -> float:  # ∫_0^t min(1, s/ramp) ds
+        return t * t / (2 * ramp) if t <= ramp else ramp / 2 + (t - ramp)
+
+    return (integral(t1) - integral(t0)) / (t1 - t0)
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> GravityConfig:
     """Validate ``[gravity]``; requires ``material.density``."""
     for key in table:
-        if key != "acceleration":
-            raise SceneError(
-                ctx.file, f"gravity.{key}", "unknown key" + did_you_mean(key, ["acceleration"])
-            )
+        if key not in KEYS:
+            raise SceneError(ctx.file, f"gravity.{key}", "unknown key" + did_you_mean(key, KEYS))
     density = getattr(ctx.material, "density", None)
     if density is None:
         raise SceneError(ctx.file, "material.density", "effect 'gravity' needs the mass density")
@@ -65,7 +96,26 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> GravityConfig:
                 f"entry {i} must be finite and at most {MAX_ACCELERATION:.0e} in magnitude, "
                 f"got {short(c)}",
             )
-    return GravityConfig(acceleration=tuple(float(c) for c in g), density=float(density))
+    ramp = table.get("ramp", 0.0)
+    if "ramp" in table:
+        if ctx.method != "mpm":
+            raise SceneError(
+                ctx.file, "gravity.ramp", "applies to MPM scenes only (an FEM solve is static)"
+            )
+        if (
+            not isinstance(ramp, int | float)
+            or isinstance(ramp, bool)
+            or not finite(ramp)
+            or not 0 <= ramp <= MAX_RAMP
+        ):
+            raise SceneError(
+                ctx.file,
+                "gravity.ramp",
+                f"must be a number of seconds in [0, {MAX_RAMP:g}], got {short(ramp)}",
+            )
+    return GravityConfig(
+        acceleration=tuple(float(c) for c in g), density=float(density), ramp=float(ramp)
+    )
 
 
 def linear_form(config: GravityConfig, ctx: Any) -> Any:

@@ -88,6 +88,8 @@ def start_summary(scene: Any, comm: Any, fem: bool = True, **details: Any) -> di
             "path": str(scene.path),
             "sha256": scene.sha256,
             "name": scene.name,
+            "description": scene.description,
+            "overrides": list(getattr(scene, "overrides", ())),
             "effects": list(scene.effect_names),
             **details,
             "input": scene.raw,

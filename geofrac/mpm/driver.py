@@ -13,7 +13,12 @@ validated :class:`~geofrac.scene.model.Scene`, decomposes them over the communic
 - ``summary.json`` (by :func:`run_mpm_scene`): ``results`` with ``runout_m`` (the
   largest particle x at the end minus at the start), ``friction_angle_deg`` (with
   ``plasticity``), ``energy_drift_max`` (max |E(t) − E₀| / E₀ with E the total above;
-  None when E₀ = 0, a body starting at rest), front and probe histories.
+  None when E₀ = 0, a body starting at rest), front and probe histories, and ``bodies``
+  (per body of ``[[mpm.bodies]]``, or one ``"body"``: particles, first id, mass).
+
+Particles come from ``[mpm.particles]`` or from the bodies of ``[[mpm.bodies]]``, ids
+numbered body after body before the decomposition; initial velocities may be expressions
+of the position (:mod:`geofrac.scene.expr`); ``[gravity] ramp`` scales gravity per step.
 
 With a :class:`~geofrac.io.checkpoint.RunControl` the loop checkpoints (every rank's
 particles in their local order and the loop's state) and stops cleanly on a signal;
@@ -28,6 +33,7 @@ imported.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -70,6 +76,10 @@ class MpmRun:
         probes: probe name -> particle id (the particle nearest the point at t = 0).
         friction_angle: φ in degrees with ``plasticity``, else None.
         total: number of particles over all ranks.
+        ramp: seconds over which gravity rises from 0 to ``settings.gravity``
+            (``[gravity] ramp``; 0: full gravity from the start).
+        bodies: body name -> {"particles", "first_id", "mass"} (ids of a body are
+            ``first_id`` ... ``first_id + particles - 1``).
     """
 
     grid: Grid
@@ -82,56 +92,138 @@ class MpmRun:
     probes: dict[str, int] = field(default_factory=dict)
     friction_angle: float | None = None
     total: int = 0
+    ramp: float = 0.0
+    bodies: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
 def _all_particles(
     scene: Scene, comm: MPI.Comm
-) -> tuple[Particles, tuple[tuple[float, float], ...]]:
-    """The scene's particles and bed, built on rank 0 and broadcast (every rank has all)."""
-    from geofrac.mpm.seeding import from_cells, from_lattice, mesh_cells
+) -> tuple[Particles, tuple[tuple[float, float], ...], dict[str, dict[str, Any]]]:
+    """The scene's particles, bed and bodies, built on rank 0's mesh (every rank has all).
+
+    Particle ids are numbered body after body in the scene's order (``[[mpm.bodies]]``),
+    so they are the same on any number of ranks.
+
+    Returns:
+        (particles, bed polyline, body name -> {"particles", "first_id", "mass"}).
+    """
+    from geofrac.mpm.seeding import from_cells, from_lattice
 
     spec, mat = scene.mpm, scene.material
     assert spec is not None and mat.density is not None
     src = spec.particles
     bed = spec.bed
-    if src.kind == "lattice":
+    if src.kind == "bodies":
+        groups = [b.group for b in spec.bodies if b.kind == "group"]
+        meshed, polyline = _meshed(scene, comm, groups)
+        parts = []
+        for b in spec.bodies:
+            density = mat.density if b.density is None else b.density
+            if b.kind == "lattice":
+                part = from_lattice(b.lower, b.counts, b.spacing, density)
+            else:
+                points, cells = meshed[b.group]  # type: ignore[index]
+                part = from_cells(points, cells, np.full(len(cells), density))
+            key = f"{b.key}.velocity" if b.velocity is not None else "mpm.velocity"
+            part.v[:] = _velocity(b.velocity or spec.velocity, part.x, key)
+            parts.append(part)
+        p = concat(parts, spec.dim)
+        p.ids = np.arange(p.n, dtype=np.int64)
+        first = np.cumsum([0, *(q.n for q in parts)])
+        bodies = {
+            b.name: {
+                "particles": q.n,
+                "first_id": int(first[i]),
+                "mass": float(np.sum(q.mass)),
+            }
+            for i, (b, q) in enumerate(zip(spec.bodies, parts, strict=True))
+        }
+    elif src.kind == "lattice":
         p = from_lattice(src.lower, src.counts, src.spacing, mat.density)
+        p.v[:] = _velocity(spec.velocity, p.x, "mpm.velocity")
+        polyline = None
     else:
-        geometry = scene.geometry
-        assert geometry is not None and geometry.file is not None
-        result: Any = None
-        if comm.rank == 0:
-            try:
-                groups, polyline = mesh_cells(
-                    geometry.file,
-                    geometry.parameters,
-                    geometry.mesh_size,
-                    geometry.dim,
-                    spec.bed_group,
-                    time_limit=geometry.time_limit,
-                    trusted=geometry.trusted,
-                )
-                points = next(xyz for xyz, _ in groups.values())
-                # a cell in several groups is seeded once, with a density its groups name
-                named = sorted(groups, key=lambda n: n not in src.densities)
-                cells = np.concatenate([groups[n][1] for n in named])
-                density = np.concatenate(
-                    [np.full(len(groups[n][1]), src.densities.get(n, mat.density)) for n in named]
-                )
-                _, first = np.unique(np.sort(cells, axis=1), axis=0, return_index=True)
-                first = np.sort(first)
-                cells, density = cells[first], density[first]
-                result = (points, cells, density, polyline)
-            except (RuntimeError, ValueError) as exc:
-                result = f"seeding particles from {geometry.file.name} failed: {exc}"
-        result = comm.bcast(result, root=0)
+        meshed, polyline = _meshed(scene, comm, None)
+        # a cell in several groups is seeded once, with a density its groups name
+        named = sorted(meshed, key=lambda n: n not in src.densities)
+        points = next(xyz for xyz, _ in meshed.values())
+        cells = np.concatenate([meshed[n][1] for n in named])
+        density = np.concatenate(
+            [np.full(len(meshed[n][1]), src.densities.get(n, mat.density)) for n in named]
+        )
+        _, first_cell = np.unique(np.sort(cells, axis=1), axis=0, return_index=True)
+        first_cell = np.sort(first_cell)
+        p = from_cells(points, cells[first_cell], density[first_cell])
+        p.v[:] = _velocity(spec.velocity, p.x, "mpm.velocity")
+    if src.kind != "bodies":
+        bodies = {"body": {"particles": p.n, "first_id": 0, "mass": float(np.sum(p.mass))}}
+    if polyline is not None:
+        bed = tuple((float(x), float(y)) for x, y in polyline)
+    return p, bed, bodies
+
+
+def _meshed(
+    scene: Scene, comm: MPI.Comm, groups: list[str | None] | None
+) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], np.ndarray | None]:
+    """The geometry's cells per top-dimensional group and the bed curve, meshed on rank 0.
+
+    ``groups``: the groups needed (None: all). Nothing is meshed when no group and no
+    bed group is needed. Collective; the result is broadcast.
+
+    Raises:
+        RunError: on every rank, when gmsh fails.
+    """
+    from geofrac.mpm.seeding import mesh_cells
+
+    spec, geometry = scene.mpm, scene.geometry
+    assert spec is not None
+    if groups == [] and spec.bed_group is None:
+        return {}, None
+    assert geometry is not None and geometry.file is not None
+    result: Any = None
+    if comm.rank == 0:
+        try:
+            result = mesh_cells(
+                geometry.file,
+                geometry.parameters,
+                geometry.mesh_size,
+                geometry.dim,
+                spec.bed_group,
+                time_limit=geometry.time_limit,
+                trusted=geometry.trusted,
+            )
+            missing = [g for g in groups or () if g not in result[0]]
+            if missing:
+                result = f"physical group(s) {missing} have no meshed {geometry.dim}D cells"
+        except (RuntimeError, ValueError) as exc:
+            result = str(exc)
         if isinstance(result, str):
-            raise RunError(result)
-        p = from_cells(*result[:3])
-        if result[3] is not None:
-            bed = tuple((float(x), float(y)) for x, y in result[3])
-    p.v[:] = np.asarray(spec.velocity)
-    return p, bed
+            result = f"seeding particles from {geometry.file.name} failed: {result}"
+    result = comm.bcast(result, root=0)
+    if isinstance(result, str):
+        raise RunError(result)
+    return result
+
+
+def _velocity(components: tuple[float | str, ...], x: np.ndarray, key: str) -> np.ndarray:
+    """Initial velocities at positions ``x`` (shape=(n, dim)): numbers or expressions.
+
+    Raises:
+        RunError: an expression is not finite at some particle (the message names ``key``).
+    """
+    from geofrac.scene.expr import ExpressionError, evaluate, parse
+
+    v = np.empty_like(x)
+    names = ("x", "y", "z")[: x.shape[1]]
+    for a, c in enumerate(components):
+        if isinstance(c, str):
+            try:
+                v[:, a] = evaluate(parse(c, names), x)
+            except ExpressionError as exc:
+                raise RunError(f"{key}: entry {a}: expression {c!r} {exc}") from None
+        else:
+            v[:, a] = c
+    return v
 
 
 def _material(scene: Scene) -> tuple[Any, float | None]:
@@ -162,7 +254,7 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
     spec = scene.mpm
     assert spec is not None
     g = scene_grid(spec.lower, spec.upper, spec.spacing, spec.padding)
-    p, bed = _all_particles(scene, comm)
+    p, bed, bodies = _all_particles(scene, comm)
     margin = p.lp if spec.shape != "mpm" else 0.0
     if np.any(g.outside(p.x, margin)):
         raise RunError(
@@ -215,7 +307,8 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
         **({"domain": domain} if domain is not None else {}),
         damping=spec.damping,
     )
-    return MpmRun(g, local, p, material, settings, steps, domain, probes, phi, total)
+    ramp = gravity.ramp if gravity is not None else 0.0
+    return MpmRun(g, local, p, material, settings, steps, domain, probes, phi, total, ramp, bodies)
 
 
 def _energies(run: MpmRun, comm: MPI.Comm) -> list[float]:
@@ -255,6 +348,10 @@ def _fields(p: Particles, x0: np.ndarray, wanted: tuple[str, ...]) -> dict[str, 
         out["plastic_strain"] = p.plastic
     if "density" in wanted:
         out["density"] = p.density
+    if "mass" in wanted:
+        out["mass"] = p.mass
+    if "volume" in wanted:
+        out["volume"] = p.volume
     return out
 
 
@@ -336,7 +433,7 @@ def simulate(
     try:
         with timings.phase("steps"):
             for k in range(first_step, run.steps + 1):
-                step(run.local, run.particles, run.material, s)
+                step(run.local, run.particles, run.material, _settings(run, k))
                 kin, strain, pot = _energies(run, comm)
                 total = kin + strain + (pot - u0)
                 drift = max(drift, abs(total - e0))
@@ -397,12 +494,28 @@ def simulate(
         "particle_steps_per_s": run.total * steps_done / seconds if seconds > 0 else None,
         "history": history,
         "probes": probes,
+        "bodies": run.bodies,
     }
     if resume is not None:
         results["resumed_at_step"] = resume.k
     if run.friction_angle is not None:
         results["friction_angle_deg"] = run.friction_angle
     return results
+
+
+def _settings(run: MpmRun, k: int) -> StepSettings:
+    """The settings of step ``k`` (from t = (k − 1) dt to k dt).
+
+    During a gravity ramp (``[gravity] ramp``) gravity is multiplied by the ramp's mean
+    factor over the step; afterwards the settings are ``run.settings`` themselves.
+    """
+    s = run.settings
+    if run.ramp <= 0 or (k - 1) * s.dt >= run.ramp:
+        return s
+    from geofrac.effects.gravity import ramp_factor
+
+    factor = ramp_factor(run.ramp, (k - 1) * s.dt, k * s.dt)
+    return dataclasses.replace(s, gravity=factor * s.gravity)
 
 
 def _start(run: MpmRun, comm: MPI.Comm) -> dict[str, Any]:

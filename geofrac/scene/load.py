@@ -45,6 +45,7 @@ __all__ = [
     "TOP_LEVEL_KEYS",
     "apply_overrides",
     "load_scene",
+    "marked_description",
 ]
 
 #: Keys a scene may have at the top level (besides one table per declared effect).
@@ -133,6 +134,29 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str], file: Path) 
         if isinstance(node, list):
             raise SceneError(file, key, "cannot replace a whole list entry; set one of its keys")
         node[parts[-1]] = value
+
+
+#: ``--set`` keys that do not change what a scene describes (where its output goes).
+UNMARKED_KEYS = ("description", "output.dir")
+#: Longest override quoted in full in a marked description.
+MAX_OVERRIDE_TEXT = 200
+
+
+def marked_description(description: str, overrides: Sequence[str]) -> str:
+    """``description``, followed by ``(modified by --set K=V, ...)`` after overrides.
+
+    A scene's description speaks of the file; once ``--set`` changed the scene it no
+    longer describes it alone. Overrides of ``description`` itself and of ``output.dir``
+    are not listed (they change no physics).
+    """
+    changed = [o.strip() for o in overrides if o.partition("=")[0].strip() not in UNMARKED_KEYS]
+    if not changed:
+        return description
+    cut = [
+        o if len(o) <= MAX_OVERRIDE_TEXT else o[: MAX_OVERRIDE_TEXT - 3] + "..." for o in changed
+    ]
+    note = "(modified by " + ", ".join(f"--set {o}" for o in cut) + ")"
+    return f"{description} {note}" if description else note
 
 
 def _geometry(file: Path, raw: Any) -> Geometry:
@@ -502,6 +526,13 @@ def _mpm_scene(
         if gravity is None:
             raise SceneError(file, "mpm.initial_stress", "'geostatic' needs the gravity effect")
         g = gravity.acceleration
+        if gravity.ramp > 0:
+            raise SceneError(
+                file,
+                "gravity.ramp",
+                "'mpm.initial_stress = geostatic' starts with the stress of full gravity; "
+                "a ramp would start from none (remove one of them)",
+            )
         if any(c != 0 for c in g[:-1]) or not g[-1] < 0:
             raise SceneError(
                 file,
@@ -689,6 +720,8 @@ def load_scene(
             scene,
             allow_large=scene.allow_large or allow_large,
             size=estimate(scene, _extent(scene.geometry)),
+            overrides=tuple(overrides),
+            description=marked_description(scene.description, overrides),
         )
         check_size(file, scene.size, ranks, scene.allow_large)
     except SceneError as exc:

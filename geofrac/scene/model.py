@@ -12,6 +12,7 @@ from typing import Any, Literal
 
 __all__ = [
     "BlocksSpec",
+    "Body",
     "BoundaryCondition",
     "Discretization",
     "EffectSpec",
@@ -203,13 +204,45 @@ class ParticleSource:
         spacing: lattice: the lattice spacing.
         densities: geometry: physical group -> initial density (groups not named take
             ``material.density``).
+
+    ``kind = "bodies"``: the particles are those of :attr:`MpmSpec.bodies`.
     """
 
-    kind: Literal["lattice", "geometry"]
+    kind: Literal["lattice", "geometry", "bodies"]
     lower: tuple[float, ...] = ()
     counts: tuple[int, ...] = ()
     spacing: float = 0.0
     densities: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Body:
+    """One body of an MPM scene (an entry of ``[[mpm.bodies]]``).
+
+    Attributes:
+        name: the body's name (unique in the scene).
+        kind: ``"lattice"`` (a box filled on a regular lattice) or ``"group"`` (one
+            particle per gmsh cell of a top-dimensional physical group).
+        lower: lattice: the box's lowest corner, shape=(dim,).
+        counts: lattice: particles per direction, shape=(dim,).
+        spacing: lattice: the lattice spacing.
+        group: group: the physical group's name.
+        density: initial density, or None for ``material.density``.
+        velocity: initial velocity components (numbers, or expression texts of the
+            position for :mod:`geofrac.scene.expr`), shape=(dim,), or None for
+            ``mpm.velocity``.
+        key: the body's dotted key in the scene (``mpm.bodies[1]``), for messages.
+    """
+
+    name: str
+    kind: Literal["lattice", "group"]
+    lower: tuple[float, ...] = ()
+    counts: tuple[int, ...] = ()
+    spacing: float = 0.0
+    group: str | None = None
+    density: float | None = None
+    velocity: tuple[float | str, ...] | None = None
+    key: str = ""
 
 
 @dataclass(frozen=True)
@@ -239,8 +272,12 @@ class MpmSpec:
         dt: fixed time step, or None.
         t_end: end time.
         frames: particle output frames written over the run (plus the initial one).
-        velocity: initial velocity of every particle, shape=(dim,).
-        particles: where the particles come from.
+        velocity: initial velocity of every particle (of every body that gives none),
+            shape=(dim,): each component a number or an expression text of the position
+            (:mod:`geofrac.scene.expr`, names ``x``, ``y``, ``z``).
+        particles: where the particles come from (``kind = "bodies"``: from ``bodies``).
+        bodies: the bodies of ``[[mpm.bodies]]`` in order (particle ids are numbered
+            body after body), or empty for the single ``[mpm.particles]`` form.
         damping: Cundall's local damping coefficient α in [0, 1) of ``mpm.damping``
             (0: none; :class:`geofrac.mpm.schemes.StepSettings`).
     """
@@ -258,11 +295,12 @@ class MpmSpec:
     dt: float | None
     t_end: float
     frames: int
-    velocity: tuple[float, ...]
+    velocity: tuple[float | str, ...]
     particles: ParticleSource
     bed_group: str | None = None
     initial_stress: str = "none"
     damping: float = 0.0
+    bodies: tuple[Body, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -317,7 +355,9 @@ class Scene:
         path: the scene file.
         sha256: hash of the file contents plus any ``--set`` overrides.
         name: scene name.
-        description: free text.
+        description: free text; when ``--set`` changed the scene, followed by
+            ``(modified by --set KEY=VALUE, ...)`` (the text no longer describes the
+            scene alone).
         effects: declared effects in declaration order.
         geometry, material, discretization, bcs, loads, exact, solver, output: see the
             classes of the same names (``method = "mpm"``: ``geometry`` is None for
@@ -328,6 +368,7 @@ class Scene:
         mpm: the ``[mpm]`` settings of an MPM scene, else None.
         blocks: the ``[blocks]`` settings of a block scene, else None.
         raw: the input tables after overrides (for the run summary).
+        overrides: the ``--set`` overrides applied, as given.
         warnings: valid but risky choices, each naming file and key (printed, recorded).
         allow_large: the scene's ``allow_large`` (or ``--allow-large``): run even when
             the size estimate is beyond the caps of :mod:`geofrac.scene.size`.
@@ -355,6 +396,7 @@ class Scene:
     blocks: BlocksSpec | None = None
     allow_large: bool = False
     size: Any = None
+    overrides: tuple[str, ...] = ()
 
     @property
     def effect_names(self) -> tuple[str, ...]:

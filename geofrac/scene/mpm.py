@@ -11,8 +11,11 @@ import itertools
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from geofrac.scene.errors import SceneError, did_you_mean
-from geofrac.scene.model import Geometry, Material, MpmSpec, Output, ParticleSource
+from geofrac.scene.expr import ExpressionError, evaluate, parse
+from geofrac.scene.model import Body, Geometry, Material, MpmSpec, Output, ParticleSource
 from geofrac.scene.table import (
     Table,
     checkpoint_keys,
@@ -49,15 +52,36 @@ MPM_KEYS: dict[str, tuple[str, ...]] = {
         "velocity",
         "initial_stress",
         "damping",
+        "bodies",
     ),
     "mpm.grid": ("lower", "upper", "spacing", "padding"),
     "mpm.damping": ("kind", "alpha"),
     "mpm.particles": ("lower", "counts", "spacing", "density"),
+    "mpm.bodies": (
+        "name",
+        "lower",
+        "upper",
+        "counts",
+        "spacing",
+        "group",
+        "density",
+        "velocity",
+    ),
 }
+#: Coordinate names a velocity expression may use, by dimension.
+AXES = ("x", "y", "z")
 #: Grid box sides a wall (or friction) may name.
 SIDES = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
 #: Particle fields an MPM scene's ``output.fields`` may list (all by default).
-MPM_OUTPUT_FIELDS = ("displacement", "velocity", "stress", "plastic_strain", "density")
+MPM_OUTPUT_FIELDS = (
+    "displacement",
+    "velocity",
+    "stress",
+    "plastic_strain",
+    "density",
+    "mass",
+    "volume",
+)
 #: Effects an MPM scene may declare.
 MPM_EFFECTS = ("gravity", "mls_smoothing", "plasticity", "friction")
 #: Tables of finite-element scenes that an MPM scene must not have.
@@ -77,6 +101,9 @@ MAX_FRAMES = 100_000
 MAX_BED_POINTS = 100_000
 MAX_MODULUS = 1e15
 MAX_DENSITY = 1e6
+#: Most entries of ``[[mpm.bodies]]``; longest body name.
+MAX_BODIES = 1000
+MAX_BODY_NAME = 100
 
 
 def mpm_material(file: Path, raw: Any, dim: int) -> Material:
@@ -146,7 +173,27 @@ def _particles(
         if not t.has(key):
             raise t.error(key, "missing (required without a [geometry] table)")
     n = dim or (len(t.data["lower"]) if isinstance(t.data["lower"], list) else 0)
+    lower, counts, spacing = _lattice(t, n)
+    return ParticleSource("lattice", lower, counts, spacing), n
+
+
+def _lattice(t: Table, n: int) -> tuple[tuple[float, ...], tuple[int, ...], float]:
+    """``lower``, ``spacing`` and ``counts`` (or ``upper``, a whole number of spacings)."""
     lower = t.vector("lower", n)
+    spacing = float(t.number("spacing", required=True, positive=True))  # type: ignore[arg-type]
+    if t.has("upper"):
+        upper = t.vector("upper", n)
+        cells = [(u - lo) / spacing for lo, u in zip(lower, upper, strict=True)]
+        for a, c in enumerate(cells):
+            if not 0.5 <= c <= MAX_AXIS_PARTICLES:  # also an overflow to inf
+                raise t.error("upper", f"gives {c:.3g} particles along axis {a}; must be 1 ... 1e9")
+            if abs(c - round(c)) > 1e-6 * max(1.0, c):
+                raise t.error(
+                    "upper",
+                    f"upper - lower along axis {a} is {c:.6g} spacings; make it a whole "
+                    "number (the lattice fills the box, one particle per spacing)",
+                )
+        return lower, tuple(round(c) for c in cells), spacing
     counts = t.data["counts"]
     if (
         not isinstance(counts, list)
@@ -157,8 +204,132 @@ def _particles(
     for i, c in enumerate(counts):
         if c > MAX_AXIS_PARTICLES:
             raise t.error("counts", f"entry {i} must be <= 1e9, got {short(c)}")
-    spacing = float(t.number("spacing", positive=True))  # type: ignore[arg-type]
-    return ParticleSource("lattice", lower, tuple(counts), spacing), n
+    return lower, tuple(counts), spacing
+
+
+def _corners(lower: tuple[float, ...], upper: tuple[float, ...]) -> np.ndarray:
+    """The corners and centre of a box, shape=(2**dim + 1, dim)."""
+    corners = list(itertools.product(*zip(lower, upper, strict=True)))
+    centre = tuple((lo + u) / 2 for lo, u in zip(lower, upper, strict=True))
+    return np.array([*corners, centre], dtype=float)
+
+
+def _velocity(t: Table, name: str, dim: int, points: np.ndarray) -> tuple[float | str, ...]:
+    """An initial velocity: ``dim`` numbers or expressions of the position.
+
+    Each expression is parsed (:func:`geofrac.scene.expr.parse`) and evaluated at
+    ``points`` (shape=(k, dim): the corners and centre of the grid box and of the body);
+    the run evaluates it at every particle again.
+    """
+    names = AXES[:dim]
+    raw = t.data[name]
+    if (
+        not isinstance(raw, list)
+        or len(raw) != dim
+        or not all(is_number(c) or isinstance(c, str) for c in raw)
+    ):
+        raise t.error(
+            name,
+            f"must be a list of {dim} numbers or expressions of {', '.join(names)} "
+            f'(e.g. "-0.5*{names[-1]}"), got {short(raw)}',
+        )
+    out: list[float | str] = []
+    for i, c in enumerate(raw):
+        if isinstance(c, str):
+            try:
+                evaluate(parse(c, names), points)
+            except ExpressionError as exc:
+                raise t.error(name, f"entry {i}: expression {short(c, 40)} {exc}") from None
+            out.append(c)
+        elif not finite(c):
+            raise t.error(name, f"entry {i} must be finite, got {short(c)}")
+        else:
+            out.append(float(c))
+    return tuple(out)
+
+
+def _bodies(
+    file: Path,
+    raw: Any,
+    dim: int,
+    geometry: Geometry | None,
+    box: np.ndarray,
+) -> tuple[Body, ...]:
+    """``[[mpm.bodies]]``: lattice boxes or physical groups, none overlapping.
+
+    ``box``: the grid box's corners and centre (where velocity expressions are tried).
+    """
+    if not isinstance(raw, list) or not raw:
+        raise SceneError(file, "mpm.bodies", "must be a non-empty array of tables ([[mpm.bodies]])")
+    if len(raw) > MAX_BODIES:
+        raise SceneError(file, "mpm.bodies", f"has {len(raw)} entries; at most {MAX_BODIES}")
+    bodies: list[Body] = []
+    for i, entry in enumerate(raw):
+        key = f"mpm.bodies[{i}]"
+        t = Table(file, key, entry, MPM_KEYS["mpm.bodies"])
+        name = t.string("name", default=f"body{i}")
+        if not 1 <= len(name) <= MAX_BODY_NAME or not name.isprintable():
+            raise t.error("name", f"must be 1 to {MAX_BODY_NAME} printable characters")
+        if any(b.name == name for b in bodies):
+            raise t.error("name", f"'{name}' names an earlier body too; names must be unique")
+        density = t.number("density", positive=True, maximum=MAX_DENSITY)
+        lattice_keys = [k for k in ("lower", "upper", "counts", "spacing") if t.has(k)]
+        if t.has("group"):
+            if lattice_keys:
+                raise t.error(lattice_keys[0], "a body is a 'group' or a lattice box, not both")
+            group = t.string("group")
+            if geometry is None:
+                raise t.error("group", "a group body needs particles from a [geometry]")
+            if group not in geometry.groups:
+                raise t.error(
+                    "group",
+                    f"unknown physical group '{group}' in {geometry.file.name}"  # type: ignore[union-attr]
+                    + did_you_mean(group, geometry.groups),
+                )
+            if geometry.groups[group] != geometry.dim or geometry.dim != dim:
+                raise t.error("group", f"group '{group}' is not a {dim}D region")
+            for b in bodies:
+                if b.group == group:
+                    raise t.error("group", f"'{group}' is body '{b.name}' already")
+            velocity = _velocity(t, "velocity", dim, box) if t.has("velocity") else None
+            bodies.append(
+                Body(name, "group", group=group, density=density, velocity=velocity, key=key)
+            )
+            continue
+        if "spacing" not in lattice_keys or "lower" not in lattice_keys:
+            missing = "lower" if "lower" not in lattice_keys else "spacing"
+            raise t.error(missing, "missing (a body needs 'group', or lower, spacing and counts)")
+        if t.has("counts") == t.has("upper"):
+            raise t.error("counts", "give either 'counts' or 'upper' (not both, not neither)")
+        lower, counts, spacing = _lattice(t, dim)
+        upper = tuple(lo + c * spacing for lo, c in zip(lower, counts, strict=True))
+        for b in bodies:
+            if b.kind != "lattice":
+                continue
+            b_upper = tuple(lo + c * b.spacing for lo, c in zip(b.lower, b.counts, strict=True))
+            gaps = [
+                min(u, bu) - max(lo, bl)
+                for lo, u, bl, bu in zip(lower, upper, b.lower, b_upper, strict=True)
+            ]
+            scale = max(spacing, b.spacing)
+            if all(g > 1e-9 * scale for g in gaps):
+                raise t.error(
+                    "lower",
+                    f"box {list(lower)} ... {list(upper)} overlaps body '{b.name}' "
+                    f"({list(b.lower)} ... {list(b_upper)}); bodies must not overlap",
+                )
+        points = np.concatenate([box, _corners(lower, upper)])
+        velocity = _velocity(t, "velocity", dim, points) if t.has("velocity") else None
+        bodies.append(Body(name, "lattice", lower, counts, spacing, None, density, velocity, key))
+    kinds = {b.kind for b in bodies}
+    if len(kinds) > 1:
+        raise SceneError(
+            file,
+            "mpm.bodies",
+            "mixes lattice boxes and geometry groups; give bodies of one kind (their "
+            "overlap could not be checked before meshing)",
+        )
+    return tuple(bodies)
 
 
 def _walls(file: Path, raw: Any, dim: int) -> dict[str, str]:
@@ -234,9 +405,17 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
         raise t.error("grid", "missing (required table: lower, upper, spacing)")
     lower, upper, spacing, padding = _grid(file, t.data["grid"])
     dim = len(lower)
-    source, pdim = _particles(file, t.data.get("particles", {}), dim, geometry)
-    if pdim != dim:
-        raise t.error("grid", f"is {dim}D but the particles are {pdim}D")
+    box = _corners(lower, upper)
+    bodies: tuple[Body, ...] = ()
+    if t.has("bodies"):
+        if t.has("particles"):
+            raise t.error("particles", "give [[mpm.bodies]] or [mpm.particles], not both")
+        bodies = _bodies(file, t.data["bodies"], dim, geometry, box)
+        source = ParticleSource("bodies")
+    else:
+        source, pdim = _particles(file, t.data.get("particles", {}), dim, geometry)
+        if pdim != dim:
+            raise t.error("grid", f"is {dim}D but the particles are {pdim}D")
     if t.has("courant") and t.has("dt"):
         raise t.error("dt", "give either 'courant' or 'dt', not both")
     dt = t.number("dt", positive=True)
@@ -249,7 +428,15 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     frames = int(
         t.number("frames", default=DEFAULT_FRAMES, positive=True, integer=True, maximum=MAX_FRAMES)  # type: ignore[arg-type]
     )
-    velocity = t.vector("velocity", dim) if t.has("velocity") else (0.0,) * dim
+    points = np.concatenate(
+        [box, *(_corners(b.lower, _upper(b)) for b in bodies if b.kind == "lattice")]
+    )
+    if source.kind == "lattice":
+        upper_p = tuple(
+            lo + c * source.spacing for lo, c in zip(source.lower, source.counts, strict=True)
+        )
+        points = np.concatenate([points, _corners(source.lower, upper_p)])
+    velocity = _velocity(t, "velocity", dim, points) if t.has("velocity") else (0.0,) * dim
     initial_stress = t.string("initial_stress", default="none", choices=("none", "geostatic"))
     if initial_stress == "geostatic" and dim == 1:
         raise t.error("initial_stress", "'geostatic' applies to 2D and 3D scenes")
@@ -275,7 +462,13 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
         particles=source,
         initial_stress=initial_stress,
         damping=damping,
+        bodies=bodies,
     )
+
+
+def _upper(b: Body) -> tuple[float, ...]:
+    """A lattice body's highest corner, shape=(dim,)."""
+    return tuple(lo + c * b.spacing for lo, c in zip(b.lower, b.counts, strict=True))
 
 
 def mpm_output(

@@ -261,10 +261,15 @@ def _wave_speed(material: Any, dim: int) -> float:
 
 def _mpm(scene: Any, extent: Extent | None, q: dict[str, float], keys: dict[str, str]) -> None:
     m = scene.mpm
+    lattices = [b for b in m.bodies if b.kind == "lattice"]
     if m.particles.kind == "lattice":
         q["particles"] = float(math.prod(m.particles.counts))
         keys["particles"] = "mpm.particles.counts"
-    else:
+    elif lattices:  # every body a lattice box: their particles add up
+        q["particles"] = float(sum(math.prod(b.counts) for b in lattices))
+        big = max(lattices, key=lambda b: math.prod(b.counts))
+        keys["particles"] = f"{big.key}.counts"
+    else:  # the geometry's groups (at most all its cells)
         q["particles"] = _fem_cells(scene, extent)
         keys["particles"] = _cells_key(scene, extent)
     q["grid_nodes"] = float(

@@ -172,3 +172,149 @@ def test_mls_smoothing_with_a_rank_that_holds_no_particle(tmp_path_factory):
     assert parallel["runout_m"] == pytest.approx(serial["runout_m"], rel=1e-10)
     front = parallel["probes"]["front"][-1]["x"]
     np.testing.assert_allclose(front, serial["probes"]["front"][-1]["x"], rtol=1e-10)
+
+
+def _frames(out):
+    """Every frame of particles.h5 in time order: a list of {field: array}."""
+    with h5py.File(out / "particles.h5") as f:
+        names = sorted((k for k in f if k.startswith("frame_")), key=lambda k: int(k[6:]))
+        return [{k: f[name][k][()] for k in f[name]} for name in names]
+
+
+TWO_BLOCKS = JOBS / "mpm_two_blocks.toml"
+TWO_SHORT = ["mpm.t_end=0.5", "mpm.frames=10"]
+
+
+def test_a_striker_hitting_a_block_at_rest_conserves_momentum(tmp_path):
+    """Two bodies, no wall or gravity: P = m_s v0 and x_cm = x_cm(0) + P t / M throughout.
+
+    The striker (0.4 x 0.4, ρ = 1000, v0 = 1) reaches the target (ρ = 2000) at t = 0.2 and
+    hands it momentum; the sums of the mass and volume fields are the bodies' ρA and A.
+    """
+    summary = run_mpm_scene(load_scene(TWO_BLOCKS, TWO_SHORT, out=tmp_path), MPI.COMM_SELF)
+    bodies = summary["results"]["bodies"]
+    striker, target = bodies["striker"], bodies["target"]
+    m_s, m_t = 1000.0 * 0.4 * 0.4, 2000.0 * 0.6 * 0.6
+    assert (striker["first_id"], target["first_id"]) == (0, striker["particles"])
+    assert (striker["mass"], target["mass"]) == (pytest.approx(m_s), pytest.approx(m_t))
+    frames = _frames(tmp_path)
+    times = summary["results"]["history"]["t"]
+    assert len(frames) == len(times) > 10
+    total = m_s + m_t
+    x0 = frames[0]["geometry"] - frames[0]["displacement"]
+    cm0 = frames[0]["mass"] @ x0 / total
+    assert np.sum(frames[0]["volume"]) == pytest.approx(0.4 * 0.4 + 0.6 * 0.6, rel=1e-12)
+    ids_s = slice(0, striker["particles"])
+    for t, frame in zip(times, frames, strict=True):
+        m, v = frame["mass"], frame["velocity"]
+        assert np.sum(m) == pytest.approx(total, rel=1e-12)
+        np.testing.assert_allclose(m @ v, [m_s * 1.0, 0.0, 0.0], rtol=0, atol=1e-9 * m_s)
+        cm = m @ frame["geometry"] / total
+        np.testing.assert_allclose(cm, cm0 + np.array([m_s / total, 0, 0]) * t, atol=1e-9)
+    # the impact happened: the target carries most of the momentum at the end
+    last = frames[-1]
+    p_striker = last["mass"][ids_s] @ last["velocity"][ids_s, 0]
+    assert p_striker < 0.5 * m_s
+
+
+def test_the_description_in_summary_json_is_marked_after_set(tmp_path):
+    run_mpm_scene(load_scene(TWO_BLOCKS, ["mpm.t_end=0.01"], out=tmp_path), MPI.COMM_SELF)
+    scene = json.loads((tmp_path / "summary.json").read_text())["scene"]
+    assert scene["description"].endswith("momentum is conserved (modified by --set mpm.t_end=0.01)")
+    assert scene["overrides"] == ["mpm.t_end=0.01"]
+
+
+def test_a_rigid_rotation_expression_gives_its_angular_momentum(tmp_path):
+    """A rigid rotation about the striker's centre has L = ω ρ s⁴ n² (n² − 1) / 6.
+
+    v = ω (−(y − yc), x − xc) on an n x n lattice of spacing s centred at (xc, yc):
+    L = ω ρ s² Σ |r|², with Σ x_i² = s² n (n² − 1) / 12 per row (point masses at the
+    lattice cell centres).
+    """
+    omega, n, s, rho = 0.5, 8, 0.05, 1000.0
+    rotation = '["-0.5*(y - 0.7)", "0.5*(x - 0.6)"]'
+    scene = load_scene(TWO_BLOCKS, [f"mpm.bodies.0.velocity={rotation}"], out=tmp_path)
+    from geofrac.mpm.driver import prepare
+
+    p = prepare(scene, MPI.COMM_SELF).particles
+    ids = p.ids < n * n
+    r = p.x[ids] - [0.6, 0.7]
+    angular = np.sum(p.mass[ids] * (r[:, 0] * p.v[ids, 1] - r[:, 1] * p.v[ids, 0]))
+    assert angular == pytest.approx(omega * rho * s**4 * n**2 * (n**2 - 1) / 6, rel=1e-12)
+    np.testing.assert_allclose(p.mass[ids] @ p.v[ids], 0.0, atol=1e-12)  # about its centre
+    assert np.all(p.v[~ids] == 0.0)  # the target keeps mpm.velocity = 0
+
+
+def test_an_expression_that_is_not_finite_at_a_particle_stops_the_run_naming_the_key(tmp_path):
+    """Checked at the box corners and centre by geofrac check; the run checks every particle."""
+    scene = load_scene(TWO_BLOCKS, ["mpm.bodies.1.velocity=['1/(x - 1.325)', 0.0]"])
+    with pytest.raises(
+        RunError, match=r"mpm.bodies\[1\].velocity: entry 0: .* is inf at x = 1.325"
+    ):
+        simulate(scene, MPI.COMM_SELF, verbose=False)
+
+
+def test_a_gravity_ramp_loads_a_column_as_the_closed_form_says(tmp_path):
+    """A column's base stress follows the closed form of gravity ramped over T_r.
+
+    1D column (fixed base, E = 1e6, ρ = 1, L = 50, b = −20), T_r = 0.4 (two periods
+    4L/c). Modal solution of the fixed-free bar: with
+    k_n = (2n − 1)π/(2L), ω_n = c k_n, a_n = 8/((2n − 1)²π²),
+    σ(x, t) = ρ b L Σ a_n g_n(t) cos(k_n x), g_n = t/T_r − sin(ω_n t)/(ω_n T_r) for t ≤ T_r
+    and 1 − (sin ω_n t − sin ω_n (t − T_r))/(ω_n T_r) after: the base stress rises with the
+    ramp and stays at ρ b L, without the ±100 % ringing of a sudden load.
+    """
+    ramp, rho, b, length, c = 0.4, 1.0, -20.0, 50.0, 1000.0
+    overrides = [
+        f"gravity.ramp={ramp}",
+        "mpm.t_end=0.6",
+        "mpm.frames=30",
+        "output.probes.base=[0.25]",
+    ]
+    scene = load_scene(JOBS / "mpm_bar_w1000.toml", overrides, out=tmp_path)
+    results = simulate(scene, MPI.COMM_SELF, verbose=False)
+    t = np.array(results["history"]["t"])
+    base = results["probes"]["base"]
+    stress = np.array([frame["stress"][0] for frame in base])
+    x = base[0]["x"][0]
+    odd = 2 * np.arange(1, 2001) - 1
+    k, a = odd * np.pi / (2 * length), 8 / (odd**2 * np.pi**2)
+    w = c * k
+
+    def exact(tt):
+        if tt <= ramp:
+            g = tt / ramp - np.sin(w * tt) / (w * ramp)
+        else:
+            g = 1 - (np.sin(w * tt) - np.sin(w * (tt - ramp))) / (w * ramp)
+        return rho * b * length * np.sum(a * g * np.cos(k * x))
+
+    expected = np.array([exact(tt) for tt in t])
+    assert np.max(np.abs(stress - expected)) < 0.01 * rho * -b * length  # measured 0.0045
+    half = np.interp(0.5 * ramp, t, stress)  # halfway up the ramp: about half the weight
+    assert half == pytest.approx(0.5 * rho * b * (length - x), rel=0.03)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_a_two_body_scene_is_the_same_on_one_and_all_ranks(tmp_path_factory):
+    """A two-body scene gives the same frames on 1 rank and on all ranks.
+
+    Particle ids are numbered body by body before the decomposition, so the gathered
+    frames (in id order) and the bodies' ids agree.
+    """
+    comm = MPI.COMM_WORLD
+    base = comm.bcast(str(tmp_path_factory.mktemp("two")) if comm.rank == 0 else None)
+    overrides = [*TWO_SHORT, "mpm.t_end=0.3", "mpm.bodies.0.velocity=[1.0, '0.2*(y - 0.7)']"]
+    serial_out = tmp_path_factory.mktemp(f"serial{comm.rank}")
+    serial = run_mpm_scene(
+        load_scene(TWO_BLOCKS, overrides, out=serial_out), MPI.COMM_SELF, verbose=False
+    )["results"]
+    scene = load_scene(TWO_BLOCKS, overrides, out=f"{base}/par")
+    parallel = run_mpm_scene(scene, comm, verbose=False)["results"]
+    assert parallel["bodies"] == serial["bodies"]
+    assert parallel["particles"] == serial["particles"] == 64 + 144
+    if comm.rank == 0:
+        a, b = _frames(serial_out), _frames(Path(f"{base}/par"))
+        assert len(a) == len(b)
+        for fa, fb in zip(a, b, strict=True):
+            for name in ("geometry", "velocity", "mass", "volume", "stress"):
+                np.testing.assert_allclose(fb[name], fa[name], rtol=1e-9, atol=1e-9)
