@@ -7,7 +7,7 @@ apart. Here every term c of a column is put on a fixed grid of 2^−(HI_BITS + L
 times a power of two 2^e above every term of the column (the same on every rank: e comes
 from an allreduced bound) and split into two integers,
 
-    x = c · 2^(HI_BITS − e),   hi = ⌊x⌋,   lo = ⌊(x − hi) · 2^LO_BITS⌋,
+    x = c · 2^(HI_BITS − e),   hi = trunc x,   lo = trunc((x − hi) · 2^LO_BITS),
 
 so that c ≈ (hi + lo 2^−LO_BITS) 2^(e − HI_BITS) with an error below 2^(e − 102). Integer
 sums are associative: the pairs of a node (or of a rank's particles) add up to the same
@@ -15,7 +15,10 @@ integers in any order, over any ranks, and one conversion back to float64
 (:func:`to_float`) gives every rank and every rank count the same value, to the last bit.
 
 Budget: |x| < 2^HI_BITS = 2^40, so a node can take 2^22 terms before its ``hi`` word
-could overflow; ``lo`` is kept in [0, 2^LO_BITS) = [0, 2^62) by carrying into ``hi``
+could overflow. The bound need not be tight nor strict: terms 2^k times above it still
+add up exactly while 2^k times the terms of a node stays below 2^22 (the step bounds φ
+by 1 and |∇φ| by 1/L, which cpGIMP's stretched half-widths beyond L/2 exceed by a small
+factor); ``lo`` is kept in [0, 2^LO_BITS) = [0, 2^62) by carrying into ``hi``
 (after every addition in the compiled loops, once per sum here). A node far lighter than
 the heaviest term (the mass floor of :mod:`~geofrac.mpm.schemes`, 1e-12, or below) keeps
 its float64 digits: 2^−102 of the largest term is ~1e-31.
@@ -80,20 +83,23 @@ def scales(bound: np.ndarray) -> np.ndarray:
 def split(terms: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(hi, lo) of every term, both int64 of terms' shape (the last axis is the column).
 
+    hi = trunc x and lo = trunc((x − hi) 2^LO_BITS), x = term · scale: both carry the
+    term's sign, and hi + lo 2^−LO_BITS is x to 2^−LO_BITS.
+
     Args:
         terms: shape=(..., c).
         scale: :func:`scales`, shape=(c,).
     """
     x = terms * scale
-    fh = np.floor(x)
-    return fh.astype(np.int64), ((x - fh) * float(2**LO_BITS)).astype(np.int64)
+    hi = x.astype(np.int64)
+    return hi, ((x - hi) * float(2**LO_BITS)).astype(np.int64)
 
 
 def normalise(acc: np.ndarray) -> np.ndarray:
     """Carry lo's excess into hi, so 0 <= lo < 2^LO_BITS (in place and returned).
 
     Args:
-        acc: pairs (hi, lo), shape=(..., 2) int64, lo >= 0.
+        acc: pairs (hi, lo), shape=(..., 2) int64 (lo of any sign: the shift floors).
     """
     acc[..., 0] += acc[..., 1] >> LO_BITS
     acc[..., 1] &= (1 << LO_BITS) - 1

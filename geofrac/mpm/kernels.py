@@ -37,10 +37,10 @@ __all__ = [
     "nodal_acceleration",
     "nodal_velocity",
     "outside",
+    "pairs_to_float",
     "scratch",
     "strain_increment",
     "velocity_gradient",
-    "weight_bounds",
     "weights_gimp",
     "weights_hat",
 ]
@@ -268,18 +268,20 @@ def weights_gimp(
 _LO_BITS = 62
 _LO_MASK = (1 << _LO_BITS) - 1
 _LO_ONE = float(2**_LO_BITS)
+_LO_UNIT = 1.0 / _LO_ONE
 
 
 @_jit
 def _add(acc: np.ndarray, j: int, col: int, x: float) -> None:
     """Add the scaled term x (|x| < 2^40) to node j's pair (hi, lo) of column ``col``.
 
-    The split of :func:`geofrac.mpm.fixedpoint.split`, then lo's carry into hi, so the
-    pair stays normalised (0 <= lo < 2^62) whatever the number of terms.
+    The split of :func:`geofrac.mpm.fixedpoint.split` (hi = trunc x, lo = trunc of the
+    rest times 2^62, both signed), then lo's carry into hi, so the pair stays
+    normalised (0 <= lo < 2^62) whatever the number of terms.
     """
-    fh = np.floor(x)
-    lo = acc[j, col, 1] + np.int64((x - fh) * _LO_ONE)
-    acc[j, col, 0] += np.int64(fh) + (lo >> _LO_BITS)
+    h = np.int64(x)
+    lo = acc[j, col, 1] + np.int64((x - h) * _LO_ONE)
+    acc[j, col, 0] += h + (lo >> _LO_BITS)
     acc[j, col, 1] = lo & _LO_MASK
 
 
@@ -294,18 +296,27 @@ def _bigger(m: float, value: float) -> float:
 
 
 @_jit
-def weight_bounds(phi: np.ndarray, grad: np.ndarray) -> tuple[float, float]:
-    """(max φ_ip, max |∂φ_ip/∂x_b|) over this rank's weights, shapes (n, k), (n, k, dim)."""
-    n, k = phi.shape
-    dim = grad.shape[2]
-    pmax = 0.0
-    gmax = 0.0
-    for i in range(n):
-        for c in range(k):
-            pmax = _bigger(pmax, abs(phi[i, c]))
-            for b in range(dim):
-                gmax = _bigger(gmax, abs(grad[i, c, b]))
-    return pmax, gmax
+def pairs_to_float(acc: np.ndarray, e: np.ndarray, out: np.ndarray) -> None:
+    """:func:`geofrac.mpm.fixedpoint.to_float` of finite columns, the same bits.
+
+    Args:
+        acc: normalised pairs, shape=(N, c, 2) int64.
+        e: the columns' exponents (:func:`geofrac.mpm.fixedpoint.exponents`),
+            shape=(c,).
+        out: out, shape=(N, c).
+    """
+    N, c, _ = acc.shape
+    half = np.int64(1) << (_LO_BITS - 1)
+    one = np.int64(1) << _LO_BITS
+    for a in range(c):
+        unit = 2.0 ** (e[a] - 40)  # a power of two: the product is rounded once
+        for j in range(N):
+            hi = acc[j, a, 0]
+            lo = acc[j, a, 1]
+            if lo >= half:
+                hi += 1
+                lo -= one
+            out[j, a] = (float(hi) + float(lo) * _LO_UNIT) * unit
 
 
 @_jit

@@ -233,7 +233,7 @@ def _to_grid(
     terms = w.phi[:, :, None] * values[:, None, :]
     if bound is None:
         bound = np.max(np.abs(terms), axis=(0, 1), initial=0.0)
-    return _complete(_scatter(w, terms, bound, num_nodes), bound, None)
+    return _complete(_scatter(w, terms, bound, num_nodes), bound, None, False)
 
 
 def _nodal_velocity(
@@ -243,33 +243,32 @@ def _nodal_velocity(
     return _velocity(_to_grid(w, p.mass[:, None] * p.v, len(mass)), mass, active, fixed)
 
 
-def _complete(acc: np.ndarray, bound: np.ndarray, dom: Domain | None) -> np.ndarray:
+def _complete(acc: np.ndarray, bound: np.ndarray, dom: Domain | None, fast: bool) -> np.ndarray:
     """The nodal sums of this rank's pairs, completed over the ranks, as float64.
 
     Args:
         acc: normalised pairs, shape=(N, c, 2) int64.
         bound: the columns' bounds they were split with, shape=(c,).
         dom: the decomposition, or None.
+        fast: convert with the compiled loop (the same bits as the numpy one).
 
     Returns:
         shape=(N, c): the same values, to the last bit, on every rank holding a node and
         for every decomposition.
     """
-    from geofrac.mpm.fixedpoint import normalise, to_float
+    from geofrac.mpm.fixedpoint import exponents, normalise, to_float
 
     if dom is not None:
         N, c, _ = acc.shape
         acc = normalise(dom.sum_halo(acc.reshape(N, 2 * c)).reshape(N, c, 2))
-    return to_float(acc, bound)
+    if not fast:
+        return to_float(acc, bound)
+    from geofrac.mpm import kernels
 
-
-def _weight_bounds(w: Weights, fast: bool) -> tuple[float, float]:
-    """(max φ_ip, max |∇φ_ip| component) of this rank's weights."""
-    if fast:
-        from geofrac.mpm import kernels
-
-        return kernels.weight_bounds(w.phi, w.grad)
-    return float(np.max(w.phi, initial=0.0)), float(np.max(np.abs(w.grad), initial=0.0))
+    out = np.empty(acc.shape[:2])
+    kernels.pairs_to_float(acc, exponents(bound), out)
+    out[:, ~np.isfinite(bound)] = np.nan
+    return out
 
 
 def _mass_momentum_bounds(p: Particles, pmax: float, fast: bool) -> np.ndarray:
@@ -451,7 +450,9 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
     # the terms, the same on every rank.
     early = s.scheme == "musl"
     ncol = 1 + dim + dim * early  # mass, momentum (, force)
-    pmax, gmax = _weight_bounds(w, fast)
+    # every shape has 0 <= φ <= 1 and |∂φ/∂x_a| <= 1/L (eqs. 4.29, 4.31; a test pins
+    # it): the terms' bounds need no pass over the weights
+    pmax, gmax = 1.0, 1.0 / g.spacing
     bound = _mass_momentum_bounds(p, pmax, fast)
     if early:
         bound = np.concatenate([bound, _forces_bounds(p, s.gravity, pmax, gmax, fast)])
@@ -476,7 +477,7 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
         if early:
             terms[:, :, 1 + dim :] = _forces(w, p, s.gravity)
         acc = _scatter(w, terms, bound, N)
-    nodal = _complete(acc, bound, dom)
+    nodal = _complete(acc, bound, dom, fast)
     mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
     peak = mass.max(initial=0.0)
     if dom is not None:
@@ -505,7 +506,7 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
             )  # fmt: skip
         else:
             acc = _scatter(w, _forces(w, p, s.gravity), bound, N)
-        f = _complete(acc, bound, dom)
+        f = _complete(acc, bound, dom, fast)
     if fast:
         a, v_new = kernels.scratch("a", (N, dim)), kernels.scratch("v_new", (N, dim))
         kernels.nodal_acceleration(f, mass, MASS_FLOOR * peak, s.fixed, dt, v, a, v_new)
@@ -537,7 +538,7 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
         else:
             terms = w.phi[:, :, None] * (p.mass[:, None] * p.v)[:, None, :]
             acc = _scatter(w, terms, bound, N)
-        mom = _complete(acc, bound, dom)
+        mom = _complete(acc, bound, dom, fast)
         if fast:  # D.6, D.26
             kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
         else:

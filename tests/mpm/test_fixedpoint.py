@@ -102,3 +102,16 @@ def test_light_nodes_keep_their_digits():
     assert len(light) >= 4
     for j in range(g.num_nodes):
         assert abs(Fraction(got[j]) - exact[j]) <= Fraction(1e-16) * exact[j]
+
+
+@pytest.mark.parametrize("shape", ["mpm", "ugimp"])
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_weights_stay_within_the_bounds_the_step_scales_by(dim, shape):
+    """0 <= φ <= 1 and |∂φ/∂x| <= 1/L (eqs. 4.29, 4.31) for half-widths up to L/2."""
+    rng = np.random.default_rng(dim)
+    g = grid(np.zeros(dim), 0.5, [8] * dim)
+    x = rng.uniform(1.0, 3.0, size=(3000, dim))
+    lp = rng.uniform(0.01, 0.25, size=x.shape) if shape != "mpm" else None
+    w = weights(g, x, lp)
+    assert w.phi.min() >= 0.0 and w.phi.max() <= 1.0
+    assert np.abs(w.grad).max() <= 1.0 / g.spacing * (1 + 1e-15)
