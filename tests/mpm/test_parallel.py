@@ -53,7 +53,7 @@ def _scene(material):
 
 
 #: Steps of the sliding block in pytest.
-SLIDING_STEPS = 3000
+SLIDING_STEPS = 1000
 
 CASES = [
     ("musl", "mpm", None, "elastic"),
