@@ -22,7 +22,13 @@ Cases (``--cases``):
   load, recorded as ``warmup_seconds``). Under ``mpiexec -n N`` the block is
   decomposed over the N ranks (:mod:`geofrac.mpm.parallel`): ``ranks`` is N,
   ``particle_steps_per_s`` counts all particles over the slowest rank's wall time and
-  ``per_rank`` gives each rank's own particle-steps per second of that time.
+  ``per_rank`` gives each rank's own particle-steps per second of that time;
+- ``ranks``: rank invariance over long runs (:func:`geofrac.mpm.invariance.compare_ranks`,
+  run under ``mpiexec -n 2``): the translating bar to ``--t-end`` and a 2D block sliding
+  on a frictional floor for 1e5 steps, each stepped serially and decomposed, every shape
+  and scheme: ``rank_difference_max``, the largest difference of particle fields and
+  energies over the run relative to their scale (0: bitwise equal), and
+  ``rank_difference_t``, the first time they differ.
 
 Every record has particle-steps per second beside its error. The engine is the
 compiled one (:mod:`geofrac.mpm.kernels`); ``--backend numpy`` runs the block on the
@@ -56,11 +62,12 @@ COLUMNS = (
     ("particle_steps_per_s", "particle-steps/s", ".3g"),
     ("stress_error_rms", "stress error (RMS/ρ0|b|L0)", ".4f"),
     ("energy_drift_max", "energy drift max", ".4f"),
+    ("rank_difference_max", "1 vs N ranks", ".3g"),
 )
 
 
 #: Cases of ``--cases``.
-CASES = ("bar", "translating", "impact", "block")
+CASES = ("bar", "translating", "impact", "block", "ranks")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -229,8 +236,8 @@ def _record(
     """One JSON record.
 
     ``measured`` may give ``W``, ``stress_error_rms``, ``energy_drift_max``,
-    ``stress_overshoot``, ``warmup_seconds``, ``per_rank`` and ``backend``; the others
-    are None.
+    ``stress_overshoot``, ``warmup_seconds``, ``per_rank``, ``backend``,
+    ``rank_difference_max`` and ``rank_difference_t``; the others are None.
     """
     return {
         "case": case,
@@ -250,7 +257,31 @@ def _record(
         "stress_overshoot": measured.get("stress_overshoot"),
         "warmup_seconds": measured.get("warmup_seconds"),
         "per_rank": measured.get("per_rank"),
+        "rank_difference_max": measured.get("rank_difference_max"),
+        "rank_difference_t": measured.get("rank_difference_t"),
     }
+
+
+def _ranks(comm: Any, shape: str, scheme: str, t_end: float, progress: Any) -> list[dict]:
+    """The ``ranks`` case of one shape and scheme (collective; records on rank 0)."""
+    from geofrac.mpm.invariance import compare_ranks
+
+    records = []
+    for case in ("translating", "sliding"):
+        d = compare_ranks(comm, case, shape, scheme, t_end=t_end)
+        if d is not None:
+            first = d.first_above(0.0)
+            n = 20 if case == "translating" else 32
+            records.append(
+                _record(
+                    f"ranks_{case}", scheme, shape, None, 1 if case == "translating" else 2, n,
+                    d.steps, sum(d.seconds), d.ranks, rank_difference_max=d.worst,
+                    rank_difference_t=first,
+                )
+            )  # fmt: skip
+            msg = f"differ from t = {first:.4g} on, up to {d.worst:.3g}" if first else "bitwise"
+        progress.step(f"ranks {case} {shape} {scheme}: " + (msg if d is not None else ""))
+    return records
 
 
 def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
@@ -274,8 +305,12 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     total += 2 * len(shapes) * ("block" in cases) + 2 * len(shapes) * len(schemes) * (
         "impact" in cases
     )
+    total += len(shapes) * len(schemes) * 2 * ("ranks" in cases)
     impacts = {}
     progress = Progress(comm, total, "bench mpm")
+    for shape in shapes if "ranks" in cases else ():
+        for scheme in schemes:
+            records += _ranks(comm, shape, scheme, args.t_end, progress)
     # the block runs on every rank, decomposed over comm; the bars on rank 0
     for shape in shapes if "block" in cases else ():
         for sm in smoothings:

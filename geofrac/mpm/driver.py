@@ -49,7 +49,13 @@ from geofrac.log import format_seconds, sayer
 from geofrac.mpm.boundaries import held, scene_grid
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles, concat, take
-from geofrac.mpm.schemes import Elastic, StepSettings, step, strain_energy, time_step
+from geofrac.mpm.schemes import (
+    Elastic,
+    StepSettings,
+    particle_strain_energy,
+    step,
+    time_step,
+)
 from geofrac.scene.model import Scene
 from geofrac.timing import Timings
 
@@ -312,16 +318,23 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
 
 
 def _energies(run: MpmRun, comm: MPI.Comm) -> list[float]:
-    """(kinetic, strain, gravitational potential −Σ m b·x) summed over the ranks."""
+    """(kinetic, strain, gravitational potential −Σ m b·x) summed over the ranks.
+
+    Exact sums of the per-particle terms (:func:`geofrac.mpm.fixedpoint.exact_sums`):
+    the same on any number of ranks, whatever the particles' order.
+    """
+    from geofrac.mpm.fixedpoint import exact_sums
+
     p = run.particles
-    local = np.array(
+    per = np.stack(
         [
-            p.kinetic_energy(),
-            strain_energy(p, run.material),
-            -float(p.mass @ (p.x @ run.settings.gravity)),
-        ]
+            0.5 * p.mass * np.sum(p.v**2, axis=1),
+            particle_strain_energy(p, run.material),
+            -p.mass * (p.x @ run.settings.gravity),
+        ],
+        axis=1,
     )
-    return [float(e) for e in comm.allreduce(local)]
+    return [float(e) for e in exact_sums(per, comm)]
 
 
 def _gather(run: MpmRun, comm: MPI.Comm) -> Particles | None:

@@ -25,16 +25,19 @@ __all__ = [
     "bin_neighbours",
     "elastic_update",
     "forces",
+    "forces_bounds",
     "from_grid",
     "from_grid2",
     "grid_weights",
     "mass_momentum",
+    "mass_momentum_bounds",
     "mls_moments",
     "mls_sums",
     "momentum",
     "nodal_acceleration",
     "nodal_velocity",
     "outside",
+    "pairs_to_float",
     "scratch",
     "strain_increment",
     "velocity_gradient",
@@ -261,24 +264,137 @@ def weights_gimp(
     return ok
 
 
+#: Fixed-point words of the nodal sums (:mod:`~geofrac.mpm.fixedpoint`): lo's bits.
+_LO_BITS = 62
+_LO_MASK = (1 << _LO_BITS) - 1
+_LO_ONE = float(2**_LO_BITS)
+_LO_UNIT = 1.0 / _LO_ONE
+
+
+@_jit
+def _add(acc: np.ndarray, j: int, col: int, x: float) -> None:
+    """Add the scaled term x (|x| < 2^40) to node j's pair (hi, lo) of column ``col``.
+
+    The split of :func:`geofrac.mpm.fixedpoint.split` (hi = trunc x, lo = trunc of the
+    rest times 2^62, both signed), then lo's carry into hi, so the pair stays
+    normalised (0 <= lo < 2^62) whatever the number of terms.
+    """
+    h = np.int64(x)
+    lo = acc[j, col, 1] + np.int64((x - h) * _LO_ONE)
+    acc[j, col, 0] += h + (lo >> _LO_BITS)
+    acc[j, col, 1] = lo & _LO_MASK
+
+
+@_jit
+def _bigger(m: float, value: float) -> float:
+    """max(m, value), NaN once seen staying NaN (a blown-up step must not hide)."""
+    if np.isnan(m):
+        return m
+    if value > m or np.isnan(value):
+        return value
+    return m
+
+
+@_jit
+def pairs_to_float(acc: np.ndarray, e: np.ndarray, out: np.ndarray) -> None:
+    """:func:`geofrac.mpm.fixedpoint.to_float` of finite columns, the same bits.
+
+    Args:
+        acc: normalised pairs, shape=(N, c, 2) int64.
+        e: the columns' exponents (:func:`geofrac.mpm.fixedpoint.exponents`),
+            shape=(c,).
+        out: out, shape=(N, c).
+    """
+    N, c, _ = acc.shape
+    half = np.int64(1) << (_LO_BITS - 1)
+    one = np.int64(1) << _LO_BITS
+    for a in range(c):
+        unit = 2.0 ** (e[a] - 40)  # a power of two: the product is rounded once
+        for j in range(N):
+            hi = acc[j, a, 0]
+            lo = acc[j, a, 1]
+            if lo >= half:
+                hi += 1
+                lo -= one
+            out[j, a] = (float(hi) + float(lo) * _LO_UNIT) * unit
+
+
+@_jit
+def mass_momentum_bounds(mass: np.ndarray, v: np.ndarray, pmax: float, out: np.ndarray) -> None:
+    """Bounds of the terms φ m_p and φ m_p v_p: out = (pmax max m, pmax max m|v_a|).
+
+    Args:
+        mass: m_p, shape=(n,).
+        v: v_p, shape=(n, dim).
+        pmax: the largest φ_ip (:func:`weight_bounds`).
+        out: out, shape=(1 + dim,).
+    """
+    n, dim = v.shape
+    for a in range(1 + dim):
+        out[a] = 0.0
+    for i in range(n):
+        out[0] = _bigger(out[0], mass[i])
+        for a in range(dim):
+            out[1 + a] = _bigger(out[1 + a], mass[i] * abs(v[i, a]))
+    for a in range(1 + dim):
+        out[a] *= pmax
+
+
+@_jit
+def forces_bounds(
+    volume: np.ndarray,
+    stress: np.ndarray,
+    mass: np.ndarray,
+    gravity: np.ndarray,
+    pmax: float,
+    gmax: float,
+    out: np.ndarray,
+) -> None:
+    """Bounds of the force terms: out_a = max V_p Σ_b |σ_ab| gmax + m_p pmax |b_a|.
+
+    Args:
+        volume: V_p, shape=(n,).
+        stress: σ_p, shape=(n, dim, dim).
+        mass: m_p, shape=(n,).
+        gravity: b, shape=(dim,).
+        pmax: the largest φ_ip (:func:`weight_bounds`).
+        gmax: the largest |∂φ_ip/∂x_b|.
+        out: out, shape=(dim,).
+    """
+    n, dim, _ = stress.shape
+    for a in range(dim):
+        out[a] = 0.0
+    for i in range(n):
+        for a in range(dim):
+            row = 0.0
+            for b in range(dim):
+                row += abs(stress[i, a, b])
+            out[a] = _bigger(out[a], volume[i] * row * gmax + mass[i] * pmax * abs(gravity[a]))
+
+
 @_jit
 def mass_momentum(
     nodes: np.ndarray,
     phi: np.ndarray,
     mass: np.ndarray,
     v: np.ndarray,
-    m_out: np.ndarray,
-    mom_out: np.ndarray,
+    scale: np.ndarray,
+    acc: np.ndarray,
 ) -> None:
-    """m_i += Σ φ_ip m_p and (m v)_i += Σ φ_ip m_p v_p (eqs. 4.20-4.21, D.1-D.2).
+    """m_i += Σ φ_ip m_p and (m v)_i += Σ φ_ip m_p v_p (eqs. 4.20-4.21, D.1-D.2), exactly.
+
+    Every term is added as a fixed-point pair (:mod:`~geofrac.mpm.fixedpoint`), so the
+    sums do not depend on the particles' order.
 
     Args:
         nodes: the weights' flat node ids, shape=(n, k).
         phi: φ_ip, shape=(n, k).
         mass: m_p, shape=(n,).
         v: v_p, shape=(n, dim).
-        m_out: nodal mass, added to, shape=(N,).
-        mom_out: nodal momentum, added to, shape=(N, dim).
+        scale: the columns' scales (:func:`geofrac.mpm.fixedpoint.scales`; mass, then
+            momentum), shape=(>= 1 + dim,).
+        acc: the pairs (hi, lo), added to: column 0 the mass, 1 … dim the momentum,
+            shape=(N, >= 1 + dim, 2) int64.
     """
     n, k = nodes.shape
     dim = v.shape[1]
@@ -286,16 +402,32 @@ def mass_momentum(
         for c in range(k):
             j = nodes[i, c]
             w = phi[i, c]
-            m_out[j] += w * mass[i]
+            _add(acc, j, 0, (w * mass[i]) * scale[0])
             for a in range(dim):
-                mom_out[j, a] += w * (mass[i] * v[i, a])
+                _add(acc, j, 1 + a, (w * (mass[i] * v[i, a])) * scale[1 + a])
 
 
 @_jit
 def momentum(
-    nodes: np.ndarray, phi: np.ndarray, mass: np.ndarray, v: np.ndarray, mom_out: np.ndarray
+    nodes: np.ndarray,
+    phi: np.ndarray,
+    mass: np.ndarray,
+    v: np.ndarray,
+    scale: np.ndarray,
+    acc: np.ndarray,
+    col0: int,
 ) -> None:
-    """(m v)_i += Σ φ_ip m_p v_p (D.6): MUSL's re-mapped momentum, shape=(N, dim)."""
+    """(m v)_i += Σ φ_ip m_p v_p (D.6): MUSL's re-mapped momentum, exactly.
+
+    Args:
+        nodes: the weights' flat node ids, shape=(n, k).
+        phi: φ_ip, shape=(n, k).
+        mass: m_p, shape=(n,).
+        v: v_p, shape=(n, dim).
+        scale: the columns' scales, shape=(>= col0 + dim,).
+        acc: pairs, added to in columns col0 …, shape=(N, >= col0 + dim, 2) int64.
+        col0: the first column.
+    """
     n, k = nodes.shape
     dim = v.shape[1]
     for i in range(n):
@@ -303,7 +435,7 @@ def momentum(
             j = nodes[i, c]
             w = phi[i, c]
             for a in range(dim):
-                mom_out[j, a] += w * (mass[i] * v[i, a])
+                _add(acc, j, col0 + a, (w * (mass[i] * v[i, a])) * scale[col0 + a])
 
 
 @_jit
@@ -315,9 +447,11 @@ def forces(
     stress: np.ndarray,
     mass: np.ndarray,
     gravity: np.ndarray,
-    f_out: np.ndarray,
+    scale: np.ndarray,
+    acc: np.ndarray,
+    col0: int,
 ) -> None:
-    """f_i += −Σ V_p σ_p ∇φ_ip + Σ m_p b φ_ip (eqs. 4.22-4.23, D.3).
+    """f_i += −Σ V_p σ_p ∇φ_ip + Σ m_p b φ_ip (eqs. 4.22-4.23, D.3), exactly.
 
     Args:
         nodes: the weights' flat node ids, shape=(n, k).
@@ -327,7 +461,9 @@ def forces(
         stress: σ_p, shape=(n, dim, dim).
         mass: m_p, shape=(n,).
         gravity: b, shape=(dim,).
-        f_out: nodal force, added to, shape=(N, dim).
+        scale: the columns' scales, shape=(>= col0 + dim,).
+        acc: pairs, added to in columns col0 …, shape=(N, >= col0 + dim, 2) int64.
+        col0: the first column.
     """
     n, k = nodes.shape
     dim = stress.shape[1]
@@ -337,10 +473,10 @@ def forces(
             j = nodes[i, c]
             mw = mass[i] * phi[i, c]
             for a in range(dim):
-                acc = 0.0
+                s = 0.0
                 for b in range(dim):
-                    acc += grad[i, c, b] * stress[i, a, b]
-                f_out[j, a] += nv * acc + mw * gravity[a]
+                    s += grad[i, c, b] * stress[i, a, b]
+                _add(acc, j, col0 + a, (nv * s + mw * gravity[a]) * scale[col0 + a])
 
 
 @_jit

@@ -6,8 +6,9 @@ cells each side (clipped at the grid's ends). A step with a :class:`Domain` in i
 settings (:class:`geofrac.mpm.schemes.StepSettings`)
 
 - completes the nodal sums of the nodes shared with other ranks: every rank adds the
-  partial sums of all ranks whose sub-grids hold the node, in rank order, so a shared
-  node has the same value, to the last bit, on every rank that holds it;
+  partial sums of all ranks whose sub-grids hold the node. The step's sums are exact
+  fixed-point integers (:mod:`~geofrac.mpm.fixedpoint`), so a shared node has the same
+  value, to the last bit, on every rank that holds it and for any number of ranks;
 - sends each rank's MLS ghost particles (positions at the step's start and strain
   increments of the particles within the smoothing radius of another slab);
 - moves the particles that left a slab to their new rank at the end of the step.
@@ -91,10 +92,14 @@ class Domain:
             return out
         return self.comm.allreduce(value, op=MPI.SUM)
 
-    def allmax(self, value: float) -> float:
-        """The largest value over the ranks."""
+    def allmax(self, value: float | np.ndarray) -> float | np.ndarray:
+        """The largest value over the ranks (per entry of an array)."""
         from mpi4py import MPI
 
+        if isinstance(value, np.ndarray):
+            out = np.empty_like(value)
+            self.comm.Allreduce(np.ascontiguousarray(value), out, op=MPI.MAX)
+            return out
         return float(self.comm.allreduce(float(value), op=MPI.MAX))
 
     def any(self, flag: bool) -> bool:
@@ -116,10 +121,13 @@ class Domain:
         """Complete nodal sums of this rank's sub-grid with the other ranks' parts.
 
         Each node's value becomes the sum, in rank order, of the partial sums of every
-        rank whose sub-grid holds it, so all those ranks hold the same value.
+        rank whose sub-grid holds it, so all those ranks hold the same value. With
+        integer values (the step's fixed-point pairs) the sum is exact and does not depend
+        on the order or on the decomposition.
 
         Args:
-            values: this rank's partial sums on ``local``'s nodes, shape=(N, c).
+            values: this rank's partial sums on ``local``'s nodes, shape=(N, c), float or
+                int64.
 
         Returns:
             The complete sums, shape=(N, c).

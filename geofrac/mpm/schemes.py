@@ -60,6 +60,7 @@ __all__ = [
     "ParticlesLeftGrid",
     "StepSettings",
     "local_damping",
+    "particle_strain_energy",
     "rotate_stress",
     "spin_increment",
     "step",
@@ -133,21 +134,26 @@ class Elastic:
         return float(np.sqrt((lam + 2 * mu) / density))
 
 
-def strain_energy(p: Particles, material: Elastic | DruckerPrager) -> float:
-    """Σ ½ V_p σ_p : D⁻¹ : σ_p (the elastic energy stored in the stresses).
+def particle_strain_energy(p: Particles, material: Elastic | DruckerPrager) -> np.ndarray:
+    """½ V_p σ_p : D⁻¹ : σ_p per particle, shape=(n,).
 
     In 2D the stored out-of-plane stress of plane strain enters (for an elastic history
     it equals ν tr σ).
     """
     s = p.stress
     if p.dim == 1:
-        return 0.5 * float(np.sum(p.volume * s[:, 0, 0] ** 2) / material.E)
+        return 0.5 * p.volume * s[:, 0, 0] ** 2 / material.E
     E, nu = material.E, material.nu
     tr = np.trace(s, axis1=1, axis2=2)
     ss = np.sum(s * s, axis=(1, 2))
     if p.dim == 2:
         tr, ss = tr + p.stress_zz, ss + p.stress_zz**2
-    return 0.5 * float(np.sum(p.volume * ((1 + nu) * ss - nu * tr**2) / E))
+    return 0.5 * p.volume * ((1 + nu) * ss - nu * tr**2) / E
+
+
+def strain_energy(p: Particles, material: Elastic | DruckerPrager) -> float:
+    """Σ ½ V_p σ_p : D⁻¹ : σ_p (the elastic energy stored in the stresses)."""
+    return float(np.sum(particle_strain_energy(p, material)))
 
 
 def time_step(
@@ -246,43 +252,35 @@ def _owned_nodes(dom: Domain | None, num_nodes: int) -> np.ndarray | slice:
     return (plane >= dom.cuts[r]) & ((plane < dom.cuts[r + 1]) | (last & (plane == dom.cuts[-1])))
 
 
-def _scatter(w: Weights, contrib: np.ndarray, num_nodes: int) -> np.ndarray:
-    """Sum per (particle, node) contributions onto the nodes.
+def _scatter(w: Weights, terms: np.ndarray, bound: np.ndarray, num_nodes: int) -> np.ndarray:
+    """Exact sums of per (particle, node) terms onto the nodes, as fixed-point pairs.
 
     Args:
         w: the weights (their node ids).
-        contrib: shape=(n, k, c).
+        terms: shape=(n, k, c).
+        bound: every column's largest |term| over all ranks (or more), shape=(c,).
         num_nodes: grid nodes.
 
     Returns:
-        shape=(num_nodes, c).
+        Normalised pairs (:mod:`~geofrac.mpm.fixedpoint`), shape=(num_nodes, c, 2) int64.
     """
-    flat = w.nodes.ravel()
-    return np.stack(
-        [
-            np.bincount(flat, weights=contrib[:, :, c].ravel(), minlength=num_nodes)
-            for c in range(contrib.shape[2])
-        ],
-        axis=1,
-    )
+    from geofrac.mpm.fixedpoint import accumulate, scales
+
+    with np.errstate(invalid="ignore"):  # a non-finite column turns NaN in _complete
+        return accumulate(w.nodes, terms, scales(bound), num_nodes)
 
 
-def _to_grid(w: Weights, values: np.ndarray, num_nodes: int) -> np.ndarray:
-    """Σ_p φ_ip values_p, values shape=(n, c); returns shape=(num_nodes, c)."""
-    return _scatter(w, w.phi[:, :, None] * values[:, None, :], num_nodes)
+def _to_grid(
+    w: Weights, values: np.ndarray, num_nodes: int, bound: np.ndarray | None = None
+) -> np.ndarray:
+    """Σ_p φ_ip values_p, values shape=(n, c); returns shape=(num_nodes, c).
 
-
-def _from_grid(w: Weights, values: np.ndarray) -> np.ndarray:
-    """Σ_i φ_ip values_i, values shape=(num_nodes, c); returns shape=(n, c)."""
-    return np.matmul(w.phi[:, None, :], values[w.nodes])[:, 0, :]
-
-
-def _forces(w: Weights, p: Particles, gravity: np.ndarray, num_nodes: int) -> np.ndarray:
-    """f_int + f_ext (eqs. 4.22-4.23, without tractions), shape=(num_nodes, dim)."""
-    # −Σ V_p σ_p ∇φ_ip + m_p b φ_ip, per particle and node: shape=(n, k, dim)
-    f = -p.volume[:, None, None] * np.matmul(w.grad, np.swapaxes(p.stress, 1, 2))
-    f += (p.mass[:, None] * w.phi)[:, :, None] * gravity
-    return _scatter(w, f, num_nodes)
+    ``bound``: the columns' largest |term| over all ranks; None: of these particles.
+    """
+    terms = w.phi[:, :, None] * values[:, None, :]
+    if bound is None:
+        bound = np.max(np.abs(terms), axis=(0, 1), initial=0.0)
+    return _complete(_scatter(w, terms, bound, num_nodes), bound, None, False)
 
 
 def _nodal_velocity(
@@ -290,6 +288,77 @@ def _nodal_velocity(
 ) -> np.ndarray:
     """v_i = Σ m_p v_p φ_ip / m_i (D.6, D.10), held components zero, shape=(N, dim)."""
     return _velocity(_to_grid(w, p.mass[:, None] * p.v, len(mass)), mass, active, fixed)
+
+
+def _complete(acc: np.ndarray, bound: np.ndarray, dom: Domain | None, fast: bool) -> np.ndarray:
+    """The nodal sums of this rank's pairs, completed over the ranks, as float64.
+
+    Args:
+        acc: normalised pairs, shape=(N, c, 2) int64.
+        bound: the columns' bounds they were split with, shape=(c,).
+        dom: the decomposition, or None.
+        fast: convert with the compiled loop (the same bits as the numpy one).
+
+    Returns:
+        shape=(N, c): the same values, to the last bit, on every rank holding a node and
+        for every decomposition.
+    """
+    from geofrac.mpm.fixedpoint import exponents, normalise, to_float
+
+    if dom is not None:
+        N, c, _ = acc.shape
+        acc = normalise(dom.sum_halo(acc.reshape(N, 2 * c)).reshape(N, c, 2))
+    if not fast:
+        return to_float(acc, bound)
+    from geofrac.mpm import kernels
+
+    out = np.empty(acc.shape[:2])
+    kernels.pairs_to_float(acc, exponents(bound), out)
+    out[:, ~np.isfinite(bound)] = np.nan
+    return out
+
+
+def _mass_momentum_bounds(p: Particles, pmax: float, fast: bool) -> np.ndarray:
+    """Bounds of the terms φ m_p and φ m_p v_p, shape=(1 + dim,)."""
+    out = np.empty(1 + p.dim)
+    if fast:
+        from geofrac.mpm import kernels
+
+        kernels.mass_momentum_bounds(p.mass, p.v, pmax, out)
+        return out
+    out[0] = np.max(p.mass, initial=0.0)
+    out[1:] = np.max(p.mass[:, None] * np.abs(p.v), axis=0, initial=0.0)
+    return out * pmax
+
+
+def _forces_bounds(
+    p: Particles, gravity: np.ndarray, pmax: float, gmax: float, fast: bool
+) -> np.ndarray:
+    """Bounds of the force terms, max V_p Σ_b |σ_ab| gmax + m_p pmax |b_a|, shape=(dim,)."""
+    out = np.empty(p.dim)
+    if fast:
+        from geofrac.mpm import kernels
+
+        kernels.forces_bounds(p.volume, p.stress, p.mass, gravity, pmax, gmax, out)
+        return out
+    rows = p.volume[:, None] * np.sum(np.abs(p.stress), axis=2) * gmax
+    out[:] = np.max(rows + (p.mass * pmax)[:, None] * np.abs(gravity), axis=0, initial=0.0)
+    return out
+
+
+def _from_grid(w: Weights, values: np.ndarray) -> np.ndarray:
+    """Σ_i φ_ip values_i, values shape=(num_nodes, c); returns shape=(n, c)."""
+    return np.matmul(w.phi[:, None, :], values[w.nodes])[:, 0, :]
+
+
+def _forces(w: Weights, p: Particles, gravity: np.ndarray) -> np.ndarray:
+    """The terms of f_int + f_ext (eqs. 4.22-4.23, without tractions), shape=(n, k, dim).
+
+    −V_p σ_p ∇φ_ip + m_p b φ_ip per particle and node.
+    """
+    f = -p.volume[:, None, None] * np.matmul(w.grad, np.swapaxes(p.stress, 1, 2))
+    f += (p.mass[:, None] * w.phi)[:, :, None] * gravity
+    return f
 
 
 def _velocity(
@@ -464,26 +533,41 @@ def step(
         w = weights(g, p.x, p.lp if gimp else None)
     N, dt, dim = g.num_nodes, s.dt, p.dim
     smooth_at = None if s.smoothing is None else (p.x.copy(), s.smoothing * g.spacing)
-    # MUSL's forces use σ^k: they join the first transfer (one pass, one exchange)
+    # MUSL's forces use σ^k: they join the first transfer (one pass, one exchange). The
+    # nodal sums are exact (fixed-point pairs, geofrac.mpm.fixedpoint), hence the same
+    # for any particle order and any decomposition; their scales come from bounds of
+    # the terms, the same on every rank.
     early = s.scheme == "musl"
-    if fast:
-        nodal = kernels.scratch("nodal", (N, 1 + dim + dim * early))
-        nodal.fill(0.0)
-    else:
-        nodal = np.zeros((N, 1 + dim + dim * early))  # mass, momentum (, force)
-    mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
-    if fast:
-        kernels.mass_momentum(w.nodes, w.phi, p.mass, p.v, mass, mom)
-        if early:
-            kernels.forces(w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, f)
-    else:
-        mass[:] = _to_grid(w, p.mass[:, None], N)[:, 0]
-        mom[:] = _to_grid(w, p.mass[:, None] * p.v, N)
-        if early:
-            f[:] = _forces(w, p, s.gravity, N)
+    ncol = 1 + dim + dim * early  # mass, momentum (, force)
+    # every shape has 0 <= φ <= 1 and |∂φ/∂x_a| <= 1/L (eqs. 4.29, 4.31; a test pins
+    # it): the terms' bounds need no pass over the weights
+    pmax, gmax = 1.0, 1.0 / g.spacing
+    bound = _mass_momentum_bounds(p, pmax, fast)
+    if early:
+        bound = np.concatenate([bound, _forces_bounds(p, s.gravity, pmax, gmax, fast)])
     if dom is not None:
-        nodal = dom.sum_halo(nodal)
-        mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
+        bound = dom.allmax(bound)
+    if fast:
+        from geofrac.mpm.fixedpoint import scales
+
+        acc = kernels.scratch("acc", (N, ncol, 2), np.int64)
+        acc.fill(0)
+        scale = scales(bound)
+        kernels.mass_momentum(w.nodes, w.phi, p.mass, p.v, scale, acc)
+        if early:
+            kernels.forces(
+                w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, scale, acc,
+                1 + dim,
+            )  # fmt: skip
+    else:
+        terms = np.empty((p.n, w.phi.shape[1], ncol))
+        terms[:, :, 0] = w.phi * p.mass[:, None]
+        terms[:, :, 1 : 1 + dim] = w.phi[:, :, None] * (p.mass[:, None] * p.v)[:, None, :]
+        if early:
+            terms[:, :, 1 + dim :] = _forces(w, p, s.gravity)
+        acc = _scatter(w, terms, bound, N)
+    nodal = _complete(acc, bound, dom, fast)
+    mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
     peak = mass.max(initial=0.0)
     if dom is not None:
         peak = dom.allmax(peak)
@@ -497,13 +581,21 @@ def step(
     if s.scheme in ("usf", "usavg"):
         _update_stress(w, p, material, v, half * dt, s, smooth_at)
     if not early:
-        f = np.zeros((N, dim))
-        if fast:
-            kernels.forces(w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, f)
-        else:
-            f = _forces(w, p, s.gravity, N)
+        bound = _forces_bounds(p, s.gravity, pmax, gmax, fast)
         if dom is not None:
-            f = dom.sum_halo(f)
+            bound = dom.allmax(bound)
+        if fast:
+            from geofrac.mpm.fixedpoint import scales
+
+            acc = kernels.scratch("acc", (N, dim, 2), np.int64)
+            acc.fill(0)
+            kernels.forces(
+                w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, scales(bound),
+                acc, 0,
+            )  # fmt: skip
+        else:
+            acc = _scatter(w, _forces(w, p, s.gravity), bound, N)
+        f = _complete(acc, bound, dom, fast)
     if s.damping > 0:  # a branch: no extra work without damping
         f_damp = local_damping(f, v, s.damping)
         f = f + f_damp
@@ -530,14 +622,19 @@ def step(
         p.v += dt * _from_grid(w, a)  # D.4, D.16, D.24
         p.x += dt * _from_grid(w, v_new)  # D.5, D.17, D.25
     if s.scheme in ("musl", "usavg"):
-        if fast:
-            mom = kernels.scratch("mom", (N, dim))
-            mom.fill(0.0)
-            kernels.momentum(w.nodes, w.phi, p.mass, p.v, mom)
-        else:
-            mom = _to_grid(w, p.mass[:, None] * p.v, N)
+        bound = _mass_momentum_bounds(p, pmax, fast)[1:]
         if dom is not None:
-            mom = dom.sum_halo(mom)
+            bound = dom.allmax(bound)
+        if fast:
+            from geofrac.mpm.fixedpoint import scales
+
+            acc = kernels.scratch("acc", (N, dim, 2), np.int64)
+            acc.fill(0)
+            kernels.momentum(w.nodes, w.phi, p.mass, p.v, scales(bound), acc, 0)
+        else:
+            terms = w.phi[:, :, None] * (p.mass[:, None] * p.v)[:, None, :]
+            acc = _scatter(w, terms, bound, N)
+        mom = _complete(acc, bound, dom, fast)
         if fast:  # D.6, D.26
             kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
         else:

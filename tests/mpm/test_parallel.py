@@ -2,7 +2,9 @@
 
 The MPI tests run under ``mpiexec -n 2 python -m mpi4py -m pytest --only-mpi``: every rank
 runs the serial scene itself and the decomposed one over COMM_WORLD, and rank 0 compares
-the gathered particles.
+the gathered particles. Without MLS smoothing the nodal sums are exact
+(geofrac.mpm.fixedpoint), so the decomposed run equals the serial one to the last bit,
+also over long runs (the full-length runs: ``bench mpm --cases ranks``).
 """
 
 import copy
@@ -14,10 +16,19 @@ import pytest
 from geofrac.errors import RunError
 from geofrac.mpm.friction import friction
 from geofrac.mpm.grid import grid
+from geofrac.mpm.invariance import compare_ranks
 from geofrac.mpm.parallel import decompose
 from geofrac.mpm.particles import lattice
 from geofrac.mpm.plasticity import DruckerPrager
-from geofrac.mpm.schemes import Elastic, ParticlesLeftGrid, StepSettings, step, time_step
+from geofrac.mpm.schemes import (
+    SCHEMES,
+    Elastic,
+    ParticlesLeftGrid,
+    StepSettings,
+    step,
+    time_step,
+)
+from geofrac.mpm.shapes import SHAPES
 
 
 def _settings(g, scheme, shape, smoothing, dt, backend="numba", domain=None):
@@ -40,6 +51,9 @@ def _scene(material):
     dt = time_step(0.2, g.spacing, material, 1000.0, 2)
     return g, p, dt
 
+
+#: Steps of the sliding block in pytest.
+SLIDING_STEPS = 1000
 
 CASES = [
     ("musl", "mpm", None, "elastic"),
@@ -104,6 +118,55 @@ def test_decomposed_run_equals_the_serial_one(scheme, shape, smoothing, material
         _compare(serial, gathered)
     else:
         assert gathered is None
+
+
+@pytest.mark.mpi(min_size=2)
+@pytest.mark.parametrize("material", ["elastic", "drucker-prager"])
+@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("scheme", SCHEMES)
+def test_decomposed_run_without_smoothing_is_bitwise_the_serial_one(scheme, shape, material):
+    """Exact nodal sums: 300 steps of the sliding block across the slabs, no bit differs."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    serial, gathered, _, crossed = _run(comm, scheme, shape, None, material, steps=300)
+    assert crossed > 10
+    if comm.rank == 0:
+        assert serial.x[:, 0].max() > 4.0
+        _compare(serial, gathered, rtol=0.0)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_translating_bar_stays_rank_invariant():
+    """The translating bar (Edo 2016, sec. 4.5.3) on 1 and 2 ranks to t = 15: bitwise.
+
+    The bar starts across the slab boundary at x = 25 and crosses it on every pass
+    between the walls; with sums in particle order the runs part at t = 11.2 (1e-12 at
+    t = 20, sign-flipped velocities by t ≈ 90). The full t = 100: ``bench mpm --cases
+    ranks``.
+    """
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    d = compare_ranks(comm, "translating", "mpm", "musl", steps=6800, samples=30)
+    if comm.rank == 0:
+        assert d.t[-1] > 15.0 and d.crossed >= 10  # one half crossed to the other rank
+        assert d.worst == 0.0, f"1 and 2 ranks part at t = {d.first_above(0.0)}"
+
+
+@pytest.mark.mpi(min_size=2)
+def test_sliding_block_stays_rank_invariant():
+    """A block sliding on a frictional floor into a wall, under gravity: bitwise.
+
+    SLIDING_STEPS steps here; 1e5 in ``bench mpm --cases ranks``.
+    """
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    d = compare_ranks(comm, "sliding", "cpgimp", "musl", steps=SLIDING_STEPS, samples=30)
+    if comm.rank == 0:
+        assert d.crossed > 10
+        assert d.worst == 0.0, f"1 and 2 ranks part at t = {d.first_above(0.0)}"
 
 
 @pytest.mark.mpi(min_size=2)
