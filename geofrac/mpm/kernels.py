@@ -10,7 +10,8 @@ order).
 This module imports numba: only a step with ``backend="numba"`` imports it (nothing in
 :mod:`geofrac` does at import time). The kernels are compiled on first use and cached
 on disk (``cache=True``); ``fastmath`` is off, so no result depends on reassociation.
-The MLS fits themselves are in the generated :mod:`~geofrac.mpm.mls_kernels`.
+The MLS fits themselves are in the generated :mod:`~geofrac.mpm.mls_kernels`, whose
+neighbour-sum loop alone allows reassociation (see there).
 """
 
 from __future__ import annotations

@@ -2,15 +2,19 @@
 
 The fit of one particle sums, over its neighbours, the distinct moments Σ W x^e of the
 moment matrix A (eq. 4.54; 7, 28 and 84 monomials of degree ≤ 6 in 1D, 2D and 3D) and
-the products Σ W F_r v_c of B v (4.55-4.56). Written as loops over small arrays, numba
-keeps these sums in memory and spends ~4× longer than with one local variable per sum
-(measured on the 2D block, 50k particles: 100 ms against 26 ms), so the kernels are
-generated with every sum spelt out. The code is generated once and committed
-(``python -m geofrac.mpm.mls_codegen`` rewrites it; a test checks that it is current).
+the products Σ W F_r v_c of B v (4.55-4.56). Written as loops over small arrays,
+numba keeps these sums in memory and does not vectorise them: ~100 ms for the 50k
+particles of one rank of the 2D block (about 46 neighbours each). With one local
+variable per sum, in a loop over the gathered neighbours that the compiler may
+vectorise (reassociation allowed in that loop only), they take ~13 ms, plus ~19 ms to
+gather the neighbours within h and ~11 ms for the unrolled 10×10 solves. So the
+kernels are generated with every sum spelt out, once, and committed
+(``python -m geofrac.mpm.mls_codegen`` rewrites them; a test checks they are current).
 
-Within a particle the neighbours are summed in the order of their rows in ``nbrs``
-(sorted by global id), one after the other: the same operations in the same order on
-any number of ranks.
+Within a particle the neighbours are gathered in the order of their rows in ``nbrs``
+(sorted by global id) and summed by one loop whose grouping of the partial sums the
+compiler fixes from the number of neighbours alone: the same operations in the same
+order on any number of ranks, for a reused neighbour list as for a fresh one.
 """
 
 from __future__ import annotations
