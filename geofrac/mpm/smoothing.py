@@ -319,7 +319,7 @@ def _stale(lists: _Lists | None, x: np.ndarray, ids: np.ndarray, h: float, margi
     """Whether this rank's lists cannot serve positions x of particles ids (radius h)."""
     if lists is None or lists.h != h or lists.radius != h * (1 + margin):
         return True
-    if len(lists.ids) != len(ids) or not np.array_equal(lists.ids, ids):
+    if lists.x.shape != x.shape or not np.array_equal(lists.ids, ids):
         return True  # particles arrived or left (migration), or another particle set
     if len(ids) == 0:
         return False
