@@ -22,7 +22,13 @@ Cases (``--cases``):
   load, recorded as ``warmup_seconds``). Under ``mpiexec -n N`` the block is
   decomposed over the N ranks (:mod:`geofrac.mpm.parallel`): ``ranks`` is N,
   ``particle_steps_per_s`` counts all particles over the slowest rank's wall time and
-  ``per_rank`` gives each rank's own particle-steps per second of that time;
+  ``per_rank`` gives each rank's own particle-steps per second of that time. The
+  smoothed record (radius ``--smoothing`` cells) has ``cost_ratio``, the plain
+  record's particle-steps/s over its own (the same block, shape and ranks), printed
+  after the table with both rates; its warm-up step includes the first MLS neighbour
+  search (``warmup_seconds``), and ``neighbour_builds`` / ``neighbour_build_seconds``
+  count the searches within the timed steps (the neighbour lists are reused while
+  the particles move less than their margin).
 - ``ranks``: rank invariance over long runs (:func:`geofrac.mpm.invariance.compare_ranks`,
   run under ``mpiexec -n 2``): the translating bar to ``--t-end`` and a 2D block sliding
   on a frictional floor for 1e5 steps, each stepped serially and decomposed, every shape
@@ -98,7 +104,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--smoothing",
         type=float,
         default=2.0,
-        help="MLS radius in cells of the smoothed translating-bar runs (2.0)",
+        help="MLS radius in cells of the smoothed runs: translating bar, impact, block (2.0)",
     )
     p.add_argument(
         "--shapes",
@@ -237,7 +243,8 @@ def _record(
 
     ``measured`` may give ``W``, ``stress_error_rms``, ``energy_drift_max``,
     ``stress_overshoot``, ``warmup_seconds``, ``per_rank``, ``backend``,
-    ``rank_difference_max`` and ``rank_difference_t``; the others are None.
+    ``rank_difference_max``, ``rank_difference_t``, ``cost_ratio``, ``neighbour_builds``
+    and ``neighbour_build_seconds``; the others are None.
     """
     return {
         "case": case,
@@ -259,6 +266,9 @@ def _record(
         "per_rank": measured.get("per_rank"),
         "rank_difference_max": measured.get("rank_difference_max"),
         "rank_difference_t": measured.get("rank_difference_t"),
+        "cost_ratio": measured.get("cost_ratio"),
+        "neighbour_builds": measured.get("neighbour_builds"),
+        "neighbour_build_seconds": measured.get("neighbour_build_seconds"),
     }
 
 
@@ -312,14 +322,19 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         for scheme in schemes:
             records += _ranks(comm, shape, scheme, args.t_end, progress)
     # the block runs on every rank, decomposed over comm; the bars on rank 0
+    ratios = []
     for shape in shapes if "block" in cases else ():
+        plain = None
         for sm in smoothings:
             tp = gravity_block(args.particles, "musl", shape, sm, args.steps, comm, args.backend)
+            ratio = None if sm is None else plain.particle_steps_per_s / tp.particle_steps_per_s
             records.append(
                 _record(
                     "block2d", "musl", shape, sm, 2, tp.particles, tp.steps, tp.seconds,
                     tp.ranks, warmup_seconds=tp.warmup_seconds, per_rank=list(tp.per_rank),
-                    backend=args.backend,
+                    backend=args.backend, cost_ratio=ratio,
+                    neighbour_builds=None if sm is None else tp.neighbour_builds,
+                    neighbour_build_seconds=None if sm is None else tp.neighbour_build_seconds,
                 )
             )  # fmt: skip
             progress.step(
@@ -327,6 +342,18 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
                 f"{tp.particle_steps_per_s:.3g} p-steps/s on {tp.ranks} rank(s) "
                 f"(warm-up {tp.warmup_seconds:.2g} s)"
             )
+            if sm is None:
+                plain = tp
+            else:
+                ratios.append(
+                    f"block {shape}, {tp.ranks} rank(s), {tp.particles} particles, "
+                    f"{tp.steps} steps: plain {plain.particle_steps_per_s:.3g} "
+                    f"p-steps/s, MLS {sm:g} cells {tp.particle_steps_per_s:.3g} p-steps/s, "
+                    f"cost ratio {ratio:.2f}; warm-up (compile/load, first step, first "
+                    f"neighbour search) {plain.warmup_seconds:.2g} s / "
+                    f"{tp.warmup_seconds:.2g} s, not timed; neighbour searches in the "
+                    f"timed steps: {tp.neighbour_builds} ({tp.neighbour_build_seconds:.2g} s)"
+                )
     if comm.rank == 0:
         for shape in shapes if "translating" in cases else ():
             for scheme in schemes:
@@ -397,6 +424,8 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     }
     if comm.rank == 0:
         echo(comm, format_table(records, COLUMNS))
+        for line in ratios:
+            echo(comm, line)
         args.out.mkdir(parents=True, exist_ok=True)
         if runs:
             _plot(runs, Ws, args.out / "mpm_bar.png")

@@ -37,6 +37,10 @@ class Throughput:
             slowest rank).
         per_rank: each rank's own particle-steps per second of the wall time,
             shape=(ranks,).
+        neighbour_builds: MLS neighbour-list builds within the timed steps (the most
+            of any rank; the warm-up step's first build is not counted).
+        neighbour_build_seconds: their wall seconds (the slowest rank), part of
+            ``seconds``.
     """
 
     particles: int
@@ -46,6 +50,8 @@ class Throughput:
     ranks: int = 1
     warmup_seconds: float = 0.0
     per_rank: tuple[float, ...] = ()
+    neighbour_builds: int = 0
+    neighbour_build_seconds: float = 0.0
 
 
 def gravity_block(
@@ -92,6 +98,10 @@ def gravity_block(
     warmup = time.perf_counter() - t0
     if dom is not None:
         comm.Barrier()
+    if smoothing is not None:
+        from geofrac.mpm.smoothing import neighbour_stats
+
+        neighbour_stats(reset=True)
     done = 0
     t0 = time.perf_counter()
     for _ in range(steps):
@@ -100,11 +110,17 @@ def gravity_block(
     if dom is not None:
         comm.Barrier()
     seconds = time.perf_counter() - t0
+    builds, build_seconds = 0, 0.0
+    if smoothing is not None:
+        stats = neighbour_stats()
+        builds, build_seconds = int(stats["builds"]), float(stats["build_seconds"])
     if dom is None:
         rate = n_total * steps / seconds
-        return Throughput(n_total, steps, seconds, rate, 1, warmup, (rate,))
+        return Throughput(n_total, steps, seconds, rate, 1, warmup, (rate,), builds, build_seconds)
     seconds, warmup = dom.allmax(seconds), dom.allmax(warmup)
+    builds, build_seconds = int(dom.allmax(builds)), dom.allmax(build_seconds)
     per_rank = tuple(float(d) / seconds for d in comm.allgather(done))
     return Throughput(
-        n_total, steps, seconds, n_total * steps / seconds, comm.size, warmup, per_rank
-    )
+        n_total, steps, seconds, n_total * steps / seconds, comm.size, warmup, per_rank,
+        builds, build_seconds,
+    )  # fmt: skip

@@ -10,6 +10,8 @@ order).
 This module imports numba: only a step with ``backend="numba"`` imports it (nothing in
 :mod:`geofrac` does at import time). The kernels are compiled on first use and cached
 on disk (``cache=True``); ``fastmath`` is off, so no result depends on reassociation.
+The MLS fits themselves are in the generated :mod:`~geofrac.mpm.mls_kernels`, whose
+neighbour-sum loop alone allows reassociation (see there).
 """
 
 from __future__ import annotations
@@ -31,9 +33,8 @@ __all__ = [
     "grid_weights",
     "mass_momentum",
     "mass_momentum_bounds",
-    "mls_moments",
-    "mls_sums",
     "momentum",
+    "neighbour_lists",
     "nodal_acceleration",
     "nodal_velocity",
     "outside",
@@ -644,28 +645,36 @@ def update_F(i: int, L: np.ndarray, dt: float, F: np.ndarray, work: np.ndarray) 
 
 
 @_jit
-def bin_neighbours(x: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """All (p, I) with |x_I − x_p| < h, self included, as CSR sorted by p then I.
+def neighbour_lists(
+    x: np.ndarray, ids: np.ndarray, radius: float, n_fit: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """All (p, I) with |x_I − x_p| < radius, p < n_fit, self included, as CSR by p then ids[I].
 
-    Cell binning with bins of size h (the 3^dim neighbouring bins are searched), as
-    :func:`geofrac.mpm.smoothing.neighbour_pairs`; the same pairs in the same order.
+    Cell binning with bins of size ``radius`` (the 3^dim neighbouring bins are
+    searched). Each particle's neighbours are in the order of their global ids, not of
+    their rows, so sums over them do not depend on how the particles are stored or
+    decomposed.
 
     Args:
         x: positions, shape=(n, dim).
-        h: radius.
+        ids: global particle ids (unique), shape=(n,).
+        radius: the search radius.
+        n_fit: the particles whose neighbours are listed (the first rows; the others,
+            such as ghosts, are only neighbours).
 
     Returns:
-        starts, shape=(n + 1,), and the neighbours I of p at starts[p]:starts[p + 1].
+        starts, shape=(n_fit + 1,), and the neighbours' rows I of p at
+        starts[p]:starts[p + 1].
     """
     n, dim = x.shape
     lo = np.empty(dim)
     for a in range(dim):
-        lo[a] = x[:, a].min()
+        lo[a] = x[:, a].min() if n > 0 else 0.0
     key = np.empty((n, dim), np.int64)
     dims = np.ones(dim, np.int64)
     for i in range(n):
         for a in range(dim):
-            key[i, a] = np.int64(np.floor((x[i, a] - lo[a]) / h))
+            key[i, a] = np.int64(np.floor((x[i, a] - lo[a]) / radius))
             dims[a] = max(dims[a], key[i, a] + 3)
     flat = np.empty(n, np.int64)
     for i in range(n):
@@ -675,16 +684,16 @@ def bin_neighbours(x: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
         flat[i] = f
     order = np.argsort(flat, kind="mergesort")
     sorted_flat = flat[order]
-    h2 = h * h
-    counts = np.zeros(n + 1, np.int64)
+    r2 = radius * radius
+    counts = np.zeros(n_fit + 1, np.int64)
     off = np.empty(dim, np.int64)
     # two passes: count, then fill
     for sweep in range(2):
         pos = 0
         buf = np.empty(0, np.int64)
         if sweep == 1:
-            buf = np.empty(counts[n], np.int64)
-        for i in range(n):
+            buf = np.empty(counts[n_fit], np.int64)
+        for i in range(n_fit):
             start = pos
             for o in range(3**dim):
                 rem = o
@@ -700,7 +709,7 @@ def bin_neighbours(x: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
                     d2 = 0.0
                     for a in range(dim):
                         d2 += (x[q, a] - x[i, a]) ** 2
-                    if d2 < h2:
+                    if d2 < r2:
                         if sweep == 1:
                             buf[pos] = q
                         pos += 1
@@ -708,27 +717,22 @@ def bin_neighbours(x: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
             if sweep == 0:
                 counts[i + 1] = pos
             else:
-                buf[start:pos].sort()
+                mine = buf[start:pos].copy()
+                by_id = np.argsort(ids[mine], kind="mergesort")
+                for t in range(pos - start):
+                    buf[start + t] = mine[by_id[t]]
         if sweep == 1:
             return counts, buf
     return counts, np.empty(0, np.int64)
 
 
 @_jit
-def _basis(dx: np.ndarray, exps: np.ndarray, out: np.ndarray) -> None:
-    """The monomials x^exps[c] at the scaled offset dx into out, shape=(m,)."""
-    m, dim = exps.shape
-    for c in range(m):
-        v = 1.0
-        for a in range(dim):
-            e = exps[c, a]
-            if e == 1:
-                v = v * dx[a]
-            elif e == 2:
-                v = v * dx[a] ** 2
-            elif e == 3:
-                v = v * dx[a] ** 3
-        out[c] = v
+def bin_neighbours(x: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`neighbour_lists` of every row, with the rows as ids.
+
+    The pairs of :func:`geofrac.mpm.smoothing.neighbour_pairs`, in the same order.
+    """
+    return neighbour_lists(x, np.arange(x.shape[0]), h, x.shape[0])
 
 
 @_jit
@@ -740,112 +744,6 @@ def _spline(s: float) -> float:
     if s < 1.0:
         return 4 / 3 - 4 * s + 4 * s**2 - 4 / 3 * s**3
     return 0.0
-
-
-@_jit
-def _pair(
-    x: np.ndarray, p: int, q: int, h: float, exps: np.ndarray, dx: np.ndarray, F: np.ndarray
-) -> float:
-    """Weight W(|x_q - x_p|, h) (eq. 4.51), with the basis F(x_q) at the offset into F.
-
-    ``dx`` (shape=(dim,)) is scratch for the scaled offset; ``F`` is out, shape=(m,).
-    """
-    r2 = 0.0
-    for a in range(x.shape[1]):
-        d = x[q, a] - x[p, a]
-        r2 += d * d
-        dx[a] = d / h
-    _basis(dx, exps, F)
-    return _spline(np.sqrt(r2) / h)
-
-
-@_jit
-def mls_moments(
-    x: np.ndarray,
-    h: float,
-    starts: np.ndarray,
-    nbrs: np.ndarray,
-    exps: np.ndarray,
-    first: int,
-    A: np.ndarray,
-) -> None:
-    """Moment matrices A = Σ_I W(r_I, h) F(x_I) F(x_I)ᵀ (eq. 4.54) of particles first….
-
-    Args:
-        x: positions, shape=(n, dim).
-        h: radius.
-        starts: where each particle's neighbours start in ``nbrs``, shape=(n + 1,).
-        nbrs: the neighbours (:func:`bin_neighbours`), shape=(pairs,).
-        exps: the basis' exponents, shape=(m, dim).
-        first: the first particle of the batch.
-        A: out, shape=(batch, m, m).
-    """
-    dim = x.shape[1]
-    m = exps.shape[0]
-    dx = np.empty(dim)
-    F = np.empty(m)
-    for b in range(A.shape[0]):
-        p = first + b
-        A[b] = 0.0
-        for t in range(starts[p], starts[p + 1]):
-            q = nbrs[t]
-            w = _pair(x, p, q, h, exps, dx, F)
-            for r in range(m):  # A is symmetric: the upper triangle, mirrored below
-                wr = w * F[r]
-                for c in range(r, m):
-                    A[b, r, c] += wr * F[c]
-        for r in range(m):
-            for c in range(r):
-                A[b, r, c] = A[b, c, r]
-
-
-@_jit
-def mls_sums(
-    x: np.ndarray,
-    values: np.ndarray,
-    h: float,
-    starts: np.ndarray,
-    nbrs: np.ndarray,
-    exps: np.ndarray,
-    first: int,
-    g: np.ndarray,
-    ok: np.ndarray,
-    out: np.ndarray,
-) -> None:
-    """Σ_I W(r_I, h) (g·F(x_I)) values_I (eq. 4.57) of the batch's fitted particles.
-
-    Args:
-        x: positions, shape=(n, dim).
-        values: the values to fit, shape=(n, c).
-        h: radius.
-        starts: where each particle's neighbours start in ``nbrs``, shape=(n + 1,).
-        nbrs: the neighbours (:func:`bin_neighbours`), shape=(pairs,).
-        exps: the basis' exponents, shape=(m, dim).
-        first: the first particle of the batch.
-        g: A⁻¹ e₀ per particle of the batch, shape=(batch, m).
-        ok: which of the batch are fitted, shape=(batch,).
-        out: the fits, written where ``ok``, shape=(n, c).
-    """
-    dim = x.shape[1]
-    m = exps.shape[0]
-    nc = values.shape[1]
-    dx = np.empty(dim)
-    F = np.empty(m)
-    for b in range(g.shape[0]):
-        if not ok[b]:
-            continue
-        p = first + b
-        for c in range(nc):
-            out[p, c] = 0.0
-        for t in range(starts[p], starts[p + 1]):
-            q = nbrs[t]
-            w = _pair(x, p, q, h, exps, dx, F)
-            acc = 0.0
-            for r in range(m):
-                acc += F[r] * g[b, r]
-            phi = w * acc
-            for c in range(nc):
-                out[p, c] += phi * values[q, c]
 
 
 @_jit

@@ -9,8 +9,9 @@ settings (:class:`geofrac.mpm.schemes.StepSettings`)
   partial sums of all ranks whose sub-grids hold the node. The step's sums are exact
   fixed-point integers (:mod:`~geofrac.mpm.fixedpoint`), so a shared node has the same
   value, to the last bit, on every rank that holds it and for any number of ranks;
-- sends each rank's MLS ghost particles (positions at the step's start and strain
-  increments of the particles within the smoothing radius of another slab);
+- sends each rank's MLS ghost particles (positions at the step's start, strain
+  increments and global ids of the particles within the smoothing radius of another
+  slab; the ids order the MLS sums);
 - moves the particles that left a slab to their new rank at the end of the step.
 
 Only this module speaks MPI (mpi4py; the communicator is the caller's), and only
@@ -162,7 +163,48 @@ class Domain:
             out[(lo - a) * per : (hi - a + 1) * per] += received[q]
         return out
 
-    def ghosts(self, x: np.ndarray, values: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    def ghost_rows(self, x: np.ndarray, h: float) -> list[np.ndarray]:
+        """Per rank, this rank's rows within ``h`` of its slab (along axis 0).
+
+        Args:
+            x: this rank's positions (all in its slab), shape=(n, dim).
+            h: the radius.
+
+        Returns:
+            One index array per rank (empty for this rank), shape=(k_q,) each.
+        """
+        g = self.grid
+        edges = g.origin[0] + g.spacing * self.cuts
+        rows = []
+        for q in range(len(self.planes)):
+            near = (x[:, 0] >= edges[q] - h) & (x[:, 0] <= edges[q + 1] + h)
+            rows.append(np.zeros(0, np.int64) if q == self.rank else np.flatnonzero(near))
+        return rows
+
+    def send_rows(self, rows: list[np.ndarray], *arrays: np.ndarray) -> list[np.ndarray]:
+        """Send each rank its rows of the arrays; return what the others sent (collective).
+
+        Args:
+            rows: per rank, the rows to send to it (:meth:`ghost_rows`).
+            arrays: this rank's arrays, shape=(n, ...) each.
+
+        Returns:
+            Per array, the rows received from the other ranks in rank order,
+            shape=(k, ...).
+        """
+        send = [
+            None if len(r) == 0 or q == self.rank else tuple(a[r] for a in arrays)
+            for q, r in enumerate(rows)
+        ]
+        got = [item for item in self.comm.alltoall(send) if item is not None]
+        return [
+            np.concatenate([item[i] for item in got]) if got else arrays[i][:0]
+            for i in range(len(arrays))
+        ]
+
+    def ghosts(
+        self, x: np.ndarray, values: np.ndarray, h: float, ids: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Other ranks' particles within ``h`` of this rank's slab (MLS ghosts).
 
         Args:
@@ -170,21 +212,14 @@ class Domain:
                 shape=(n, dim).
             values: their values, shape=(n, c).
             h: the radius.
+            ids: their global ids, shape=(n,) (the order of the MLS sums).
 
         Returns:
-            The ghosts' positions, shape=(k, dim), and values, shape=(k, c), in rank
-            order.
+            The ghosts' positions, shape=(k, dim), values, shape=(k, c), and ids,
+            shape=(k,), in rank order.
         """
-        g = self.grid
-        edges = g.origin[0] + g.spacing * self.cuts
-        send = []
-        for q in range(len(self.planes)):
-            near = (x[:, 0] >= edges[q] - h) & (x[:, 0] <= edges[q + 1] + h)
-            send.append(None if q == self.rank or not near.any() else (x[near], values[near]))
-        got = [item for item in self.comm.alltoall(send) if item is not None]
-        if not got:
-            return np.zeros((0, x.shape[1])), np.zeros((0, values.shape[1]))
-        return np.concatenate([a for a, _ in got]), np.concatenate([b for _, b in got])
+        gx, gv, gids = self.send_rows(self.ghost_rows(x, h), x, values, ids)
+        return gx, gv, gids
 
     def migrate(self, p: Particles) -> None:
         """Send the particles that left this rank's slab to their owners (p in place)."""

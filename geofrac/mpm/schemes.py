@@ -378,11 +378,11 @@ def _update_stress(
     v: np.ndarray,
     dt: float,
     s: StepSettings,
-    smooth_at: tuple[np.ndarray, float] | None,
+    smooth_at: tuple[np.ndarray, np.ndarray, float] | None,
 ) -> None:
     """Stress, volume and deformation gradient from the nodal velocity v (D.7-D.9, 4.70).
 
-    ``smooth_at`` = (positions at the step's start, radius): the strain increments are
+    ``smooth_at`` = (positions at the step's start, ids, radius): the strain increments are
     replaced by their MLS fit there (4.57, 4.66) before they change stress and volume.
     """
     n, d = p.n, p.dim
@@ -397,7 +397,7 @@ def _update_stress(
         L = np.matmul(np.swapaxes(v[w.nodes], 1, 2), w.grad)  # ∇v_p, shape=(n, dim, dim)
         deps = 0.5 * dt * (L + np.swapaxes(L, 1, 2))
     if smooth_at is not None:
-        deps = _smoothed(deps, smooth_at, s).reshape(n, d, d)
+        deps = _smoothed(deps, smooth_at, s)
     if isinstance(material, Elastic) and s.backend == "numba":
         from geofrac.mpm import kernels
 
@@ -421,23 +421,19 @@ def _update_stress(
         p.lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
 
 
-def _smoothed(deps: np.ndarray, smooth_at: tuple[np.ndarray, float], s: StepSettings) -> np.ndarray:
-    """The MLS fits of the strain increments (4.57), shape=(n, dim·dim).
+def _smoothed(
+    deps: np.ndarray, smooth_at: tuple[np.ndarray, np.ndarray, float], s: StepSettings
+) -> np.ndarray:
+    """The MLS fits of the strain increments (4.57), shape=(n, dim, dim).
 
     With a domain the neighbours on other ranks take part as ghosts, so every fit is
-    the one of the whole set.
+    the one of the whole set (the same operations in the same order: neighbours are
+    summed by global id).
     """
-    from geofrac.mpm.smoothing import smooth
+    from geofrac.mpm.smoothing import smooth_strain
 
-    x0, h = smooth_at
-    n = len(deps)
-    values = deps.reshape(n, deps.shape[1] * deps.shape[2])
-    if s.domain is not None:
-        gx, gv = s.domain.ghosts(x0, values, h)  # collective: every rank takes part
-        x0, values = np.concatenate([x0, gx]), np.concatenate([values, gv])
-    if n == 0:  # a rank whose slab holds no particle (yet) has nothing to smooth
-        return values[:0]
-    return smooth(x0, values, h, s.backend)[0][:n]
+    x0, ids, h = smooth_at
+    return smooth_strain(deps, x0, ids, h, s.backend, s.domain)
 
 
 def spin_increment(L: np.ndarray, dt: float) -> np.ndarray:
@@ -532,7 +528,7 @@ def step(
     else:
         w = weights(g, p.x, p.lp if gimp else None)
     N, dt, dim = g.num_nodes, s.dt, p.dim
-    smooth_at = None if s.smoothing is None else (p.x.copy(), s.smoothing * g.spacing)
+    smooth_at = None if s.smoothing is None else (p.x.copy(), p.ids, s.smoothing * g.spacing)
     # MUSL's forces use σ^k: they join the first transfer (one pass, one exchange). The
     # nodal sums are exact (fixed-point pairs, geofrac.mpm.fixedpoint), hence the same
     # for any particle order and any decomposition; their scales come from bounds of
