@@ -404,6 +404,14 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
         kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
     else:
         v = _velocity(mom, mass, active, s.fixed)
+    touch = None
+    if s.friction is not None:  # the contact holds every nodal velocity (friction.py)
+        from geofrac.mpm.friction import apply_friction, touching
+
+        touch = touching(s.friction, p.x, p.lp, w.nodes, w.phi, N, g.spacing)
+        if dom is not None:
+            touch = dom.sum_halo(touch)
+        apply_friction(v, s.friction, touch)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):
         _update_stress(w, p, material, v, half * dt, s, smooth_at)
@@ -424,9 +432,7 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
         a[s.fixed] = 0.0
         v_new = v + dt * a
     if s.friction is not None:
-        from geofrac.mpm.friction import apply_friction
-
-        apply_friction(v_new, s.friction)
+        apply_friction(v_new, s.friction, touch)
         a = (v_new - v) / dt  # the particles take the same, frictional, change
     if fast:
         kernels.from_grid2(w.nodes, w.phi, a, v_new, dt, p.v, p.x)  # D.4-D.5
@@ -447,9 +453,7 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
         else:
             v = _velocity(mom, mass, active, s.fixed)
         if s.friction is not None:
-            from geofrac.mpm.friction import apply_friction
-
-            apply_friction(v, s.friction, sliding_only=True)
+            apply_friction(v, s.friction, touch)
         _update_stress(w, p, material, v, half * dt, s, smooth_at)
     _check(p, dom, fast)
     if dom is not None:
