@@ -35,7 +35,10 @@ the particles at the start of the step (USF and USAVG strain from it), the updat
 updated velocity felt the contact (and the re-mapped one only its normal part), so the
 strain of the bottom layer saw a floor node moving down and sideways while the
 particles did not: extra compression pushed the layer up, and missing shear let a
-block on a 30° slope with μ = 0.7 creep off (USF, from its equilibrium stress).
+block on a 30° slope with μ = 0.7 creep off (USF, from its equilibrium stress). The
+particles take the whole change the contact makes in a step, from the mapped velocity
+to the updated one; otherwise the approach removed from the mapped velocity would stay
+in the particles' velocities step after step and its friction would be lost.
 """
 
 from __future__ import annotations
@@ -142,10 +145,11 @@ def touching(
         spacing: cell size.
 
     Returns:
-        Σ_p φ_ip [p touches], shape=(num_nodes, number of layers).
+        Σ_p φ_ip [p touches], shape=(num_nodes, dim + 1) (a node lies on at most dim
+        walls and the bed; the same width on every rank, for the halo sum).
     """
     layers = fr.layers()
-    out = np.zeros((num_nodes, len(layers)))
+    out = np.zeros((num_nodes, max(x.shape[1] + 1, len(layers))))
     if fr.offsets is None:
         for j, rows in enumerate(layers):
             out[fr.nodes[rows], j] = 1.0
