@@ -8,9 +8,12 @@ only when a scene declares this effect.
 
 Scene table ``[friction]``:
 
-- ``mu``: Coulomb coefficient μ >= 0 (the seed: 0.1), required;
+- ``mu``: Coulomb coefficient μ >= 0 (the seed: 0.1), required unless every boundary
+  has its own;
 - ``boundaries``: walled grid sides (``x_min`` ... ``z_max``, as set in ``mpm.walls``)
-  and/or ``"bed"`` (the ``mpm.bed`` polyline), default ``["bed"]``.
+  and/or ``"bed"`` (the ``mpm.bed`` polyline), default ``["bed"]``; either a list of
+  names (each with ``mu``) or a table name -> μ (``{ bed = 0.1, x_max = 0.5 }``), a
+  boundary's own μ; ``mu`` may then be left out.
 """
 
 from __future__ import annotations
@@ -37,19 +40,32 @@ class FrictionConfig:
     """Validated friction settings.
 
     Attributes:
-        mu: Coulomb friction coefficient.
+        mu: the common Coulomb friction coefficient (None when every boundary has its
+            own).
         boundaries: names of the frictional boundaries.
+        mus: each boundary's μ, in the order of ``boundaries``.
     """
 
-    mu: float
+    mu: float | None
     boundaries: tuple[str, ...]
+    mus: tuple[float, ...] = ()
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> FrictionConfig:
     """Validate ``[friction]``; the boundaries must exist (``ctx.groups``)."""
     t = Table(ctx.file, "friction", table, KEYS)
-    mu = float(t.number("mu", required=True, minimum=0.0, maximum=MAX_MU))  # type: ignore[arg-type]
     names = t.data.get("boundaries", ["bed"])
+    own: dict[str, float] = {}
+    if isinstance(names, dict):
+        b = Table(ctx.file, "friction.boundaries", names, list(names))
+        if not names:
+            raise t.error("boundaries", "must name at least one boundary")
+        own = {
+            str(n): float(b.number(n, required=True, minimum=0.0, maximum=MAX_MU))  # type: ignore[arg-type]
+            for n in names
+        }
+        names = list(names)
+    mu = t.number("mu", required=len(own) < len(names), minimum=0.0, maximum=MAX_MU)
     if (
         not isinstance(names, list)
         or not names
@@ -57,7 +73,8 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> FrictionConfig:
         or len(set(names)) != len(names)
     ):
         raise t.error(
-            "boundaries", f"must be a list of distinct boundary names, got {short(names)}"
+            "boundaries",
+            "must be a list of distinct boundary names or a table name -> mu, got " + short(names),
         )
     for name in names:
         if name not in ctx.groups:
@@ -67,4 +84,5 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> FrictionConfig:
                 f"no boundary {name!r} (walled sides and bed: {where})"
                 + did_you_mean(str(name), ctx.groups),
             )
-    return FrictionConfig(mu, tuple(names))
+    mus = tuple(own.get(n, mu) for n in names)  # type: ignore[misc]
+    return FrictionConfig(None if mu is None else float(mu), tuple(names), mus)  # type: ignore[arg-type]

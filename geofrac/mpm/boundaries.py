@@ -6,6 +6,17 @@ beyond that side: ``fixed`` all velocity components, ``roller`` the normal one. 
 ``bed`` (2D) is the immobile ground as a polyline y(x): nodes on or below it are held,
 or, when the ``friction`` effect names it, frictional (eqs. 4.44-4.47) with the normal
 pointing out of the material into the bed.
+
+A frictional boundary gives one row (node, normal, plane offset) per node on or beyond
+it: the padding nodes beyond a wall and the nodes below the bed too, since GIMP
+supports reach them; each row's plane x·n = d is the boundary itself, so the touch
+check of :mod:`~geofrac.mpm.friction` measures how far the material is from the
+boundary, not from the node. A node on several boundaries keeps a row for each
+frictional one (a corner); a node with held components keeps its frictional rows with
+the normals projected onto its free components (a roller wall meeting a frictional
+floor: the wall holds x, the floor still stops y; before, such a node lost its friction
+row and material fell through the corner). Only a node held in every component drops
+its rows.
 """
 
 from __future__ import annotations
@@ -14,7 +25,7 @@ import numpy as np
 
 from geofrac.mpm.grid import Grid, grid
 
-__all__ = ["TOL", "bed_nodes", "held", "scene_grid", "wall_nodes"]
+__all__ = ["TOL", "bed_nodes", "boundary_rows", "held", "scene_grid", "wall_nodes"]
 
 #: Relative tolerance (in cells) for "on a side" and "on the bed".
 TOL = 1e-9
@@ -51,7 +62,9 @@ def wall_nodes(
     return nodes[:, axis] >= upper[axis] - tol, axis, 1.0
 
 
-def bed_nodes(nodes: np.ndarray, bed: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+def bed_nodes(
+    nodes: np.ndarray, bed: np.ndarray, spacing: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Nodes on or below the bed polyline within its x-range, with normals into the bed.
 
     Args:
@@ -61,28 +74,31 @@ def bed_nodes(nodes: np.ndarray, bed: np.ndarray, spacing: float) -> tuple[np.nd
 
     Returns:
         (node ids shape=(m,), unit normals out of the material into the bed
-        shape=(m, 2): (f', −1)/√(1 + f'²) of the segment under the node).
+        shape=(m, 2): (f', −1)/√(1 + f'²) of the segment under the node, the plane
+        offsets d = n·(x, f(x)) of that segment shape=(m,)).
     """
     x, y = nodes[:, 0], nodes[:, 1]
     inside = (x >= bed[0, 0]) & (x <= bed[-1, 0])
     seg = np.clip(np.searchsorted(bed[:, 0], x, side="right") - 1, 0, len(bed) - 2)
     x0, y0 = bed[seg, 0], bed[seg, 1]
     slope = (bed[seg + 1, 1] - y0) / (bed[seg + 1, 0] - x0)
-    below = inside & (y <= y0 + slope * (x - x0) + TOL * spacing)
+    yb = y0 + slope * (x - x0)
+    below = inside & (y <= yb + TOL * spacing)
     ids = np.flatnonzero(below)
     n = np.column_stack([slope[ids], -np.ones(len(ids))])
-    return ids, n / np.linalg.norm(n, axis=1)[:, None]
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    return ids, n, n[:, 0] * x[ids] + n[:, 1] * yb[ids]
 
 
-def held(
+def boundary_rows(
     g: Grid,
     lower: tuple[float, ...],
     upper: tuple[float, ...],
     walls: dict[str, str],
     bed: tuple[tuple[float, float], ...],
     frictional: tuple[str, ...] = (),
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Held components and frictional nodes of grid ``g``.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Held components and frictional rows of grid ``g``.
 
     Args:
         g: the (local) grid.
@@ -94,37 +110,58 @@ def held(
             held.
 
     Returns:
-        (held components shape=(N, dim) bool, frictional node ids shape=(m,), their
-        normals out of the material shape=(m, dim)).
+        (held components shape=(N, dim) bool, frictional node ids shape=(m,) (a corner
+        node once per boundary), their unit normals out of the material, projected on
+        the node's free components, shape=(m, dim), their boundary planes' offsets
+        x·n = d shape=(m,), the index into ``frictional`` of each row's boundary
+        shape=(m,)).
     """
     nodes = g.nodes()
     lo, up = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     fixed = np.zeros((g.num_nodes, g.dim), dtype=bool)
-    f_ids: list[np.ndarray] = []
-    f_normals: list[np.ndarray] = []
+    rows: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = []
     for side, kind in walls.items():
         mask, axis, sign = wall_nodes(nodes, lo, up, side, g.spacing)
         if side in frictional:
             ids = np.flatnonzero(mask)
             normal = np.zeros((len(ids), g.dim))
             normal[:, axis] = sign
-            f_ids.append(ids)
-            f_normals.append(normal)
+            plane = sign * (lo[axis] if sign < 0 else up[axis])
+            rows.append((ids, normal, np.full(len(ids), plane), frictional.index(side)))
         elif kind == "fixed":
             fixed[mask] = True
         else:
             fixed[mask, axis] = True
     if bed:
-        ids, normals = bed_nodes(nodes, np.asarray(bed, dtype=float), g.spacing)
+        ids, normals, planes = bed_nodes(nodes, np.asarray(bed, dtype=float), g.spacing)
         if "bed" in frictional:
-            f_ids.append(ids)
-            f_normals.append(normals)
+            rows.append((ids, normals, planes, frictional.index("bed")))
         else:
             fixed[ids] = True
-    if not f_ids:
-        return fixed, np.zeros(0, dtype=np.int64), np.zeros((0, g.dim))
-    ids = np.concatenate(f_ids)
-    normals = np.concatenate(f_normals)
-    ids, first = np.unique(ids, return_index=True)  # a corner node keeps one normal
-    keep = ~np.any(fixed[ids], axis=1)  # a held node stays held
-    return fixed, ids[keep], normals[first][keep]
+    if not rows:
+        empty = np.zeros(0, dtype=np.int64)
+        return fixed, empty, np.zeros((0, g.dim)), np.zeros(0), empty
+    ids = np.concatenate([r[0] for r in rows])
+    normals = np.concatenate([r[1] for r in rows])
+    planes = np.concatenate([r[2] for r in rows])
+    which = np.concatenate([np.full(len(r[0]), r[3], dtype=np.int64) for r in rows])
+    from geofrac.mpm.friction import free_normals
+
+    keep, free = free_normals(normals, fixed[ids])
+    # a projected normal keeps its plane through the boundary point nearest the node
+    planes = planes[keep] - np.einsum("ka,ka->k", nodes[ids[keep]], normals[keep])
+    planes += np.einsum("ka,ka->k", nodes[ids[keep]], free)
+    return fixed, ids[keep], free, planes, which[keep]
+
+
+def held(
+    g: Grid,
+    lower: tuple[float, ...],
+    upper: tuple[float, ...],
+    walls: dict[str, str],
+    bed: tuple[tuple[float, float], ...],
+    frictional: tuple[str, ...] = (),
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(held components, frictional node ids, their normals) of :func:`boundary_rows`."""
+    fixed, ids, normals, _, _ = boundary_rows(g, lower, upper, walls, bed, frictional)
+    return fixed, ids, normals

@@ -46,7 +46,7 @@ from geofrac.errors import RunError
 from geofrac.io.checkpoint import RunControl
 from geofrac.io.summary import start_summary
 from geofrac.log import format_seconds, sayer
-from geofrac.mpm.boundaries import held, scene_grid
+from geofrac.mpm.boundaries import boundary_rows, scene_grid
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles, concat, take
 from geofrac.mpm.schemes import (
@@ -294,14 +294,15 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
     total = comm.allreduce(p.n)
     smoothing = _config(scene, "mls_smoothing")
     fric = _config(scene, "friction")
-    fixed, f_nodes, f_normals = held(
+    fixed, f_nodes, f_normals, f_planes, f_which = boundary_rows(
         local, spec.lower, spec.upper, spec.walls, bed, fric.boundaries if fric else ()
     )
     friction = None
     if fric is not None and len(f_nodes):
         from geofrac.mpm.friction import friction as make_friction
 
-        friction = make_friction(f_nodes, f_normals, fric.mu)
+        mus = np.asarray(fric.mus or (fric.mu,) * len(fric.boundaries))
+        friction = make_friction(f_nodes, f_normals, mus[f_which], f_planes)
     settings = StepSettings(
         spec.scheme,
         spec.shape,

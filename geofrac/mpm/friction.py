@@ -1,13 +1,44 @@
-"""Coulomb friction on grid nodes of a boundary (seed eqs. 4.44-4.47).
+"""Contact and Coulomb friction on grid nodes of a boundary (seed eqs. 4.44-4.47).
 
-A node of the boundary is in contact when its motion pushes into the boundary
-(a_i · n_i > 0, eq. 4.44, with n_i the unit normal pointing out of the body, into the
-boundary). Then the normal component is removed (4.47) and the tangential one is slowed
-by the Coulomb friction μ |a_i · n_i| (4.46), at most to rest: the seed's "μ' = μ while
-the node slides, μ' = |a_t| / (a · n) while it sticks" (4.45) is the same cap. We apply it
-to the grid velocity after the step's update, v* = v + a Δt, in impulse form (the
-normal velocity change Δv_n = v*·n > 0 times μ bounds the tangential change), which is
-(4.44-4.47) multiplied by Δt; nodes moving away from the boundary are free.
+A frictional boundary is a set of rows (node, unit normal n out of the body into the
+boundary, μ, and the boundary's plane x·n = d at that node). A node on a corner has
+one row per boundary.
+
+Contact (4.44). A node is in contact with a boundary when the material that maps to it
+touches the boundary and the node's trial velocity v* = v + aΔt moves into it
+(v*·n > 0). "Touches": some particle with weight on the node reaches the plane to
+within :data:`TOUCH` cells (its GIMP box, or for point MPM its half-spacing box,
+measured along n). Without that check a body lifted a little off the boundary (by
+cell-crossing noise of the base shear) could never come back down: the node, fixed in
+space on the boundary, would stop every downward motion, so every upward jitter of the
+bottom layer stayed for good (a block sliding at μ = 0.7 crept up 0.02 m per 0.3 s on
+0.1 m cells). With it the layer falls back until it touches again.
+
+Impulse form. (4.44-4.47) multiplied by Δt: the normal approach v*·n is removed (4.47)
+and the tangential velocity is slowed by μ v*·n against its direction, at most to rest
+(4.45-4.46: the seed's μ' = μ while the node slides, μ' = |a_t| / (a·n) while it sticks,
+i.e. stick when the tangential impulse needed to stop it is within μ times the normal
+impulse, Coulomb slip otherwise). A node moving away from the boundary is free: the
+boundary never pulls.
+
+Several boundaries at one node (a corner of two walls, a wall meeting the bed). The
+approaching normal components are removed one after the other (exact for orthogonal
+normals; Gram-Schmidt for others), then the remaining tangential velocity is slowed by
+Σ μ_j v*·n_j over the boundaries in contact. Components held by a wall (``fixed``) are
+projected out of a frictional normal beforehand (:func:`free_normals`), so a roller
+wall meeting a frictional floor holds its component and the floor keeps its normal.
+
+Where the constraint applies. Like the held components, which are zero in every nodal
+velocity the step forms, the contact acts on every nodal velocity: the one mapped from
+the particles at the start of the step (USF and USAVG strain from it), the updated one
+(which moves the particles), and MUSL's re-mapped one (its strain). Before, only the
+updated velocity felt the contact (and the re-mapped one only its normal part), so the
+strain of the bottom layer saw a floor node moving down and sideways while the
+particles did not: extra compression pushed the layer up, and missing shear let a
+block on a 30° slope with μ = 0.7 creep off (USF, from its equilibrium stress). The
+particles take the whole change the contact makes in a step, from the mapped velocity
+to the updated one; otherwise the approach removed from the mapped velocity would stay
+in the particles' velocities step after step and its friction would be lost.
 """
 
 from __future__ import annotations
@@ -16,58 +47,198 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Friction", "apply_friction", "friction"]
+__all__ = ["TOUCH", "Friction", "apply_friction", "free_normals", "friction", "touching"]
+
+#: A particle touches a boundary when its box reaches within this many cells of it.
+TOUCH = 0.1
 
 
 @dataclass(frozen=True)
 class Friction:
-    """Boundary nodes with their outward normals and a friction coefficient.
+    """Rows (node, normal, μ, plane offset) of frictional boundaries.
 
     Attributes:
-        nodes: flat grid node ids, shape=(k,).
-        normals: unit normals out of the body, shape=(k, dim).
-        mu: Coulomb friction coefficient μ >= 0 (the seed: 0.1).
+        nodes: flat grid node ids, shape=(k,) (a node on a corner appears once per
+            boundary).
+        normals: unit normals out of the body into the boundary, shape=(k, dim).
+        mu: Coulomb friction coefficients μ >= 0, shape=(k,) (the seed: 0.1).
+        offsets: the boundary's plane at the node, x·n = d, shape=(k,); None: the
+            material always touches (no touch check).
     """
 
     nodes: np.ndarray
     normals: np.ndarray
-    mu: float
+    mu: np.ndarray
+    offsets: np.ndarray | None = None
+
+    def layers(self) -> list[np.ndarray]:
+        """Row ids split so that no node repeats within a part: [shape=(k_j,)]."""
+        order = np.argsort(self.nodes, kind="stable")
+        nodes = self.nodes[order]
+        first = np.r_[True, nodes[1:] != nodes[:-1]]
+        start = np.maximum.accumulate(np.where(first, np.arange(len(nodes)), 0))
+        rank = np.arange(len(nodes)) - start  # 0 for a node's first row, 1 for its second…
+        return [order[rank == j] for j in range(int(rank.max(initial=-1)) + 1)]
 
 
-def friction(nodes: np.ndarray, normals: np.ndarray, mu: float) -> Friction:
-    """Validated :class:`Friction` (normals normalised)."""
+def friction(
+    nodes: np.ndarray,
+    normals: np.ndarray,
+    mu: float | np.ndarray,
+    offsets: np.ndarray | None = None,
+) -> Friction:
+    """Validated :class:`Friction` (normals normalised, μ one per row)."""
     nodes = np.asarray(nodes, dtype=np.int64).reshape(-1)
     n = np.asarray(normals, dtype=float).reshape(len(nodes), -1)
     length = np.linalg.norm(n, axis=1)
     if np.any(length == 0):
         raise ValueError("friction: every normal must be non-zero")
-    if not mu >= 0:
+    mus = np.broadcast_to(np.asarray(mu, dtype=float), nodes.shape).copy()
+    if not np.all(mus >= 0):
         raise ValueError(f"friction: mu must be >= 0, got {mu}")
-    return Friction(nodes, n / length[:, None], float(mu))
+    d = None if offsets is None else np.asarray(offsets, dtype=float).reshape(len(nodes))
+    return Friction(nodes, n / length[:, None], mus, d)
 
 
-def apply_friction(v: np.ndarray, fr: Friction, sliding_only: bool = False) -> np.ndarray:
-    """Contact and Coulomb friction on the trial grid velocities (in place and returned).
+def free_normals(
+    normals: np.ndarray, held: np.ndarray, tol: float = 1e-12
+) -> tuple[np.ndarray, np.ndarray]:
+    """Frictional normals projected onto a node's free (not held) velocity components.
 
     Args:
-        v: trial nodal velocities v* = v + a Δt, shape=(num_nodes, dim).
+        normals: unit normals, shape=(k, dim).
+        held: the nodes' held components, shape=(k, dim) bool.
+        tol: a projection shorter than this leaves nothing to constrain.
+
+    Returns:
+        (keep shape=(k,) bool: rows with a free normal part, the unit projected normals
+        of the kept rows shape=(m, dim)).
+    """
+    n = np.where(held, 0.0, normals)
+    length = np.linalg.norm(n, axis=1)
+    keep = length > tol
+    return keep, n[keep] / length[keep, None]
+
+
+def touching(
+    fr: Friction,
+    x: np.ndarray,
+    lp: np.ndarray,
+    nodes: np.ndarray,
+    phi: np.ndarray,
+    num_nodes: int,
+    spacing: float,
+) -> np.ndarray:
+    """Per layer (:meth:`Friction.layers`) and node, the particle weight touching its row.
+
+    A particle p touches row r (node i, normal n, plane d) when it has weight on i and
+    x_p·n + Σ_a |n_a| lp_a >= d − :data:`TOUCH` · spacing. The sums are nodal (complete
+    them across ranks like the mass).
+
+    Args:
         fr: the boundary.
-        sliding_only: only remove the normal approach (no friction): for the velocity
-            rebuilt from particle momentum after the friction was applied once.
+        x: particle positions, shape=(n, dim).
+        lp: particle half-widths, shape=(n, dim).
+        nodes: the particles' node ids, shape=(n, kk).
+        phi: their weights, shape=(n, kk).
+        num_nodes: grid nodes.
+        spacing: cell size.
+
+    Returns:
+        Σ_p φ_ip [p touches], shape=(num_nodes, dim + 1) (a node lies on at most dim
+        walls and the bed; the same width on every rank, for the halo sum).
+    """
+    layers = fr.layers()
+    out = np.zeros((num_nodes, max(x.shape[1] + 1, len(layers))))
+    if fr.offsets is None:
+        for j, rows in enumerate(layers):
+            out[fr.nodes[rows], j] = 1.0
+        return out
+    for j, rows in enumerate(layers):
+        row_of = np.full(num_nodes, -1, dtype=np.int64)
+        row_of[fr.nodes[rows]] = rows
+        r = row_of[nodes]  # shape=(n, kk)
+        hit = (r >= 0) & (phi > 0)
+        if not np.any(hit):
+            continue
+        p_idx, slot = np.nonzero(hit)
+        rr = r[p_idx, slot]
+        n = fr.normals[rr]
+        reach = np.einsum("ka,ka->k", x[p_idx], n) + np.einsum("ka,ka->k", lp[p_idx], np.abs(n))
+        close = reach >= fr.offsets[rr] - TOUCH * spacing
+        np.add.at(out[:, j], nodes[p_idx, slot][close], phi[p_idx, slot][close])
+    return out
+
+
+def apply_friction(
+    v: np.ndarray, fr: Friction, touch: np.ndarray | None = None, sliding_only: bool = False
+) -> np.ndarray:
+    """Contact and Coulomb friction on nodal velocities (in place and returned).
+
+    Args:
+        v: nodal velocities (the trial v* = v + a Δt, or one mapped from the particles),
+            shape=(num_nodes, dim).
+        fr: the boundary.
+        touch: :func:`touching`'s (complete) sums, shape=(num_nodes, layers); None:
+            every row touches.
+        sliding_only: only remove the normal approach (no friction).
 
     Returns:
         ``v``, changed on the nodes in contact.
     """
+    if len(fr.nodes) == 0:
+        return v
     vn = np.einsum("ka,ka->k", v[fr.nodes], fr.normals)
     contact = vn > 0.0  # moving into the boundary (4.44)
+    if touch is not None:
+        for j, rows in enumerate(fr.layers()):
+            contact[rows] &= touch[fr.nodes[rows], j] > 0
     if not np.any(contact):
         return v
-    ids, n, dvn = fr.nodes[contact], fr.normals[contact], vn[contact]
-    vt = v[ids] - dvn[:, None] * n  # tangential part
-    if not sliding_only and fr.mu > 0:
+    rows = np.flatnonzero(contact)
+    ids = fr.nodes[rows]
+    uniq, first, count = np.unique(ids, return_index=True, return_counts=True)
+    single = rows[first[count == 1]]
+    _single(v, fr, single, vn[single], sliding_only)
+    for node in uniq[count > 1]:  # corners: a few nodes
+        _corner(v, fr, rows[ids == node], sliding_only)
+    return v
+
+
+def _single(v: np.ndarray, fr: Friction, rows: np.ndarray, vn: np.ndarray, no_mu: bool) -> None:
+    """One boundary per node: (4.45)-(4.47) in impulse form, vectorised over ``rows``."""
+    ids, n = fr.nodes[rows], fr.normals[rows]
+    vt = v[ids] - vn[:, None] * n  # tangential part
+    if not no_mu:
         speed = np.linalg.norm(vt, axis=1)
-        slow = np.minimum(fr.mu * dvn, speed)  # (4.45)-(4.46): at most to rest
+        slow = np.minimum(fr.mu[rows] * vn, speed)  # at most to rest: stick
         scale = np.where(speed > 0, 1.0 - slow / np.where(speed > 0, speed, 1.0), 0.0)
         vt = vt * scale[:, None]
     v[ids] = vt  # (4.47): no normal velocity into the boundary
-    return v
+
+
+def _corner(v: np.ndarray, fr: Friction, rows: np.ndarray, no_mu: bool) -> None:
+    """Several boundaries at one node: approaches removed together, then Σ μ_j Δv_n,j."""
+    node = fr.nodes[rows[0]]
+    u = v[node].copy()
+    basis: list[np.ndarray] = []
+    budget = 0.0
+    for r in rows:
+        n = fr.normals[r].copy()
+        for b in basis:  # Gram-Schmidt against the normals already in contact
+            n -= (n @ b) * b
+        length = np.linalg.norm(n)
+        if length < 1e-12:
+            continue
+        n /= length
+        un = u @ n
+        if un <= 0:
+            continue
+        u -= un * n
+        basis.append(n)
+        budget += fr.mu[r] * un
+    if not no_mu:
+        speed = np.linalg.norm(u)
+        if speed > 0:
+            u *= 1.0 - min(budget, speed) / speed
+    v[node] = u

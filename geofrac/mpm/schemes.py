@@ -573,6 +573,15 @@ def step(
         kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
     else:
         v = _velocity(mom, mass, active, s.fixed)
+    touch = None
+    if s.friction is not None:  # the contact holds every nodal velocity (friction.py)
+        from geofrac.mpm.friction import apply_friction, touching
+
+        touch = touching(s.friction, p.x, p.lp, w.nodes, w.phi, N, g.spacing)
+        if dom is not None:
+            touch = dom.sum_halo(touch)
+        v_mapped = v.copy()
+        apply_friction(v, s.friction, touch)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):
         _update_stress(w, p, material, v, half * dt, s, smooth_at)
@@ -608,10 +617,11 @@ def step(
         power = np.where(held, 0.0, f_damp * (v + v_new))[_owned_nodes(dom, N)]
         work["damping"] = work.get("damping", 0.0) - 0.5 * dt * float(power.sum())
     if s.friction is not None:
-        from geofrac.mpm.friction import apply_friction
-
-        apply_friction(v_new, s.friction)
-        a = (v_new - v) / dt  # the particles take the same, frictional, change
+        apply_friction(v_new, s.friction, touch)
+        # the particles take every change the contact made, the mapped velocity's too
+        # (else the approach it removed stays in their velocity, step after step, and
+        # its friction is lost: a launched block slid 8 % too far)
+        a = (v_new - v_mapped) / dt
     if fast:
         kernels.from_grid2(w.nodes, w.phi, a, v_new, dt, p.v, p.x)  # D.4-D.5
     else:
@@ -636,9 +646,7 @@ def step(
         else:
             v = _velocity(mom, mass, active, s.fixed)
         if s.friction is not None:
-            from geofrac.mpm.friction import apply_friction
-
-            apply_friction(v, s.friction, sliding_only=True)
+            apply_friction(v, s.friction, touch)
         _update_stress(w, p, material, v, half * dt, s, smooth_at)
     _check(p, dom, fast)
     if dom is not None:
