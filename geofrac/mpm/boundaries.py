@@ -17,6 +17,10 @@ the normals projected onto its free components (a roller wall meeting a friction
 floor: the wall holds x, the floor still stops y; before, such a node lost its friction
 row and material fell through the corner). Only a node held in every component drops
 its rows.
+
+``mpm.bed_representation`` says which bed nodes are frictional: all those on or below
+the polyline (``"plane"``), or only the surface of the staircase they form, the deeper
+ones held (``"staircase"``, the grid boundary of Edo (2016), 4.3.3); see :func:`bed_nodes`.
 """
 
 from __future__ import annotations
@@ -25,10 +29,20 @@ import numpy as np
 
 from geofrac.mpm.grid import Grid, grid
 
-__all__ = ["TOL", "bed_nodes", "boundary_rows", "held", "scene_grid", "wall_nodes"]
+__all__ = [
+    "BED_REPRESENTATIONS",
+    "TOL",
+    "bed_nodes",
+    "boundary_rows",
+    "held",
+    "scene_grid",
+    "wall_nodes",
+]
 
 #: Relative tolerance (in cells) for "on a side" and "on the bed".
 TOL = 1e-9
+#: How the bed's nodes constrain the material (:func:`bed_nodes`); the first is the default.
+BED_REPRESENTATIONS = ("plane", "staircase")
 
 
 def scene_grid(
@@ -62,32 +76,70 @@ def wall_nodes(
     return nodes[:, axis] >= upper[axis] - tol, axis, 1.0
 
 
-def bed_nodes(
-    nodes: np.ndarray, bed: np.ndarray, spacing: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Nodes on or below the bed polyline within its x-range, with normals into the bed.
-
-    Args:
-        nodes: node coordinates, shape=(N, 2).
-        bed: the polyline, shape=(k, 2), x increasing.
-        spacing: cell size (for the tolerance).
+def _below(x: np.ndarray, y: np.ndarray, bed: np.ndarray, tol: float) -> tuple[np.ndarray, ...]:
+    """Which points lie on or below the polyline within its x-range, shape=(N,).
 
     Returns:
-        (node ids shape=(m,), unit normals out of the material into the bed
-        shape=(m, 2): (f', −1)/√(1 + f'²) of the segment under the node, the plane
-        offsets d = n·(x, f(x)) of that segment shape=(m,)).
+        (below shape=(N,) bool, the segment under each point shape=(N,), its slope
+        f' shape=(N,), the bed height f(x) shape=(N,)).
     """
-    x, y = nodes[:, 0], nodes[:, 1]
     inside = (x >= bed[0, 0]) & (x <= bed[-1, 0])
     seg = np.clip(np.searchsorted(bed[:, 0], x, side="right") - 1, 0, len(bed) - 2)
     x0, y0 = bed[seg, 0], bed[seg, 1]
     slope = (bed[seg + 1, 1] - y0) / (bed[seg + 1, 0] - x0)
     yb = y0 + slope * (x - x0)
-    below = inside & (y <= yb + TOL * spacing)
-    ids = np.flatnonzero(below)
+    return inside & (y <= yb + tol), seg, slope, yb
+
+
+def bed_nodes(
+    nodes: np.ndarray, bed: np.ndarray, spacing: float, representation: str = "plane"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Nodes on or below the bed polyline within its x-range, with normals into the bed.
+
+    ``representation`` says which of them carry a frictional row:
+
+    - ``"plane"``: every one; its row's plane is the polyline's segment over the node, so
+      a node a cell or more below the bed still lets the material slide along the bed
+      (only the approach into the bed is stopped).
+    - ``"staircase"`` (the immobile ground as the grid's boundary, Edo (2016), 4.3.3):
+      the nodes below the bed form the fixed region, a staircase of cells. Only its
+      surface nodes, those sharing a cell with a node above the bed (or beyond the
+      polyline's x-range), carry a row (normal and plane of the segment over the node);
+      the deeper ones are held in every component.
+
+    Args:
+        nodes: node coordinates, shape=(N, 2).
+        bed: the polyline, shape=(k, 2), x increasing.
+        spacing: cell size (for the tolerance and the neighbours).
+        representation: ``"plane"`` or ``"staircase"``.
+
+    Returns:
+        (node ids of the rows shape=(m,), unit normals out of the material into the bed
+        shape=(m, 2): (f', −1)/√(1 + f'²) of the segment under the node, the plane
+        offsets d = n·(x, f(x)) of that segment shape=(m,), ids of the nodes held in
+        every component shape=(j,) (empty for ``"plane"``)).
+    """
+    if representation not in BED_REPRESENTATIONS:
+        raise ValueError(
+            f"bed_nodes: representation must be one of {BED_REPRESENTATIONS}, "
+            f"got {representation!r}"
+        )
+    x, y = nodes[:, 0], nodes[:, 1]
+    tol = TOL * spacing
+    below, _, slope, yb = _below(x, y, bed, tol)
+    deep = np.zeros_like(below)
+    if representation == "staircase":
+        # a node is deep when all 8 nodes it shares a cell with are below the bed too
+        # (tested by coordinates, not grid indices: the same answer on every rank's slab)
+        deep = below.copy()
+        for dx in (-spacing, 0.0, spacing):
+            for dy in (-spacing, 0.0, spacing):
+                if dx or dy:
+                    deep &= _below(x + dx, y + dy, bed, tol)[0]
+    ids = np.flatnonzero(below & ~deep)
     n = np.column_stack([slope[ids], -np.ones(len(ids))])
     n /= np.linalg.norm(n, axis=1)[:, None]
-    return ids, n, n[:, 0] * x[ids] + n[:, 1] * yb[ids]
+    return ids, n, n[:, 0] * x[ids] + n[:, 1] * yb[ids], np.flatnonzero(deep)
 
 
 def boundary_rows(
@@ -97,6 +149,7 @@ def boundary_rows(
     walls: dict[str, str],
     bed: tuple[tuple[float, float], ...],
     frictional: tuple[str, ...] = (),
+    bed_representation: str = "plane",
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Held components and frictional rows of grid ``g``.
 
@@ -108,6 +161,7 @@ def boundary_rows(
         bed: the bed polyline (2D), or empty.
         frictional: boundaries (sides, ``"bed"``) whose nodes are frictional instead of
             held.
+        bed_representation: ``"plane"`` or ``"staircase"`` (:func:`bed_nodes`).
 
     Returns:
         (held components shape=(N, dim) bool, frictional node ids shape=(m,) (a corner
@@ -133,7 +187,10 @@ def boundary_rows(
         else:
             fixed[mask, axis] = True
     if bed:
-        ids, normals, planes = bed_nodes(nodes, np.asarray(bed, dtype=float), g.spacing)
+        ids, normals, planes, deep = bed_nodes(
+            nodes, np.asarray(bed, dtype=float), g.spacing, bed_representation
+        )
+        fixed[deep] = True
         if "bed" in frictional:
             rows.append((ids, normals, planes, frictional.index("bed")))
         else:

@@ -295,7 +295,13 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
     smoothing = _config(scene, "mls_smoothing")
     fric = _config(scene, "friction")
     fixed, f_nodes, f_normals, f_planes, f_which = boundary_rows(
-        local, spec.lower, spec.upper, spec.walls, bed, fric.boundaries if fric else ()
+        local,
+        spec.lower,
+        spec.upper,
+        spec.walls,
+        bed,
+        fric.boundaries if fric else (),
+        spec.bed_representation,
     )
     friction = None
     if fric is not None and len(f_nodes):

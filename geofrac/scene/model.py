@@ -264,6 +264,10 @@ class MpmSpec:
         bed: 2D only: the immobile ground as a polyline y(x), shape=(k, 2) with x
             increasing, or empty; grid nodes below it are held (``fixed``) or, when the
             ``friction`` effect lists ``"bed"``, frictional (eqs. 4.44-4.47).
+        bed_representation: which bed nodes are frictional: ``"plane"`` (every node on
+            or below the bed, each with the plane of the bed over it) or ``"staircase"``
+            (only the surface nodes of the fixed region below the bed; the deeper ones
+            are held): :func:`geofrac.mpm.boundaries.bed_nodes`.
         bed_group: 2D only: a physical curve group of the geometry whose mesh nodes,
             sorted by x, form the bed polyline instead (None: ``bed`` is used).
         initial_stress: ``"none"`` (particles start stress-free) or ``"geostatic"`` (the
@@ -301,6 +305,7 @@ class MpmSpec:
     initial_stress: str = "none"
     damping: float = 0.0
     bodies: tuple[Body, ...] = ()
+    bed_representation: str = "plane"
 
 
 @dataclass(frozen=True)

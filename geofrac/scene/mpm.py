@@ -44,6 +44,7 @@ MPM_KEYS: dict[str, tuple[str, ...]] = {
         "grid",
         "walls",
         "bed",
+        "bed_representation",
         "particles",
         "courant",
         "dt",
@@ -443,6 +444,13 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     damping = _damping(file, t.data["damping"]) if t.has("damping") else 0.0
     walls = _walls(file, t.data.get("walls", {}), dim)
     bed = _bed(file, t.data["bed"], dim, geometry) if t.has("bed") else ()
+    from geofrac.mpm.boundaries import BED_REPRESENTATIONS
+
+    bed_representation = t.string(
+        "bed_representation", default=BED_REPRESENTATIONS[0], choices=BED_REPRESENTATIONS
+    )
+    if t.has("bed_representation") and not t.has("bed"):
+        raise t.error("bed_representation", "applies to a scene with an 'mpm.bed'")
     return MpmSpec(
         dim=dim,
         scheme=scheme,
@@ -463,6 +471,7 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
         initial_stress=initial_stress,
         damping=damping,
         bodies=bodies,
+        bed_representation=bed_representation,
     )
 
 
