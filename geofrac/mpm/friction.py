@@ -44,6 +44,7 @@ in the particles' velocities step after step and its friction would be lost.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -73,12 +74,36 @@ class Friction:
 
     def layers(self) -> list[np.ndarray]:
         """Row ids split so that no node repeats within a part: [shape=(k_j,)]."""
+        return [np.flatnonzero(self.layer == j) for j in range(int(self.layer.max(initial=-1)) + 1)]
+
+    @cached_property
+    def layer(self) -> np.ndarray:
+        """Each row's part in :meth:`layers`, shape=(k,).
+
+        0 for a node's first row, 1 for its second (a corner)…
+        """
         order = np.argsort(self.nodes, kind="stable")
         nodes = self.nodes[order]
         first = np.r_[True, nodes[1:] != nodes[:-1]]
         start = np.maximum.accumulate(np.where(first, np.arange(len(nodes)), 0))
-        rank = np.arange(len(nodes)) - start  # 0 for a node's first row, 1 for its second…
-        return [order[rank == j] for j in range(int(rank.max(initial=-1)) + 1)]
+        out = np.empty(len(nodes), dtype=np.int64)
+        out[order] = np.arange(len(nodes)) - start
+        return out
+
+    @cached_property
+    def row_table(self) -> np.ndarray:
+        """Node id -> its row in each layer, or -1, shape=(max node + 1, layers)."""
+        out = np.full(
+            (int(self.nodes.max(initial=-1)) + 1, int(self.layer.max(initial=-1)) + 1), -1
+        )
+        out[self.nodes, self.layer] = np.arange(len(self.nodes))
+        return out
+
+    @cached_property
+    def shared(self) -> np.ndarray:
+        """Rows whose node has another row (a corner), shape=(k,) bool."""
+        counts = np.bincount(self.nodes, minlength=int(self.nodes.max(initial=-1)) + 1)
+        return counts[self.nodes] > 1
 
 
 def friction(
@@ -148,25 +173,23 @@ def touching(
         Σ_p φ_ip [p touches], shape=(num_nodes, dim + 1) (a node lies on at most dim
         walls and the bed; the same width on every rank, for the halo sum).
     """
-    layers = fr.layers()
-    out = np.zeros((num_nodes, max(x.shape[1] + 1, len(layers))))
+    width = max(x.shape[1] + 1, int(fr.layer.max(initial=-1)) + 1)
+    out = np.zeros((num_nodes, width))
     if fr.offsets is None:
-        for j, rows in enumerate(layers):
-            out[fr.nodes[rows], j] = 1.0
+        out[fr.nodes, fr.layer] = 1.0
         return out
-    for j, rows in enumerate(layers):
-        row_of = np.full(num_nodes, -1, dtype=np.int64)
-        row_of[fr.nodes[rows]] = rows
-        r = row_of[nodes]  # shape=(n, kk)
-        hit = (r >= 0) & (phi > 0)
-        if not np.any(hit):
-            continue
-        p_idx, slot = np.nonzero(hit)
-        rr = r[p_idx, slot]
-        n = fr.normals[rr]
-        reach = np.einsum("ka,ka->k", x[p_idx], n) + np.einsum("ka,ka->k", lp[p_idx], np.abs(n))
-        close = reach >= fr.offsets[rr] - TOUCH * spacing
-        np.add.at(out[:, j], nodes[p_idx, slot][close], phi[p_idx, slot][close])
+    table = fr.row_table  # node -> its row in each layer, or -1
+    inside = nodes < len(table)
+    r = np.where(inside[:, :, None], table[np.where(inside, nodes, 0)], -1)  # (n, kk, L)
+    hit = (r >= 0) & (phi > 0)[:, :, None]
+    if not np.any(hit):
+        return out
+    p_idx, slot, j = np.nonzero(hit)
+    rr = r[p_idx, slot, j]
+    n = fr.normals[rr]
+    reach = np.einsum("ka,ka->k", x[p_idx], n) + np.einsum("ka,ka->k", lp[p_idx], np.abs(n))
+    close = reach >= fr.offsets[rr] - TOUCH * spacing
+    np.add.at(out, (nodes[p_idx, slot][close], j[close]), phi[p_idx, slot][close])
     return out
 
 
@@ -191,17 +214,16 @@ def apply_friction(
     vn = np.einsum("ka,ka->k", v[fr.nodes], fr.normals)
     contact = vn > 0.0  # moving into the boundary (4.44)
     if touch is not None:
-        for j, rows in enumerate(fr.layers()):
-            contact[rows] &= touch[fr.nodes[rows], j] > 0
+        contact &= touch[fr.nodes, fr.layer] > 0
     if not np.any(contact):
         return v
-    rows = np.flatnonzero(contact)
-    ids = fr.nodes[rows]
-    uniq, first, count = np.unique(ids, return_index=True, return_counts=True)
-    single = rows[first[count == 1]]
+    single = np.flatnonzero(contact & ~fr.shared)
     _single(v, fr, single, vn[single], sliding_only)
-    for node in uniq[count > 1]:  # corners: a few nodes
-        _corner(v, fr, rows[ids == node], sliding_only)
+    corner = contact & fr.shared
+    if np.any(corner):
+        rows = np.flatnonzero(corner)
+        for node in np.unique(fr.nodes[rows]):  # corners: a few nodes
+            _corner(v, fr, rows[fr.nodes[rows] == node], sliding_only)
     return v
 
 

@@ -23,11 +23,10 @@ from geofrac.mpm.boundaries import boundary_rows, scene_grid
 from geofrac.mpm.friction import apply_friction, friction
 from geofrac.mpm.parallel import decompose
 from geofrac.mpm.particles import lattice
-from geofrac.mpm.schemes import SCHEMES, Elastic, StepSettings, step, time_step
+from geofrac.mpm.schemes import Elastic, StepSettings, step, time_step
 from geofrac.scene import load_scene
 from tests.conftest import JOBS
 
-SHAPES = ("mpm", "ugimp", "cpgimp")
 G0, RHO, CELL = 10.0, 1000.0, 0.1
 MAT = Elastic(1e7, 0.3)
 
@@ -126,50 +125,64 @@ def _run(p, gravity, mu, scheme, shape, t_end, **kw):
     )
 
 
-@pytest.mark.parametrize("scheme", SCHEMES)
-@pytest.mark.parametrize("shape", SHAPES)
+# Representative (shape, scheme) pairs per check; every shape and every scheme is in each
+# list (each combination was measured: docs/mpm_friction.md).
+COVER = [("mpm", "usf"), ("ugimp", "usavg"), ("cpgimp", "musl")]
+
+
+@pytest.mark.parametrize(("shape", "scheme"), [*COVER, ("cpgimp", "usf")])
 def test_a_block_on_a_30_degree_slope_with_mu_07_sticks(shape, scheme):
-    """μ = 0.7 > tan 30° = 0.577: the block stays (elastic settling ≈ 2 mm), at rest."""
+    """μ = 0.7 > tan 30° = 0.577: the block stays (elastic settling ≈ 2 mm), at rest.
+
+    Before the contact held the mapped velocity too, USF crept off (v = 0.03 at 0.3 s).
+    """
     p, gravity = _block(30.0, prestress=True)
-    moved, v, rise = _run(p, gravity, 0.7, scheme, shape, 0.6)
-    assert abs(moved) < 0.005  # sliding from rest at the slip rate would be 0.43
+    moved, v, rise = _run(p, gravity, 0.7, scheme, shape, 0.3)
+    assert abs(moved) < 0.005  # sliding from rest at the slip rate would be 0.11
     assert abs(v) < 0.01
     assert abs(rise) < 0.02 * CELL
 
 
-@pytest.mark.parametrize("scheme", SCHEMES)
-@pytest.mark.parametrize("shape", ["mpm", "cpgimp"])
+@pytest.mark.parametrize(
+    ("shape", "scheme"), [("mpm", "musl"), ("ugimp", "usf"), ("cpgimp", "usavg")]
+)
 def test_a_block_on_a_30_degree_slope_with_mu_03_slides_at_coulombs_rate(shape, scheme):
-    """μ = 0.3 < tan 30°: v(t) = g (sin θ − μ cos θ) t = 2.40 t."""
+    """μ = 0.3 < tan 30°: v(t) = g (sin θ − μ cos θ) t = 2.40 t (μ = 0: 5 t)."""
     p, gravity = _block(30.0, prestress=True)
-    t = 0.6
+    t = 0.3
     _, v, _ = _run(p, gravity, 0.3, scheme, shape, t)
     a = G0 * (np.sin(np.radians(30.0)) - 0.3 * np.cos(np.radians(30.0)))
     assert v == pytest.approx(a * t, rel=0.02)
 
 
 @pytest.mark.parametrize(
-    ("shape", "scheme"),
-    [("mpm", "musl"), ("ugimp", "musl"), ("cpgimp", "musl"), ("cpgimp", "usf"), ("mpm", "usavg")],
+    ("shape", "scheme"), [("mpm", "musl"), ("ugimp", "usavg"), ("cpgimp", "usf")]
 )
 def test_a_block_launched_on_a_level_floor_stops_after_v0_squared_over_2_mu_g(shape, scheme):
     """v₀ = 1, μ = 0.5: it stops after 0.1 m (at t = 0.2 s) and stays."""
     p, gravity = _block(0.0, prestress=True, v0=1.0)
-    moved, v, rise = _run(p, gravity, 0.5, scheme, shape, 0.4)
+    moved, v, rise = _run(p, gravity, 0.5, scheme, shape, 0.3)
     assert moved == pytest.approx(1.0 / (2 * 0.5 * G0), rel=0.03)
     assert abs(v) < 0.02
     assert abs(rise) < 0.1 * CELL
 
 
-@pytest.mark.parametrize("scheme", SCHEMES)
-def test_a_block_dropped_on_a_frictional_floor_does_not_creep_up(scheme):
-    """No prestress: the block rings under its weight, its bottom layer stays down."""
+@pytest.mark.parametrize(
+    ("shape", "scheme"), [("cpgimp", "usf"), ("mpm", "usavg"), ("ugimp", "musl")]
+)
+def test_a_block_dropped_on_a_frictional_floor_does_not_creep_up(shape, scheme):
+    """No prestress: the block rings under its weight, its bottom layer stays down.
+
+    The whole block compresses by ρ g H² / (2 E) = 0.125 mm under its weight, which bounds
+    any motion of its bottom layer. Before the contact held the mapped velocity, USF's
+    bottom layer rose 0.6 mm in 0.3 s (3 mm in 0.6 s).
+    """
     p, gravity = _block(0.0, prestress=False)
-    _, _, rise = _run(p, gravity, 0.7, scheme, "cpgimp", 0.6)
-    assert abs(rise) < 0.02 * CELL
+    _, _, rise = _run(p, gravity, 0.7, scheme, shape, 0.3)
+    assert abs(rise) < 2 * RHO * G0 * 0.5**2 / (2 * MAT.E)
 
 
-@pytest.mark.parametrize("shape", ["mpm", "cpgimp"])
+@pytest.mark.parametrize("shape", ["mpm"])
 def test_a_block_launched_down_a_sticking_slope_stays_on_it(shape):
     """μ = 0.7 on 30°, launched at 1 m/s downhill: the bottom layer stays on the floor.
 
@@ -191,16 +204,16 @@ def _mean_displacement(out: Path) -> np.ndarray:
 def test_the_incline_scene_slides_at_coulombs_rate(tmp_path):
     """jobs/mpm_incline_block.toml, from rest and stress-free, μ = 0.3 on 30°.
 
-    The mean displacement at t = 1 is g (sin 30° − 0.3 cos 30°) / 2 = 1.2010 (the front
+    The mean displacement at t = 0.5 is g (sin 30° − 0.3 cos 30°) t² / 2 = 0.3003 (the front
     moves more: the block stretches).
     """
     from geofrac.mpm.driver import run_mpm_scene
 
-    scene = load_scene(JOBS / "mpm_incline_block.toml", out=tmp_path)
+    scene = load_scene(JOBS / "mpm_incline_block.toml", ["mpm.t_end=0.5"], out=tmp_path)
     summary = run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)
     assert summary["status"] == "ok"
     a = G0 * (np.sin(np.radians(30.0)) - 0.3 * np.cos(np.radians(30.0)))
-    assert _mean_displacement(tmp_path)[0] == pytest.approx(a / 2, rel=0.01)
+    assert _mean_displacement(tmp_path)[0] == pytest.approx(a * 0.5**2 / 2, rel=0.01)
 
 
 @pytest.mark.mpi(min_size=2)
@@ -218,7 +231,7 @@ def test_the_incline_scene_slides_at_coulombs_rate_on_two_ranks(tmp_path_factory
 
 
 @pytest.mark.mpi(min_size=2)
-@pytest.mark.parametrize("scheme", ["musl", "usf"])
+@pytest.mark.parametrize("scheme", ["usf"])
 def test_a_block_on_a_30_degree_slope_sticks_on_two_ranks(scheme):
     """The sticking block decomposed over the ranks (its nodes shared by both)."""
     comm = MPI.COMM_WORLD
@@ -229,7 +242,7 @@ def test_a_block_on_a_30_degree_slope_sticks_on_two_ranks(scheme):
     s = _settings(dom.local, gravity, 0.7, scheme, "cpgimp", domain=dom)
     m = dom.allsum(float(mine.mass.sum()))
     x0 = dom.allsum(float(mine.mass @ mine.x[:, 0])) / m
-    for _ in range(round(0.4 / s.dt)):
+    for _ in range(round(0.3 / s.dt)):
         step(dom.local, mine, MAT, s)
     moved = dom.allsum(float(mine.mass @ mine.x[:, 0])) / m - x0
     v = dom.allsum(float(mine.mass @ mine.v[:, 0])) / m
