@@ -4,27 +4,29 @@ A frictional boundary is a set of rows (node, unit normal n out of the body into
 boundary, μ, and the boundary's plane x·n = d at that node). A node on a corner has
 one row per boundary.
 
-Contact (4.44). A node is in contact with a boundary when the material that maps to it
-touches the boundary and the node's trial velocity v* = v + aΔt moves into it
-(v*·n > 0). "Touches": some particle with weight on the node reaches the plane to
-within :data:`TOUCH` cells (its GIMP box, or for point MPM its half-spacing box,
-measured along n). Without that check a body lifted a little off the boundary (by
-cell-crossing noise of the base shear) could never come back down: the node, fixed in
-space on the boundary, would stop every downward motion, so every upward jitter of the
-bottom layer stayed for good (a block sliding at μ = 0.7 crept up 0.02 m per 0.3 s on
-0.1 m cells). With it the layer falls back until it touches again.
+Contact (4.44). A node is in contact with a boundary when its trial velocity
+v* = v + aΔt would carry its material past the boundary within the step: v*·n > g/Δt,
+g >= 0 the gap between the boundary's plane x·n = d and the nearest particle with
+weight on the node (its GIMP box, or for point MPM its half-spacing box, measured
+along n). Material resting on the boundary has g = 0, so this is (4.44) with the
+velocity; a layer lifted by g may come back down by g and no further. Before, the
+contact stopped every approach of a node whose material was within 0.1 cell of the
+boundary, so each upward jitter of a sliding body's bottom layer stayed for good: it
+ratcheted up to the 0.1 cell (2-3 mm in 0.3 s for a block launched on a level floor,
+10 mm on a 30° slope), and once beyond it the body hopped.
 
-Impulse form. (4.44-4.47) multiplied by Δt: the normal approach v*·n is removed (4.47)
-and the tangential velocity is slowed by μ v*·n against its direction, at most to rest
+Impulse form. (4.44-4.47) multiplied by Δt: the excess approach Δv_n = v*·n − g/Δt is
+removed (4.47) and the tangential velocity is slowed by μ Δv_n against its direction,
+at most to rest
 (4.45-4.46: the seed's μ' = μ while the node slides, μ' = |a_t| / (a·n) while it sticks,
 i.e. stick when the tangential impulse needed to stop it is within μ times the normal
 impulse, Coulomb slip otherwise). A node moving away from the boundary is free: the
 boundary never pulls.
 
 Several boundaries at one node (a corner of two walls, a wall meeting the bed). The
-approaching normal components are removed one after the other (exact for orthogonal
-normals; Gram-Schmidt for others), then the remaining tangential velocity is slowed by
-Σ μ_j v*·n_j over the boundaries in contact. Components held by a wall (``fixed``) are
+excess approaches are removed one after the other (exact for orthogonal normals;
+Gram-Schmidt for others), then the remaining tangential velocity is slowed by
+Σ μ_j Δv_n,j over the boundaries in contact. Components held by a wall (``fixed``) are
 projected out of a frictional normal beforehand (:func:`free_normals`), so a roller
 wall meeting a frictional floor holds its component and the floor keeps its normal.
 
@@ -44,13 +46,15 @@ in the particles' velocities step after step and its friction would be lost.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-__all__ = ["TOUCH", "Friction", "apply_friction", "free_normals", "friction", "touching"]
+if TYPE_CHECKING:
+    from geofrac.mpm.parallel import Domain
 
-#: A particle touches a boundary when its box reaches within this many cells of it.
-TOUCH = 0.1
+__all__ = ["Friction", "apply_friction", "approach_allowed", "free_normals", "friction", "gaps"]
 
 
 @dataclass(frozen=True)
@@ -73,12 +77,36 @@ class Friction:
 
     def layers(self) -> list[np.ndarray]:
         """Row ids split so that no node repeats within a part: [shape=(k_j,)]."""
+        return [np.flatnonzero(self.layer == j) for j in range(int(self.layer.max(initial=-1)) + 1)]
+
+    @cached_property
+    def layer(self) -> np.ndarray:
+        """Each row's part in :meth:`layers`, shape=(k,).
+
+        0 for a node's first row, 1 for its second (a corner)…
+        """
         order = np.argsort(self.nodes, kind="stable")
         nodes = self.nodes[order]
         first = np.r_[True, nodes[1:] != nodes[:-1]]
         start = np.maximum.accumulate(np.where(first, np.arange(len(nodes)), 0))
-        rank = np.arange(len(nodes)) - start  # 0 for a node's first row, 1 for its second…
-        return [order[rank == j] for j in range(int(rank.max(initial=-1)) + 1)]
+        out = np.empty(len(nodes), dtype=np.int64)
+        out[order] = np.arange(len(nodes)) - start
+        return out
+
+    @cached_property
+    def row_table(self) -> np.ndarray:
+        """Node id -> its row in each layer, or -1, shape=(max node + 1, layers)."""
+        out = np.full(
+            (int(self.nodes.max(initial=-1)) + 1, int(self.layer.max(initial=-1)) + 1), -1
+        )
+        out[self.nodes, self.layer] = np.arange(len(self.nodes))
+        return out
+
+    @cached_property
+    def shared(self) -> np.ndarray:
+        """Rows whose node has another row (a corner), shape=(k,) bool."""
+        counts = np.bincount(self.nodes, minlength=int(self.nodes.max(initial=-1)) + 1)
+        return counts[self.nodes] > 1
 
 
 def friction(
@@ -120,20 +148,20 @@ def free_normals(
     return keep, n[keep] / length[keep, None]
 
 
-def touching(
+def gaps(
     fr: Friction,
     x: np.ndarray,
     lp: np.ndarray,
     nodes: np.ndarray,
     phi: np.ndarray,
     num_nodes: int,
-    spacing: float,
 ) -> np.ndarray:
-    """Per layer (:meth:`Friction.layers`) and node, the particle weight touching its row.
+    """Per layer (:meth:`Friction.layers`) and node, the gap between its material and row.
 
-    A particle p touches row r (node i, normal n, plane d) when it has weight on i and
-    x_p·n + Σ_a |n_a| lp_a >= d − :data:`TOUCH` · spacing. The sums are nodal (complete
-    them across ranks like the mass).
+    The gap of row r (node i, normal n, plane d) is the least d − (x_p·n + Σ_a |n_a| lp_a)
+    over the particles p with weight on i: how far the nearest material (its box) is from
+    the boundary, negative when it reaches past it. The minima are nodal (complete them
+    across ranks with a minimum).
 
     Args:
         fr: the boundary.
@@ -142,36 +170,62 @@ def touching(
         nodes: the particles' node ids, shape=(n, kk).
         phi: their weights, shape=(n, kk).
         num_nodes: grid nodes.
-        spacing: cell size.
 
     Returns:
-        Σ_p φ_ip [p touches], shape=(num_nodes, dim + 1) (a node lies on at most dim
-        walls and the bed; the same width on every rank, for the halo sum).
+        shape=(num_nodes, dim + 1), +inf where no particle has weight on a row (a node
+        lies on at most dim walls and the bed; the same width on every rank).
     """
-    layers = fr.layers()
-    out = np.zeros((num_nodes, max(x.shape[1] + 1, len(layers))))
-    if fr.offsets is None:
-        for j, rows in enumerate(layers):
-            out[fr.nodes[rows], j] = 1.0
+    width = max(x.shape[1] + 1, int(fr.layer.max(initial=-1)) + 1)
+    out = np.full((num_nodes, width), np.inf)
+    table = fr.row_table  # node -> its row in each layer, or -1
+    inside = nodes < len(table)
+    r = np.where(inside[:, :, None], table[np.where(inside, nodes, 0)], -1)  # (n, kk, L)
+    hit = (r >= 0) & (phi > 0)[:, :, None]
+    if not np.any(hit):
         return out
-    for j, rows in enumerate(layers):
-        row_of = np.full(num_nodes, -1, dtype=np.int64)
-        row_of[fr.nodes[rows]] = rows
-        r = row_of[nodes]  # shape=(n, kk)
-        hit = (r >= 0) & (phi > 0)
-        if not np.any(hit):
-            continue
-        p_idx, slot = np.nonzero(hit)
-        rr = r[p_idx, slot]
-        n = fr.normals[rr]
-        reach = np.einsum("ka,ka->k", x[p_idx], n) + np.einsum("ka,ka->k", lp[p_idx], np.abs(n))
-        close = reach >= fr.offsets[rr] - TOUCH * spacing
-        np.add.at(out[:, j], nodes[p_idx, slot][close], phi[p_idx, slot][close])
+    p_idx, slot, j = np.nonzero(hit)
+    rr = r[p_idx, slot, j]
+    n = fr.normals[rr]
+    reach = np.einsum("ka,ka->k", x[p_idx], n) + np.einsum("ka,ka->k", lp[p_idx], np.abs(n))
+    np.minimum.at(out, (nodes[p_idx, slot], j), fr.offsets[rr] - reach)
     return out
 
 
+def approach_allowed(
+    fr: Friction,
+    x: np.ndarray,
+    lp: np.ndarray,
+    nodes: np.ndarray,
+    phi: np.ndarray,
+    num_nodes: int,
+    dt: float,
+    dom: Domain | None = None,
+) -> np.ndarray | None:
+    """Per row, the normal speed max(g, 0)/Δt at which its node may still approach.
+
+    Args:
+        fr: the boundary.
+        x: particle positions, shape=(n, dim).
+        lp: particle half-widths, shape=(n, dim).
+        nodes: the particles' node ids, shape=(n, kk).
+        phi: their weights, shape=(n, kk).
+        num_nodes: grid nodes.
+        dt: the step.
+        dom: the decomposition (the gaps are completed over the ranks), or None.
+
+    Returns:
+        shape=(k,); None when ``fr`` has no planes (every row touches: no gap).
+    """
+    if fr.offsets is None:
+        return None
+    g = gaps(fr, x, lp, nodes, phi, num_nodes)
+    if dom is not None:
+        g = dom.min_halo(g)
+    return np.maximum(g[fr.nodes, fr.layer], 0.0) / dt
+
+
 def apply_friction(
-    v: np.ndarray, fr: Friction, touch: np.ndarray | None = None, sliding_only: bool = False
+    v: np.ndarray, fr: Friction, allow: np.ndarray | None = None, sliding_only: bool = False
 ) -> np.ndarray:
     """Contact and Coulomb friction on nodal velocities (in place and returned).
 
@@ -179,8 +233,9 @@ def apply_friction(
         v: nodal velocities (the trial v* = v + a Δt, or one mapped from the particles),
             shape=(num_nodes, dim).
         fr: the boundary.
-        touch: :func:`touching`'s (complete) sums, shape=(num_nodes, layers); None:
-            every row touches.
+        allow: per row, the normal speed at which the node may still approach
+            (:func:`approach_allowed`: its gap over Δt), shape=(k,); None: 0, the
+            material touches.
         sliding_only: only remove the normal approach (no friction).
 
     Returns:
@@ -189,41 +244,50 @@ def apply_friction(
     if len(fr.nodes) == 0:
         return v
     vn = np.einsum("ka,ka->k", v[fr.nodes], fr.normals)
-    contact = vn > 0.0  # moving into the boundary (4.44)
-    if touch is not None:
-        for j, rows in enumerate(fr.layers()):
-            contact[rows] &= touch[fr.nodes[rows], j] > 0
+    excess = vn if allow is None else vn - allow
+    contact = excess > 0.0  # moving into the boundary beyond the gap (4.44)
     if not np.any(contact):
         return v
-    rows = np.flatnonzero(contact)
-    ids = fr.nodes[rows]
-    uniq, first, count = np.unique(ids, return_index=True, return_counts=True)
-    single = rows[first[count == 1]]
-    _single(v, fr, single, vn[single], sliding_only)
-    for node in uniq[count > 1]:  # corners: a few nodes
-        _corner(v, fr, rows[ids == node], sliding_only)
+    single = np.flatnonzero(contact & ~fr.shared)
+    _single(v, fr, single, vn[single], excess[single], sliding_only)
+    corner = contact & fr.shared
+    if np.any(corner):
+        rows = np.flatnonzero(corner)
+        for node in np.unique(fr.nodes[rows]):  # corners: a few nodes
+            mine = rows[fr.nodes[rows] == node]
+            _corner(v, fr, mine, None if allow is None else allow[mine], sliding_only)
     return v
 
 
-def _single(v: np.ndarray, fr: Friction, rows: np.ndarray, vn: np.ndarray, no_mu: bool) -> None:
-    """One boundary per node: (4.45)-(4.47) in impulse form, vectorised over ``rows``."""
+def _single(
+    v: np.ndarray, fr: Friction, rows: np.ndarray, vn: np.ndarray, dvn: np.ndarray, no_mu: bool
+) -> None:
+    """One boundary per node: (4.45)-(4.47) in impulse form, vectorised over ``rows``.
+
+    ``vn``: the rows' normal velocities, ``dvn`` > 0 the excess approach, both shape=(m,).
+    """
     ids, n = fr.nodes[rows], fr.normals[rows]
     vt = v[ids] - vn[:, None] * n  # tangential part
     if not no_mu:
         speed = np.linalg.norm(vt, axis=1)
-        slow = np.minimum(fr.mu[rows] * vn, speed)  # at most to rest: stick
+        slow = np.minimum(fr.mu[rows] * dvn, speed)  # at most to rest: stick
         scale = np.where(speed > 0, 1.0 - slow / np.where(speed > 0, speed, 1.0), 0.0)
         vt = vt * scale[:, None]
-    v[ids] = vt  # (4.47): no normal velocity into the boundary
+    v[ids] = vt + (vn - dvn)[:, None] * n  # (4.47): no approach beyond the gap
 
 
-def _corner(v: np.ndarray, fr: Friction, rows: np.ndarray, no_mu: bool) -> None:
-    """Several boundaries at one node: approaches removed together, then Σ μ_j Δv_n,j."""
+def _corner(
+    v: np.ndarray, fr: Friction, rows: np.ndarray, allow: np.ndarray | None, no_mu: bool
+) -> None:
+    """Several boundaries at one node: excess approaches removed, then Σ μ_j Δv_n,j.
+
+    ``allow``: the rows' allowed approach speeds, shape=(m,), or None (0).
+    """
     node = fr.nodes[rows[0]]
     u = v[node].copy()
     basis: list[np.ndarray] = []
     budget = 0.0
-    for r in rows:
+    for k, r in enumerate(rows):
         n = fr.normals[r].copy()
         for b in basis:  # Gram-Schmidt against the normals already in contact
             n -= (n @ b) * b
@@ -231,14 +295,16 @@ def _corner(v: np.ndarray, fr: Friction, rows: np.ndarray, no_mu: bool) -> None:
         if length < 1e-12:
             continue
         n /= length
-        un = u @ n
+        un = u @ n - (0.0 if allow is None else allow[k])
         if un <= 0:
             continue
         u -= un * n
         basis.append(n)
         budget += fr.mu[r] * un
     if not no_mu:
-        speed = np.linalg.norm(u)
+        normal = sum(((u @ b) * b for b in basis), np.zeros_like(u))  # the allowed approach
+        t = u - normal
+        speed = np.linalg.norm(t)
         if speed > 0:
-            u *= 1.0 - min(budget, speed) / speed
+            u = normal + t * (1.0 - min(budget, speed) / speed)
     v[node] = u

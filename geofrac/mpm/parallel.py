@@ -163,6 +163,42 @@ class Domain:
             out[(lo - a) * per : (hi - a + 1) * per] += received[q]
         return out
 
+    def min_halo(self, values: np.ndarray) -> np.ndarray:
+        """Complete nodal minima of this rank's sub-grid with the other ranks' parts.
+
+        Like :meth:`sum_halo` with the least value in place of the sum (exact, so the
+        same on every rank holding a node and for every decomposition).
+
+        Args:
+            values: this rank's partial minima on ``local``'s nodes, shape=(N, c) float.
+
+        Returns:
+            The complete minima, shape=(N, c).
+        """
+        r = self.rank
+        a, b = self.planes[r]
+        per = self._plane_nodes()
+        values = np.ascontiguousarray(values, dtype=float)
+        out = values.copy()
+        received, requests = {}, []
+        for q in range(len(self.planes)):
+            lo, hi = max(a, self.planes[q][0]), min(b, self.planes[q][1])
+            if q == r or lo > hi:
+                continue
+            part = values[(lo - a) * per : (hi - a + 1) * per]
+            received[q] = (lo, hi, np.empty_like(part))
+            requests.append(self.comm.Irecv(received[q][2], source=q, tag=73))
+            requests.append(self.comm.Isend(part, dest=q, tag=73))
+        if not requests:
+            return out
+        from mpi4py import MPI
+
+        MPI.Request.Waitall(requests)
+        for lo, hi, got in received.values():
+            view = out[(lo - a) * per : (hi - a + 1) * per]
+            np.minimum(view, got, out=view)
+        return out
+
     def ghost_rows(self, x: np.ndarray, h: float) -> list[np.ndarray]:
         """Per rank, this rank's rows within ``h`` of its slab (along axis 0).
 

@@ -573,15 +573,16 @@ def step(
         kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
     else:
         v = _velocity(mom, mass, active, s.fixed)
-    touch = None
+    allow = None
     if s.friction is not None:  # the contact holds every nodal velocity (friction.py)
-        from geofrac.mpm.friction import apply_friction, touching
+        from geofrac.mpm.friction import apply_friction, approach_allowed
 
-        touch = touching(s.friction, p.x, p.lp, w.nodes, w.phi, N, g.spacing)
-        if dom is not None:
-            touch = dom.sum_halo(touch)
+        # the material's deformed half-widths (cpGIMP's p.lp; also for the shapes that
+        # do not use them, or the compression of the bottom layer would read as a gap)
+        lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
+        allow = approach_allowed(s.friction, p.x, lp, w.nodes, w.phi, N, dt, dom)
         v_mapped = v.copy()
-        apply_friction(v, s.friction, touch)
+        apply_friction(v, s.friction, allow)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):
         _update_stress(w, p, material, v, half * dt, s, smooth_at)
@@ -617,7 +618,7 @@ def step(
         power = np.where(held, 0.0, f_damp * (v + v_new))[_owned_nodes(dom, N)]
         work["damping"] = work.get("damping", 0.0) - 0.5 * dt * float(power.sum())
     if s.friction is not None:
-        apply_friction(v_new, s.friction, touch)
+        apply_friction(v_new, s.friction, allow)
         # the particles take every change the contact made, the mapped velocity's too
         # (else the approach it removed stays in their velocity, step after step, and
         # its friction is lost: a launched block slid 8 % too far)
@@ -646,7 +647,7 @@ def step(
         else:
             v = _velocity(mom, mass, active, s.fixed)
         if s.friction is not None:
-            apply_friction(v, s.friction, touch)
+            apply_friction(v, s.friction, allow)
         _update_stress(w, p, material, v, half * dt, s, smooth_at)
     _check(p, dom, fast)
     if dom is not None:
