@@ -8,12 +8,17 @@ validated :class:`~geofrac.scene.model.Scene`, decomposes them over the communic
   fields of ``output.fields`` (rank 0 gathers them, in particle-id order, so 1 and N
   ranks write the same files);
 - ``energies.csv``: per step, kinetic, strain, gravitational potential (relative to the
-  start), total (their sum) and dissipated (initial total minus total: plastic work,
-  friction and numerical dissipation together);
+  start), total (their sum) and dissipated (initial total minus total), then the energy
+  budget of :mod:`~geofrac.mpm.energy` (columns :data:`~geofrac.mpm.energy.CSV_COLUMNS`:
+  the stored energy as stress work, the cumulative wall, friction, smoothing, plastic and
+  numerical terms, their total and the budget's closure);
 - ``summary.json`` (by :func:`run_mpm_scene`): ``results`` with ``runout_m`` (the
   largest particle x at the end minus at the start), ``friction_angle_deg`` (with
   ``plasticity``), ``energy_drift_max`` (max |E(t) − E₀| / E₀ with E the total above;
-  None when E₀ = 0, a body starting at rest), front and probe histories.
+  None when E₀ = 0, a body starting at rest), ``energy_drift_work_max`` (the same with
+  the stored energy as stress work), ``energy_balance_error`` (the energy no physical
+  term explains over the run's energy scale; defined for bodies starting at rest),
+  front and probe histories.
 
 With a :class:`~geofrac.io.checkpoint.RunControl` the loop checkpoints (every rank's
 particles in their local order and the loop's state) and stops cleanly on a signal;
@@ -41,13 +46,14 @@ from geofrac.io.checkpoint import RunControl
 from geofrac.io.summary import start_summary
 from geofrac.log import format_seconds, sayer
 from geofrac.mpm.boundaries import held, scene_grid
+from geofrac.mpm.energy import CSV_COLUMNS, EnergyLog, StepBudget
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles, concat, take
 from geofrac.mpm.schemes import Elastic, StepSettings, step, strain_energy, time_step
 from geofrac.scene.model import Scene
 from geofrac.timing import Timings
 
-__all__ = ["OUTPUT_FILES", "MpmRun", "prepare", "run_mpm_scene", "simulate"]
+__all__ = ["OUTPUT_FILES", "MpmRun", "advance", "prepare", "run_mpm_scene", "simulate"]
 
 #: Files an MPM run writes into its output directory.
 OUTPUT_FILES = ("particles.xdmf", "particles.h5", "energies.csv", "summary.json")
@@ -213,21 +219,60 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
         None if smoothing is None else smoothing.radius,
         friction,
         **({"domain": domain} if domain is not None else {}),
+        smoothing_kind="seed" if smoothing is None else smoothing.kind,
     )
     return MpmRun(g, local, p, material, settings, steps, domain, probes, phi, total)
 
 
-def _energies(run: MpmRun, comm: MPI.Comm) -> list[float]:
-    """(kinetic, strain, gravitational potential −Σ m b·x) summed over the ranks."""
+def _energies(
+    run: MpmRun, comm: MPI.Comm, budget: StepBudget | None = None
+) -> tuple[float, float, float, np.ndarray]:
+    """Kinetic, strain, gravitational potential −Σ m b·x and the step's budget terms.
+
+    Summed over the ranks (one reduction); the terms are zeros without ``budget``.
+    """
     p = run.particles
-    local = np.array(
+    terms = budget.terms() if budget is not None else StepBudget().terms()
+    local = np.concatenate(
         [
-            p.kinetic_energy(),
-            strain_energy(p, run.material),
-            -float(p.mass @ (p.x @ run.settings.gravity)),
+            [
+                p.kinetic_energy(),
+                strain_energy(p, run.material),
+                -float(p.mass @ (p.x @ run.settings.gravity)),
+            ],
+            terms,
         ]
     )
-    return [float(e) for e in comm.allreduce(local)]
+    total = comm.allreduce(local)
+    return float(total[0]), float(total[1]), float(total[2]), total[3:]
+
+
+def advance(run: MpmRun, comm: MPI.Comm, log: EnergyLog, u0: float) -> list[float]:
+    """One step of ``run`` with its energy budget recorded in ``log`` (collective).
+
+    The scene's time loop and the translating-bar bench (:func:`geofrac.mpm.bar.
+    translating_bar`) both step through here, so they report the same energies.
+
+    Args:
+        run: the prepared run.
+        comm: its communicator.
+        log: the run's energy log.
+        u0: the gravity potential at t = 0.
+
+    Returns:
+        The step's ``energies.csv`` row after ``step`` and ``t`` (kinetic first, strain
+        second).
+    """
+    budget = StepBudget()
+    step(run.local, run.particles, run.material, run.settings, budget)
+    kin, strain, pot, terms = _energies(run, comm, budget)
+    return log.record(kin, strain, pot - u0, terms)
+
+
+def start_log(run: MpmRun, comm: MPI.Comm) -> tuple[EnergyLog, float]:
+    """The energy log of a run at t = 0 and its gravity potential then (collective)."""
+    k0, s0, u0, _ = _energies(run, comm)
+    return EnergyLog(k0, s0), u0
 
 
 def _gather(run: MpmRun, comm: MPI.Comm) -> Particles | None:
@@ -327,7 +372,7 @@ def simulate(
     if error is not None:
         raise RunError(error)
     every = max(1, run.steps // spec.frames)
-    drift, e0, u0 = loop["drift"], loop["e0"], loop["u0"]
+    log, u0 = loop["log"], loop["u0"]
     history, probes = loop["history"], loop["probes"]
     t_wall = time.perf_counter()
     last_say = t_wall
@@ -335,15 +380,10 @@ def simulate(
     try:
         with timings.phase("steps"):
             for k in range(first_step, run.steps + 1):
-                step(run.local, run.particles, run.material, s)
-                kin, strain, pot = _energies(run, comm)
-                total = kin + strain + (pot - u0)
-                drift = max(drift, abs(total - e0))
+                row = advance(run, comm, log, u0)
+                kin, strain = row[0], row[1]
                 if csv is not None:
-                    csv.write(
-                        f"{k},{k * s.dt!r},{kin!r},{strain!r},{pot - u0!r},{total!r},"
-                        f"{e0 - total!r}\n"
-                    )
+                    csv.write(",".join([str(k), repr(k * s.dt), *map(repr, row)]) + "\n")
                     csv.flush()  # a killed run keeps every completed step
                 if k % every == 0 or k == run.steps:
                     t = k * s.dt
@@ -370,7 +410,7 @@ def simulate(
                 if control is not None:
                     save, stop = control.poll(k)
                     if save and k < run.steps:
-                        state = {"k": k, "drift": drift, "e0": e0, "u0": u0}
+                        state = {"k": k, "log": log.state(), "u0": u0}
                         state |= {"front0": loop["front0"], "history": history, "probes": probes}
                         control.save(
                             k,
@@ -392,7 +432,9 @@ def simulate(
         "dt": s.dt,
         "t_end": spec.t_end,
         "runout_m": history["front_x"][-1] - loop["front0"],
-        "energy_drift_max": drift / e0 if e0 > 0 else None,
+        "energy_drift_max": log.drift_max,
+        "energy_drift_work_max": log.drift_work_max,
+        "energy_balance_error": log.balance_error,
         "particle_steps_per_s": run.total * steps_done / seconds if seconds > 0 else None,
         "history": history,
         "probes": probes,
@@ -408,7 +450,7 @@ def _start(run: MpmRun, comm: MPI.Comm) -> dict[str, Any]:
     """The loop's state at t = 0 (collective): initial energies, front, probes, x0."""
     first = _gather(run, comm)
     x0 = None if first is None else first.x.copy()
-    k0, s0, u0 = _energies(run, comm)
+    log, u0 = start_log(run, comm)
     front0 = _front(run, comm)
     probes: dict[str, list[Any]] = {name: [] for name in run.probes}
     if first is not None:
@@ -416,16 +458,13 @@ def _start(run: MpmRun, comm: MPI.Comm) -> dict[str, Any]:
             probes[name].append(_probe(first, pid, x0))
     return {
         "k": 0,
-        "drift": 0.0,
-        "e0": k0 + s0,
+        "log": log,
         "u0": u0,
         "front0": front0,
         "history": {"t": [0.0], "front_x": [front0]},
         "probes": probes,
         "x0": x0,
         "first": first,
-        "k0": k0,
-        "s0": s0,
     }
 
 
@@ -462,6 +501,7 @@ def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
     if error is None:
         assert particles is not None
         loop = dict(ck.data)
+        loop["log"] = EnergyLog.from_state(loop["log"])
         loop["x0"] = ck.shared().get("x0") if comm.rank == 0 else None
         broken = comm.rank == 0 and (loop["x0"] is None or len(loop["x0"]) != run.total)
         count = comm.allreduce(particles.n)
@@ -474,7 +514,7 @@ def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
     return loop
 
 
-_ENERGY_HEADER = "step,t,kinetic,strain,gravity,total,dissipated\n"
+_ENERGY_HEADER = ",".join(CSV_COLUMNS) + "\n"
 
 
 def _open_logs(run: MpmRun, out: Any, loop: dict[str, Any], resumed: bool) -> tuple[Any, Any]:
@@ -507,8 +547,7 @@ def _open_logs(run: MpmRun, out: Any, loop: dict[str, Any], resumed: bool) -> tu
         series.write(0.0, first.x, _fields(first, loop["x0"], out.fields))  # type: ignore[arg-type]
     csv = path.open("w")
     csv.write(_ENERGY_HEADER)
-    k0, s0 = loop["k0"], loop["s0"]
-    csv.write(f"0,0,{k0!r},{s0!r},0.0,{loop['e0']!r},0.0\n")
+    csv.write(",".join(["0", "0.0", *map(repr, loop["log"].first_row())]) + "\n")
     csv.flush()
     return series, csv
 

@@ -43,9 +43,10 @@ import numpy as np
 from geofrac.errors import RunError
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles
-from geofrac.mpm.shapes import SHAPES, Weights, weights
+from geofrac.mpm.shapes import SHAPES, Weights, support_margin, weights
 
 if TYPE_CHECKING:  # imported only by a step that uses them
+    from geofrac.mpm.energy import StepBudget
     from geofrac.mpm.friction import Friction
     from geofrac.mpm.parallel import Domain
     from geofrac.mpm.plasticity import DruckerPrager
@@ -54,6 +55,7 @@ __all__ = [
     "BACKENDS",
     "MASS_FLOOR",
     "SCHEMES",
+    "SMOOTHINGS",
     "Elastic",
     "ParticlesLeftGrid",
     "StepSettings",
@@ -67,6 +69,11 @@ SCHEMES = ("musl", "usf", "usavg")
 
 #: Step implementations: compiled loops, or the numpy reference.
 BACKENDS = ("numba", "numpy")
+
+#: MLS smoothing kinds: the seed's (4.66-4.67: the fitted increments change the stress),
+#: or ``consistent`` (the same, with the grid forces from the operator's adjoint applied
+#: to the stresses, :mod:`~geofrac.mpm.consistent`).
+SMOOTHINGS = ("seed", "consistent")
 
 #: Nodes lighter than this fraction of the heaviest node are inactive.
 MASS_FLOOR = 1e-12
@@ -167,6 +174,7 @@ class StepSettings:
         smoothing: MLS influence radius of the strain increments as a multiple of the
             cell size (:mod:`~geofrac.mpm.smoothing`), or None for no smoothing (the
             smoothing code is then not even imported).
+        smoothing_kind: one of :data:`SMOOTHINGS` (with ``smoothing``).
         friction: a Coulomb friction boundary (:mod:`~geofrac.mpm.friction`), or None.
         backend: one of :data:`BACKENDS`.
         domain: this rank's part of a decomposed grid (:func:`geofrac.mpm.parallel.
@@ -184,6 +192,7 @@ class StepSettings:
     friction: Friction | None = None
     backend: str = "numba"
     domain: Domain | None = field(default=None, repr=False)
+    smoothing_kind: str = "seed"
 
     def __post_init__(self) -> None:
         """Check the names and the step."""
@@ -195,6 +204,12 @@ class StepSettings:
             raise ValueError(f"dt must be > 0, got {self.dt}")
         if self.smoothing is not None and not self.smoothing > 0:
             raise ValueError(f"smoothing radius factor must be > 0, got {self.smoothing}")
+        if self.smoothing_kind not in SMOOTHINGS:
+            raise ValueError(
+                f"smoothing kind {self.smoothing_kind!r} is not one of {', '.join(SMOOTHINGS)}"
+            )
+        if self.smoothing_kind == "consistent" and self.domain is not None:
+            raise ValueError("consistent smoothing runs on one process only")
         if self.backend not in BACKENDS:
             raise ValueError(f"backend {self.backend!r} is not one of {', '.join(BACKENDS)}")
 
@@ -230,10 +245,12 @@ def _from_grid(w: Weights, values: np.ndarray) -> np.ndarray:
     return np.matmul(w.phi[:, None, :], values[w.nodes])[:, 0, :]
 
 
-def _forces(w: Weights, p: Particles, gravity: np.ndarray, num_nodes: int) -> np.ndarray:
-    """f_int + f_ext (eqs. 4.22-4.23, without tractions), shape=(num_nodes, dim)."""
+def _forces(
+    w: Weights, p: Particles, gravity: np.ndarray, num_nodes: int, stress: np.ndarray
+) -> np.ndarray:
+    """f_int + f_ext (eqs. 4.22-4.23, without tractions) of ``stress``, shape=(num_nodes, dim)."""
     # −Σ V_p σ_p ∇φ_ip + m_p b φ_ip, per particle and node: shape=(n, k, dim)
-    f = -p.volume[:, None, None] * np.matmul(w.grad, np.swapaxes(p.stress, 1, 2))
+    f = -p.volume[:, None, None] * np.matmul(w.grad, np.swapaxes(stress, 1, 2))
     f += (p.mass[:, None] * w.phi)[:, :, None] * gravity
     return _scatter(w, f, num_nodes)
 
@@ -262,12 +279,14 @@ def _update_stress(
     v: np.ndarray,
     dt: float,
     s: StepSettings,
-    smooth_at: tuple[np.ndarray, float] | None,
+    smooth_at: tuple | None,
+    budget: StepBudget | None = None,
 ) -> None:
     """Stress, volume and deformation gradient from the nodal velocity v (D.7-D.9, 4.70).
 
     ``smooth_at`` = (positions at the step's start, radius): the strain increments are
     replaced by their MLS fit there (4.57, 4.66) before they change stress and volume.
+    ``budget``: add the stored-energy terms of this update (:mod:`~geofrac.mpm.energy`).
     """
     n, d = p.n, p.dim
     if s.backend == "numba":
@@ -280,8 +299,48 @@ def _update_stress(
     else:
         L = np.matmul(np.swapaxes(v[w.nodes], 1, 2), w.grad)  # ∇v_p, shape=(n, dim, dim)
         deps = 0.5 * dt * (L + np.swapaxes(L, 1, 2))
+    raw = deps
     if smooth_at is not None:
         deps = _smoothed(deps, smooth_at, s).reshape(n, d, d)
+    if budget is not None:
+        from geofrac.mpm.energy import stored
+
+        nu = material.nu if d > 1 else 0.0
+        s0, v0 = p.stress.copy(), p.volume.copy()
+        budget.power_raw += float(np.einsum("p,pij,pij->", v0, s0, raw))
+        budget.smoothing += float(np.einsum("p,pij,pij->", v0, s0, deps - raw))
+        trial = float(np.sum(_trial(p, material, deps)))
+    _apply_increment(w, p, material, deps, L, dt, s, budget)
+    if budget is not None:
+        budget.quadratic += 0.5 * float(np.einsum("p,pij,pij->", v0, p.stress - s0, deps))
+        budget.plastic += trial - float(
+            np.sum(stored(p.stress, p.stress_zz, p.volume, material.E, nu))
+        )
+
+
+def _trial(p: Particles, material: Elastic | DruckerPrager, deps: np.ndarray) -> np.ndarray:
+    """Stored energy of the elastic trial σ + D:Δε at volume V(1 + tr Δε), shape=(n,)."""
+    from geofrac.mpm.energy import stored
+
+    el = Elastic(material.E, material.nu)
+    tr = np.trace(deps, axis1=1, axis2=2)
+    zz = p.stress_zz + (el.lame()[0] * tr if p.dim == 2 else 0.0)
+    nu = material.nu if p.dim > 1 else 0.0
+    return stored(p.stress + el.increment(deps), zz, p.volume * (1.0 + tr), material.E, nu)
+
+
+def _apply_increment(
+    w: Weights,
+    p: Particles,
+    material: Elastic | DruckerPrager,
+    deps: np.ndarray,
+    L: np.ndarray,
+    dt: float,
+    s: StepSettings,
+    budget: StepBudget | None,
+) -> None:
+    """Stress (D.8 or the plastic return), volume (D.9) and G (4.70) from Δε and ∇v."""
+    d = p.dim
     if isinstance(material, Elastic) and s.backend == "numba":
         from geofrac.mpm import kernels
 
@@ -296,14 +355,14 @@ def _update_stress(
         if p.dim == 2:
             p.stress_zz += material.lame()[0] * np.trace(deps, axis1=1, axis2=2)
     else:
-        _plastic_update(p, material, deps, L, dt)
+        _plastic_update(p, material, deps, L, dt, budget)
     p.volume *= 1.0 + np.trace(deps, axis1=1, axis2=2)
     p.F = np.matmul(np.eye(p.dim) + dt * L, p.F)
     if s.shape == "cpgimp":
         p.lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
 
 
-def _smoothed(deps: np.ndarray, smooth_at: tuple[np.ndarray, float], s: StepSettings) -> np.ndarray:
+def _smoothed(deps: np.ndarray, smooth_at: tuple, s: StepSettings) -> np.ndarray:
     """The MLS fits of the strain increments (4.57), shape=(n, dim·dim).
 
     With a domain the neighbours on other ranks take part as ghosts, so every fit is
@@ -311,9 +370,11 @@ def _smoothed(deps: np.ndarray, smooth_at: tuple[np.ndarray, float], s: StepSett
     """
     from geofrac.mpm.smoothing import smooth
 
-    x0, h = smooth_at
+    x0, h = smooth_at[:2]
     n = len(deps)
     values = deps.reshape(n, deps.shape[1] * deps.shape[2])
+    if len(smooth_at) > 2:  # the consistent kind's operator, built at the step's start
+        return smooth_at[2].apply(values)
     if s.domain is not None:
         gx, gv = s.domain.ghosts(x0, values, h)  # collective: every rank takes part
         x0, values = np.concatenate([x0, gx]), np.concatenate([values, gv])
@@ -323,7 +384,12 @@ def _smoothed(deps: np.ndarray, smooth_at: tuple[np.ndarray, float], s: StepSett
 
 
 def _plastic_update(
-    p: Particles, material: DruckerPrager, deps: np.ndarray, L: np.ndarray, dt: float
+    p: Particles,
+    material: DruckerPrager,
+    deps: np.ndarray,
+    L: np.ndarray,
+    dt: float,
+    budget: StepBudget | None = None,
 ) -> None:
     """Jaumann rotation (D.30-D.31) and Drucker-Prager return (4.39-4.43) on 3×3 stresses.
 
@@ -340,15 +406,38 @@ def _plastic_update(
     spin[:, :d, :d] = -0.5 * dt * (L - np.swapaxes(L, 1, 2))  # the seed's Δω (D.31)
     deps3 = np.zeros((n, 3, 3))
     deps3[:, :d, :d] = deps
-    new, dlam = material.update(jaumann(full, spin), deps3)
+    rotated = jaumann(full, spin)
+    if budget is not None:  # the rotation's change of the trial's stored energy
+        from geofrac.mpm.energy import stored
+
+        tr = np.trace(deps, axis1=1, axis2=2)
+        el = Elastic(material.E, material.nu)
+        volume, zero = p.volume * (1.0 + tr), np.zeros(n)
+        rot = float(
+            np.sum(
+                stored(rotated + el.increment(deps3), zero, volume, material.E, material.nu)
+                - stored(full + el.increment(deps3), zero, volume, material.E, material.nu)
+            )
+        )
+        budget.plastic += rot  # the return starts from the rotated trial
+    new, dlam = material.update(rotated, deps3)
     p.stress = new[:, :d, :d].copy()
     if d == 2:
         p.stress_zz = new[:, 2, 2].copy()
     p.plastic += dlam
 
 
-def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettings) -> None:
+def step(
+    g: Grid,
+    p: Particles,
+    material: Elastic | DruckerPrager,
+    s: StepSettings,
+    budget: StepBudget | None = None,
+) -> None:
     """Advance the particles by one step of ``s.scheme`` (in place).
+
+    ``budget``: add this step's energy terms (this rank's part) to it
+    (:mod:`~geofrac.mpm.energy`); None (the default) computes none of them.
 
     With ``s.domain``, ``g`` is ``s.domain.local`` and ``p`` this rank's particles; every
     rank calls the step, and at its end ``p``'s arrays hold the particles the rank owns
@@ -364,17 +453,32 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
     if not isinstance(material, Elastic) and p.dim == 1:
         raise ValueError("plasticity needs 2D or 3D particles (the 1D bar is elastic)")
     dom = s.domain
-    gimp = s.shape != "mpm"
+    gimp = s.shape in ("ugimp", "cpgimp")
+    spline = s.shape == "bspline2"
     fast = s.backend == "numba"
     if fast:
         from geofrac.mpm import kernels
     _check_inside(g, p, s)
     if fast:
-        w = kernels.grid_weights(g, p.x, p.lp if gimp else None, reuse=True)
+        w = kernels.grid_weights(g, p.x, p.lp if gimp else None, reuse=True, bspline=spline)
     else:
-        w = weights(g, p.x, p.lp if gimp else None)
+        w = weights(g, p.x, p.lp if gimp else None, bspline=spline)
     N, dt, dim = g.num_nodes, s.dt, p.dim
-    smooth_at = None if s.smoothing is None else (p.x.copy(), s.smoothing * g.spacing)
+    smooth_at: tuple | None = None
+    if s.smoothing is not None:
+        smooth_at = (p.x.copy(), s.smoothing * g.spacing)
+        if s.smoothing_kind == "consistent":
+            from geofrac.mpm.consistent import mls_operator
+
+            smooth_at += (mls_operator(p.x, s.smoothing * g.spacing),)
+
+    def force_stress() -> np.ndarray:
+        """The stresses the grid forces are made of (the adjoint fit: consistent kind)."""
+        if smooth_at is None or len(smooth_at) < 3:
+            return p.stress
+        flat = p.stress.reshape(p.n, dim * dim)
+        return np.ascontiguousarray(smooth_at[2].adjoint(flat, p.volume).reshape(p.n, dim, dim))
+
     # MUSL's forces use σ^k: they join the first transfer (one pass, one exchange)
     early = s.scheme == "musl"
     if fast:
@@ -386,12 +490,12 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
     if fast:
         kernels.mass_momentum(w.nodes, w.phi, p.mass, p.v, mass, mom)
         if early:
-            kernels.forces(w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, f)
+            kernels.forces(w.nodes, w.phi, w.grad, p.volume, force_stress(), p.mass, s.gravity, f)
     else:
         mass[:] = _to_grid(w, p.mass[:, None], N)[:, 0]
         mom[:] = _to_grid(w, p.mass[:, None] * p.v, N)
         if early:
-            f[:] = _forces(w, p, s.gravity, N)
+            f[:] = _forces(w, p, s.gravity, N, force_stress())
     if dom is not None:
         nodal = dom.sum_halo(nodal)
         mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
@@ -406,13 +510,13 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
         v = _velocity(mom, mass, active, s.fixed)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):
-        _update_stress(w, p, material, v, half * dt, s, smooth_at)
+        _update_stress(w, p, material, v, half * dt, s, smooth_at, budget)
     if not early:
         f = np.zeros((N, dim))
         if fast:
-            kernels.forces(w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, f)
+            kernels.forces(w.nodes, w.phi, w.grad, p.volume, force_stress(), p.mass, s.gravity, f)
         else:
-            f = _forces(w, p, s.gravity, N)
+            f = _forces(w, p, s.gravity, N, force_stress())
         if dom is not None:
             f = dom.sum_halo(f)
     if fast:
@@ -428,6 +532,14 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
 
         apply_friction(v_new, s.friction)
         a = (v_new - v) / dt  # the particles take the same, frictional, change
+    if budget is not None:
+        from geofrac.mpm.energy import owned_nodes
+
+        x_start, v_start = p.x.copy(), p.v.copy()
+        budget.grid_terms(
+            dt, mass, mom, f, a, s.fixed, mass[:, None] * s.gravity, MASS_FLOOR * peak,
+            owned_nodes(dom, N),
+        )  # fmt: skip
     if fast:
         kernels.from_grid2(w.nodes, w.phi, a, v_new, dt, p.v, p.x)  # D.4-D.5
     else:
@@ -450,14 +562,22 @@ def step(g: Grid, p: Particles, material: Elastic | DruckerPrager, s: StepSettin
             from geofrac.mpm.friction import apply_friction
 
             apply_friction(v, s.friction, sliding_only=True)
-        _update_stress(w, p, material, v, half * dt, s, smooth_at)
+        _update_stress(w, p, material, v, half * dt, s, smooth_at, budget)
+    if budget is not None:
+        budget.transfer += 0.5 * float(np.sum(p.mass * np.sum((p.v - v_start) ** 2, axis=1)))
+        budget.potential -= float(p.mass @ ((p.x - x_start) @ s.gravity))
     _check(p, dom, fast)
     if dom is not None:
         dom.migrate(p)
 
 
-def _outside(g: Grid, p: Particles, gimp: bool, fast: bool) -> np.ndarray:
-    """Which particles (or their GIMP boxes) reach beyond the grid, shape=(n,)."""
+def _outside(g: Grid, p: Particles, gimp: bool, fast: bool, margin: float | None) -> np.ndarray:
+    """Which particles (or their GIMP boxes) reach beyond the grid, shape=(n,).
+
+    ``margin``: a fixed support half-width instead (``bspline2``), or None.
+    """
+    if margin is not None:
+        return g.outside(p.x, margin)
     if not fast:
         return g.outside(p.x, p.lp if gimp else 0.0)
     from geofrac.mpm import kernels
@@ -473,19 +593,20 @@ def _check_inside(g: Grid, p: Particles, s: StepSettings) -> None:
     With a domain: against the whole grid, on every rank alike; then a RunError when a
     particle's support reaches beyond its rank's sub-grid (the halo is too narrow).
     """
-    gimp, fast = s.shape != "mpm", s.backend == "numba"
+    gimp, fast = s.shape in ("ugimp", "cpgimp"), s.backend == "numba"
+    margin = support_margin(s.shape, g.spacing)
     dom = s.domain
     if dom is None:
-        out = _outside(g, p, gimp, fast)
+        out = _outside(g, p, gimp, fast, margin)
         if np.any(out):
             raise ParticlesLeftGrid(p.ids[out], p.x[out])
         return
-    out = _outside(dom.grid, p, gimp, fast)
+    out = _outside(dom.grid, p, gimp, fast, margin)
     ids, positions = dom.allgather_rows(p.ids[out], p.x[out])
     if len(ids):
         order = np.argsort(ids)
         raise ParticlesLeftGrid(ids[order], positions[order])
-    if dom.any(bool(np.any(_outside(g, p, gimp, fast)))):
+    if dom.any(bool(np.any(_outside(g, p, gimp, fast, margin)))):
         raise RunError(
             f"a particle's support reaches beyond its rank's halo of {dom.halo} cells; "
             "decompose with a wider halo"
