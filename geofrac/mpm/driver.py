@@ -243,7 +243,7 @@ def _energies(
             terms,
         ]
     )
-    total = comm.allreduce(local)
+    total = comm.allreduce(local) if comm.size > 1 else local
     return float(total[0]), float(total[1]), float(total[2]), total[3:]
 
 
