@@ -435,6 +435,7 @@ def simulate(
         "energy_drift_max": log.drift_max,
         "energy_drift_work_max": log.drift_work_max,
         "energy_balance_error": log.balance_error,
+        "energy_budget_closure": log.closure / log.scale if log.scale > 0 else None,
         "particle_steps_per_s": run.total * steps_done / seconds if seconds > 0 else None,
         "history": history,
         "probes": probes,
