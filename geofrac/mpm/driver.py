@@ -50,6 +50,7 @@ from geofrac.mpm.energy import CSV_COLUMNS, EnergyLog, StepBudget
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles, concat, take
 from geofrac.mpm.schemes import Elastic, StepSettings, step, strain_energy, time_step
+from geofrac.mpm.shapes import support_margin
 from geofrac.scene.model import Scene
 from geofrac.timing import Timings
 
@@ -169,7 +170,9 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
     assert spec is not None
     g = scene_grid(spec.lower, spec.upper, spec.spacing, spec.padding)
     p, bed = _all_particles(scene, comm)
-    margin = p.lp if spec.shape != "mpm" else 0.0
+    margin = support_margin(spec.shape, spec.spacing)
+    if margin is None:
+        margin = p.lp if spec.shape != "mpm" else 0.0
     if np.any(g.outside(p.x, margin)):
         raise RunError(
             f"mpm.grid: {int(np.sum(g.outside(p.x, margin)))} particle(s) start outside the "
