@@ -6,10 +6,15 @@ Cases (``--cases``):
   at W = ρ₀|b|L₀ in ``--W`` (the seed's 1000, 12500, 100000) for every shape and scheme:
   the RMS stress error against eq. 4.73 (normalised by ρ₀|b|L₀); plot ``mpm_bar.png``
   (after Fig. 4.13-4.15);
-- ``translating``: the translating bar of seed 4.5.3
-  (:func:`geofrac.mpm.bar.translating_bar`) to ``--t-end`` (100, Fig. 4.20-4.21) for every
-  shape and scheme, without and with MLS smoothing (radius ``--smoothing`` cells): the
-  largest drift of the total energy, max |E(t) − E₀|/E₀; plot ``mpm_translating.png``.
+- ``translating``: the translating bar of seed 4.5.3 (:func:`geofrac.mpm.bar.
+  translating_bar`: the scene ``jobs/mpm_translating_bar.toml`` run through the driver's
+  step, so ``geofrac run`` of the same variant reports the same numbers) to ``--t-end``
+  (100, Fig. 4.20-4.21) for every shape and scheme, without and with MLS smoothing
+  (radius ``--smoothing`` cells) of each kind of ``--smoothing-kinds`` (the seed's, and
+  ``consistent``): the largest drift of the total energy over every step, max |E(t) −
+  E₀|/E₀, with the stored energy as ½ V σ : D⁻¹ : σ (``energy_drift_max``) and as stress
+  work (``energy_drift_work_max``, :mod:`geofrac.mpm.energy`); plot
+  ``mpm_translating.png``.
 
 - ``impact``: the bar with an initial velocity v₀ = c/50 towards its fixed base (seed
   4.5.2, :func:`geofrac.mpm.bar.impact_bar`) at t = 0.8 L₀/c, every shape and scheme,
@@ -68,6 +73,7 @@ COLUMNS = (
     ("particle_steps_per_s", "particle-steps/s", ".3g"),
     ("stress_error_rms", "stress error (RMS/ρ0|b|L0)", ".4f"),
     ("energy_drift_max", "energy drift max", ".4f"),
+    ("energy_drift_work_max", "drift (stress work)", ".4f"),
     ("rank_difference_max", "1 vs N ranks", ".3g"),
 )
 
@@ -105,6 +111,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         type=float,
         default=2.0,
         help="MLS radius in cells of the smoothed runs: translating bar, impact, block (2.0)",
+    )
+    p.add_argument(
+        "--smoothing-kinds",
+        type=name_list(("seed", "consistent"), "smoothing kind"),
+        default=["seed", "consistent"],
+        help="comma-separated smoothing kinds of the smoothed translating-bar runs "
+        "(default: seed,consistent)",
     )
     p.add_argument(
         "--shapes",
@@ -242,15 +255,19 @@ def _record(
     """One JSON record.
 
     ``measured`` may give ``W``, ``stress_error_rms``, ``energy_drift_max``,
-    ``stress_overshoot``, ``warmup_seconds``, ``per_rank``, ``backend``,
-    ``rank_difference_max``, ``rank_difference_t``, ``cost_ratio``, ``neighbour_builds``
-    and ``neighbour_build_seconds``; the others are None.
+    ``energy_drift_work_max``, ``stress_overshoot``, ``warmup_seconds``, ``per_rank``,
+    ``backend``, ``kind`` (the smoothing kind), ``rank_difference_max``,
+    ``rank_difference_t``, ``cost_ratio``, ``neighbour_builds`` and
+    ``neighbour_build_seconds``; the others are None.
     """
+    label = "none" if smoothing is None else f"mls {smoothing:g} cells"
+    if smoothing is not None and measured.get("kind", "seed") != "seed":
+        label += f" {measured['kind']}"
     return {
         "case": case,
         "scheme": scheme,
         "shape": shape,
-        "smoothing": "none" if smoothing is None else f"mls {smoothing:g} cells",
+        "smoothing": label,
         "dim": dim,
         "particles": particles,
         "ranks": ranks,
@@ -261,6 +278,7 @@ def _record(
         "particle_steps_per_s": particles * steps / seconds,
         "stress_error_rms": measured.get("stress_error_rms"),
         "energy_drift_max": measured.get("energy_drift_max"),
+        "energy_drift_work_max": measured.get("energy_drift_work_max"),
         "stress_overshoot": measured.get("stress_overshoot"),
         "warmup_seconds": measured.get("warmup_seconds"),
         "per_rank": measured.get("per_rank"),
@@ -311,7 +329,13 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     runs = {}
     histories = {}
     smoothings = (None, args.smoothing)
-    total = len(shapes) * len(schemes) * (len(Ws) * ("bar" in cases) + 2 * ("translating" in cases))
+    kinds = args.smoothing_kinds
+    variants = [(None, "seed")] + [(args.smoothing, k) for k in kinds]
+    total = (
+        len(shapes)
+        * len(schemes)
+        * (len(Ws) * ("bar" in cases) + len(variants) * ("translating" in cases))
+    )
     total += 2 * len(shapes) * ("block" in cases) + 2 * len(shapes) * len(schemes) * (
         "impact" in cases
     )
@@ -357,21 +381,15 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     if comm.rank == 0:
         for shape in shapes if "translating" in cases else ():
             for scheme in schemes:
-                for sm in smoothings:
-                    hist = translating_bar(shape, scheme, sm, t_end=args.t_end)
+                for sm, kind in variants:
+                    hist = translating_bar(shape, scheme, sm, t_end=args.t_end, smoothing_kind=kind)
                     records.append(
                         _record(
-                            "translating_bar",
-                            scheme,
-                            shape,
-                            sm,
-                            1,
-                            hist.particles,
-                            hist.steps,
-                            hist.seconds,
-                            energy_drift_max=hist.drift_max,
+                            "translating_bar", scheme, shape, sm, 1, hist.particles,
+                            hist.steps, hist.seconds, energy_drift_max=hist.drift_max,
+                            energy_drift_work_max=hist.drift_work_max, kind=kind,
                         )
-                    )
+                    )  # fmt: skip
                     label = records[-1]["smoothing"]
                     histories[(shape, scheme, label)] = hist
                     progress.step(

@@ -7,7 +7,10 @@ The influence radius is a multiple of the grid cell size (the seed: "the cell si
 an arbitrary constant"). MPM scenes only; the smoothing code is imported only when a
 scene declares this effect.
 
-Scene table ``[mls_smoothing]``: ``radius`` = influence radius in cells (default 2.0).
+Scene table ``[mls_smoothing]``: ``radius`` = influence radius in cells (default 2.0);
+``kind`` = ``"seed"`` (default: the fitted increments change the stresses, eqs. 4.66-4.67)
+or ``"consistent"`` (the same, with the grid forces from the fit's adjoint applied to the
+stresses, so the smoothing does no net work; one rank only; docs/mpm_energy.md).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ __all__ = ["DEFAULT_RADIUS", "KEYS", "MAX_RADIUS", "METHODS", "SmoothingConfig",
 #: Methods this effect serves.
 METHODS = ("mpm",)
 #: Keys of ``[mls_smoothing]``.
-KEYS = ("radius",)
+KEYS = ("radius", "kind")
 #: Default influence radius in cells.
 DEFAULT_RADIUS = 2.0
 #: Largest influence radius in cells (a particle's neighbours grow as radius^dim).
@@ -36,13 +39,16 @@ class SmoothingConfig:
 
     Attributes:
         radius: influence radius h as a multiple of the grid cell size.
+        kind: ``seed`` or ``consistent`` (:data:`geofrac.mpm.schemes.SMOOTHINGS`).
     """
 
     radius: float
+    kind: str = "seed"
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> SmoothingConfig:
     """Validate ``[mls_smoothing]``."""
     t = Table(ctx.file, "mls_smoothing", table, KEYS)
     radius = float(t.number("radius", default=DEFAULT_RADIUS, positive=True, maximum=MAX_RADIUS))  # type: ignore[arg-type]
-    return SmoothingConfig(radius)
+    kind = str(t.string("kind", default="seed", choices=("seed", "consistent")))
+    return SmoothingConfig(radius, kind)

@@ -30,14 +30,16 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
-from geofrac.mpm.schemes import Elastic, StepSettings, step, strain_energy, time_step
+from geofrac.mpm.schemes import Elastic, StepSettings, step, time_step
 
 __all__ = [
+    "TRANSLATING_SCENE",
     "BarResult",
     "EnergyHistory",
     "ImpactResult",
@@ -45,6 +47,7 @@ __all__ = [
     "quasi_static_bar",
     "self_weight_stress",
     "translating_bar",
+    "translating_overrides",
 ]
 
 
@@ -114,6 +117,10 @@ def quasi_static_bar(
     return BarResult(x, stress, exact, error, steps, seconds)
 
 
+#: The translating bar's scene: the bench runs it (with overrides), as ``geofrac run`` does.
+TRANSLATING_SCENE = Path(__file__).resolve().parents[2] / "jobs" / "mpm_translating_bar.toml"
+
+
 @dataclass(frozen=True)
 class EnergyHistory:
     """Energies of a translating-bar run, normalised by the initial energy.
@@ -121,13 +128,19 @@ class EnergyHistory:
     Attributes:
         t: times, shape=(k,).
         kinetic: shape=(k,).
-        strain: shape=(k,).
-        total: shape=(k,).
-        drift_max: max |E(t) − E₀| / E₀ over the run.
-        finite: every particle position, velocity and stress stayed finite.
+        strain: ½ V σ : D⁻¹ : σ, shape=(k,).
+        total: kinetic + strain, shape=(k,).
+        drift_max: max |E(t) − E₀| / E₀ over the run (every step), E = kinetic + strain.
+        finite: the run ended without a non-finite state.
         steps: time steps taken.
         seconds: wall time of the steps.
         particles: number of particles.
+        stored_work: the stored energy as stress work W (:mod:`~geofrac.mpm.energy`),
+            shape=(k,).
+        drift_work_max: max |K + W − E₀| / E₀ over the run (every step).
+        budget: the cumulative budget terms of :data:`~geofrac.mpm.energy.COLUMNS`
+            normalised by E₀, name -> shape=(k,).
+        closure_max: the budget's largest closure error over E₀ (round-off).
     """
 
     t: np.ndarray
@@ -139,6 +152,28 @@ class EnergyHistory:
     steps: int
     seconds: float
     particles: int
+    stored_work: np.ndarray
+    drift_work_max: float
+    budget: dict[str, np.ndarray]
+    closure_max: float
+
+
+def translating_overrides(
+    shape: str,
+    scheme: str,
+    smoothing: float | None,
+    t_end: float,
+    smoothing_kind: str = "seed",
+) -> list[str]:
+    """The ``--set`` overrides of :data:`TRANSLATING_SCENE` for one variant."""
+    sets = [f"mpm.shape={shape}", f"mpm.scheme={scheme}", f"mpm.t_end={t_end!r}"]
+    if smoothing is not None:
+        sets += [
+            'effects=["mls_smoothing"]',
+            f"mls_smoothing.radius={smoothing!r}",
+            f"mls_smoothing.kind={smoothing_kind}",
+        ]
+    return sets
 
 
 def translating_bar(
@@ -148,48 +183,72 @@ def translating_bar(
     t_end: float = 100.0,
     steps: int | None = None,
     samples: int = 2000,
+    smoothing_kind: str = "seed",
 ) -> EnergyHistory:
     """Run the translating bar of seed 4.5.3 to ``t_end`` (or for ``steps`` steps).
+
+    The scene ``jobs/mpm_translating_bar.toml`` with :func:`translating_overrides`, on one
+    process, stepped by :func:`geofrac.mpm.driver.advance`: the same grid, walls, time
+    step and energies as ``geofrac run jobs/mpm_translating_bar.toml --set ...``.
 
     Args:
         shape: shape functions.
         scheme: update scheme.
         smoothing: MLS radius factor (None: no smoothing).
         t_end: end time (the seed's Fig. 4.21 runs about 100).
-        steps: run exactly this many steps instead of up to ``t_end``.
-        samples: about this many energy samples are kept.
+        steps: run exactly this many steps of the Courant time step instead.
+        samples: about this many energy samples are kept (the drifts use every step).
+        smoothing_kind: ``seed`` or ``consistent`` (:data:`~geofrac.mpm.schemes.SMOOTHINGS`).
     """
-    E, rho, length, v0, cell, ppc = 500.0, 1.0, 5.0, 2.0, 0.5, 2
-    n = round(length / cell) * ppc
-    h = length / n
-    p = lattice([25.0 - length / 2], [n], h, rho)
-    p.v[:] = v0
-    g = grid([-2 * cell], cell, [round(50.0 / cell) + 4])
-    mat = Elastic(E)
-    dt = time_step(0.1, cell, mat, rho, 1)
-    X = g.nodes()[:, 0]
-    fixed = ((X <= 0.0) | (X >= 50.0)).reshape(-1, 1)
-    s = StepSettings(scheme, shape, dt, np.zeros(1), fixed, smoothing)
-    total_steps = int(np.ceil(t_end / dt)) if steps is None else int(steps)
-    every = max(1, total_steps // samples)
-    e0 = p.kinetic_energy() + strain_energy(p, mat)
-    rows = [(0.0, p.kinetic_energy(), strain_energy(p, mat))]
+    from mpi4py import MPI
+
+    from geofrac.errors import RunError
+    from geofrac.mpm.driver import advance, prepare, start_log
+    from geofrac.scene import load_scene
+
+    if steps is not None:  # the scene's rule dt = t_end / ceil(t_end / dt_courant)
+        E, rho, cell = 500.0, 1.0, 0.5
+        t_end = steps * time_step(0.1, cell, Elastic(E), rho, 1)
+    scene = load_scene(
+        TRANSLATING_SCENE, translating_overrides(shape, scheme, smoothing, t_end, smoothing_kind)
+    )
+    comm = MPI.COMM_SELF
+    run = prepare(scene, comm)
+    log = start_log(run, comm)
+    e0 = log.e0
+    every = max(1, run.steps // samples)
+    rows = [[0.0, *log.first_row()]]
     finite = True
+    k = 0
     t0 = time.perf_counter()
-    for k in range(1, total_steps + 1):
-        step(g, p, mat, s)
-        if k % every == 0 or k == total_steps:
-            if not (np.all(np.isfinite(p.x)) and np.all(np.isfinite(p.v))):
-                finite = False
-                break
-            rows.append((k * dt, p.kinetic_energy(), strain_energy(p, mat)))
+    try:
+        for k in range(1, run.steps + 1):
+            row = advance(run, comm, log, k)
+            if k % every == 0 or k == run.steps:
+                rows.append([k * run.settings.dt, *row])
+    except RunError:
+        finite = False
     seconds = time.perf_counter() - t0
-    finite = finite and bool(np.all(np.isfinite(p.stress)))
     arr = np.array(rows)
-    kin, strain = arr[:, 1] / e0, arr[:, 2] / e0
-    total = kin + strain
-    drift = float(np.max(np.abs(total - 1.0))) if finite else float("inf")
-    return EnergyHistory(arr[:, 0], kin, strain, total, drift, finite, k, seconds, n)
+    from geofrac.mpm.energy import COLUMNS, CSV_COLUMNS
+
+    col = {name: i - 1 for i, name in enumerate(CSV_COLUMNS) if i >= 1}
+    budget = {c: arr[:, col[c]] / e0 for c in COLUMNS}
+    return EnergyHistory(
+        t=arr[:, 0],
+        kinetic=arr[:, col["kinetic"]] / e0,
+        strain=arr[:, col["strain"]] / e0,
+        total=arr[:, col["total"]] / e0,
+        drift_max=float(log.drift_max) if finite else float("inf"),
+        finite=finite,
+        steps=k,
+        seconds=seconds,
+        particles=run.total,
+        stored_work=budget["stored_work"],
+        drift_work_max=float(log.drift_work_max) if finite else float("inf"),
+        budget=budget,
+        closure_max=log.closure / e0,
+    )
 
 
 @dataclass(frozen=True)

@@ -8,17 +8,24 @@ validated :class:`~geofrac.scene.model.Scene`, decomposes them over the communic
   fields of ``output.fields`` (rank 0 gathers them, in particle-id order, so 1 and N
   ranks write the same files);
 - ``energies.csv``: per step, kinetic, strain, gravitational potential (relative to the
-  start), total (their sum) and dissipated (initial total minus total: plastic work,
-  friction and numerical dissipation together);
+  start), total (their sum) and dissipated (initial total minus total), then the energy
+  budget of :mod:`~geofrac.mpm.energy` (columns :data:`~geofrac.mpm.energy.CSV_COLUMNS`:
+  the stored energy as stress work, the cumulative wall, friction, smoothing, plastic and
+  numerical terms, their total and the budget's closure);
 - ``summary.json`` (by :func:`run_mpm_scene`): ``results`` with ``runout_m`` (the
   largest particle x at the end minus at the start), ``friction_angle_deg`` (with
   ``plasticity``), ``energy_drift_max`` (max |E(t) − E₀| / E₀ with E the total above;
-  None when E₀ = 0, a body starting at rest), front and probe histories, and ``bodies``
-  (per body of ``[[mpm.bodies]]``, or one ``"body"``: particles, first id, mass).
+  None when E₀ = 0, a body starting at rest), ``energy_drift_work_max`` (the same with
+  the stored energy as stress work), ``energy_balance_error`` (the energy no physical
+  term explains over the run's energy scale; defined for bodies starting at rest),
+  ``energy_budget_closure``, front and probe histories, and ``bodies`` (per body of
+  ``[[mpm.bodies]]``, or one ``"body"``: particles, first id, mass).
 
 Particles come from ``[mpm.particles]`` or from the bodies of ``[[mpm.bodies]]``, ids
 numbered body after body before the decomposition; initial velocities may be expressions
-of the position (:mod:`geofrac.scene.expr`); ``[gravity] ramp`` scales gravity per step.
+of the position (:mod:`geofrac.scene.expr`); ``[gravity] ramp`` scales gravity per step
+(the gravitational potential is then the work of each step's own gravity,
+:meth:`~geofrac.mpm.energy.EnergyLog.potential`).
 
 With a :class:`~geofrac.io.checkpoint.RunControl` the loop checkpoints (every rank's
 particles in their local order and the loop's state) and stops cleanly on a signal;
@@ -47,6 +54,7 @@ from geofrac.io.checkpoint import RunControl
 from geofrac.io.summary import start_summary
 from geofrac.log import format_seconds, sayer
 from geofrac.mpm.boundaries import boundary_rows, scene_grid
+from geofrac.mpm.energy import CSV_COLUMNS, EnergyLog, StepBudget
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles, concat, take
 from geofrac.mpm.schemes import (
@@ -56,10 +64,11 @@ from geofrac.mpm.schemes import (
     step,
     time_step,
 )
+from geofrac.mpm.shapes import support_margin
 from geofrac.scene.model import Scene
 from geofrac.timing import Timings
 
-__all__ = ["OUTPUT_FILES", "MpmRun", "prepare", "run_mpm_scene", "simulate"]
+__all__ = ["OUTPUT_FILES", "MpmRun", "advance", "prepare", "run_mpm_scene", "simulate"]
 
 #: Files an MPM run writes into its output directory.
 OUTPUT_FILES = ("particles.xdmf", "particles.h5", "energies.csv", "summary.json")
@@ -261,7 +270,9 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
     assert spec is not None
     g = scene_grid(spec.lower, spec.upper, spec.spacing, spec.padding)
     p, bed, bodies = _all_particles(scene, comm)
-    margin = p.lp if spec.shape != "mpm" else 0.0
+    margin = support_margin(spec.shape, spec.spacing)
+    if margin is None:
+        margin = p.lp if spec.shape != "mpm" else 0.0
     if np.any(g.outside(p.x, margin)):
         raise RunError(
             f"mpm.grid: {int(np.sum(g.outside(p.x, margin)))} particle(s) start outside the "
@@ -319,16 +330,21 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
         friction,
         **({"domain": domain} if domain is not None else {}),
         damping=spec.damping,
+        smoothing_kind="seed" if smoothing is None else smoothing.kind,
     )
     ramp = gravity.ramp if gravity is not None else 0.0
     return MpmRun(g, local, p, material, settings, steps, domain, probes, phi, total, ramp, bodies)
 
 
-def _energies(run: MpmRun, comm: MPI.Comm) -> list[float]:
-    """(kinetic, strain, gravitational potential −Σ m b·x) summed over the ranks.
+def _energies(
+    run: MpmRun, comm: MPI.Comm, budget: StepBudget | None = None
+) -> tuple[float, float, float, np.ndarray]:
+    """Kinetic, strain, gravitational potential −Σ m b·x (full b) and the step's budget terms.
 
-    Exact sums of the per-particle terms (:func:`geofrac.mpm.fixedpoint.exact_sums`):
-    the same on any number of ranks, whatever the particles' order.
+    The energies are exact sums of the per-particle terms
+    (:func:`geofrac.mpm.fixedpoint.exact_sums`): the same on any number of ranks,
+    whatever the particles' order. The budget terms (zeros without ``budget``) are
+    summed over the ranks by a plain reduction (reporting only).
     """
     from geofrac.mpm.fixedpoint import exact_sums
 
@@ -341,7 +357,40 @@ def _energies(run: MpmRun, comm: MPI.Comm) -> list[float]:
         ],
         axis=1,
     )
-    return [float(e) for e in exact_sums(per, comm)]
+    kin, strain, pot = (float(e) for e in exact_sums(per, comm))
+    terms = budget.terms() if budget is not None else StepBudget().terms()
+    if comm.size > 1:
+        terms = comm.allreduce(terms)
+    return kin, strain, pot, terms
+
+
+def advance(run: MpmRun, comm: MPI.Comm, log: EnergyLog, k: int) -> list[float]:
+    """Step ``k`` of ``run`` with its energy budget recorded in ``log`` (collective).
+
+    The step uses :func:`_settings` (gravity ramped during ``[gravity] ramp``). The
+    scene's time loop and the translating-bar bench (:func:`geofrac.mpm.bar.
+    translating_bar`) both step through here, so they report the same energies.
+
+    Args:
+        run: the prepared run.
+        comm: its communicator.
+        log: the run's energy log (:func:`start_log`).
+        k: the step, from 1 (from t = (k − 1) dt to k dt).
+
+    Returns:
+        The step's ``energies.csv`` row after ``step`` and ``t`` (kinetic first, strain
+        second).
+    """
+    budget = StepBudget()
+    step(run.local, run.particles, run.material, _settings(run, k), budget)
+    kin, strain, pot, terms = _energies(run, comm, budget)
+    return log.record(kin, strain, log.potential(pot, _gravity_factor(run, k)), terms)
+
+
+def start_log(run: MpmRun, comm: MPI.Comm) -> EnergyLog:
+    """The energy log of a run at t = 0 (collective)."""
+    k0, s0, u0, _ = _energies(run, comm)
+    return EnergyLog(k0, s0, u0)
 
 
 def _gather(run: MpmRun, comm: MPI.Comm) -> Particles | None:
@@ -445,7 +494,7 @@ def simulate(
     if error is not None:
         raise RunError(error)
     every = max(1, run.steps // spec.frames)
-    drift, e0, u0 = loop["drift"], loop["e0"], loop["u0"]
+    log = loop["log"]
     history, probes = loop["history"], loop["probes"]
     t_wall = time.perf_counter()
     last_say = t_wall
@@ -453,15 +502,10 @@ def simulate(
     try:
         with timings.phase("steps"):
             for k in range(first_step, run.steps + 1):
-                step(run.local, run.particles, run.material, _settings(run, k))
-                kin, strain, pot = _energies(run, comm)
-                total = kin + strain + (pot - u0)
-                drift = max(drift, abs(total - e0))
+                row = advance(run, comm, log, k)
+                kin, strain = row[0], row[1]
                 if csv is not None:
-                    csv.write(
-                        f"{k},{k * s.dt!r},{kin!r},{strain!r},{pot - u0!r},{total!r},"
-                        f"{e0 - total!r}\n"
-                    )
+                    csv.write(",".join([str(k), repr(k * s.dt), *map(repr, row)]) + "\n")
                     csv.flush()  # a killed run keeps every completed step
                 if k % every == 0 or k == run.steps:
                     t = k * s.dt
@@ -488,7 +532,7 @@ def simulate(
                 if control is not None:
                     save, stop = control.poll(k)
                     if save and k < run.steps:
-                        state = {"k": k, "drift": drift, "e0": e0, "u0": u0}
+                        state = {"k": k, "log": log.state()}
                         state |= {"front0": loop["front0"], "history": history, "probes": probes}
                         control.save(
                             k,
@@ -510,7 +554,10 @@ def simulate(
         "dt": s.dt,
         "t_end": spec.t_end,
         "runout_m": history["front_x"][-1] - loop["front0"],
-        "energy_drift_max": drift / e0 if e0 > 0 else None,
+        "energy_drift_max": log.drift_max,
+        "energy_drift_work_max": log.drift_work_max,
+        "energy_balance_error": log.balance_error,
+        "energy_budget_closure": log.closure / log.scale if log.scale > 0 else None,
         "particle_steps_per_s": run.total * steps_done / seconds if seconds > 0 else None,
         "history": history,
         "probes": probes,
@@ -529,20 +576,27 @@ def _settings(run: MpmRun, k: int) -> StepSettings:
     During a gravity ramp (``[gravity] ramp``) gravity is multiplied by the ramp's mean
     factor over the step; afterwards the settings are ``run.settings`` themselves.
     """
+    factor = _gravity_factor(run, k)
+    if factor == 1.0:
+        return run.settings
+    return dataclasses.replace(run.settings, gravity=factor * run.settings.gravity)
+
+
+def _gravity_factor(run: MpmRun, k: int) -> float:
+    """Step ``k``'s gravity over the full one: the ramp's mean factor, 1.0 after it."""
     s = run.settings
     if run.ramp <= 0 or (k - 1) * s.dt >= run.ramp:
-        return s
+        return 1.0
     from geofrac.effects.gravity import ramp_factor
 
-    factor = ramp_factor(run.ramp, (k - 1) * s.dt, k * s.dt)
-    return dataclasses.replace(s, gravity=factor * s.gravity)
+    return float(ramp_factor(run.ramp, (k - 1) * s.dt, k * s.dt))
 
 
 def _start(run: MpmRun, comm: MPI.Comm) -> dict[str, Any]:
     """The loop's state at t = 0 (collective): initial energies, front, probes, x0."""
     first = _gather(run, comm)
     x0 = None if first is None else first.x.copy()
-    k0, s0, u0 = _energies(run, comm)
+    log = start_log(run, comm)
     front0 = _front(run, comm)
     probes: dict[str, list[Any]] = {name: [] for name in run.probes}
     if first is not None:
@@ -550,16 +604,12 @@ def _start(run: MpmRun, comm: MPI.Comm) -> dict[str, Any]:
             probes[name].append(_probe(first, pid, x0))
     return {
         "k": 0,
-        "drift": 0.0,
-        "e0": k0 + s0,
-        "u0": u0,
+        "log": log,
         "front0": front0,
         "history": {"t": [0.0], "front_x": [front0]},
         "probes": probes,
         "x0": x0,
         "first": first,
-        "k0": k0,
-        "s0": s0,
     }
 
 
@@ -596,6 +646,7 @@ def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
     if error is None:
         assert particles is not None
         loop = dict(ck.data)
+        loop["log"] = EnergyLog.from_state(loop["log"])
         loop["x0"] = ck.shared().get("x0") if comm.rank == 0 else None
         broken = comm.rank == 0 and (loop["x0"] is None or len(loop["x0"]) != run.total)
         count = comm.allreduce(particles.n)
@@ -608,7 +659,7 @@ def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
     return loop
 
 
-_ENERGY_HEADER = "step,t,kinetic,strain,gravity,total,dissipated\n"
+_ENERGY_HEADER = ",".join(CSV_COLUMNS) + "\n"
 
 
 def _open_logs(run: MpmRun, out: Any, loop: dict[str, Any], resumed: bool) -> tuple[Any, Any]:
@@ -641,8 +692,7 @@ def _open_logs(run: MpmRun, out: Any, loop: dict[str, Any], resumed: bool) -> tu
         series.write(0.0, first.x, _fields(first, loop["x0"], out.fields))  # type: ignore[arg-type]
     csv = path.open("w")
     csv.write(_ENERGY_HEADER)
-    k0, s0 = loop["k0"], loop["s0"]
-    csv.write(f"0,0,{k0!r},{s0!r},0.0,{loop['e0']!r},0.0\n")
+    csv.write(",".join(["0", "0.0", *map(repr, loop["log"].first_row())]) + "\n")
     csv.flush()
     return series, csv
 

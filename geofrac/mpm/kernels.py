@@ -42,6 +42,7 @@ __all__ = [
     "scratch",
     "strain_increment",
     "velocity_gradient",
+    "weights_bspline2",
     "weights_gimp",
     "weights_hat",
 ]
@@ -67,7 +68,11 @@ def scratch(name: str, shape: tuple[int, ...], dtype: type = float) -> np.ndarra
 
 
 def grid_weights(
-    g: Grid, x: np.ndarray, lp: np.ndarray | None = None, reuse: bool = False
+    g: Grid,
+    x: np.ndarray,
+    lp: np.ndarray | None = None,
+    reuse: bool = False,
+    bspline: bool = False,
 ) -> Weights:
     """Compiled :func:`geofrac.mpm.shapes.weights` (same arguments, same result).
 
@@ -80,7 +85,7 @@ def grid_weights(
     n, dim = x.shape
     shape = np.asarray(g.shape, dtype=np.int64)
     origin = np.ascontiguousarray(g.origin, dtype=float)
-    k1 = 2 if lp is None else gimp_nodes(g.spacing, lp)
+    k1 = 3 if bspline else 2 if lp is None else gimp_nodes(g.spacing, lp)
     k = k1**dim
     if reuse:
         nodes = scratch("nodes", (n, k), np.int64)
@@ -90,7 +95,10 @@ def grid_weights(
         nodes = np.empty((n, k), np.int64)
         phi = np.empty((n, k))
         grad = np.empty((n, k, dim))
-    if lp is None:
+    if bspline:
+        if not weights_bspline2(x, origin, g.spacing, shape, nodes, phi, grad):
+            raise ValueError("weights: a particle's support reaches beyond the grid")
+    elif lp is None:
         weights_hat(x, origin, g.spacing, shape, nodes, phi, grad)
     elif not weights_gimp(x, lp, origin, g.spacing, shape, k1, nodes, phi, grad):
         raise ValueError("weights: a particle's support reaches beyond the grid")
@@ -193,6 +201,62 @@ def weights_hat(
             d1[a, 0] = -1.0 / L
             d1[a, 1] = 1.0 / L
         _tensor(i, combos, i1, p1, d1, shape, nodes, phi, grad)
+
+
+@_jit
+def weights_bspline2(
+    x: np.ndarray,
+    origin: np.ndarray,
+    L: float,
+    shape: np.ndarray,
+    nodes: np.ndarray,
+    phi: np.ndarray,
+    grad: np.ndarray,
+) -> bool:
+    """Quadratic B-spline weights (:func:`geofrac.mpm.shapes.bspline2_1d`) into the outputs.
+
+    Args:
+        x: positions, shape=(n, dim).
+        origin: the grid's lowest corner, shape=(dim,).
+        L: cell size.
+        shape: nodes per direction, shape=(dim,).
+        nodes: out, flat node ids, shape=(n, 3**dim).
+        phi: out, φ_ip, shape=(n, 3**dim).
+        grad: out, ∇φ_ip, shape=(n, 3**dim, dim).
+
+    Returns:
+        False when a node with weight lies outside the grid.
+    """
+    n, dim = x.shape
+    i1 = np.empty((dim, 3), np.int64)
+    p1 = np.empty((dim, 3))
+    d1 = np.empty((dim, 3))
+    combos = _combos(3, dim)
+    ok = True
+    for i in range(n):
+        for a in range(dim):
+            st = np.int64(np.floor((x[i, a] - origin[a]) / L + 0.5)) - 1
+            for m in range(3):
+                idx = st + m
+                r = x[i, a] - (origin[a] + L * idx)
+                q = abs(r) / L
+                sgn = 1.0 if r > 0 else (-1.0 if r < 0 else 0.0)
+                if q < 0.5:
+                    ph, dph = 0.75 - q * q, -2.0 * q * sgn / L
+                elif q < 1.5:
+                    ph, dph = 0.5 * (1.5 - q) ** 2, -(1.5 - q) * sgn / L
+                else:
+                    ph, dph = 0.0, 0.0
+                if idx < 0 or idx > shape[a] - 1:
+                    if ph != 0.0:
+                        ok = False
+                    ph, dph = 0.0, 0.0
+                    idx = min(max(idx, 0), shape[a] - 1)
+                i1[a, m] = idx
+                p1[a, m] = ph
+                d1[a, m] = dph
+        _tensor(i, combos, i1, p1, d1, shape, nodes, phi, grad)
+    return ok
 
 
 @_jit

@@ -45,9 +45,10 @@ import numpy as np
 from geofrac.errors import RunError
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles
-from geofrac.mpm.shapes import SHAPES, Weights, weights
+from geofrac.mpm.shapes import SHAPES, Weights, support_margin, weights
 
 if TYPE_CHECKING:  # imported only by a step that uses them
+    from geofrac.mpm.energy import StepBudget
     from geofrac.mpm.friction import Friction
     from geofrac.mpm.parallel import Domain
     from geofrac.mpm.plasticity import DruckerPrager
@@ -56,6 +57,7 @@ __all__ = [
     "BACKENDS",
     "MASS_FLOOR",
     "SCHEMES",
+    "SMOOTHINGS",
     "Elastic",
     "ParticlesLeftGrid",
     "StepSettings",
@@ -73,6 +75,11 @@ SCHEMES = ("musl", "usf", "usavg")
 
 #: Step implementations: compiled loops, or the numpy reference.
 BACKENDS = ("numba", "numpy")
+
+#: MLS smoothing kinds: the seed's (4.66-4.67: the fitted increments change the stress),
+#: or ``consistent`` (the same, with the grid forces from the operator's adjoint applied
+#: to the stresses, :mod:`~geofrac.mpm.consistent`).
+SMOOTHINGS = ("seed", "consistent")
 
 #: Nodes lighter than this fraction of the heaviest node are inactive.
 MASS_FLOOR = 1e-12
@@ -178,6 +185,7 @@ class StepSettings:
         smoothing: MLS influence radius of the strain increments as a multiple of the
             cell size (:mod:`~geofrac.mpm.smoothing`), or None for no smoothing (the
             smoothing code is then not even imported).
+        smoothing_kind: one of :data:`SMOOTHINGS` (with ``smoothing``).
         friction: a Coulomb friction boundary (:mod:`~geofrac.mpm.friction`), or None.
         damping: Cundall's local (non-viscous) damping coefficient α in [0, 1): each
             component of the nodal force becomes f − α |f| sign(v), v the nodal velocity
@@ -202,6 +210,7 @@ class StepSettings:
     backend: str = "numba"
     domain: Domain | None = field(default=None, repr=False)
     damping: float = 0.0
+    smoothing_kind: str = "seed"
 
     def __post_init__(self) -> None:
         """Check the names and the step."""
@@ -215,6 +224,12 @@ class StepSettings:
             raise ValueError(f"smoothing radius factor must be > 0, got {self.smoothing}")
         if not 0 <= self.damping < 1:
             raise ValueError(f"the local damping α must lie in [0, 1), got {self.damping}")
+        if self.smoothing_kind not in SMOOTHINGS:
+            raise ValueError(
+                f"smoothing kind {self.smoothing_kind!r} is not one of {', '.join(SMOOTHINGS)}"
+            )
+        if self.smoothing_kind == "consistent" and self.domain is not None:
+            raise ValueError("consistent smoothing runs on one process only")
         if self.backend not in BACKENDS:
             raise ValueError(f"backend {self.backend!r} is not one of {', '.join(BACKENDS)}")
 
@@ -236,20 +251,6 @@ def local_damping(f: np.ndarray, v: np.ndarray, alpha: float) -> np.ndarray:
         The damping force, shape=(N, dim) (add it to f).
     """
     return -alpha * np.abs(f) * np.sign(v)
-
-
-def _owned_nodes(dom: Domain | None, num_nodes: int) -> np.ndarray | slice:
-    """The nodes this rank counts in a sum over the grid (each node on one rank).
-
-    A node plane along axis 0 belongs to the rank whose slab starts at or below it (the
-    last plane to the last rank); halo planes are another rank's.
-    """
-    if dom is None:
-        return slice(None)
-    r, per = dom.rank, num_nodes // (dom.planes[dom.rank][1] - dom.planes[dom.rank][0] + 1)
-    plane = dom.planes[r][0] + np.arange(num_nodes) // per
-    last = r == len(dom.planes) - 1
-    return (plane >= dom.cuts[r]) & ((plane < dom.cuts[r + 1]) | (last & (plane == dom.cuts[-1])))
 
 
 def _scatter(w: Weights, terms: np.ndarray, bound: np.ndarray, num_nodes: int) -> np.ndarray:
@@ -332,16 +333,19 @@ def _mass_momentum_bounds(p: Particles, pmax: float, fast: bool) -> np.ndarray:
 
 
 def _forces_bounds(
-    p: Particles, gravity: np.ndarray, pmax: float, gmax: float, fast: bool
+    p: Particles, stress: np.ndarray, gravity: np.ndarray, pmax: float, gmax: float, fast: bool
 ) -> np.ndarray:
-    """Bounds of the force terms, max V_p Σ_b |σ_ab| gmax + m_p pmax |b_a|, shape=(dim,)."""
+    """Bounds of the force terms of ``stress`` (shape=(n, dim, dim)), shape=(dim,).
+
+    max V_p Σ_b |σ_ab| gmax + m_p pmax |b_a|.
+    """
     out = np.empty(p.dim)
     if fast:
         from geofrac.mpm import kernels
 
-        kernels.forces_bounds(p.volume, p.stress, p.mass, gravity, pmax, gmax, out)
+        kernels.forces_bounds(p.volume, stress, p.mass, gravity, pmax, gmax, out)
         return out
-    rows = p.volume[:, None] * np.sum(np.abs(p.stress), axis=2) * gmax
+    rows = p.volume[:, None] * np.sum(np.abs(stress), axis=2) * gmax
     out[:] = np.max(rows + (p.mass * pmax)[:, None] * np.abs(gravity), axis=0, initial=0.0)
     return out
 
@@ -351,12 +355,13 @@ def _from_grid(w: Weights, values: np.ndarray) -> np.ndarray:
     return np.matmul(w.phi[:, None, :], values[w.nodes])[:, 0, :]
 
 
-def _forces(w: Weights, p: Particles, gravity: np.ndarray) -> np.ndarray:
+def _forces(w: Weights, p: Particles, stress: np.ndarray, gravity: np.ndarray) -> np.ndarray:
     """The terms of f_int + f_ext (eqs. 4.22-4.23, without tractions), shape=(n, k, dim).
 
-    −V_p σ_p ∇φ_ip + m_p b φ_ip per particle and node.
+    −V_p σ_p ∇φ_ip + m_p b φ_ip per particle and node, σ_p = ``stress`` (shape=(n, dim,
+    dim): the particles' own, or the consistent smoothing's adjoint fit).
     """
-    f = -p.volume[:, None, None] * np.matmul(w.grad, np.swapaxes(p.stress, 1, 2))
+    f = -p.volume[:, None, None] * np.matmul(w.grad, np.swapaxes(stress, 1, 2))
     f += (p.mass[:, None] * w.phi)[:, :, None] * gravity
     return f
 
@@ -378,12 +383,14 @@ def _update_stress(
     v: np.ndarray,
     dt: float,
     s: StepSettings,
-    smooth_at: tuple[np.ndarray, np.ndarray, float] | None,
+    smooth_at: tuple | None,
+    budget: StepBudget | None = None,
 ) -> None:
     """Stress, volume and deformation gradient from the nodal velocity v (D.7-D.9, 4.70).
 
     ``smooth_at`` = (positions at the step's start, ids, radius): the strain increments are
     replaced by their MLS fit there (4.57, 4.66) before they change stress and volume.
+    ``budget``: add the stored-energy terms of this update (:mod:`~geofrac.mpm.energy`).
     """
     n, d = p.n, p.dim
     if s.backend == "numba":
@@ -396,8 +403,48 @@ def _update_stress(
     else:
         L = np.matmul(np.swapaxes(v[w.nodes], 1, 2), w.grad)  # ∇v_p, shape=(n, dim, dim)
         deps = 0.5 * dt * (L + np.swapaxes(L, 1, 2))
+    raw = deps
     if smooth_at is not None:
         deps = _smoothed(deps, smooth_at, s)
+    plastic = not isinstance(material, Elastic)  # an elastic update dissipates nothing
+    if budget is not None:
+        s0, v0 = p.stress.copy(), p.volume.copy()
+        budget.power_raw += float(np.einsum("p,pij,pij->", v0, s0, raw))
+        budget.smoothing += float(np.einsum("p,pij,pij->", v0, s0, deps - raw))
+        trial = float(np.sum(_trial(p, material, deps))) if plastic else 0.0
+    _apply_increment(w, p, material, deps, L, dt, s, budget)
+    if budget is not None:
+        budget.quadratic += 0.5 * float(np.einsum("p,pij,pij->", v0, p.stress - s0, deps))
+        if plastic:
+            from geofrac.mpm.energy import stored
+
+            after = stored(p.stress, p.stress_zz, p.volume, material.E, material.nu)
+            budget.plastic += trial - float(np.sum(after))
+
+
+def _trial(p: Particles, material: Elastic | DruckerPrager, deps: np.ndarray) -> np.ndarray:
+    """Stored energy of the elastic trial σ + D:Δε at volume V(1 + tr Δε), shape=(n,)."""
+    from geofrac.mpm.energy import stored
+
+    el = Elastic(material.E, material.nu)
+    tr = np.trace(deps, axis1=1, axis2=2)
+    zz = p.stress_zz + (el.lame()[0] * tr if p.dim == 2 else 0.0)
+    nu = material.nu if p.dim > 1 else 0.0
+    return stored(p.stress + el.increment(deps), zz, p.volume * (1.0 + tr), material.E, nu)
+
+
+def _apply_increment(
+    w: Weights,
+    p: Particles,
+    material: Elastic | DruckerPrager,
+    deps: np.ndarray,
+    L: np.ndarray,
+    dt: float,
+    s: StepSettings,
+    budget: StepBudget | None,
+) -> None:
+    """Stress (D.30 + D.8 or the plastic return), volume (D.9) and G (4.70) from Δε and ∇v."""
+    d = p.dim
     if isinstance(material, Elastic) and s.backend == "numba":
         from geofrac.mpm import kernels
 
@@ -414,16 +461,14 @@ def _update_stress(
         if p.dim == 2:
             p.stress_zz += material.lame()[0] * np.trace(deps, axis1=1, axis2=2)
     else:
-        _plastic_update(p, material, deps, L, dt)
+        _plastic_update(p, material, deps, L, dt, budget)
     p.volume *= 1.0 + np.trace(deps, axis1=1, axis2=2)
     p.F = np.matmul(np.eye(p.dim) + dt * L, p.F)
     if s.shape == "cpgimp":
         p.lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
 
 
-def _smoothed(
-    deps: np.ndarray, smooth_at: tuple[np.ndarray, np.ndarray, float], s: StepSettings
-) -> np.ndarray:
+def _smoothed(deps: np.ndarray, smooth_at: tuple, s: StepSettings) -> np.ndarray:
     """The MLS fits of the strain increments (4.57), shape=(n, dim, dim).
 
     With a domain the neighbours on other ranks take part as ghosts, so every fit is
@@ -432,7 +477,10 @@ def _smoothed(
     """
     from geofrac.mpm.smoothing import smooth_strain
 
-    x0, ids, h = smooth_at
+    if len(smooth_at) > 3:  # the consistent kind's operator, built at the step's start
+        n, d = deps.shape[:2]
+        return smooth_at[3].apply(deps.reshape(n, d * d)).reshape(n, d, d)
+    x0, ids, h = smooth_at[:3]
     return smooth_strain(deps, x0, ids, h, s.backend, s.domain)
 
 
@@ -468,7 +516,12 @@ def rotate_stress(stress: np.ndarray, spin: np.ndarray) -> np.ndarray:
 
 
 def _plastic_update(
-    p: Particles, material: DruckerPrager, deps: np.ndarray, L: np.ndarray, dt: float
+    p: Particles,
+    material: DruckerPrager,
+    deps: np.ndarray,
+    L: np.ndarray,
+    dt: float,
+    budget: StepBudget | None = None,
 ) -> None:
     """Jaumann rotation (D.30-D.31) and Drucker-Prager return (4.39-4.43) on 3×3 stresses.
 
@@ -483,7 +536,21 @@ def _plastic_update(
     spin[:, :d, :d] = spin_increment(L, dt)
     deps3 = np.zeros((n, 3, 3))
     deps3[:, :d, :d] = deps
-    new, dlam = material.update(rotate_stress(full, spin), deps3)
+    rotated = rotate_stress(full, spin)
+    if budget is not None:  # the rotation's change of the trial's stored energy
+        from geofrac.mpm.energy import stored
+
+        tr = np.trace(deps, axis1=1, axis2=2)
+        el = Elastic(material.E, material.nu)
+        volume, zero = p.volume * (1.0 + tr), np.zeros(n)
+        rot = float(
+            np.sum(
+                stored(rotated + el.increment(deps3), zero, volume, material.E, material.nu)
+                - stored(full + el.increment(deps3), zero, volume, material.E, material.nu)
+            )
+        )
+        budget.plastic += rot  # the return starts from the rotated trial
+    new, dlam = material.update(rotated, deps3)
     p.stress = new[:, :d, :d].copy()
     if d == 2:
         p.stress_zz = new[:, 2, 2].copy()
@@ -495,18 +562,18 @@ def step(
     p: Particles,
     material: Elastic | DruckerPrager,
     s: StepSettings,
-    work: dict[str, float] | None = None,
+    budget: StepBudget | None = None,
 ) -> None:
     """Advance the particles by one step of ``s.scheme`` (in place).
+
+    ``budget``: add this step's energy terms (this rank's part, each node counted on one
+    rank: sum over the ranks for the whole) to it (:mod:`~geofrac.mpm.energy`), among
+    them ``budget.damping``, the energy the local damping took out (``s.damping`` > 0);
+    None (the default) computes none of them.
 
     With ``s.domain``, ``g`` is ``s.domain.local`` and ``p`` this rank's particles; every
     rank calls the step, and at its end ``p``'s arrays hold the particles the rank owns
     then.
-
-    ``work``: an accumulator for energy terms; with ``s.damping`` > 0 the step adds to
-    ``work["damping"]`` the energy the local damping took out of the grid this step,
-    −Δt Σ_i f_damp,i · ½ (v_i + v*_i) over the nodes this rank owns (each node counted
-    on one rank: sum over the ranks for the whole).
 
     Raises:
         ParticlesLeftGrid: a particle (or its GIMP box) is outside the grid; nothing
@@ -518,29 +585,46 @@ def step(
     if not isinstance(material, Elastic) and p.dim == 1:
         raise ValueError("plasticity needs 2D or 3D particles (the 1D bar is elastic)")
     dom = s.domain
-    gimp = s.shape != "mpm"
+    gimp = s.shape in ("ugimp", "cpgimp")
+    spline = s.shape == "bspline2"
     fast = s.backend == "numba"
     if fast:
         from geofrac.mpm import kernels
     _check_inside(g, p, s)
     if fast:
-        w = kernels.grid_weights(g, p.x, p.lp if gimp else None, reuse=True)
+        w = kernels.grid_weights(g, p.x, p.lp if gimp else None, reuse=True, bspline=spline)
     else:
-        w = weights(g, p.x, p.lp if gimp else None)
+        w = weights(g, p.x, p.lp if gimp else None, bspline=spline)
     N, dt, dim = g.num_nodes, s.dt, p.dim
-    smooth_at = None if s.smoothing is None else (p.x.copy(), p.ids, s.smoothing * g.spacing)
+    smooth_at: tuple | None = None
+    if s.smoothing is not None:
+        smooth_at = (p.x.copy(), p.ids, s.smoothing * g.spacing)
+        if s.smoothing_kind == "consistent":
+            from geofrac.mpm.consistent import mls_operator
+
+            smooth_at += (mls_operator(p.x, s.smoothing * g.spacing, p.ids),)
+
+    def force_stress() -> np.ndarray:
+        """The stresses the grid forces are made of (the adjoint fit: consistent kind)."""
+        if smooth_at is None or len(smooth_at) < 4:
+            return p.stress
+        flat = p.stress.reshape(p.n, dim * dim)
+        return np.ascontiguousarray(smooth_at[3].adjoint(flat, p.volume).reshape(p.n, dim, dim))
+
     # MUSL's forces use σ^k: they join the first transfer (one pass, one exchange). The
     # nodal sums are exact (fixed-point pairs, geofrac.mpm.fixedpoint), hence the same
     # for any particle order and any decomposition; their scales come from bounds of
     # the terms, the same on every rank.
     early = s.scheme == "musl"
     ncol = 1 + dim + dim * early  # mass, momentum (, force)
-    # every shape has 0 <= φ <= 1 and |∂φ/∂x_a| <= 1/L (eqs. 4.29, 4.31; a test pins
-    # it): the terms' bounds need no pass over the weights
+    # every shape has 0 <= φ <= 1 and |∂φ/∂x_a| <= 1/L (eqs. 4.29, 4.31; bspline2:
+    # N <= 3/4, |N'| <= 1/L; a test pins it): the terms' bounds need no pass over the
+    # weights
     pmax, gmax = 1.0, 1.0 / g.spacing
     bound = _mass_momentum_bounds(p, pmax, fast)
     if early:
-        bound = np.concatenate([bound, _forces_bounds(p, s.gravity, pmax, gmax, fast)])
+        fs = force_stress()
+        bound = np.concatenate([bound, _forces_bounds(p, fs, s.gravity, pmax, gmax, fast)])
     if dom is not None:
         bound = dom.allmax(bound)
     if fast:
@@ -552,15 +636,14 @@ def step(
         kernels.mass_momentum(w.nodes, w.phi, p.mass, p.v, scale, acc)
         if early:
             kernels.forces(
-                w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, scale, acc,
-                1 + dim,
-            )  # fmt: skip
+                w.nodes, w.phi, w.grad, p.volume, fs, p.mass, s.gravity, scale, acc, 1 + dim
+            )
     else:
         terms = np.empty((p.n, w.phi.shape[1], ncol))
         terms[:, :, 0] = w.phi * p.mass[:, None]
         terms[:, :, 1 : 1 + dim] = w.phi[:, :, None] * (p.mass[:, None] * p.v)[:, None, :]
         if early:
-            terms[:, :, 1 + dim :] = _forces(w, p, s.gravity)
+            terms[:, :, 1 + dim :] = _forces(w, p, fs, s.gravity)
         acc = _scatter(w, terms, bound, N)
     nodal = _complete(acc, bound, dom, fast)
     mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
@@ -585,9 +668,10 @@ def step(
         apply_friction(v, s.friction, allow)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):
-        _update_stress(w, p, material, v, half * dt, s, smooth_at)
+        _update_stress(w, p, material, v, half * dt, s, smooth_at, budget)
     if not early:
-        bound = _forces_bounds(p, s.gravity, pmax, gmax, fast)
+        fs = force_stress()
+        bound = _forces_bounds(p, fs, s.gravity, pmax, gmax, fast)
         if dom is not None:
             bound = dom.allmax(bound)
         if fast:
@@ -596,33 +680,37 @@ def step(
             acc = kernels.scratch("acc", (N, dim, 2), np.int64)
             acc.fill(0)
             kernels.forces(
-                w.nodes, w.phi, w.grad, p.volume, p.stress, p.mass, s.gravity, scales(bound),
-                acc, 0,
-            )  # fmt: skip
+                w.nodes, w.phi, w.grad, p.volume, fs, p.mass, s.gravity, scales(bound), acc, 0
+            )
         else:
-            acc = _scatter(w, _forces(w, p, s.gravity), bound, N)
+            acc = _scatter(w, _forces(w, p, fs, s.gravity), bound, N)
         f = _complete(acc, bound, dom, fast)
+    f_damp, f_total = None, f
     if s.damping > 0:  # a branch: no extra work without damping
         f_damp = local_damping(f, v, s.damping)
-        f = f + f_damp
+        f_total = f + f_damp
     if fast:
         a, v_new = kernels.scratch("a", (N, dim)), kernels.scratch("v_new", (N, dim))
-        kernels.nodal_acceleration(f, mass, MASS_FLOOR * peak, s.fixed, dt, v, a, v_new)
+        kernels.nodal_acceleration(f_total, mass, MASS_FLOOR * peak, s.fixed, dt, v, a, v_new)
     else:
         a = np.zeros((N, dim))
-        a[active] = f[active] / mass[active, None]
+        a[active] = f_total[active] / mass[active, None]
         a[s.fixed] = 0.0
         v_new = v + dt * a
-    if s.damping > 0 and work is not None:
-        held = s.fixed | ~active[:, None]  # held components and inactive nodes do not move
-        power = np.where(held, 0.0, f_damp * (v + v_new))[_owned_nodes(dom, N)]
-        work["damping"] = work.get("damping", 0.0) - 0.5 * dt * float(power.sum())
     if s.friction is not None:
         apply_friction(v_new, s.friction, allow)
         # the particles take every change the contact made, the mapped velocity's too
         # (else the approach it removed stays in their velocity, step after step, and
         # its friction is lost: a launched block slid 8 % too far)
         a = (v_new - v_mapped) / dt
+    if budget is not None:
+        from geofrac.mpm.energy import owned_nodes
+
+        x_start, v_start = p.x.copy(), p.v.copy()
+        budget.grid_terms(
+            dt, mass, mom, f, a, s.fixed, mass[:, None] * s.gravity, MASS_FLOOR * peak,
+            owned_nodes(dom, N), f_damp,
+        )  # fmt: skip
     if fast:
         kernels.from_grid2(w.nodes, w.phi, a, v_new, dt, p.v, p.x)  # D.4-D.5
     else:
@@ -648,14 +736,22 @@ def step(
             v = _velocity(mom, mass, active, s.fixed)
         if s.friction is not None:
             apply_friction(v, s.friction, allow)
-        _update_stress(w, p, material, v, half * dt, s, smooth_at)
+        _update_stress(w, p, material, v, half * dt, s, smooth_at, budget)
+    if budget is not None:
+        budget.transfer += 0.5 * float(np.sum(p.mass * np.sum((p.v - v_start) ** 2, axis=1)))
+        budget.potential -= float(p.mass @ ((p.x - x_start) @ s.gravity))
     _check(p, dom, fast)
     if dom is not None:
         dom.migrate(p)
 
 
-def _outside(g: Grid, p: Particles, gimp: bool, fast: bool) -> np.ndarray:
-    """Which particles (or their GIMP boxes) reach beyond the grid, shape=(n,)."""
+def _outside(g: Grid, p: Particles, gimp: bool, fast: bool, margin: float | None) -> np.ndarray:
+    """Which particles (or their GIMP boxes) reach beyond the grid, shape=(n,).
+
+    ``margin``: a fixed support half-width instead (``bspline2``), or None.
+    """
+    if margin is not None:
+        return g.outside(p.x, margin)
     if not fast:
         return g.outside(p.x, p.lp if gimp else 0.0)
     from geofrac.mpm import kernels
@@ -671,19 +767,20 @@ def _check_inside(g: Grid, p: Particles, s: StepSettings) -> None:
     With a domain: against the whole grid, on every rank alike; then a RunError when a
     particle's support reaches beyond its rank's sub-grid (the halo is too narrow).
     """
-    gimp, fast = s.shape != "mpm", s.backend == "numba"
+    gimp, fast = s.shape in ("ugimp", "cpgimp"), s.backend == "numba"
+    margin = support_margin(s.shape, g.spacing)
     dom = s.domain
     if dom is None:
-        out = _outside(g, p, gimp, fast)
+        out = _outside(g, p, gimp, fast, margin)
         if np.any(out):
             raise ParticlesLeftGrid(p.ids[out], p.x[out])
         return
-    out = _outside(dom.grid, p, gimp, fast)
+    out = _outside(dom.grid, p, gimp, fast, margin)
     ids, positions = dom.allgather_rows(p.ids[out], p.x[out])
     if len(ids):
         order = np.argsort(ids)
         raise ParticlesLeftGrid(ids[order], positions[order])
-    if dom.any(bool(np.any(_outside(g, p, gimp, fast)))):
+    if dom.any(bool(np.any(_outside(g, p, gimp, fast, margin)))):
         raise RunError(
             f"a particle's support reaches beyond its rank's halo of {dom.halo} cells; "
             "decompose with a wider halo"

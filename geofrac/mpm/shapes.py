@@ -11,6 +11,12 @@ Three kinds, as the scene's ``shape``:
 - ``cpgimp``: the same, with l_p following the deformation gradient, l_p = F_p l_p⁰
   (eqs. 4.69-4.70; per direction, the diagonal of F_p).
 
+- ``bspline2``: not in the seed; the quadratic B-spline of the node distance,
+  N(r) = 3/4 − (r/L)² for |r| < L/2 and (3/2 − |r|/L)²/2 for L/2 ≤ |r| < 3L/2 (support
+  1.5 cells each side, three nodes per direction). Its gradient is continuous, so a
+  particle crossing a cell boundary changes no force abruptly (the cell-crossing error
+  of ``mpm``); docs/mpm_energy.md.
+
 In 2D and 3D the weights are tensor products of the 1D ones (eq. 4.32).
 """
 
@@ -22,10 +28,37 @@ import numpy as np
 
 from geofrac.mpm.grid import Grid
 
-__all__ = ["SHAPES", "Weights", "gimp_1d", "gimp_nodes", "hat_1d", "weights"]
+__all__ = [
+    "SHAPES",
+    "Weights",
+    "bspline2_1d",
+    "gimp_1d",
+    "gimp_nodes",
+    "hat_1d",
+    "support_margin",
+    "weights",
+]
 
 #: Shape function kinds.
-SHAPES = ("mpm", "ugimp", "cpgimp")
+SHAPES = ("mpm", "ugimp", "cpgimp", "bspline2")
+
+
+def support_margin(shape: str, spacing: float) -> float | None:
+    """How far from a particle the nodes with weight reach beyond the grid check, or None.
+
+    None: the particle's half-widths l_p (GIMP) or nothing (``mpm``) decide. For
+    ``bspline2`` the three nodes around the particle must exist: half a cell.
+    """
+    return 0.5 * spacing if shape == "bspline2" else None
+
+
+def bspline2_1d(r: np.ndarray, L: float) -> tuple[np.ndarray, np.ndarray]:
+    """The quadratic B-spline N(r) and dN/dx for r = x_p − x_i, each the shape of r."""
+    a = np.abs(r) / L
+    sign = np.sign(r)
+    phi = np.where(a < 0.5, 0.75 - a**2, np.where(a < 1.5, 0.5 * (1.5 - a) ** 2, 0.0))
+    dphi = np.where(a < 0.5, -2 * a, np.where(a < 1.5, -(1.5 - a), 0.0)) * sign / L
+    return phi, dphi
 
 
 @dataclass(frozen=True)
@@ -109,11 +142,17 @@ def gimp_nodes(L: float, lp: np.ndarray) -> int:
 
 
 def _per_direction(
-    g: Grid, x: np.ndarray, lp: np.ndarray | None
+    g: Grid, x: np.ndarray, lp: np.ndarray | None, bspline: bool = False
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Node indices, φ and dφ/dx per direction, each shape=(n, dim, k1)."""
     L = g.spacing
     n, dim = x.shape
+    if bspline:
+        start = np.floor((x - g.origin) / L + 0.5).astype(np.int64) - 1
+        idx = start[:, :, None] + np.arange(3)
+        r = x[:, :, None] - (g.origin[:, None] + L * idx)
+        phi, dphi = bspline2_1d(r, L)
+        return idx, phi, dphi
     if lp is None:
         start = np.floor((x - g.origin) / L).astype(np.int64)
         start = np.clip(start, 0, np.asarray(g.cells) - 1)  # the upper boundary's cell
@@ -129,20 +168,21 @@ def _per_direction(
     return idx, phi.reshape(n, dim, k1), dphi.reshape(n, dim, k1)
 
 
-def weights(g: Grid, x: np.ndarray, lp: np.ndarray | None = None) -> Weights:
+def weights(g: Grid, x: np.ndarray, lp: np.ndarray | None = None, bspline: bool = False) -> Weights:
     """φ_ip and ∇φ_ip of particles at x (tensor products, eq. 4.32).
 
     Args:
         g: the grid.
         x: particle positions, all inside the grid, shape=(n, dim).
         lp: GIMP half-widths, shape=(n, dim); None for ``mpm`` (point particles).
+        bspline: quadratic B-splines (``bspline2``; ``lp`` is then ignored).
 
     Raises:
         ValueError: a node with weight lies outside the grid (check
             :meth:`Grid.outside` first).
     """
     n, dim = x.shape
-    idx, phi1, dphi1 = _per_direction(g, x, lp)
+    idx, phi1, dphi1 = _per_direction(g, x, lp, bspline)
     k1 = idx.shape[2]
     upper = np.asarray(g.shape)[None, :, None] - 1
     off = (idx < 0) | (idx > upper)

@@ -37,9 +37,10 @@ def test_bench_mpm_translating_bar_reports_energy_drift(cli, tmp_path):
         cli, tmp_path, "--cases", "translating", "--shapes", "cpgimp", "--schemes", "usf",
         "--t-end", "2",
     )  # fmt: skip
-    assert [r["smoothing"] for r in records] == ["none", "mls 2 cells"]
+    assert [r["smoothing"] for r in records] == ["none", "mls 2 cells", "mls 2 cells consistent"]
     # before the first wall hit (t = 11.25) the bar only flies: energy is conserved
     assert all(0 <= r["energy_drift_max"] < 1e-6 for r in records)
+    assert all(0 <= r["energy_drift_work_max"] < 1e-6 for r in records)
     assert (tmp_path / "mpm_translating.png").stat().st_size > 0
 
 

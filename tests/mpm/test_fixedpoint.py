@@ -52,11 +52,11 @@ def _nodal(dim, shape, order):
     p.v = rng.normal(size=p.x.shape)
     p.x, p.v, p.mass, p.lp = p.x[order], p.v[order], p.mass[order], p.lp[order]
     g = grid(np.zeros(dim), 0.5, [6] * dim)
-    w = weights(g, p.x, None if shape == "mpm" else p.lp)
+    w = weights(g, p.x, None if shape == "mpm" else p.lp, bspline=shape == "bspline2")
     return g, p, w
 
 
-@pytest.mark.parametrize("shape", ["mpm", "ugimp"])
+@pytest.mark.parametrize("shape", ["mpm", "ugimp", "bspline2"])
 @pytest.mark.parametrize("dim", [1, 2, 3])
 def test_compiled_nodal_sums_are_the_reference_integers_in_any_order(dim, shape):
     from geofrac.mpm import kernels
@@ -104,14 +104,23 @@ def test_light_nodes_keep_their_digits():
         assert abs(Fraction(got[j]) - exact[j]) <= Fraction(1e-16) * exact[j]
 
 
-@pytest.mark.parametrize("shape", ["mpm", "ugimp"])
+@pytest.mark.parametrize("shape", ["mpm", "ugimp", "bspline2"])
 @pytest.mark.parametrize("dim", [1, 2, 3])
 def test_weights_stay_within_the_bounds_the_step_scales_by(dim, shape):
-    """0 <= φ <= 1 and |∂φ/∂x| <= 1/L (eqs. 4.29, 4.31) for half-widths up to L/2."""
+    """0 <= φ <= 1 and |∂φ/∂x| <= 1/L (eqs. 4.29, 4.31) for half-widths up to L/2.
+
+    The quadratic B-spline too: N <= 3/4 and |N'| <= 1/L (its largest slope, at |r| =
+    L/2), so a tensor product's gradient is at most 1/L; numpy and compiled weights.
+    """
+    from geofrac.mpm import kernels
+
     rng = np.random.default_rng(dim)
     g = grid(np.zeros(dim), 0.5, [8] * dim)
     x = rng.uniform(1.0, 3.0, size=(3000, dim))
-    lp = rng.uniform(0.01, 0.25, size=x.shape) if shape != "mpm" else None
-    w = weights(g, x, lp)
-    assert w.phi.min() >= 0.0 and w.phi.max() <= 1.0
-    assert np.abs(w.grad).max() <= 1.0 / g.spacing * (1 + 1e-15)
+    lp = rng.uniform(0.01, 0.25, size=x.shape) if shape == "ugimp" else None
+    spline = shape == "bspline2"
+    for w in (weights(g, x, lp, bspline=spline), kernels.grid_weights(g, x, lp, bspline=spline)):
+        assert w.phi.min() >= 0.0 and w.phi.max() <= 1.0
+        assert np.abs(w.grad).max() <= 1.0 / g.spacing * (1 + 1e-15)
+        if spline:  # nearly reached: N'(L/2) = 1/L times N = 3/4 across, per other axis
+            assert np.abs(w.grad).max() > 0.9 * 0.75 ** (dim - 1) / g.spacing

@@ -125,14 +125,19 @@ def test_decomposed_run_equals_the_serial_one(scheme, shape, smoothing, material
 @pytest.mark.parametrize("shape", SHAPES)
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_decomposed_run_without_smoothing_is_bitwise_the_serial_one(scheme, shape, material):
-    """Exact nodal sums: 300 steps of the sliding block across the slabs, no bit differs."""
+    """Exact nodal sums: 300 steps of the sliding block across the slabs, no bit differs.
+
+    The front passes x = 4 (from 3.5). The quadratic B-spline's lowest particle row
+    (1.25 cells above the held ground nodes, inside its 1.5-cell support) is braked by
+    them, so its elastic block's front reaches 3.97-3.98 only: 3.9 for it.
+    """
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
     serial, gathered, _, crossed = _run(comm, scheme, shape, None, material, steps=300)
     assert crossed > 10
     if comm.rank == 0:
-        assert serial.x[:, 0].max() > 4.0
+        assert serial.x[:, 0].max() > (3.9 if shape == "bspline2" else 4.0)
         _compare(serial, gathered, rtol=0.0)
 
 

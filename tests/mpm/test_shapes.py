@@ -56,3 +56,30 @@ def test_support_beyond_the_grid_is_refused():
     g = grid([0.0], 1.0, [4])
     with pytest.raises(ValueError, match="beyond the grid"):
         weights(g, np.array([[3.9]]), np.array([[0.25]]))
+
+
+def test_quadratic_bspline_values_partition_and_continuity():
+    """N(0) = 3/4, N(±L) = 1/8, N(±3L/2) = 0; Σ N = 1, Σ N x_i = x; dN/dx continuous."""
+    from geofrac.mpm.kernels import grid_weights
+    from geofrac.mpm.shapes import bspline2_1d
+
+    L = 0.5
+    phi, dphi = bspline2_1d(np.array([0.0, L, -L, 1.5 * L, 0.5 * L]), L)
+    np.testing.assert_allclose(phi, [0.75, 0.125, 0.125, 0.0, 0.5], atol=1e-15)
+    np.testing.assert_allclose(dphi, [0.0, -0.5 / L, 0.5 / L, 0.0, -1.0 / L], atol=1e-14)
+    # the gradient is continuous at |r| = L/2 (C¹), unlike the hat's at r = 0
+    eps = 1e-9
+    left, right = bspline2_1d(np.array([0.5 * L - eps, 0.5 * L + eps]), L)[1]
+    assert left == pytest.approx(right, abs=1e-7)
+    g = grid([0.0, 0.0], L, [10, 10])
+    x = np.random.default_rng(3).uniform(0.3, 4.7, (40, 2))
+    w = weights(g, x, bspline=True)
+    np.testing.assert_allclose(w.phi.sum(axis=1), 1.0, atol=1e-14)
+    np.testing.assert_allclose(
+        np.sum(w.phi[:, :, None] * g.nodes()[w.nodes], axis=1), x, atol=1e-13
+    )
+    np.testing.assert_allclose(w.grad.sum(axis=1), 0.0, atol=1e-13)
+    fast = grid_weights(g, x, bspline=True)
+    np.testing.assert_array_equal(fast.nodes, w.nodes)
+    np.testing.assert_allclose(fast.phi, w.phi, atol=1e-15)
+    np.testing.assert_allclose(fast.grad, w.grad, atol=1e-13)
