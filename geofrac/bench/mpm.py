@@ -114,10 +114,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--smoothing-kinds",
-        type=name_list(("seed", "consistent"), "smoothing kind"),
-        default=["seed", "consistent"],
+        type=name_list(("standard", "consistent"), "smoothing kind"),
+        default=["standard", "consistent"],
         help="comma-separated smoothing kinds of the smoothed translating-bar runs "
-        "(default: seed,consistent)",
+        "(default: standard,consistent)",
     )
     p.add_argument(
         "--shapes",
@@ -261,7 +261,7 @@ def _record(
     ``neighbour_build_seconds``; the others are None.
     """
     label = "none" if smoothing is None else f"mls {smoothing:g} cells"
-    if smoothing is not None and measured.get("kind", "seed") != "seed":
+    if smoothing is not None and measured.get("kind", "standard") != "standard":
         label += f" {measured['kind']}"
     return {
         "case": case,
@@ -330,7 +330,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     histories = {}
     smoothings = (None, args.smoothing)
     kinds = args.smoothing_kinds
-    variants = [(None, "seed")] + [(args.smoothing, k) for k in kinds]
+    variants = [(None, "standard")] + [(args.smoothing, k) for k in kinds]
     total = (
         len(shapes)
         * len(schemes)

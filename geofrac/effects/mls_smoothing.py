@@ -2,13 +2,13 @@
 
 Each particle's strain increment is replaced by the moving-least-squares fit of its
 neighbours' increments (eqs. 4.50-4.58: cubic basis, cubic spline weight 4.51); a
-particle with fewer neighbours than basis terms keeps its own (the seed: "fewer than 4").
-The influence radius is a multiple of the grid cell size (the seed: "the cell size times
+particle with fewer neighbours than basis terms keeps its own (Edo (2016): "fewer than 4").
+The influence radius is a multiple of the grid cell size (Edo (2016): "the cell size times
 an arbitrary constant"). MPM scenes only; the smoothing code is imported only when a
 scene declares this effect.
 
 Scene table ``[mls_smoothing]``: ``radius`` = influence radius in cells (default 2.0);
-``kind`` = ``"seed"`` (default: the fitted increments change the stresses, eqs. 4.66-4.67)
+``kind`` = ``"standard"`` (default: the fitted increments change the stresses, eqs. 4.66-4.67)
 or ``"consistent"`` (the same, with the grid forces from the fit's adjoint applied to the
 stresses, so the smoothing does no net work; one rank only; docs/mpm_energy.md).
 """
@@ -39,16 +39,16 @@ class SmoothingConfig:
 
     Attributes:
         radius: influence radius h as a multiple of the grid cell size.
-        kind: ``seed`` or ``consistent`` (:data:`geofrac.mpm.schemes.SMOOTHINGS`).
+        kind: ``standard`` (Edo (2016)) or ``consistent`` (:data:`geofrac.mpm.schemes.SMOOTHINGS`).
     """
 
     radius: float
-    kind: str = "seed"
+    kind: str = "standard"
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> SmoothingConfig:
     """Validate ``[mls_smoothing]``."""
     t = Table(ctx.file, "mls_smoothing", table, KEYS)
     radius = float(t.number("radius", default=DEFAULT_RADIUS, positive=True, maximum=MAX_RADIUS))  # type: ignore[arg-type]
-    kind = str(t.string("kind", default="seed", choices=("seed", "consistent")))
+    kind = str(t.string("kind", default="standard", choices=("standard", "consistent")))
     return SmoothingConfig(radius, kind)

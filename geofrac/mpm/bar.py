@@ -163,7 +163,7 @@ def translating_overrides(
     scheme: str,
     smoothing: float | None,
     t_end: float,
-    smoothing_kind: str = "seed",
+    smoothing_kind: str = "standard",
 ) -> list[str]:
     """The ``--set`` overrides of :data:`TRANSLATING_SCENE` for one variant."""
     sets = [f"mpm.shape={shape}", f"mpm.scheme={scheme}", f"mpm.t_end={t_end!r}"]
@@ -183,7 +183,7 @@ def translating_bar(
     t_end: float = 100.0,
     steps: int | None = None,
     samples: int = 2000,
-    smoothing_kind: str = "seed",
+    smoothing_kind: str = "standard",
 ) -> EnergyHistory:
     """Run the translating bar of seed 4.5.3 to ``t_end`` (or for ``steps`` steps).
 

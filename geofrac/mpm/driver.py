@@ -330,7 +330,7 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
         friction,
         **({"domain": domain} if domain is not None else {}),
         damping=spec.damping,
-        smoothing_kind="seed" if smoothing is None else smoothing.kind,
+        smoothing_kind="standard" if smoothing is None else smoothing.kind,
     )
     ramp = gravity.ramp if gravity is not None else 0.0
     return MpmRun(g, local, p, material, settings, steps, domain, probes, phi, total, ramp, bodies)

@@ -79,7 +79,7 @@ BACKENDS = ("numba", "numpy")
 #: MLS smoothing kinds: the seed's (4.66-4.67: the fitted increments change the stress),
 #: or ``consistent`` (the same, with the grid forces from the operator's adjoint applied
 #: to the stresses, :mod:`~geofrac.mpm.consistent`).
-SMOOTHINGS = ("seed", "consistent")
+SMOOTHINGS = ("standard", "consistent")
 
 #: Nodes lighter than this fraction of the heaviest node are inactive.
 MASS_FLOOR = 1e-12
@@ -210,7 +210,7 @@ class StepSettings:
     backend: str = "numba"
     domain: Domain | None = field(default=None, repr=False)
     damping: float = 0.0
-    smoothing_kind: str = "seed"
+    smoothing_kind: str = "standard"
 
     def __post_init__(self) -> None:
         """Check the names and the step."""

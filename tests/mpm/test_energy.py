@@ -16,7 +16,7 @@ from geofrac.mpm.schemes import SCHEMES, Elastic, StepSettings, step, strain_ene
 from geofrac.scene import load_scene
 
 
-def _block(scheme, shape="ugimp", smoothing=None, kind="seed", mu=0.3, backend="numba"):
+def _block(scheme, shape="ugimp", smoothing=None, kind="standard", mu=0.3, backend="numba"):
     """A 2D elastic block thrown sideways onto a frictional floor beside a fixed wall."""
     cell = 0.5
     g = grid([-1.0, -1.0], cell, [16, 12])
