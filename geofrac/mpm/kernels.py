@@ -247,16 +247,35 @@ def weights_bspline2(
                     ph, dph = 0.5 * (1.5 - q) ** 2, -(1.5 - q) * sgn / L
                 else:
                     ph, dph = 0.0, 0.0
-                if idx < 0 or idx > shape[a] - 1:
-                    if ph != 0.0:
-                        ok = False
-                    ph, dph = 0.0, 0.0
-                    idx = min(max(idx, 0), shape[a] - 1)
-                i1[a, m] = idx
-                p1[a, m] = ph
-                d1[a, m] = dph
+                ok &= _store(a, m, idx, ph, dph, shape[a], i1, p1, d1)
         _tensor(i, combos, i1, p1, d1, shape, nodes, phi, grad)
     return ok
+
+
+@_jit
+def _store(
+    a: int,
+    m: int,
+    idx: int,
+    ph: float,
+    dph: float,
+    n: int,
+    i1: np.ndarray,
+    p1: np.ndarray,
+    d1: np.ndarray,
+) -> bool:
+    """Store node ``idx`` (of ``n`` along axis a) and its φ, dφ/dx as entry m of the axis.
+
+    A node outside the grid is clipped to it and carries no weight; returns False when
+    it had weight (the particle's support reaches beyond the grid).
+    """
+    inside = 0 <= idx <= n - 1
+    if not inside:
+        idx = min(max(idx, 0), n - 1)
+    i1[a, m] = idx
+    p1[a, m] = ph if inside else 0.0
+    d1[a, m] = dph if inside else 0.0
+    return inside or ph == 0.0
 
 
 @_jit
@@ -317,14 +336,7 @@ def weights_gimp(
                 idx = st + m
                 r = x[i, a] - (origin[a] + L * idx)
                 ph, dph = _gimp_1d(r, L, lp[i, a])
-                if idx < 0 or idx > shape[a] - 1:
-                    if ph != 0.0:
-                        ok = False
-                    ph, dph = 0.0, 0.0
-                    idx = min(max(idx, 0), shape[a] - 1)
-                i1[a, m] = idx
-                p1[a, m] = ph
-                d1[a, m] = dph
+                ok &= _store(a, m, idx, ph, dph, shape[a], i1, p1, d1)
         _tensor(i, combos, i1, p1, d1, shape, nodes, phi, grad)
     return ok
 
