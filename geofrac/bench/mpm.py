@@ -168,7 +168,7 @@ def _plot(runs: dict[tuple[str, str, float], Any], Ws: list[float], path: Path) 
         ax.set_xlabel("x / Δ")
         ax.set_title(f"W = {W:g}")
     save_figure(
-        fig, axes, path, "Quasi-static bar at t = L0/c (seed Fig. 4.13-4.15)", "σ / ρ0|b|L0"
+        fig, axes, path, "Quasi-static bar at t = L0/c (Edo (2016), Fig. 4.13-4.15)", "σ / ρ0|b|L0"
     )
 
 
@@ -219,7 +219,7 @@ def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None
             ax.axhline(level, color="k", lw=0.5, ls=":")
 
     _smoothing_panels(
-        histories, path, "Translating bar (seed 4.5.3): total energy", "E(t) / E0", "t",
+        histories, path, "Translating bar (Edo (2016), 4.5.3): total energy", "E(t) / E0", "t",
         draw, reference,
     )  # fmt: skip
 
