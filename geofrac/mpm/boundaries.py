@@ -34,7 +34,6 @@ __all__ = [
     "TOL",
     "bed_nodes",
     "boundary_rows",
-    "held",
     "scene_grid",
     "wall_nodes",
 ]
@@ -209,16 +208,3 @@ def boundary_rows(
     planes = planes[keep] - np.einsum("ka,ka->k", nodes[ids[keep]], normals[keep])
     planes += np.einsum("ka,ka->k", nodes[ids[keep]], free)
     return fixed, ids[keep], free, planes, which[keep]
-
-
-def held(
-    g: Grid,
-    lower: tuple[float, ...],
-    upper: tuple[float, ...],
-    walls: dict[str, str],
-    bed: tuple[tuple[float, float], ...],
-    frictional: tuple[str, ...] = (),
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(held components, frictional node ids, their normals) of :func:`boundary_rows`."""
-    fixed, ids, normals, _, _ = boundary_rows(g, lower, upper, walls, bed, frictional)
-    return fixed, ids, normals

@@ -75,13 +75,9 @@ class Friction:
     mu: np.ndarray
     offsets: np.ndarray | None = None
 
-    def layers(self) -> list[np.ndarray]:
-        """Row ids split so that no node repeats within a part: [shape=(k_j,)]."""
-        return [np.flatnonzero(self.layer == j) for j in range(int(self.layer.max(initial=-1)) + 1)]
-
     @cached_property
     def layer(self) -> np.ndarray:
-        """Each row's part in :meth:`layers`, shape=(k,).
+        """Each row's layer (rows split so that no node repeats within a layer), shape=(k,).
 
         0 for a node's first row, 1 for its second (a corner)…
         """
@@ -156,7 +152,7 @@ def gaps(
     phi: np.ndarray,
     num_nodes: int,
 ) -> np.ndarray:
-    """Per layer (:meth:`Friction.layers`) and node, the gap between its material and row.
+    """Per layer (:attr:`Friction.layer`) and node, the gap between its material and row.
 
     The gap of row r (node i, normal n, plane d) is the least d − (x_p·n + Σ_a |n_a| lp_a)
     over the particles p with weight on i: how far the nearest material (its box) is from

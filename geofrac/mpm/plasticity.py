@@ -1,4 +1,4 @@
-"""Drucker-Prager plasticity with return mapping, and the Jaumann stress rate.
+"""Drucker-Prager plasticity with return mapping.
 
 Pure functions on full 3×3 stress tensors (plane strain keeps σ_zz), for the MPM's
 ``plasticity`` effect (seed 4.3.2, App. D):
@@ -11,13 +11,10 @@ Pure functions on full 3×3 stress tensors (plane strain keeps σ_zz), for the M
   associated flow; the default ψ = 0 keeps the plastic volume); the return is
   σ = σ* − Δλ (3K β_ψ I + G s*/√J₂*) with Δλ = f(σ*)/(9K β β_ψ + G), which lands on
   f = 0; a trial stress beyond the apex returns to the apex σ = k/(3β) I (σ = 0 for a
-  cohesionless soil: no tension);
-- Jaumann rate (D.30-D.31): σ ← σ + σ Δω − Δω σ with the seed's spin increment
-  Δω_ij = Δt/2 (∂v_j/∂x_i − ∂v_i/∂x_j) (D.31 writes the gradient as dφ/dx v, index i on
-  the derivative), which is −Δt W for the usual spin W = skew(∂v_i/∂x_j); applied before
-  the constitutive increment, it turns a rigidly rotating body's stress with the body.
-  The update is explicit: over a rotation θ in N steps the stress grows by about θ²/N
-  relative (first order in Δt).
+  cohesionless soil: no tension).
+
+The Jaumann rotation (D.30-D.31) that precedes every stress update, elastic or
+plastic, is :func:`geofrac.mpm.schemes.rotate_stress`.
 
 The seed gives the yield function only; the flow rule and the apex treatment are the
 standard ones (e.g. de Souza Neto, Perić and Owen, ch. 8) and are documented here
@@ -30,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DruckerPrager", "jaumann", "yield_function"]
+__all__ = ["DruckerPrager", "yield_function"]
 
 
 @dataclass(frozen=True)
@@ -138,13 +135,3 @@ def yield_function(stress: np.ndarray, beta: float, k: float) -> np.ndarray:
     i1 = np.trace(stress, axis1=1, axis2=2)
     s = stress - i1[:, None, None] / 3 * np.eye(3)
     return beta * i1 + np.sqrt(0.5 * np.sum(s * s, axis=(1, 2))) - k
-
-
-def jaumann(stress: np.ndarray, spin: np.ndarray) -> np.ndarray:
-    """The rotated stress σ + σ Δω − Δω σ (D.30).
-
-    Args:
-        stress: shape=(n, 3, 3).
-        spin: the seed's Δω (D.31), Δt/2 (∂v_j/∂x_i − ∂v_i/∂x_j), shape=(n, 3, 3).
-    """
-    return stress + np.matmul(stress, spin) - np.matmul(spin, stress)

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from geofrac.mpm.plasticity import DruckerPrager, jaumann, yield_function
+from geofrac.mpm.plasticity import DruckerPrager, yield_function
+from geofrac.mpm.schemes import rotate_stress
 
 
 def _random_stresses(n: int, scale: float, seed: int = 0) -> np.ndarray:
@@ -69,7 +70,7 @@ def _spin_to_quarter_turn(steps: int) -> np.ndarray:
     # v = ω × x: ∂v_x/∂y = −w Δt, ∂v_y/∂x = w Δt per step; the seed's Δω (D.31)
     dw = np.array([[[0.0, w, 0.0], [-w, 0.0, 0.0], [0.0, 0.0, 0.0]]])
     for _ in range(steps):
-        s = jaumann(s, dw)
+        s = rotate_stress(s, dw)
     return s[0]
 
 
