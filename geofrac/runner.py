@@ -8,7 +8,6 @@ directory, XDMF fields and ``summary.json``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -27,16 +26,17 @@ from geofrac.fem.post import (
     locate_points,
     probe,
 )
+from geofrac.fem.solution import Solution
 from geofrac.io.checkpoint import RunControl
 from geofrac.io.summary import start_summary
 from geofrac.io.xdmf import write_fields, write_meshtags
 from geofrac.log import format_seconds, sayer
-from geofrac.meshing.distribute import TaggedMesh, build_mesh, check_fracture_cover
+from geofrac.meshing.distribute import build_mesh, check_fracture_cover
 from geofrac.scene.model import Scene
 from geofrac.timing import Timings
 from geofrac_forms.elasticity import strain_energy_form
 
-__all__ = ["OUTPUT_FILES", "Solution", "run_scene", "solve_scene"]
+__all__ = ["OUTPUT_FILES", "run_scene", "solve_scene"]
 
 #: Files a run writes into its output directory.
 OUTPUT_FILES = (
@@ -57,37 +57,6 @@ OUTPUT_FILES = (
     "grains.xdmf",
     "grains.h5",
 )
-
-
-@dataclass
-class Solution:
-    """Everything a solved scene produced.
-
-    Attributes:
-        scene: the scene.
-        tagged: distributed mesh and groups.
-        problem: the elastic problem (call ``problem.destroy()`` when done).
-        results: JSON-ready results (probes, errors, energy, solver).
-        timings: per-phase wall times of this rank.
-        control: checkpoints, signal stop and resume data for an effect's loop, or None.
-    """
-
-    scene: Scene
-    tagged: TaggedMesh
-    problem: ElasticProblem
-    results: dict[str, Any] = field(default_factory=dict)
-    timings: Timings = field(default_factory=Timings)
-    #: checkpoints, signal stop and resume data for an effect's loop (None: a plain run).
-    control: RunControl | None = None
-
-    def mesh_counts(self) -> dict[str, int]:
-        """Global numbers of cells and vertices, and the topological dimension."""
-        tdim = self.tagged.mesh.topology.dim
-        return {
-            "cells": self.tagged.num_global(tdim),
-            "vertices": self.tagged.num_global(0),
-            "dim": tdim,
-        }
 
 
 def solve_scene(

@@ -318,8 +318,8 @@ def scene_driver(scene: Any, comm: Any, say: Any = None) -> Any:
     """
     from geofrac.elements import make_element
     from geofrac.fem.elastic import make_problem
+    from geofrac.fem.solution import Solution
     from geofrac.meshing.distribute import build_mesh
-    from geofrac.runner import Solution
 
     config = next((s.config for s in scene.effects if s.name == "cracking"), None)
     if config is None:

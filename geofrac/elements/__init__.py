@@ -1,4 +1,4 @@
-"""Element registry: scene name -> module that builds the discretisation.
+"""Element registry: scene name -> :class:`~geofrac.elements.spec.ElementSpec`.
 
 The runner never names an element; it asks this registry. An element joins by adding
 one entry here and one module that provides a factory
@@ -7,78 +7,127 @@ one entry here and one module that provides a factory
 
 from __future__ import annotations
 
-import importlib
+from geofrac.elements.spec import ElementSpec
 
 __all__ = [
     "GRADIENT_DOF_DEFAULTS",
     "GRADIENT_DOF_ELEMENTS",
     "REGISTRY",
+    "ElementSpec",
     "available",
     "describe",
+    "get",
     "make_element",
 ]
 
-#: name -> (module, factory, dimensions it supports, one-line description)
-REGISTRY: dict[str, tuple[str, str, tuple[int, ...], str]] = {
-    "cst": (
-        "geofrac.elements.lagrange",
-        "cst",
-        (2, 3),
-        "linear Lagrange (CST in 2D, linear tet in 3D)",
-    ),
-    "p1": (
-        "geofrac.elements.lagrange",
-        "p1",
-        (2, 3),
-        "linear Lagrange under its 3D name (the same element as cst)",
-    ),
-    "p2": (
-        "geofrac.elements.lagrange",
-        "p2",
-        (2, 3),
-        "quadratic Lagrange (6-node triangle, 10-node tet)",
-    ),
-    "p3": (
-        "geofrac.elements.lagrange",
-        "p3",
-        (2, 3),
-        "cubic Lagrange (10-node triangle), a high-order reference",
-    ),
-    "rgnt": (
-        "geofrac.elements.gradient",
-        "rgnt",
-        (2,),
-        "triangle with a drilling DOF per vertex (u, v, θ), seed eq. 2.1",
-    ),
-    "gnt": (
-        "geofrac.elements.gradient",
-        "gnt",
-        (2,),
-        "triangle with drilling and strain DOFs (u, v, θ, εx, εy, γxy), seed eq. 2.29",
-    ),
-    "efmm": (
-        "geofrac.elements.efmm",
-        "efmm",
-        (2,),
-        "Enriched Free Mesh Method: CST displacement, a linear stress per node patch, seed eq. 3.6",
-    ),
-    "rgnq": (
-        "geofrac.elements.gradient",
-        "rgnq",
-        (3,),
-        "tetrahedron with three rotations per vertex (u, v, w, θx, θy, θz), seed eq. 2.5",
-    ),
+_LAGRANGE = "geofrac.fem.elastic:ElasticProblem"
+_GRADIENT = "geofrac.fem.elastic:GradientDofProblem"
+_GRADIENT_OPTIONS = frozenset({"quadrature_degree", "zero_mode_penalty", "gradient_bc"})
+
+#: name -> element. The default zero-mode penalties α come from the measurements in
+#: docs/elements.md: GNT reproduces every quadratic field and its penalty is consistent
+#: there, so a small α (1e-3) is best; RGNT and RGNQ reproduce few quadratics and their
+#: penalty pulls the rotations off the Galerkin solution, so α is kept near the limit
+#: α → 0, where it only pins the spurious zero-energy modes.
+REGISTRY: dict[str, ElementSpec] = {
+    spec.name: spec
+    for spec in (
+        ElementSpec(
+            "cst",
+            "linear Lagrange (CST in 2D, linear tet in 3D)",
+            (2, 3),
+            {2: 2, 3: 3},
+            "geofrac.elements.lagrange:cst",
+            _LAGRANGE,
+            cracking="edges",
+            locking_nu=0.45,
+        ),
+        ElementSpec(
+            "p1",
+            "linear Lagrange under its 3D name (the same element as cst)",
+            (2, 3),
+            {2: 2, 3: 3},
+            "geofrac.elements.lagrange:p1",
+            _LAGRANGE,
+            cracking="edges",
+            locking_nu=0.45,
+        ),
+        ElementSpec(
+            "p2",
+            "quadratic Lagrange (6-node triangle, 10-node tet)",
+            (2, 3),
+            {2: 2, 3: 3},
+            "geofrac.elements.lagrange:p2",
+            _LAGRANGE,
+        ),
+        ElementSpec(
+            "p3",
+            "cubic Lagrange (10-node triangle), a high-order reference",
+            (2, 3),
+            {2: 2, 3: 3},
+            "geofrac.elements.lagrange:p3",
+            _LAGRANGE,
+        ),
+        ElementSpec(
+            "rgnt",
+            "triangle with a drilling DOF per vertex (u, v, θ), Edo (2016) eq. 2.1",
+            (2,),
+            {2: 3},
+            "geofrac.elements.gradient:rgnt",
+            _GRADIENT,
+            _GRADIENT_OPTIONS,
+            zero_mode_penalty=1e-6,
+            kinematics="rgnt",
+            cracking="edges",
+            hold="gradient",
+        ),
+        ElementSpec(
+            "gnt",
+            "triangle with drilling and strain DOFs (u, v, θ, εx, εy, γxy), Edo (2016) eq. 2.29",
+            (2,),
+            {2: 6},
+            "geofrac.elements.gradient:gnt",
+            _GRADIENT,
+            _GRADIENT_OPTIONS,
+            zero_mode_penalty=1e-3,
+            kinematics="gnt",
+            cracking="edges",
+            hold="gradient",
+        ),
+        ElementSpec(
+            "efmm",
+            "Enriched Free Mesh Method: CST displacement, a linear stress per node patch, "
+            "Edo (2016) eq. 3.6",
+            (2,),
+            {2: 2},
+            "geofrac.elements.efmm:efmm",
+            "geofrac.fem.efmm:EfmmProblem",
+            frozenset({"q_rand", "domain_seed"}),
+            cracking="grains",
+            hold="nodes",
+        ),
+        ElementSpec(
+            "rgnq",
+            "tetrahedron with three rotations per vertex (u, v, w, θx, θy, θz), Edo (2016) eq. 2.5",
+            (3,),
+            {3: 6},
+            "geofrac.elements.gradient:rgnq",
+            _GRADIENT,
+            _GRADIENT_OPTIONS,
+            zero_mode_penalty=1e-6,
+            kinematics="rgnq",
+            hold="gradient",
+        ),
+    )
 }
 
 #: Elements whose unknowns are vertex DOFs with extra gradient DOFs (RGNT, GNT, RGNQ).
-GRADIENT_DOF_ELEMENTS = ("rgnt", "gnt", "rgnq")
+GRADIENT_DOF_ELEMENTS = tuple(n for n, s in REGISTRY.items() if s.kinematics is not None)
 
-#: Default α of ``discretization.zero_mode_penalty`` per element, chosen from the
-#: measurements in docs/elements.md. GNT reproduces every quadratic field and its penalty
-#: is consistent there, so a small α (1e-3) is best; RGNT and RGNQ reproduce few
-#: quadratics and their penalty pulls the rotations off the Galerkin solution, so α is kept
-#: near the limit α → 0, where it only pins the spurious zero-energy modes.
-GRADIENT_DOF_DEFAULTS: dict[str, float] = {"rgnt": 1e-6, "gnt": 1e-3, "rgnq": 1e-6}
+#: Default α of ``discretization.zero_mode_penalty`` per element.
+GRADIENT_DOF_DEFAULTS: dict[str, float] = {
+    n: s.zero_mode_penalty for n, s in REGISTRY.items() if s.zero_mode_penalty is not None
+}
 
 
 def available() -> tuple[str, ...]:
@@ -86,13 +135,24 @@ def available() -> tuple[str, ...]:
     return tuple(sorted(REGISTRY))
 
 
+def get(name: str) -> ElementSpec:
+    """The element called ``name``.
+
+    Raises:
+        KeyError: naming the registered elements, when there is none of that name.
+    """
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise KeyError(f"no element {name!r}; registered: {', '.join(available())}") from None
+
+
 def describe(name: str) -> tuple[tuple[int, ...], str]:
     """Return (supported dimensions, description) of element ``name``."""
-    _, _, dims, text = REGISTRY[name]
-    return dims, text
+    spec = get(name)
+    return spec.dims, spec.description
 
 
 def make_element(name: str, mesh: object) -> object:
     """Build element ``name`` on a DOLFINx ``mesh`` (imports the element module)."""
-    module, factory, _, _ = REGISTRY[name]
-    return getattr(importlib.import_module(module), factory)(mesh)
+    return get(name).build(mesh)

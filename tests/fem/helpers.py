@@ -2,7 +2,8 @@
 
 from mpi4py import MPI
 
-from geofrac.runner import Solution, solve_scene
+from geofrac.fem.solution import Solution
+from geofrac.runner import solve_scene
 from geofrac.scene import load_scene_collective
 from tests.conftest import JOBS
 

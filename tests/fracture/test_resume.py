@@ -80,8 +80,8 @@ def driver(
     """The driver of ``case`` writing into ``out``, with ``control`` (not run)."""
     from geofrac.elements import make_element
     from geofrac.fem.elastic import make_problem
+    from geofrac.fem.solution import Solution
     from geofrac.meshing.distribute import build_mesh
-    from geofrac.runner import Solution
 
     job, small = case
     scene = load_scene_collective(comm, JOBS / f"{job}.toml", small + overrides, out=out)

@@ -1,0 +1,69 @@
+"""What every part of geofrac may ask of an element, in one object per element name.
+
+Pure data (no DOLFINx): the scene loader, the effects and the crack driver read an
+:class:`ElementSpec`; only :meth:`ElementSpec.build` and :meth:`ElementSpec.problem_class`
+import the DOLFINx plumbing, lazily.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from typing import Any, Literal
+
+__all__ = ["ElementSpec"]
+
+
+@dataclass(frozen=True)
+class ElementSpec:
+    """One element: its data and where its code lives.
+
+    Attributes:
+        name: the scene name (``discretization.element``).
+        description: one line for docs and errors.
+        dims: the geometric dimensions it supports.
+        vertex_dofs: unknowns per mesh vertex, by dimension (``{2: 3}`` for RGNT).
+        factory: ``"module:function"`` building the DOLFINx element,
+            ``function(mesh) -> geofrac.elements.base.Element``.
+        problem: ``"module:Class"`` of the elastic problem that assembles and solves it.
+        options: ``[discretization]`` keys it accepts besides ``element``.
+        zero_mode_penalty: default α of ``discretization.zero_mode_penalty`` (None: the
+            element has no zero-energy modes to pin and refuses the key).
+        kinematics: key of :data:`geofrac.elements.kinematics.KINDS` for the vertex-DOF
+            elements whose displacement is P2 fixed by vertex DOFs (None otherwise).
+        cracking: how the effect ``cracking`` cracks it: ``"edges"`` (MLS-cracked cells on
+            element edges, Edo (2016) ch. 2), ``"grains"`` (EFMM grain interfaces, ch. 3)
+            or None (not supported).
+        locking_nu: Poisson's ratio above which it locks volumetrically in plane strain and
+            3D (a warning at load time), or None when it does not lock.
+        hold: how a Dirichlet boundary holds it: ``"components"`` (displacement DOFs),
+            ``"gradient"`` (displacement DOFs, and the gradient DOFs per
+            ``discretization.gradient_bc``), ``"nodes"`` (node displacements of the patch
+            method).
+    """
+
+    name: str
+    description: str
+    dims: tuple[int, ...]
+    vertex_dofs: dict[int, int]
+    factory: str
+    problem: str
+    options: frozenset[str] = frozenset({"quadrature_degree"})
+    zero_mode_penalty: float | None = None
+    kinematics: str | None = None
+    cracking: Literal["edges", "grains"] | None = None
+    locking_nu: float | None = None
+    hold: Literal["components", "gradient", "nodes"] = "components"
+
+    def build(self, mesh: Any) -> Any:
+        """The DOLFINx element on ``mesh`` (imports its module)."""
+        return _resolve(self.factory)(mesh)
+
+    def problem_class(self) -> type:
+        """The elastic problem class (imports its module)."""
+        return _resolve(self.problem)
+
+
+def _resolve(path: str) -> Any:
+    module, name = path.split(":")
+    return getattr(importlib.import_module(module), name)
