@@ -100,7 +100,7 @@ def parse_elements(text: str, dim: int) -> list[str]:
     Raises:
         SceneError: an unknown element or one that does not support ``dim``.
     """
-    from geofrac.elements import available, describe
+    from geofrac.elements import available, get
     from geofrac.scene import SceneError
 
     elements = [e.strip() for e in text.split(",") if e.strip()]
@@ -109,7 +109,7 @@ def parse_elements(text: str, dim: int) -> list[str]:
             raise SceneError(
                 "--elements", e, f"unknown element (available: {', '.join(available())})"
             )
-        if dim not in describe(e)[0]:
+        if dim not in get(e).dims:
             raise SceneError("--elements", e, f"element '{e}' does not support {dim}D")
     return elements
 

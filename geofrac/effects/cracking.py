@@ -1,7 +1,8 @@
 """Effect ``cracking``: sequentially linear crack propagation (seed ch. 2 and 3.3).
 
-Crack sites are the element edges (``cst``, ``p1``, ``rgnt``, ``gnt``; seed chapter 2) or,
-for ``efmm``, the grain interfaces: each mesh edge ij owns the interface between the
+Crack sites are the element edges (elements whose :class:`~geofrac.elements.spec.ElementSpec`
+has ``cracking == "edges"``; seed chapter 2) or, for ``cracking == "grains"`` (``efmm``), the
+grain interfaces: each mesh edge ij owns the interface between the
 integration domains (grains) of nodes i and j (seed 3.3, docs/granular.md).
 
 Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference):
@@ -51,13 +52,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from geofrac import elements
 from geofrac.effects import ConfigureContext
 from geofrac.fracture import SOLVERS
 from geofrac.scene.errors import SceneError, did_you_mean
 from geofrac.scene.table import finite, short
 
 __all__ = [
-    "ELEMENTS",
     "KEYS",
     "LIMITS",
     "CrackingConfig",
@@ -66,9 +67,6 @@ __all__ = [
     "make_driver",
     "scene_driver",
 ]
-
-#: Elements the crack driver supports.
-ELEMENTS = ("cst", "p1", "rgnt", "gnt", "efmm")
 
 #: Keys of the ``[cracking]`` table.
 KEYS = (
@@ -172,11 +170,13 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             raise SceneError(file, f"cracking.{key}", "unknown key" + did_you_mean(key, KEYS))
     if ctx.gdim != 2:
         raise SceneError(file, "effects", "effect 'cracking' is 2D (triangles); the mesh is 3D")
-    if ctx.element not in ELEMENTS:
+    spec = elements.get(ctx.element)
+    if spec.cracking is None:
+        supported = [n for n in elements.available() if elements.get(n).cracking is not None]
         raise SceneError(
             file,
             "discretization.element",
-            f"effect 'cracking' supports {', '.join(ELEMENTS)}, not '{ctx.element}'",
+            f"effect 'cracking' supports {', '.join(supported)}, not '{ctx.element}'",
         )
     ft = getattr(ctx.material, "tensile_strength", None)
     if ft is None:
@@ -254,9 +254,12 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         raise SceneError(
             file, "cracking.switch", f"must be 'patch' or 'grain', got {short(switch)}"
         )
-    if "switch" in table and ctx.element != "efmm":
+    if "switch" in table and spec.cracking != "grains":
+        grains = [n for n in elements.available() if elements.get(n).cracking == "grains"]
         raise SceneError(
-            file, "cracking.switch", "applies to element 'efmm' (grain interfaces) only"
+            file,
+            "cracking.switch",
+            f"applies to elements cracked at grain interfaces ({', '.join(grains)}) only",
         )
     solver = table.get("solver", "update")
     if not isinstance(solver, str) or solver not in SOLVERS:

@@ -9,7 +9,13 @@ from __future__ import annotations
 
 import importlib
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
+
+if TYPE_CHECKING:
+    import dolfinx.mesh
+
+    from geofrac.elements.base import Element
+    from geofrac.fem.elastic import ElasticProblem
 
 __all__ = ["ElementSpec"]
 
@@ -55,11 +61,11 @@ class ElementSpec:
     locking_nu: float | None = None
     hold: Literal["components", "gradient", "nodes"] = "components"
 
-    def build(self, mesh: Any) -> Any:
+    def build(self, mesh: dolfinx.mesh.Mesh) -> Element:
         """The DOLFINx element on ``mesh`` (imports its module)."""
         return _resolve(self.factory)(mesh)
 
-    def problem_class(self) -> type:
+    def problem_class(self) -> type[ElasticProblem]:
         """The elastic problem class (imports its module)."""
         return _resolve(self.problem)
 

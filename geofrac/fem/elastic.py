@@ -16,9 +16,9 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from geofrac import effects as effect_registry
+from geofrac import elements
 from geofrac.analytic import ExactSolution, displacement_gradient, make_exact
 from geofrac.elements.base import Element
-from geofrac.elements.gradient import GradientDofElement
 from geofrac.elements.kinematics import dofs_from_gradient
 from geofrac.errors import RunError
 from geofrac.materials import lame
@@ -414,11 +414,10 @@ class GradientDofProblem(ElasticProblem):
 
 
 def make_problem(tagged: TaggedMesh, element: Element, scene: Scene) -> ElasticProblem:
-    """The elastic problem class that fits ``element``."""
-    if element.name == "efmm":
-        from geofrac.fem.efmm import EfmmProblem
+    """The elastic problem of the scene's element, built on ``element``.
 
-        return EfmmProblem(tagged, element, scene)
-    if isinstance(element, GradientDofElement):
-        return GradientDofProblem(tagged, element, scene)
-    return ElasticProblem(tagged, element, scene)
+    The class is the one the element's :class:`~geofrac.elements.spec.ElementSpec` names
+    (``problem``); no element is named here.
+    """
+    problem: type[ElasticProblem] = elements.get(scene.discretization.element).problem_class()
+    return problem(tagged, element, scene)

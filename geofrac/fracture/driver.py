@@ -39,10 +39,10 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from geofrac import elements
 from geofrac.elements.kinematics import KINDS, dofs_from_gradient, vertex_field
 from geofrac.errors import RunError
 from geofrac.fracture.cells import (
-    BLOCK_SIZES,
     MIDPOINTS,
     MlsTable,
     fe_matrices,
@@ -306,7 +306,8 @@ class CrackDriver:
         mesh = self.tagged.mesh
         self.mesh, self.comm = mesh, mesh.comm
         self.element = self.scene.discretization.element
-        self.bs = BLOCK_SIZES[self.element]
+        self.spec = elements.get(self.element)
+        self.bs = self.spec.vertex_dofs[2]
         #: extra vertex DOFs under a unit rigid rotation, shape=(bs - 2,).
         self._rotation = (
             dofs_from_gradient(KINDS[self.element], np.array([[[0.0, -1.0], [1.0, 0.0]]]))[0]
@@ -450,9 +451,9 @@ class CrackDriver:
         own = np.flatnonzero(gm.owned)
         self.own_cells = own
         x = gm.coords[gm.cells[own]]
-        self.K_fe = fe_matrices(self.element, x, self.D, self.t, self.penalty)
+        self.K_fe = fe_matrices(self.spec, x, self.D, self.t, self.penalty)
         self.fe_dofs = self._node_dofs(gm.cells[own].ravel()).reshape(len(own), 3 * bs)
-        stress_op = np.einsum("ij,cqjp->cqip", self.D, strain_operator(self.element, x, MIDPOINTS))
+        stress_op = np.einsum("ij,cqjp->cqip", self.D, strain_operator(self.spec, x, MIDPOINTS))
         nc, nd = self.fe_dofs.shape
         #: cells-last copies for :meth:`measures`: the stress at the 3 edge midpoints,
         #: shape=(9, nd, n_own), K, shape=(nd, nd, n_own), and the DOFs, shape=(nd, n_own).
@@ -578,7 +579,7 @@ class CrackDriver:
         if not units:
             return {}
         x = self.gm.coords[self.gm.cells[units]]
-        ks = fe_matrices(self.element, x, self.D, self.t, self.penalty)
+        ks = fe_matrices(self.spec, x, self.D, self.t, self.penalty)
         return {c: (self._node_dofs(self.gm.cells[c]), k) for c, k in zip(units, ks, strict=True)}
 
     def _links(self, is_mls: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

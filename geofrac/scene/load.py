@@ -250,29 +250,23 @@ def _material(file: Path, raw: Any, dim: int) -> Material:
 def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
     t = _Table(file, "discretization", raw, SECTION_KEYS["discretization"])
     element = t.string("element", choices=elements.available())
-    dims, _ = elements.describe(element)
-    if dim not in dims:
-        raise t.error("element", f"'{element}' supports dimensions {dims}, the geometry is {dim}D")
+    spec = elements.get(element)
+    if dim not in spec.dims:
+        raise t.error(
+            "element", f"'{element}' supports dimensions {spec.dims}, the geometry is {dim}D"
+        )
+    for key in SECTION_KEYS["discretization"][1:]:
+        if t.has(key) and key not in spec.options:
+            takers = [n for n, s in elements.REGISTRY.items() if key in s.options]
+            raise t.error(key, f"applies only to elements {', '.join(takers)}, not '{element}'")
     q = t.number("quadrature_degree", positive=True, integer=True, maximum=MAX_QUADRATURE_DEGREE)
-    for key in ("zero_mode_penalty", "gradient_bc"):
-        if t.has(key) and element not in elements.GRADIENT_DOF_ELEMENTS:
-            raise t.error(
-                key,
-                f"applies only to elements {', '.join(elements.GRADIENT_DOF_ELEMENTS)}, "
-                f"not '{element}'",
-            )
-    for key in ("q_rand", "domain_seed"):
-        if t.has(key) and element != "efmm":
-            raise t.error(key, f"applies only to element efmm, not '{element}'")
-    if t.has("quadrature_degree") and element == "efmm":
-        raise t.error("quadrature_degree", "does not apply to efmm (its Gauss rules are fixed)")
     q_rand = t.number("q_rand", default=0.0)
     if not 0.0 <= q_rand <= 1.0:  # type: ignore[operator]
         raise t.error("q_rand", f"must lie in [0, 1], got {q_rand!r}")
     domain_seed = t.number("domain_seed", default=0, integer=True, maximum=2**32 - 1)
     if domain_seed < 0:  # type: ignore[operator]
         raise t.error("domain_seed", f"must be >= 0, got {domain_seed!r}")
-    alpha_default = elements.GRADIENT_DOF_DEFAULTS.get(element, 0.0)
+    alpha_default = 0.0 if spec.zero_mode_penalty is None else spec.zero_mode_penalty
     alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True, maximum=1e6)
     gradient_bc = t.string("gradient_bc", default="fixed", choices=("fixed", "free"))
     return Discretization(
@@ -614,18 +608,22 @@ def _geometry_from_effect(
     return geometry, {name: config}
 
 
-#: Poisson's ratio above which linear elements lock volumetrically (plane strain, 3D).
-LOCKING_NU = 0.45
-
-
 def _warnings(file: Path, material: Material, disc: Discretization, dim: int) -> tuple[str, ...]:
+    """Load-time warnings of a valid scene.
+
+    Volumetric locking: in plane strain and 3D, above the element's measured
+    ``locking_nu`` (docs/elements.md).
+    """
     out = []
     constrained = dim == 3 or material.plane == "strain"
-    if disc.element in ("cst", "p1") and constrained and material.nu > LOCKING_NU:
+    threshold = elements.get(disc.element).locking_nu
+    if threshold is not None and constrained and material.nu > threshold:
+        free = [n for n, s in elements.REGISTRY.items() if s.locking_nu is None and dim in s.dims]
         out.append(
-            f"{file}: material.nu: {material.nu} with element 'cst' in "
-            f"{'3D' if dim == 3 else 'plane strain'} locks volumetrically (displacements far "
-            "too small); use element 'p2' or 'p3'"
+            f"{file}: material.nu: {material.nu} with element '{disc.element}' in "
+            f"{'3D' if dim == 3 else 'plane strain'} locks volumetrically above nu = "
+            f"{threshold} (displacements far too small); use element "
+            f"{' or '.join(repr(n) for n in free)}"
         )
     return tuple(out)
 

@@ -92,7 +92,7 @@ class Discretization:
         quadrature_degree: forced quadrature degree for the stiffness, or None (exact).
         zero_mode_penalty: α of the Hughes–Brezzi-type penalty α μ t ∫ (g - d(u))² that
             removes the zero-energy modes of RGNT, GNT and RGNQ (dimensionless; the
-            per-element default is in :data:`geofrac.elements.GRADIENT_DOF_DEFAULTS`;
+            per-element default is the element's ``ElementSpec.zero_mode_penalty``;
             0 for the other elements, which have none).
         gradient_bc: how a Dirichlet condition acts on the extra vertex DOFs of RGNT, GNT
             and RGNQ. ``"fixed"``: they are fixed too, to the values that reproduce the

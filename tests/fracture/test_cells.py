@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from geofrac.elements import get
 from geofrac.fracture.cells import MlsTable, fe_matrices, principal_max
 from geofrac.fracture.driver import gather_mesh
 from geofrac.materials import d_matrix, lame
@@ -29,7 +30,7 @@ def test_fe_matrices_match_dolfinx(element):
         gm = gather_mesh(sol.tagged.mesh, space)
         bs = space.dofmap.index_map_bs
         K = fe_matrices(
-            element,
+            get(element),
             gm.coords[gm.cells],
             d_matrix(mat.E, mat.nu, 2, mat.plane),
             mat.thickness,
