@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from geofrac.elements import make_element
+from geofrac.elements import available, get, make_element
 from geofrac.errors import RunError
 from geofrac.fem.elastic import exact_ufl, make_problem
 from geofrac.fem.post import error_norms
@@ -52,14 +52,11 @@ def test_cst_converges_at_rate_two_on_seed_meshes():
 @pytest.mark.mpi
 @pytest.mark.parametrize(
     ("element", "extra"),
-    [
-        ("cst", ()),
-        ("p2", ()),
-        ("p3", ()),
-        ("rgnt", ()),
-        ("gnt", ()),
-        ("efmm", ("discretization.q_rand=0.0",)),
-        ("efmm", ("discretization.q_rand=0.5", "discretization.domain_seed=7")),
+    [(n, ()) for n in available() if 2 in get(n).dims]
+    + [  # random integration domains of the patch-method elements
+        (n, ("discretization.q_rand=0.5", "discretization.domain_seed=7"))
+        for n in available()
+        if "q_rand" in get(n).options
     ],
 )
 def test_patch_test_on_a_distorted_mesh(element, extra):
