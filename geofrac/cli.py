@@ -127,23 +127,14 @@ def _run(args: argparse.Namespace, comm: Any) -> int:
         scene = _load(args, comm, args.out)
     echo(comm, f"geofrac {__version__}: scene '{scene.name}' ({args.scene}) on {comm.size} rank(s)")
     quiet = args.quiet
-    if scene.method == "mpm":  # no DOLFINx needed
-        from geofrac.mpm.driver import run_mpm_scene as run_method
+    from geofrac import pipeline
 
-        report = _report_mpm
-    elif scene.method == "blocks":
-        from geofrac.blocks.driver import run_blocks_scene as run_method
-
-        report = _report_blocks
-    else:
-        from geofrac.runner import run_scene as run_method
-
-        report = _report
+    method = pipeline.get(scene.method)  # MPM imports no DOLFINx
     # after the imports: PETSc's initialisation installs its own SIGTERM handler (which
     # aborts), and the handlers installed last are the ones that act
     interrupt.install()
     try:
-        summary = run_method(scene, comm, timings, not quiet, args.resume)
+        summary = pipeline.run_scene(scene, comm, timings, not quiet, args.resume)
     except interrupt.Interrupted as exc:
         stage = scene.output.dir / "incomplete"
         echo(comm, f"interrupted: {exc}; partial results in {stage}", err=True)
@@ -164,65 +155,10 @@ def _run(args: argparse.Namespace, comm: Any) -> int:
     finally:
         interrupt.uninstall()
     if not quiet:
-        report(comm, summary)
+        for line in pipeline.report(method, summary):
+            echo(comm, line)
     echo(comm, f"output: {scene.output.dir}")
     return 0
-
-
-def _report(comm: Any, summary: dict[str, Any]) -> None:
-    results = summary["results"]
-    exact = results.get("exact_probes", {})
-    for name, value in results["probes"].items():
-        line = f"probe {name}: u = [{_numbers(value)}]"
-        if name in exact:
-            line += f"  (exact [{_numbers(exact[name])}])"
-        echo(comm, line)
-    if "errors" in results:
-        e = results["errors"]
-        echo(
-            comm,
-            f"accuracy: ||u - u_exact||_L2 = {e['u']:.4e} (relative {e['u_relative']:.3e}), "
-            f"energy = {e['energy']:.4e} (relative {e['energy_relative']:.3e})",
-        )
-    _report_timings(comm, summary)
-
-
-def _report_blocks(comm: Any, summary: dict[str, Any]) -> None:
-    r = summary["results"]
-    q = r["quality"]
-    v = q["volume"]
-    echo(
-        comm,
-        f"blocks: {q['count']}, volume min {v['min']:.4g} mean {v['mean']:.4g} "
-        f"max {v['max']:.4g}; volumes sum to the domain's within {abs(q['volume_rel_error']):.1e}",
-    )
-    checked = q["validator"]["checked"] if q["validator"] else 0
-    echo(
-        comm,
-        f"checks: {q['invalid_blocks']} invalid, faces paired ({q['pairing']['matched']} "
-        f"matched), validator on {checked} block(s)",
-    )
-    _report_timings(comm, summary)
-
-
-def _report_mpm(comm: Any, summary: dict[str, Any]) -> None:
-    r = summary["results"]
-    line = f"runout (front x moved): {r['runout_m']:.4g}"
-    if "friction_angle_deg" in r:
-        line += f" at friction angle {r['friction_angle_deg']:g} deg"
-    if r["energy_drift_max"] is not None:
-        line += f"; energy drift max {r['energy_drift_max']:.3g}"
-    echo(comm, line)
-    _report_timings(comm, summary)
-
-
-def _report_timings(comm: Any, summary: dict[str, Any]) -> None:
-    t = summary["timings_s"]
-    echo(comm, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()))
-
-
-def _numbers(values: list[float]) -> str:
-    return ", ".join(f"{v + 0.0:.10g}" for v in values)  # + 0.0 turns -0 into 0
 
 
 def _bench(args: argparse.Namespace, comm: Any) -> int:

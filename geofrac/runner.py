@@ -1,8 +1,9 @@
-"""Run a validated scene: scene → mesh → discretisation → solve → output.
+"""The FEM method: scene → mesh → discretisation → solve (or an effect's loop) → fields.
 
 Data flows one way. :func:`solve_scene` does the computation and returns everything a
-caller may want (the benchmarks call it directly); :func:`run_scene` adds the output
-directory, XDMF fields and ``summary.json``.
+caller may want (the benchmarks call it directly); :data:`FEM` is the method the run
+pipeline (:func:`geofrac.pipeline.run_scene`) calls, adding the XDMF fields and the
+network; the pipeline writes ``summary.json`` and publishes the directory.
 """
 
 from __future__ import annotations
@@ -28,15 +29,14 @@ from geofrac.fem.post import (
 )
 from geofrac.fem.solution import Solution
 from geofrac.io.checkpoint import RunControl
-from geofrac.io.summary import start_summary
 from geofrac.io.xdmf import write_fields, write_meshtags
 from geofrac.log import format_seconds, sayer
 from geofrac.meshing.distribute import build_mesh, check_fracture_cover
-from geofrac.scene.model import Scene
+from geofrac.model.scene import Scene
 from geofrac.timing import Timings
 from geofrac_forms.elasticity import strain_energy_form
 
-__all__ = ["OUTPUT_FILES", "run_scene", "solve_scene"]
+__all__ = ["FEM", "OUTPUT_FILES", "FemMethod", "solve_scene"]
 
 #: Files a run writes into its output directory.
 OUTPUT_FILES = (
@@ -96,22 +96,20 @@ def solve_scene(
             cells = locate_points(mesh, points)
         except RunError as exc:
             raise RunError(f"output.probes: {exc}") from None
-        problem = make_problem(tagged, element, scene)
+        problem = make_problem(tagged, element, scene, effect_registry.linear_terms(scene.effects))
     solution = Solution(scene, tagged, problem, timings=timings, control=control)
     counts = solution.mesh_counts()
     say(
         f"mesh: {counts['vertices']} vertices, {counts['cells']} cells; "
         f"element {element.name}: {element.num_dofs} DOFs on {comm.size} rank(s)"
     )
-    driven = [s for s in scene.effects if hasattr(effect_registry.load(s.name), "driver")]
+    driven = effect_registry.driven(scene.effects)
     try:
-        if driven:  # the effect's loop replaces the single solve (cracking)
+        if driven is not None:  # the effect's loop replaces the single solve (cracking)
             with timings.phase("compile"):
                 problem.compile()
             with timings.phase("events"):
-                loop = effect_registry.load(driven[0].name).driver(
-                    driven[0].config, solution, say, write
-                )
+                loop = effect_registry.load(driven.name).driver(driven.config, solution, say, write)
         else:
             _solve_phases(problem, timings, say)
     except BaseException:
@@ -121,8 +119,8 @@ def solve_scene(
     with timings.phase("postprocess"):
         values = probe(uh, points, cells)
         results: dict[str, Any] = {"probes": {n: values[i].tolist() for i, n in enumerate(names)}}
-        if driven:
-            results[driven[0].name] = loop
+        if driven is not None:
+            results[driven.name] = loop
         else:
             results["strain_energy"] = integrate(
                 strain_energy_form(uh, problem.lam, problem.mu, problem.thickness, problem.dx), comm
@@ -203,30 +201,23 @@ def _write_fractures(solution: Solution) -> None:
     write_meshtags(solution.scene.output.dir / "fractures.xdmf", tagged.mesh, tags)
 
 
-def run_scene(
-    scene: Scene,
-    comm: MPI.Comm,
-    timings: Timings | None = None,
-    verbose: bool = True,
-    resume: bool = False,
-) -> dict[str, Any]:
-    """Solve ``scene`` in its owned output directory; publish on success; return the summary.
+class FemMethod:
+    """The FEM method of the run pipeline (:class:`geofrac.pipeline.Method`)."""
 
-    The run writes into ``output.dir/incomplete`` and moves its files into ``output.dir``
-    only when it succeeds (:func:`geofrac.io.outdir.owned_run`): on a :class:`RunError`
-    or a signal, ``output.dir`` keeps the previous complete results and
-    ``incomplete/summary.json`` records ``status`` = ``"error: ..."`` or
-    ``"interrupted"``. ``resume`` continues an effect's loop from its newest checkpoint.
-    """
-    from geofrac.io.outdir import owned_run
+    name = "fem"
+    output_files = OUTPUT_FILES
 
-    timings = timings or Timings()
-    start = start_summary(scene, comm, element=scene.discretization.element)
+    def head(self, scene: Scene) -> dict[str, Any]:
+        """The summary head names the element."""
+        return {"element": scene.discretization.element}
 
-    def body(staged: Scene, control: RunControl) -> dict[str, Any]:
-        solution = solve_scene(staged, comm, timings, verbose, write=True, control=control)
+    def run(
+        self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
+    ) -> dict[str, Any]:
+        """Solve (or run the effect's loop), write the fields; the summary entries."""
+        solution = solve_scene(scene, comm, timings, verbose, write=True, control=control)
         try:
-            if staged.output.xdmf:
+            if scene.output.xdmf:
                 with timings.phase("output"):
                     _write_xdmf(solution)
                     if solution.tagged.fractures is not None:
@@ -234,7 +225,7 @@ def run_scene(
             if solution.tagged.fractures is not None and comm.rank == 0:
                 from geofrac.dfn.io import save_network
 
-                save_network(solution.tagged.fractures.network, staged.output.dir / "network.csv")
+                save_network(solution.tagged.fractures.network, scene.output.dir / "network.csv")
             return {
                 "mesh": solution.mesh_counts(),
                 "dofs": solution.problem.element.num_dofs,
@@ -243,4 +234,28 @@ def run_scene(
         finally:
             solution.problem.destroy()
 
-    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "fem", resume, verbose)
+    def report(self, summary: dict[str, Any]) -> list[str]:
+        """Probes (with the exact values) and the error norms."""
+        results = summary["results"]
+        exact = results.get("exact_probes", {})
+        lines = []
+        for name, value in results["probes"].items():
+            line = f"probe {name}: u = [{_numbers(value)}]"
+            if name in exact:
+                line += f"  (exact [{_numbers(exact[name])}])"
+            lines.append(line)
+        if "errors" in results:
+            e = results["errors"]
+            lines.append(
+                f"accuracy: ||u - u_exact||_L2 = {e['u']:.4e} (relative {e['u_relative']:.3e}), "
+                f"energy = {e['energy']:.4e} (relative {e['energy_relative']:.3e})"
+            )
+        return lines
+
+
+def _numbers(values: list[float]) -> str:
+    return ", ".join(f"{v + 0.0:.10g}" for v in values)  # + 0.0 turns -0 into 0
+
+
+#: The FEM method (``method = "fem"``, the default).
+FEM = FemMethod()

@@ -13,7 +13,8 @@ import pytest
 from mpi4py import MPI
 
 from geofrac.errors import RunError
-from geofrac.runner import run_scene, solve_scene
+from geofrac.pipeline import run_scene
+from geofrac.runner import solve_scene
 from geofrac.scene import SceneError, load_scene_collective
 from tests.conftest import BROKEN, JOBS
 

@@ -122,7 +122,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     from geofrac.io.summary import versions, write_json
     from geofrac.log import echo
     from geofrac.meshing.distribute import build_mesh
-    from geofrac.scene.model import Geometry
+    from geofrac.model.scene import Geometry
 
     records = []
     for target in args.blocks:

@@ -11,12 +11,13 @@
 - :mod:`~geofrac.blocks.kernels`: the compiled (numba) sweep and prune of the exact
   self-intersection test, imported only by that test;
 - :mod:`~geofrac.blocks.distributed`: the blocks of a distributed DOLFINx mesh;
+- :mod:`~geofrac.blocks.output`: the VTU, block file and histogram writers;
 - :mod:`~geofrac.blocks.driver`: a ``method = "blocks"`` run (mesh, blocks, checks,
   output).
 
 ``distributed`` and ``driver`` import DOLFINx and MPI; everything else is numpy (and
 pyvista for the validator). The terrain's gmsh builder is
-:mod:`geofrac.meshing.terrain`; the writers are :mod:`geofrac.io.blocks`.
+:mod:`geofrac.meshing.terrain`.
 """
 
 __all__: list[str] = []

@@ -205,7 +205,7 @@ def build_blocks(
 
     Args:
         mesh: a distributed mesh of linear triangles or tetrahedra.
-        inner: 2D, the triangles' inner point (:func:`~geofrac.blocks.dual2d.inner_points`).
+        inner: 2D, the triangles' inner point (:func:`~geofrac.geometry.triangles.inner_points`).
         radius: 2D, the movable region's relative radius.
         convex: 2D, keep pieces convex.
         seed: 2D, the random seed.

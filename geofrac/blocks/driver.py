@@ -20,12 +20,12 @@ from mpi4py import MPI
 from geofrac.blocks.distributed import build_blocks, gather_blocks, owned_measure
 from geofrac.blocks.model import Blocks
 from geofrac.errors import RunError
-from geofrac.io.summary import start_summary
+from geofrac.io.checkpoint import RunControl
 from geofrac.log import echo
-from geofrac.scene.model import Geometry, Scene
+from geofrac.model.scene import Geometry, Scene
 from geofrac.timing import Timings
 
-__all__ = ["OUTPUT_FILES", "build", "run_blocks_scene"]
+__all__ = ["BLOCKS", "OUTPUT_FILES", "BlocksMethod", "build"]
 
 #: Files a block run writes in its output directory (removed first; summary last).
 OUTPUT_FILES = (
@@ -113,38 +113,51 @@ def build(
     return blocks, record
 
 
-def run_blocks_scene(
-    scene: Scene,
-    comm: MPI.Comm,
-    timings: Timings | None = None,
-    verbose: bool = True,
-    resume: bool = False,
-) -> dict[str, Any]:
-    """Run a block scene in its owned output directory; publish on success; return the summary.
+class BlocksMethod:
+    """The blocks method of the run pipeline (:class:`geofrac.pipeline.Method`).
 
-    See :func:`geofrac.io.outdir.owned_run`: on a :class:`RunError` the previous results
-    stay and ``incomplete/summary.json`` records ``status`` = ``"error: ..."``. A block
-    run has no loop to checkpoint, so ``resume`` finds nothing to continue.
+    A block run has no loop to checkpoint, so ``--resume`` finds nothing to continue.
     """
-    from geofrac.io.outdir import owned_run
 
-    timings = timings or Timings()
-    start = start_summary(scene, comm, method="blocks")
+    name = "blocks"
+    output_files = OUTPUT_FILES
 
-    def body(staged: Scene, control: Any) -> dict[str, Any]:
-        blocks, record = build(staged, comm, timings, verbose)
+    def head(self, scene: Scene) -> dict[str, Any]:
+        """The summary head says ``method = "blocks"``."""
+        return {"method": "blocks"}
+
+    def run(
+        self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
+    ) -> dict[str, Any]:
+        """Mesh, blocks, checks, files; the summary entries."""
+        blocks, record = build(scene, comm, timings, verbose)
         with timings.phase("checks"):
-            validator = _validate(staged, blocks, comm)
+            validator = _validate(scene, blocks, comm)
             whole = gather_blocks(blocks, comm)
             del blocks
-            record["quality"] = _checks(staged, whole, record["domain_volume"], validator, comm)
+            record["quality"] = _checks(scene, whole, record["domain_volume"], validator, comm)
         with timings.phase("output"):
             if comm.rank == 0:
                 assert whole is not None
-                _write(staged, whole)
+                _write(scene, whole)
         return {"results": record}
 
-    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "blocks", resume, verbose)
+    def report(self, summary: dict[str, Any]) -> list[str]:
+        """Count and volumes of the blocks, and the checks."""
+        q = summary["results"]["quality"]
+        v = q["volume"]
+        checked = q["validator"]["checked"] if q["validator"] else 0
+        return [
+            f"blocks: {q['count']}, volume min {v['min']:.4g} mean {v['mean']:.4g} "
+            f"max {v['max']:.4g}; volumes sum to the domain's within "
+            f"{abs(q['volume_rel_error']):.1e}",
+            f"checks: {q['invalid_blocks']} invalid, faces paired ({q['pairing']['matched']} "
+            f"matched), validator on {checked} block(s)",
+        ]
+
+
+#: The blocks method (``method = "blocks"``).
+BLOCKS = BlocksMethod()
 
 
 def _validate(scene: Scene, blocks: Blocks, comm: MPI.Comm) -> dict[str, Any] | None:
@@ -255,8 +268,8 @@ def _problems(report: dict[str, Any]) -> list[str]:
 
 def _write(scene: Scene, whole: Blocks) -> None:
     """The VTU, the block file and the histogram of the whole set (rank 0)."""
+    from geofrac.blocks import output as writers
     from geofrac.blocks import quality
-    from geofrac.io import blocks as writers
 
     assert scene.blocks is not None
     out = scene.output.dir

@@ -4,19 +4,21 @@ An effect is a module named in :data:`REGISTRY` that provides
 
 - ``configure(table, ctx) -> config``: validate the scene's ``[<name>]`` table (may be
   empty) against the already validated material and dimension; raise
-  :class:`~geofrac.scene.errors.SceneError` naming the key. Must be cheap and must not
+  :class:`~geofrac.model.errors.SceneError` naming the key. Must be cheap and must not
   import DOLFINx, PETSc, numba or cffi.
 - optionally ``linear_form(config, ctx) -> ufl.Form``: a right-hand-side term of the
-  elastic problem (see :class:`geofrac.fem.elastic.FormContext`).
+  elastic problem (see :class:`geofrac.fem.elastic.FormContext`); the run binds it to
+  the config (:func:`linear_terms`) and hands it to the problem, which knows no effect.
 - optionally ``geometry(table, file) -> (config, Geometry)``: the effect builds the
   scene's geometry (``dfn``); the scene then has no ``[geometry]`` table and the loader
   calls this instead of ``configure``. The returned
-  :class:`~geofrac.scene.model.Geometry` carries a builder that makes the gmsh model on
+  :class:`~geofrac.model.scene.Geometry` carries a builder that makes the gmsh model on
   one rank.
 
 - optionally ``driver(config, solution, say, write)``: the effect replaces the single
   elastic solve by its own loop (``cracking``: the sequentially linear event loop); see
-  :func:`geofrac.effects.cracking.driver`.
+  :func:`geofrac.effects.cracking.driver`. A scene declares at most one such effect
+  (the loader refuses two); :func:`driven` names it.
 
 MPM scenes (``method = "mpm"``) use ``configure`` only: the MPM driver
 (:mod:`geofrac.mpm.driver`) reads the validated configs of ``gravity``,
@@ -27,11 +29,19 @@ imports an effect module except through :func:`load`.
 
 from __future__ import annotations
 
+import functools
 import importlib
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from types import ModuleType
+from typing import TYPE_CHECKING
 
-__all__ = ["REGISTRY", "ConfigureContext", "available", "load"]
+from geofrac.model.scene import EffectSpec
+
+if TYPE_CHECKING:
+    from geofrac.fem.elastic import LinearTerm
+
+__all__ = ["REGISTRY", "ConfigureContext", "available", "driven", "linear_terms", "load"]
 
 #: effect name -> module implementing it.
 REGISTRY: dict[str, str] = {
@@ -51,11 +61,11 @@ class ConfigureContext:
     Attributes:
         file: the scene file (for error messages).
         gdim: geometric dimension of the problem.
-        material: the validated material (:class:`geofrac.scene.model.Material`).
+        material: the validated material (:class:`geofrac.model.scene.Material`).
         element: the scene's element name.
         groups: physical group name -> dimension of the scene's geometry.
         bcs: the validated Dirichlet conditions
-            (:class:`geofrac.scene.model.BoundaryCondition`).
+            (:class:`geofrac.model.scene.BoundaryCondition`).
         method: the scene's ``method``, ``"fem"`` or ``"mpm"``. An effect module lists
             the methods it serves in ``METHODS`` (absent: ``("fem",)``); for MPM scenes
             ``groups`` names the walled grid sides and ``"bed"``.
@@ -78,3 +88,23 @@ def available() -> tuple[str, ...]:
 def load(name: str) -> ModuleType:
     """Import and return the module implementing effect ``name``."""
     return importlib.import_module(REGISTRY[name])
+
+
+def driven(effects: Sequence[EffectSpec]) -> EffectSpec | None:
+    """The declared effect that brings its own ``driver`` loop, or None.
+
+    The loader has checked that there is at most one.
+    """
+    owners = [spec for spec in effects if hasattr(load(spec.name), "driver")]
+    assert len(owners) <= 1, f"more than one driver-owning effect: {owners}"
+    return owners[0] if owners else None
+
+
+def linear_terms(effects: Sequence[EffectSpec]) -> list[LinearTerm]:
+    """The ``linear_form`` hooks of the declared effects, bound to their configs."""
+    terms = []
+    for spec in effects:
+        module = load(spec.name)
+        if hasattr(module, "linear_form"):
+            terms.append(functools.partial(module.linear_form, spec.config))
+    return terms

@@ -55,8 +55,8 @@ from typing import Any
 from geofrac import elements
 from geofrac.effects import ConfigureContext
 from geofrac.fracture import SOLVERS
-from geofrac.scene.errors import SceneError, did_you_mean
-from geofrac.scene.table import finite, short
+from geofrac.model.errors import SceneError, did_you_mean
+from geofrac.model.table import finite, short
 
 __all__ = [
     "KEYS",
@@ -319,6 +319,7 @@ def scene_driver(scene: Any, comm: Any, say: Any = None) -> Any:
     (docs/grain_tip_stress.py); ``say`` receives the driver's messages (default: none).
     The caller destroys the driver or its problem.
     """
+    from geofrac.effects import linear_terms
     from geofrac.elements import make_element
     from geofrac.fem.elastic import make_problem
     from geofrac.fem.solution import Solution
@@ -328,6 +329,7 @@ def scene_driver(scene: Any, comm: Any, say: Any = None) -> Any:
     if config is None:
         raise ValueError(f"scene {scene.name!r} does not declare the effect 'cracking'")
     tagged = build_mesh(scene.geometry, comm)
-    problem = make_problem(tagged, make_element(scene.discretization.element, tagged.mesh), scene)
+    element = make_element(scene.discretization.element, tagged.mesh)
+    problem = make_problem(tagged, element, scene, linear_terms(scene.effects))
     problem.compile()
     return make_driver(config, Solution(scene, tagged, problem), say or (lambda msg: None))

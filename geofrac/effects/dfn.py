@@ -32,8 +32,8 @@ from geofrac.dfn.polygon import (
 )
 from geofrac.dfn.sampling import FractureSet, Network, generate_network
 from geofrac.meshing.dfn import ALGORITHMS, DOMAIN_GROUP, FRACTURE_GROUP, MeshSpec
-from geofrac.scene.errors import SceneError, did_you_mean
-from geofrac.scene.table import MAX_INTEGER, finite, short
+from geofrac.model.errors import SceneError, did_you_mean
+from geofrac.model.table import MAX_INTEGER, finite, short
 
 __all__ = [
     "RECTANGLE_CORNERS",
@@ -393,7 +393,7 @@ def _configure(table: dict[str, Any], file: str) -> DfnConfig:
 
 
 def geometry(table: dict[str, Any], file: str) -> tuple[DfnConfig, Any]:
-    """Validate ``[dfn]`` and return (config, :class:`~geofrac.scene.model.Geometry`).
+    """Validate ``[dfn]`` and return (config, :class:`~geofrac.model.scene.Geometry`).
 
     The geometry is 2D with physical groups ``domain``, the sides, the corners and
     ``fractures``; its builder is a :class:`DfnGeometry`.
@@ -401,7 +401,7 @@ def geometry(table: dict[str, Any], file: str) -> tuple[DfnConfig, Any]:
     Raises:
         SceneError: naming the offending ``dfn.*`` key.
     """
-    from geofrac.scene.model import Geometry
+    from geofrac.model.scene import Geometry
 
     config = _configure(table, file)
     groups = {DOMAIN_GROUP: 2, FRACTURE_GROUP: 1}

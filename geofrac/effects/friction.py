@@ -22,8 +22,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from geofrac.effects import ConfigureContext
-from geofrac.scene.errors import did_you_mean
-from geofrac.scene.table import Table, short
+from geofrac.model.errors import did_you_mean
+from geofrac.model.table import Table, short
 
 __all__ = ["KEYS", "MAX_MU", "METHODS", "FrictionConfig", "configure"]
 

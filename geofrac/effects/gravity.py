@@ -13,8 +13,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from geofrac.effects import ConfigureContext
-from geofrac.scene.errors import SceneError, did_you_mean
-from geofrac.scene.table import finite, short
+from geofrac.model.errors import SceneError, did_you_mean
+from geofrac.model.table import finite, short
 
 __all__ = [
     "KEYS",
@@ -24,7 +24,6 @@ __all__ = [
     "GravityConfig",
     "configure",
     "linear_form",
-    "ramp_factor",
 ]
 
 #: Gravity is a body force in FEM scenes and a nodal force per mass in MPM scenes.
@@ -51,21 +50,6 @@ class GravityConfig:
     acceleration: tuple[float, ...]
     density: float
     ramp: float = 0.0
-
-
-def ramp_factor(ramp: float, t0: float, t1: float) -> float:
-    """The mean of the ramp's factor min(1, t / ramp) over the step [t0, t1].
-
-    Used as gravity's factor for that step, so that the impulse m g ∫ min(1, t/ramp) dt
-    a particle receives over the run is exact, whatever the step.
-    """
-    if ramp <= 0 or t0 >= ramp:
-        return 1.0
-
-    def integral(t: float) -> float:  # ∫_0^t min(1, s/ramp) ds
-        return t * t / (2 * ramp) if t <= ramp else ramp / 2 + (t - ramp)
-
-    return (integral(t1) - integral(t0)) / (t1 - t0)
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> GravityConfig:

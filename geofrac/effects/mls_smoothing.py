@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from geofrac.effects import ConfigureContext
-from geofrac.scene.table import Table
+from geofrac.model.table import Table
 
 __all__ = ["DEFAULT_RADIUS", "KEYS", "MAX_RADIUS", "METHODS", "SmoothingConfig", "configure"]
 

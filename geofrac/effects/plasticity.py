@@ -19,8 +19,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from geofrac.effects import ConfigureContext
-from geofrac.scene.errors import SceneError
-from geofrac.scene.table import Table
+from geofrac.model.errors import SceneError
+from geofrac.model.table import Table
 
 __all__ = ["KEYS", "MAX_COHESION", "METHODS", "PlasticityConfig", "configure"]
 

@@ -35,10 +35,10 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from geofrac import kernels
-from geofrac.blocks.dual2d import inner_points
 from geofrac.elements.base import Element
 from geofrac.elements.efmm_numpy import edge_crossings
 from geofrac.errors import RunError
+from geofrac.geometry.triangles import inner_points
 
 __all__ = ["DomainData", "EfmmElement", "domain_data", "efmm"]
 

@@ -12,7 +12,7 @@ and condensing e, the node stiffness K_i = C_iᵀ A_i⁻¹ C_i (3.6), assembled 
 Integration domains (seed 3.2.2, Fig. 3.3). In every triangle T a point p_T is taken
 inside the incircle: the incentre for q_rand = 0, else a seeded random point of the
 disc of radius q_rand x r around it (the 2D blocks' points,
-:func:`geofrac.blocks.dual2d.inner_points`). Neighbouring triangles' points are joined
+:func:`geofrac.geometry.triangles.inner_points`). Neighbouring triangles' points are joined
 directly; the segment p_T p_T' crosses their shared edge ij at X_ij. Node i's domain
 inside T = (i, j, k) is the quadrilateral (i, X_ij, p_T, X_ik), integrated with Gauss
 rules on its two triangles (i, X_ij, p_T) and (i, p_T, X_ik) (the seed's triangles of
@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from geofrac.blocks.dual2d import inner_points
+from geofrac.geometry.triangles import inner_points
 from geofrac.meshing.distorted import signed_areas
 
 __all__ = [

@@ -11,6 +11,7 @@ stress show.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -23,10 +24,10 @@ from mpi4py import MPI
 
 from geofrac.elements.efmm import EfmmElement
 from geofrac.elements.efmm_numpy import stress_error
-from geofrac.fem.elastic import ElasticProblem
+from geofrac.fem.elastic import ElasticProblem, LinearTerm
 from geofrac.materials import d_matrix
 from geofrac.meshing.distribute import TaggedMesh
-from geofrac.scene.model import Scene
+from geofrac.model.scene import Scene
 
 __all__ = ["EfmmProblem"]
 
@@ -55,8 +56,14 @@ class EfmmProblem(ElasticProblem):
 
     element: EfmmElement
 
-    def __init__(self, tagged: TaggedMesh, element: EfmmElement, scene: Scene) -> None:
-        super().__init__(tagged, element, scene)
+    def __init__(
+        self,
+        tagged: TaggedMesh,
+        element: EfmmElement,
+        scene: Scene,
+        terms: Sequence[LinearTerm] = (),
+    ) -> None:
+        super().__init__(tagged, element, scene, terms)
         mat = scene.material
         self.D = d_matrix(mat.E, mat.nu, 2, mat.plane)
         self.e: dolfinx.fem.Function | None = None

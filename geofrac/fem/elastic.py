@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,7 +16,6 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from geofrac import effects as effect_registry
 from geofrac import elements
 from geofrac.analytic import ExactSolution, displacement_gradient, make_exact
 from geofrac.elements.base import Element
@@ -23,12 +23,19 @@ from geofrac.elements.kinematics import dofs_from_gradient
 from geofrac.errors import RunError
 from geofrac.materials import lame
 from geofrac.meshing.distribute import TaggedMesh
-from geofrac.scene.model import Scene
+from geofrac.model.scene import Scene
 from geofrac.solvers import LinearSolver, rigid_body_modes
 from geofrac_forms import elasticity as forms
 from geofrac_forms.gradient_dofs import penalty_forms
 
-__all__ = ["ElasticProblem", "FormContext", "GradientDofProblem", "exact_ufl", "make_problem"]
+__all__ = [
+    "ElasticProblem",
+    "FormContext",
+    "GradientDofProblem",
+    "LinearTerm",
+    "exact_ufl",
+    "make_problem",
+]
 
 #: options prefix of the elastic solver.
 PREFIX = "geofrac_elastic_"
@@ -59,6 +66,11 @@ class FormContext:
         return dolfinx.fem.Constant(self.mesh, np.asarray(values, dtype=PETSc.ScalarType))
 
 
+#: A right-hand-side term added to the loads (an effect's ``linear_form`` bound to its
+#: config by the run pipeline, :func:`geofrac.runner.linear_terms`).
+LinearTerm = Callable[[FormContext], ufl.Form]
+
+
 def exact_ufl(exact: ExactSolution, mesh: dolfinx.mesh.Mesh) -> tuple[Any, Any]:
     """(displacement vector, stress tensor) of an exact solution as UFL expressions."""
     x = ufl.SpatialCoordinate(mesh)
@@ -75,11 +87,19 @@ class ElasticProblem:
     Args:
         tagged: the distributed mesh with its physical groups.
         element: the displacement discretisation.
-        scene: the validated scene (material, loads, bcs, effects, solver).
+        scene: the validated scene (material, loads, bcs, solver).
+        terms: right-hand-side terms beyond the scene's loads (the effects', e.g. gravity).
     """
 
-    def __init__(self, tagged: TaggedMesh, element: Element, scene: Scene) -> None:
+    def __init__(
+        self,
+        tagged: TaggedMesh,
+        element: Element,
+        scene: Scene,
+        terms: Sequence[LinearTerm] = (),
+    ) -> None:
         self.tagged, self.element, self.scene = tagged, element, scene
+        self.terms = tuple(terms)
         mesh = tagged.mesh
         self.mesh = mesh
         self.comm: MPI.Comm = mesh.comm
@@ -134,10 +154,7 @@ class ElasticProblem:
             else:
                 terms.append(forms.body_force_form(v, value, self.thickness, self.dx))
         ctx = FormContext(mesh, v, self.dx, self.thickness)
-        for spec in self.scene.effects:
-            module = effect_registry.load(spec.name)
-            if hasattr(module, "linear_form"):
-                terms.append(module.linear_form(spec.config, ctx))
+        terms += [term(ctx) for term in self.terms]
         if not terms:
             zero = dolfinx.fem.Constant(mesh, np.zeros(gdim, dtype=PETSc.ScalarType))
             terms.append(ufl.inner(zero, v) * self.dx)
@@ -313,8 +330,14 @@ class GradientDofProblem(ElasticProblem):
     boundary edges follow the data between the vertices (see docs/elements.md).
     """
 
-    def __init__(self, tagged: TaggedMesh, element: Element, scene: Scene) -> None:
-        super().__init__(tagged, element, scene)
+    def __init__(
+        self,
+        tagged: TaggedMesh,
+        element: Element,
+        scene: Scene,
+        terms: Sequence[LinearTerm] = (),
+    ) -> None:
+        super().__init__(tagged, element, scene, terms)
         W = element.unknowns
         self.wh = dolfinx.fem.Function(W, name="vertex_dofs")
         g, h = ufl.TrialFunction(W), ufl.TestFunction(W)
@@ -413,11 +436,13 @@ class GradientDofProblem(ElasticProblem):
         return self.element.rigid_body_modes()
 
 
-def make_problem(tagged: TaggedMesh, element: Element, scene: Scene) -> ElasticProblem:
-    """The elastic problem of the scene's element, built on ``element``.
+def make_problem(
+    tagged: TaggedMesh, element: Element, scene: Scene, terms: Sequence[LinearTerm] = ()
+) -> ElasticProblem:
+    """The elastic problem of ``element`` with the right-hand-side ``terms``.
 
     The class is the one the element's :class:`~geofrac.elements.spec.ElementSpec` names
     (``problem``); no element is named here.
     """
-    problem: type[ElasticProblem] = elements.get(scene.discretization.element).problem_class()
-    return problem(tagged, element, scene)
+    problem: type[ElasticProblem] = elements.get(element.name).problem_class()
+    return problem(tagged, element, scene, terms)

@@ -8,7 +8,7 @@ from typing import Any
 from geofrac.fem.elastic import ElasticProblem
 from geofrac.io.checkpoint import RunControl
 from geofrac.meshing.distribute import TaggedMesh
-from geofrac.scene.model import Scene
+from geofrac.model.scene import Scene
 from geofrac.timing import Timings
 
 __all__ = ["Solution"]

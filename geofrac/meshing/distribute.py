@@ -14,7 +14,7 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.meshing.geo import failure_message, gmsh_session, meshed_model
-from geofrac.scene.model import Geometry
+from geofrac.model.scene import Geometry
 
 __all__ = ["TaggedMesh", "build_mesh", "check_fracture_cover"]
 

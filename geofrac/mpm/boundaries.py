@@ -27,10 +27,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from geofrac.model.scene import BED_REPRESENTATIONS
 from geofrac.mpm.grid import Grid, grid
 
 __all__ = [
-    "BED_REPRESENTATIONS",
     "TOL",
     "bed_nodes",
     "boundary_rows",
@@ -40,8 +40,6 @@ __all__ = [
 
 #: Relative tolerance (in cells) for "on a side" and "on the bed".
 TOL = 1e-9
-#: How the bed's nodes constrain the material (:func:`bed_nodes`); the first is the default.
-BED_REPRESENTATIONS = ("plane", "staircase")
 
 
 def scene_grid(

@@ -1,7 +1,7 @@
 """Run a ``method = "mpm"`` scene: particles → grid → time loop → output.
 
 The thin MPI layer of the MPM: it builds the grid, walls and particles from the
-validated :class:`~geofrac.scene.model.Scene`, decomposes them over the communicator
+validated :class:`~geofrac.model.scene.Scene`, decomposes them over the communicator
 (:mod:`geofrac.mpm.parallel`, on more than one rank), steps to ``t_end`` and writes
 
 - ``particles.xdmf`` / ``.h5``: ``frames`` + 1 frames of particle position and the
@@ -12,7 +12,7 @@ validated :class:`~geofrac.scene.model.Scene`, decomposes them over the communic
   budget of :mod:`~geofrac.mpm.energy` (columns :data:`~geofrac.mpm.energy.CSV_COLUMNS`:
   the stored energy as stress work, the cumulative wall, friction, smoothing, plastic and
   numerical terms, their total and the budget's closure);
-- ``summary.json`` (by :func:`run_mpm_scene`): ``results`` with ``runout_m`` (the
+- ``summary.json`` (by :func:`geofrac.pipeline.run_scene`): ``results`` with ``runout_m`` (the
   largest particle x at the end minus at the start), ``friction_angle_deg`` (with
   ``plasticity``), ``energy_drift_max`` (max |E(t) − E₀| / E₀ with E the total above;
   None when E₀ = 0, a body starting at rest), ``energy_drift_work_max`` (the same with
@@ -23,7 +23,7 @@ validated :class:`~geofrac.scene.model.Scene`, decomposes them over the communic
 
 Particles come from ``[mpm.particles]`` or from the bodies of ``[[mpm.bodies]]``, ids
 numbered body after body before the decomposition; initial velocities may be expressions
-of the position (:mod:`geofrac.scene.expr`); ``[gravity] ramp`` scales gravity per step
+of the position (:mod:`geofrac.model.expr`); ``[gravity] ramp`` scales gravity per step
 (the gravitational potential is then the work of each step's own gravity,
 :meth:`~geofrac.mpm.energy.EnergyLog.potential`).
 
@@ -51,8 +51,8 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.io.checkpoint import RunControl
-from geofrac.io.summary import start_summary
 from geofrac.log import format_seconds, sayer
+from geofrac.model.scene import Scene
 from geofrac.mpm.boundaries import boundary_rows, scene_grid
 from geofrac.mpm.energy import CSV_COLUMNS, EnergyLog, StepBudget
 from geofrac.mpm.grid import Grid
@@ -65,10 +65,9 @@ from geofrac.mpm.schemes import (
     time_step,
 )
 from geofrac.mpm.shapes import support_margin
-from geofrac.scene.model import Scene
 from geofrac.timing import Timings
 
-__all__ = ["OUTPUT_FILES", "MpmRun", "advance", "prepare", "run_mpm_scene", "simulate"]
+__all__ = ["MPM", "OUTPUT_FILES", "MpmMethod", "MpmRun", "advance", "prepare", "simulate"]
 
 #: Files an MPM run writes into its output directory.
 OUTPUT_FILES = ("particles.xdmf", "particles.h5", "energies.csv", "summary.json")
@@ -226,7 +225,7 @@ def _velocity(components: tuple[float | str, ...], x: np.ndarray, key: str) -> n
     Raises:
         RunError: an expression is not finite at some particle (the message names ``key``).
     """
-    from geofrac.scene.expr import ExpressionError, evaluate, parse
+    from geofrac.model.expr import ExpressionError, evaluate, parse
 
     v = np.empty_like(x)
     names = ("x", "y", "z")[: x.shape[1]]
@@ -587,9 +586,22 @@ def _gravity_factor(run: MpmRun, k: int) -> float:
     s = run.settings
     if run.ramp <= 0 or (k - 1) * s.dt >= run.ramp:
         return 1.0
-    from geofrac.effects.gravity import ramp_factor
-
     return float(ramp_factor(run.ramp, (k - 1) * s.dt, k * s.dt))
+
+
+def ramp_factor(ramp: float, t0: float, t1: float) -> float:
+    """The mean of the ramp's factor min(1, t / ramp) over the step [t0, t1].
+
+    Used as gravity's factor for that step, so that the impulse m g ∫ min(1, t/ramp) dt
+    a particle receives over the run is exact, whatever the step.
+    """
+    if ramp <= 0 or t0 >= ramp:
+        return 1.0
+
+    def integral(t: float) -> float:  # ∫_0^t min(1, s/ramp) ds
+        return t * t / (2 * ramp) if t <= ramp else ramp / 2 + (t - ramp)
+
+    return (integral(t1) - integral(t0)) / (t1 - t0)
 
 
 def _start(run: MpmRun, comm: MPI.Comm) -> dict[str, Any]:
@@ -720,25 +732,32 @@ def _probe(p: Particles | None, pid: int, x0: np.ndarray | None) -> dict[str, li
     }
 
 
-def run_mpm_scene(
-    scene: Scene,
-    comm: MPI.Comm,
-    timings: Timings | None = None,
-    verbose: bool = True,
-    resume: bool = False,
-) -> dict[str, Any]:
-    """Run an MPM scene in its owned output directory; publish on success; return the summary.
+class MpmMethod:
+    """The MPM method of the run pipeline (:class:`geofrac.pipeline.Method`)."""
 
-    See :func:`geofrac.io.outdir.owned_run`: on a :class:`RunError` or a signal the
-    previous results stay and ``incomplete/summary.json`` records the status; the time
-    loop checkpoints into ``incomplete/checkpoint`` and ``resume`` continues from there.
-    """
-    from geofrac.io.outdir import owned_run
+    name = "mpm"
+    output_files = OUTPUT_FILES
 
-    timings = timings or Timings()
-    start = start_summary(scene, comm, fem=False, method="mpm")
+    def head(self, scene: Scene) -> dict[str, Any]:
+        """No DOLFINx or PETSc versions: an MPM run imports neither."""
+        return {"fem": False, "method": "mpm"}
 
-    def body(staged: Scene, control: Any) -> dict[str, Any]:
-        return {"results": simulate(staged, comm, timings, verbose, write=True, control=control)}
+    def run(
+        self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
+    ) -> dict[str, Any]:
+        """:func:`simulate` with its output; the summary entries."""
+        return {"results": simulate(scene, comm, timings, verbose, write=True, control=control)}
 
-    return owned_run(scene, comm, timings, start, body, OUTPUT_FILES, "mpm", resume, verbose)
+    def report(self, summary: dict[str, Any]) -> list[str]:
+        """The runout, the friction angle and the energy drift."""
+        r = summary["results"]
+        line = f"runout (front x moved): {r['runout_m']:.4g}"
+        if "friction_angle_deg" in r:
+            line += f" at friction angle {r['friction_angle_deg']:g} deg"
+        if r["energy_drift_max"] is not None:
+            line += f"; energy drift max {r['energy_drift_max']:.3g}"
+        return [line]
+
+
+#: The MPM method (``method = "mpm"``).
+MPM = MpmMethod()

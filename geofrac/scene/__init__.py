@@ -12,9 +12,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from geofrac.scene.errors import SceneError
+from geofrac.model.errors import SceneError
+from geofrac.model.scene import Scene
 from geofrac.scene.load import load_scene
-from geofrac.scene.model import Scene
 
 __all__ = ["Scene", "SceneError", "load_scene", "load_scene_collective"]
 

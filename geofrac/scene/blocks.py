@@ -12,9 +12,9 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
-from geofrac.scene.errors import SceneError
-from geofrac.scene.model import BlocksSpec, Geometry, Output
-from geofrac.scene.table import Table, output_directory, short
+from geofrac.model.errors import SceneError
+from geofrac.model.scene import BlocksSpec, Geometry, Output
+from geofrac.model.table import Table, output_directory, short
 
 __all__ = ["BLOCKS_KEYS", "BLOCKS_OUTPUT_KEYS", "FEM_ONLY_TABLES", "blocks_output", "blocks_spec"]
 
@@ -173,7 +173,7 @@ def blocks_output(
     """``[output]`` of a block scene: ``vtu``, ``block_file`` and ``histogram`` switches.
 
     ``trusted``: ``output.dir`` was set on the command line (see
-    :func:`~geofrac.scene.table.output_directory`).
+    :func:`~geofrac.model.table.output_directory`).
     """
     t = Table(file, "output", raw, BLOCKS_OUTPUT_KEYS)
     directory = output_directory(t, name, out, trusted)

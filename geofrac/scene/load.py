@@ -18,8 +18,8 @@ from typing import Any
 
 from geofrac import analytic, effects, elements
 from geofrac.meshing.geo import define_constants, inspect_geometry
-from geofrac.scene.errors import SceneError, did_you_mean
-from geofrac.scene.model import (
+from geofrac.model.errors import SceneError, did_you_mean
+from geofrac.model.scene import (
     SCHEMA_VERSION,
     BoundaryCondition,
     Discretization,
@@ -32,10 +32,10 @@ from geofrac.scene.model import (
     Scene,
     Solver,
 )
+from geofrac.model.table import MAX_DEPTH, check_name, checkpoint_keys, first_too_deep, short
+from geofrac.model.table import Table as _Table
+from geofrac.model.table import output_directory as _output_directory
 from geofrac.scene.size import Extent, check_size, estimate
-from geofrac.scene.table import MAX_DEPTH, check_name, checkpoint_keys, first_too_deep, short
-from geofrac.scene.table import Table as _Table
-from geofrac.scene.table import output_directory as _output_directory
 
 __all__ = [
     "DEFAULT_OUTPUT_FIELDS",
@@ -450,6 +450,7 @@ def _effects(
         str(file), geometry.dim, material, discretization.element, dict(geometry.groups), bcs
     )
     _check_methods(file, declared, "fem")
+    _check_drivers(file, declared)
     specs = []
     for name in declared:
         if name in configured:
@@ -471,6 +472,21 @@ def _check_methods(file: Path, declared: Sequence[str], method: str) -> None:
                 f"effect '{name}' applies to method {' or '.join(map(repr, methods))}, "
                 f"not '{method}'",
             )
+
+
+def _check_drivers(file: Path, declared: Sequence[str]) -> None:
+    """At most one declared effect may bring its own ``driver`` loop.
+
+    Such a loop replaces the single solve: two would each want to be the run.
+    """
+    owners = [name for name in declared if hasattr(effects.load(name), "driver")]
+    if len(owners) > 1:
+        raise SceneError(
+            file,
+            "effects",
+            f"effects {' and '.join(map(repr, owners))} each drive the run with their own "
+            "loop; declare only one of them",
+        )
 
 
 def _reject_tables(file: Path, data: dict[str, Any], keys: Sequence[str], message: str) -> None:

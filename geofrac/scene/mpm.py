@@ -13,10 +13,18 @@ from typing import Any
 
 import numpy as np
 
-from geofrac.scene.errors import SceneError, did_you_mean
-from geofrac.scene.expr import ExpressionError, evaluate, parse
-from geofrac.scene.model import Body, Geometry, Material, MpmSpec, Output, ParticleSource
-from geofrac.scene.table import (
+from geofrac.model.errors import SceneError, did_you_mean
+from geofrac.model.expr import ExpressionError, evaluate, parse
+from geofrac.model.scene import (
+    BED_REPRESENTATIONS,
+    Body,
+    Geometry,
+    Material,
+    MpmSpec,
+    Output,
+    ParticleSource,
+)
+from geofrac.model.table import (
     Table,
     checkpoint_keys,
     finite,
@@ -218,7 +226,7 @@ def _corners(lower: tuple[float, ...], upper: tuple[float, ...]) -> np.ndarray:
 def _velocity(t: Table, name: str, dim: int, points: np.ndarray) -> tuple[float | str, ...]:
     """An initial velocity: ``dim`` numbers or expressions of the position.
 
-    Each expression is parsed (:func:`geofrac.scene.expr.parse`) and evaluated at
+    Each expression is parsed (:func:`geofrac.model.expr.parse`) and evaluated at
     ``points`` (shape=(k, dim): the corners and centre of the grid box and of the body);
     the run evaluates it at every particle again.
     """
@@ -444,8 +452,6 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     damping = _damping(file, t.data["damping"]) if t.has("damping") else 0.0
     walls = _walls(file, t.data.get("walls", {}), dim)
     bed = _bed(file, t.data["bed"], dim, geometry) if t.has("bed") else ()
-    from geofrac.mpm.boundaries import BED_REPRESENTATIONS
-
     bed_representation = t.string(
         "bed_representation", default=BED_REPRESENTATIONS[0], choices=BED_REPRESENTATIONS
     )
@@ -486,7 +492,7 @@ def mpm_output(
     """``[output]`` of an MPM scene: particle fields; probes are particles nearest a point.
 
     ``trusted``: ``output.dir`` was set on the command line (see
-    :func:`~geofrac.scene.table.output_directory`).
+    :func:`~geofrac.model.table.output_directory`).
     """
     t = Table(
         file,

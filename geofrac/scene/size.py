@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from geofrac.scene.errors import SceneError
+from geofrac.model.errors import SceneError
 
 __all__ = [
     "CAPS",
@@ -305,7 +305,7 @@ def estimate(scene: Any, extent: Extent | None) -> SizeEstimate:
     """Estimate the work of a validated scene (see the module docstring).
 
     Args:
-        scene: a :class:`~geofrac.scene.model.Scene` (its ``size`` not yet set).
+        scene: a :class:`~geofrac.model.scene.Scene` (its ``size`` not yet set).
         extent: what gmsh reported of the scene's geometry file, or None (no file).
     """
     q: dict[str, float] = {}

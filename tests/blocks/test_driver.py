@@ -8,9 +8,9 @@ import pytest
 import pyvista as pv
 from mpi4py import MPI
 
-from geofrac.blocks.driver import run_blocks_scene
-from geofrac.io.blocks import read_block_file
+from geofrac.blocks.output import read_block_file
 from geofrac.meshing.terrain import TerrainSpec, ground
+from geofrac.pipeline import run_scene
 from geofrac.scene import load_scene
 from tests.conftest import JOBS
 
@@ -21,7 +21,7 @@ SMALL_TERRAIN = ["blocks.terrain.h=25", "blocks.terrain.h_immobile=150"]
 def _run(tmp_path, job, overrides, comm=MPI.COMM_SELF):
     out = tmp_path / "out" if comm.size == 1 else comm.bcast(tmp_path / "out", root=0)
     scene = load_scene(JOBS / job, overrides, out=out)
-    return run_blocks_scene(scene, comm, verbose=False), out
+    return run_scene(scene, comm, verbose=False), out
 
 
 def test_square_blocks_scene_writes_what_it_says(tmp_path):
@@ -128,6 +128,6 @@ def test_a_mesh_with_a_non_manifold_vertex_is_refused_with_a_clear_error(tmp_pat
     scene = tmp_path / "scene.toml"
     scene.write_text(f'method = "blocks"\n[geometry]\nfile = "{geo.as_posix()}"\n[blocks]\n')
     with pytest.raises(RunError, match="do not form one fan"):
-        run_blocks_scene(load_scene(scene, out=tmp_path / "out"), MPI.COMM_SELF, verbose=False)
+        run_scene(load_scene(scene, out=tmp_path / "out"), MPI.COMM_SELF, verbose=False)
     summary = json.loads((tmp_path / "out" / "incomplete" / "summary.json").read_text())
     assert summary["status"].startswith("error: cannot build blocks")

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from geofrac.blocks.dual2d import blocks_2d, inner_points
+from geofrac.blocks.dual2d import blocks_2d
+from geofrac.geometry.triangles import inner_points
 from tests.blocks.conftest import square_mesh
 
 

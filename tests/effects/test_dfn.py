@@ -13,7 +13,7 @@ from mpi4py import MPI
 from geofrac.dfn.io import load_network, save_network
 from geofrac.errors import RunError
 from geofrac.meshing.distribute import build_mesh, check_fracture_cover
-from geofrac.runner import run_scene
+from geofrac.pipeline import run_scene
 from geofrac.scene import SceneError, load_scene
 from tests.conftest import JOBS
 from tests.conftest import run_and_list_modules as _run_and_list_modules

@@ -185,7 +185,7 @@ def test_a_run_writes_the_grains_and_the_nodal_stress(mpi_tmp_path):
     import h5py
     import pyvista as pv
 
-    from geofrac.runner import run_scene
+    from geofrac.pipeline import run_scene
     from geofrac.scene import load_scene_collective
     from tests.conftest import JOBS
 

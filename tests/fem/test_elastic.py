@@ -13,7 +13,7 @@ from geofrac.errors import RunError
 from geofrac.fem.elastic import exact_ufl, make_problem
 from geofrac.fem.post import error_norms
 from geofrac.meshing.distribute import build_mesh
-from geofrac.runner import run_scene
+from geofrac.pipeline import run_scene
 from geofrac.scene import load_scene
 from tests.conftest import JOBS
 from tests.fem.helpers import errors_and_tip, solve_job

@@ -15,7 +15,7 @@ from geofrac import interrupt
 from geofrac.errors import RunError
 from geofrac.io.checkpoint import KEEP, CheckpointPolicy, RunControl, latest
 from geofrac.io.outdir import INCOMPLETE, claim
-from geofrac.runner import run_scene
+from geofrac.pipeline import run_scene
 from geofrac.scene import load_scene, load_scene_collective
 from tests.conftest import JOBS, subprocess_env
 
@@ -76,10 +76,8 @@ def test_a_failed_rerun_keeps_the_previous_complete_results(tmp_path):
 def test_a_run_of_another_kind_leaves_no_file_of_the_previous_one(tmp_path):
     run_scene(load_scene(JOBS / "quickstart.toml", out=tmp_path), MPI.COMM_SELF, verbose=False)
     assert (tmp_path / "results.xdmf").exists()
-    from geofrac.blocks.driver import run_blocks_scene
-
     scene = load_scene(JOBS / "blocks_square.toml", ["geometry.parameters.h=0.3"], out=tmp_path)
-    summary = run_blocks_scene(scene, MPI.COMM_SELF, verbose=False)
+    summary = run_scene(scene, MPI.COMM_SELF, verbose=False)
     names = sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("."))
     assert names == sorted([*summary["files"], "summary.json"])
     assert "results.xdmf" not in names and "blocks.vtu" in names

@@ -10,7 +10,7 @@ import pytest
 import pyvista
 from mpi4py import MPI
 
-from geofrac.runner import run_scene
+from geofrac.pipeline import run_scene
 from geofrac.scene import load_scene
 from tests.conftest import JOBS
 

@@ -81,7 +81,7 @@ def test_group_outside_the_domain_is_an_error_not_an_abort(tmp_path):
     from mpi4py import MPI
 
     from geofrac.errors import RunError
-    from geofrac.runner import run_scene
+    from geofrac.pipeline import run_scene
     from geofrac.scene import load_scene
 
     scene = load_scene(REPO / "tests" / "scenes" / "stray_curve.toml", out=tmp_path / "out")

@@ -241,7 +241,7 @@ def test_overlapping_boundary_groups_each_keep_their_facets():
     from mpi4py import MPI
 
     from geofrac.meshing.distribute import build_mesh
-    from geofrac.scene.model import Geometry
+    from geofrac.model.scene import Geometry
 
     info = inspect_geometry(REPO / "meshes" / "square.geo", {})
     geometry = Geometry(REPO / "meshes" / "square.geo", {"a": 5.0, "h": 1.0}, None, 2, info.groups)

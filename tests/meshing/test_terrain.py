@@ -240,7 +240,7 @@ def test_zones_refine_and_coarsen_the_layer_locally():
 @pytest.mark.mpi
 def test_build_mesh_distributes_the_layer(built):
     from geofrac.meshing.distribute import build_mesh
-    from geofrac.scene.model import Geometry
+    from geofrac.model.scene import Geometry
 
     geometry = Geometry(
         file=None, parameters={}, mesh_size=None, dim=3, groups=GROUPS, builder=TerrainBuilder(SPEC)

@@ -284,13 +284,13 @@ def test_the_settling_column_scene_reaches_its_weight(tmp_path):
     import h5py
     from mpi4py import MPI
 
-    from geofrac.mpm.driver import run_mpm_scene
+    from geofrac.pipeline import run_scene
     from geofrac.scene import load_scene
     from tests.conftest import JOBS
 
     scene = load_scene(JOBS / "mpm_settling_column.toml", out=tmp_path)
     assert scene.mpm.damping == 0.2
-    assert run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)["status"] == "ok"
+    assert run_scene(scene, MPI.COMM_SELF, verbose=False)["status"] == "ok"
     with h5py.File(tmp_path / "particles.h5") as f:
         last = f[f"frame_{max(int(k.split('_')[1]) for k in f if k.startswith('frame_'))}"]
         x, u, stress = last["geometry"][()], last["displacement"][()], last["stress"][()]

@@ -11,7 +11,8 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.mpm.bar import impact_bar, self_weight_stress
-from geofrac.mpm.driver import run_mpm_scene, simulate
+from geofrac.mpm.driver import simulate
+from geofrac.pipeline import run_scene
 from geofrac.scene import load_scene
 from tests.conftest import JOBS, run_and_list_modules
 
@@ -26,7 +27,7 @@ def _last_frame(out):
 def test_the_quasi_static_bar_scene_matches_eq_4_73(tmp_path):
     """W = 1000: RMS stress error within 2 % of ρ₀|b|L₀ (the issue's acceptance)."""
     scene = load_scene(JOBS / "mpm_bar_w1000.toml", out=tmp_path)
-    summary = run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)
+    summary = run_scene(scene, MPI.COMM_SELF, verbose=False)
     assert summary["status"] == "ok"
     frame = _last_frame(tmp_path)
     x, stress = frame["geometry"][:, 0], frame["stress"][:, 0]
@@ -38,7 +39,7 @@ def test_the_quasi_static_bar_scene_matches_eq_4_73(tmp_path):
 
 def test_the_translating_bar_scene_writes_consistent_energies(tmp_path):
     scene = load_scene(JOBS / "mpm_translating_bar.toml", ["mpm.t_end=15"], out=tmp_path)
-    summary = run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)
+    summary = run_scene(scene, MPI.COMM_SELF, verbose=False)
     results = summary["results"]
     with (tmp_path / "energies.csv").open() as f:
         rows = list(csv.DictReader(f))
@@ -58,7 +59,7 @@ def test_a_particle_leaving_the_grid_stops_the_run_and_says_so(tmp_path):
         JOBS / "mpm_translating_bar.toml", ["mpm.t_end=20", "mpm.walls.x_max=free"], out=tmp_path
     )
     with pytest.raises(RunError, match="left the background grid"):
-        run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)
+        run_scene(scene, MPI.COMM_SELF, verbose=False)
     summary = json.loads((tmp_path / "incomplete" / "summary.json").read_text())
     assert (
         summary["status"].startswith("error: ") and "left the background grid" in summary["status"]
@@ -70,7 +71,7 @@ def test_a_particle_leaving_the_grid_stops_the_run_and_says_so(tmp_path):
 
 def test_the_impact_bar_scene_reaches_eq_4_75_behind_the_wave(tmp_path):
     scene = load_scene(JOBS / "mpm_impact_bar.toml", out=tmp_path)
-    run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)
+    run_scene(scene, MPI.COMM_SELF, verbose=False)
     frame = _last_frame(tmp_path)
     x0 = frame["geometry"][:, 0] - frame["displacement"][:, 0]
     behind = x0 < 0.7 * 50.0
@@ -98,7 +99,7 @@ def test_a_coarse_landslide_runs_and_a_stronger_soil_moves_less(tmp_path):
             [*COARSE_SLIDE, f"plasticity.friction_angle={angle}"],
             out=out,
         )
-        results = run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)["results"]
+        results = run_scene(scene, MPI.COMM_SELF, verbose=False)["results"]
         assert results["friction_angle_deg"] == angle
         frame = _last_frame(out)
         assert np.all(np.isfinite(frame["stress"]))
@@ -115,13 +116,13 @@ def test_a_decomposed_landslide_equals_the_serial_one(tmp_path_factory):
     base = comm.bcast(str(tmp_path_factory.mktemp("ls")) if comm.rank == 0 else None)
     overrides = [*COARSE_SLIDE, "mpm.t_end=1.0", "plasticity.friction_angle=10"]
     serial_out = tmp_path_factory.mktemp(f"serial{comm.rank}")
-    serial = run_mpm_scene(
+    serial = run_scene(
         load_scene(JOBS / "landslide_kita_uebaru.toml", overrides, out=serial_out),
         MPI.COMM_SELF,
         verbose=False,
     )["results"]
     scene = load_scene(JOBS / "landslide_kita_uebaru.toml", overrides, out=f"{base}/par")
-    parallel = run_mpm_scene(scene, comm, verbose=False)["results"]
+    parallel = run_scene(scene, comm, verbose=False)["results"]
     assert parallel["particles"] == serial["particles"]
     assert parallel["runout_m"] == pytest.approx(serial["runout_m"], rel=1e-9, abs=1e-9)
     for name, history in serial["probes"].items():
@@ -191,7 +192,7 @@ def test_a_striker_hitting_a_block_at_rest_conserves_momentum(tmp_path):
     The striker (0.4 x 0.4, ρ = 1000, v0 = 1) reaches the target (ρ = 2000) at t = 0.2 and
     hands it momentum; the sums of the mass and volume fields are the bodies' ρA and A.
     """
-    summary = run_mpm_scene(load_scene(TWO_BLOCKS, TWO_SHORT, out=tmp_path), MPI.COMM_SELF)
+    summary = run_scene(load_scene(TWO_BLOCKS, TWO_SHORT, out=tmp_path), MPI.COMM_SELF)
     bodies = summary["results"]["bodies"]
     striker, target = bodies["striker"], bodies["target"]
     m_s, m_t = 1000.0 * 0.4 * 0.4, 2000.0 * 0.6 * 0.6
@@ -218,7 +219,7 @@ def test_a_striker_hitting_a_block_at_rest_conserves_momentum(tmp_path):
 
 
 def test_the_description_in_summary_json_is_marked_after_set(tmp_path):
-    run_mpm_scene(load_scene(TWO_BLOCKS, ["mpm.t_end=0.01"], out=tmp_path), MPI.COMM_SELF)
+    run_scene(load_scene(TWO_BLOCKS, ["mpm.t_end=0.01"], out=tmp_path), MPI.COMM_SELF)
     scene = json.loads((tmp_path / "summary.json").read_text())["scene"]
     assert scene["description"].endswith("momentum is conserved (modified by --set mpm.t_end=0.01)")
     assert scene["overrides"] == ["mpm.t_end=0.01"]
@@ -323,11 +324,11 @@ def test_a_two_body_scene_is_the_same_on_one_and_all_ranks(tmp_path_factory):
     base = comm.bcast(str(tmp_path_factory.mktemp("two")) if comm.rank == 0 else None)
     overrides = [*TWO_SHORT, "mpm.t_end=0.3", "mpm.bodies.0.velocity=[1.0, '0.2*(y - 0.7)']"]
     serial_out = tmp_path_factory.mktemp(f"serial{comm.rank}")
-    serial = run_mpm_scene(
+    serial = run_scene(
         load_scene(TWO_BLOCKS, overrides, out=serial_out), MPI.COMM_SELF, verbose=False
     )["results"]
     scene = load_scene(TWO_BLOCKS, overrides, out=f"{base}/par")
-    parallel = run_mpm_scene(scene, comm, verbose=False)["results"]
+    parallel = run_scene(scene, comm, verbose=False)["results"]
     assert parallel["bodies"] == serial["bodies"]
     assert parallel["particles"] == serial["particles"] == 64 + 144
     if comm.rank == 0:

@@ -214,10 +214,10 @@ def test_the_incline_scene_slides_at_coulombs_rate(tmp_path):
     The mean displacement at t = 0.5 is g (sin 30° − 0.3 cos 30°) t² / 2 = 0.3003 (the front
     moves more: the block stretches).
     """
-    from geofrac.mpm.driver import run_mpm_scene
+    from geofrac.pipeline import run_scene
 
     scene = load_scene(JOBS / "mpm_incline_block.toml", ["mpm.t_end=0.5"], out=tmp_path)
-    summary = run_mpm_scene(scene, MPI.COMM_SELF, verbose=False)
+    summary = run_scene(scene, MPI.COMM_SELF, verbose=False)
     assert summary["status"] == "ok"
     a = G0 * (np.sin(np.radians(30.0)) - 0.3 * np.cos(np.radians(30.0)))
     assert _mean_displacement(tmp_path)[0] == pytest.approx(a * 0.5**2 / 2, rel=0.01)
@@ -225,12 +225,12 @@ def test_the_incline_scene_slides_at_coulombs_rate(tmp_path):
 
 @pytest.mark.mpi(min_size=2)
 def test_the_incline_scene_slides_at_coulombs_rate_on_two_ranks(tmp_path_factory):
-    from geofrac.mpm.driver import run_mpm_scene
+    from geofrac.pipeline import run_scene
 
     comm = MPI.COMM_WORLD
     base = comm.bcast(str(tmp_path_factory.mktemp("incline")) if comm.rank == 0 else None)
     scene = load_scene(JOBS / "mpm_incline_block.toml", ["mpm.t_end=0.5"], out=Path(base))
-    run_mpm_scene(scene, comm, verbose=False)
+    run_scene(scene, comm, verbose=False)
     moved = _mean_displacement(Path(base))[0] if comm.rank == 0 else None
     moved = comm.bcast(moved)
     a = G0 * (np.sin(np.radians(30.0)) - 0.3 * np.cos(np.radians(30.0)))
@@ -267,7 +267,7 @@ def test_a_block_on_a_30_degree_slope_sticks_on_two_ranks(scheme):
     ],
 )
 def test_mu_per_boundary_errors_name_the_key(override, key, text):
-    from geofrac.scene.errors import SceneError
+    from geofrac.model.errors import SceneError
 
     with pytest.raises(SceneError) as info:
         load_scene(JOBS / "mpm_incline_block.toml", [override])

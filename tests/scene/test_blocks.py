@@ -2,8 +2,8 @@
 
 import pytest
 
+from geofrac.model.errors import SceneError
 from geofrac.scene import load_scene
-from geofrac.scene.errors import SceneError
 from tests.conftest import JOBS
 
 

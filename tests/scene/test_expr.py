@@ -1,9 +1,9 @@
-"""Velocity expressions (geofrac.scene.expr): arithmetic only, never executed, finite."""
+"""Velocity expressions (geofrac.model.expr): arithmetic only, never executed, finite."""
 
 import numpy as np
 import pytest
 
-from geofrac.scene.expr import MAX_LENGTH, ExpressionError, evaluate, parse
+from geofrac.model.expr import MAX_LENGTH, ExpressionError, evaluate, parse
 
 XY = ("x", "y")
 POINTS = np.array([[0.0, 0.0], [1.0, 2.0], [-3.0, 0.5]])

@@ -3,8 +3,8 @@ from pathlib import Path
 
 import pytest
 
+from geofrac.model.errors import did_you_mean
 from geofrac.scene import SceneError, load_scene
-from geofrac.scene.errors import did_you_mean
 from geofrac.scene.load import apply_overrides
 from tests.conftest import BROKEN, JOBS
 
@@ -113,3 +113,23 @@ def test_did_you_mean():
 @pytest.mark.parametrize("path", sorted(JOBS.glob("*.toml")), ids=lambda p: p.stem)
 def test_every_job_scene_is_valid(path):
     load_scene(path)
+
+
+def test_two_driver_owning_effects_are_refused_naming_both(monkeypatch):
+    """Two effects that each bring their own run loop: a SceneError, not a silent choice."""
+    import sys
+    import types
+
+    from geofrac import effects
+
+    twin = types.ModuleType("geofrac_test_twin_driver")
+    twin.configure = lambda table, ctx: None
+    twin.driver = lambda config, solution, say, write: {}
+    monkeypatch.setitem(sys.modules, twin.__name__, twin)
+    monkeypatch.setitem(effects.REGISTRY, "twin", twin.__name__)
+    with pytest.raises(SceneError) as info:
+        load_scene(JOBS / "crack_patch_test.toml", ['effects=["cracking", "twin"]'])
+    assert info.value.key == "effects"
+    assert "'cracking' and 'twin'" in info.value.message
+    scene = load_scene(JOBS / "crack_patch_test.toml")  # one driver: accepted
+    assert effects.driven(scene.effects).name == "cracking"

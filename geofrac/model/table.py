@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from geofrac.scene.errors import SceneError, did_you_mean
+from geofrac.model.errors import SceneError, did_you_mean
 
 __all__ = [
     "MAX_CHECKPOINT_EVERY",

@@ -1,10 +1,10 @@
-"""Block set writers (geofrac.io.blocks): VTU/PVTU, block file, volume histogram."""
+"""Block set writers (geofrac.blocks.output): VTU/PVTU, block file, volume histogram."""
 
 import numpy as np
 import pytest
 
+from geofrac.blocks import output as io
 from geofrac.blocks import quality as q
-from geofrac.io import blocks as io
 from tests.blocks.conftest import median_dual_2d, median_dual_3d, pieces_as_blocks, take_blocks
 
 pv = pytest.importorskip("pyvista")

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 __all__ = [
+    "BED_REPRESENTATIONS",
     "BlocksSpec",
     "Body",
     "BoundaryCondition",
@@ -229,7 +230,7 @@ class Body:
         group: group: the physical group's name.
         density: initial density, or None for ``material.density``.
         velocity: initial velocity components (numbers, or expression texts of the
-            position for :mod:`geofrac.scene.expr`), shape=(dim,), or None for
+            position for :mod:`geofrac.model.expr`), shape=(dim,), or None for
             ``mpm.velocity``.
         key: the body's dotted key in the scene (``mpm.bodies[1]``), for messages.
     """
@@ -243,6 +244,11 @@ class Body:
     density: float | None = None
     velocity: tuple[float | str, ...] | None = None
     key: str = ""
+
+
+#: How the bed's nodes constrain the material (``mpm.bed_representation``, read by
+#: :func:`geofrac.mpm.boundaries.bed_nodes`); the first is the default.
+BED_REPRESENTATIONS = ("plane", "staircase")
 
 
 @dataclass(frozen=True)
@@ -278,7 +284,7 @@ class MpmSpec:
         frames: particle output frames written over the run (plus the initial one).
         velocity: initial velocity of every particle (of every body that gives none),
             shape=(dim,): each component a number or an expression text of the position
-            (:mod:`geofrac.scene.expr`, names ``x``, ``y``, ``z``).
+            (:mod:`geofrac.model.expr`, names ``x``, ``y``, ``z``).
         particles: where the particles come from (``kind = "bodies"``: from ``bodies``).
         bodies: the bodies of ``[[mpm.bodies]]`` in order (particle ids are numbered
             body after body), or empty for the single ``[mpm.particles]`` form.
