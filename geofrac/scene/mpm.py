@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from geofrac.mpm.constitutive import model_effects
 from geofrac.scene.errors import SceneError, did_you_mean
 from geofrac.scene.expr import ExpressionError, evaluate, parse
 from geofrac.scene.model import Body, Geometry, Material, MpmSpec, Output, ParticleSource
@@ -83,8 +84,8 @@ MPM_OUTPUT_FIELDS = (
     "mass",
     "volume",
 )
-#: Effects an MPM scene may declare.
-MPM_EFFECTS = ("gravity", "mls_smoothing", "plasticity", "friction")
+#: Effects an MPM scene may declare (a material model's effect from the model registry).
+MPM_EFFECTS = ("gravity", "mls_smoothing", *model_effects(), "friction")
 #: Tables of finite-element scenes that an MPM scene must not have.
 FEM_ONLY_TABLES = ("discretization", "exact", "bc", "load", "solver")
 #: Kinds of ``mpm.damping``: Cundall's local (non-viscous) damping of the nodal forces.
