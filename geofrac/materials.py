@@ -1,14 +1,16 @@
-"""Elastic constants: Lamé parameters and D matrices for plane stress, plane strain and 3D.
+"""Elastic constants: Lamé parameters, bulk/shear and P-wave moduli, D matrices.
 
-Pure numpy. The D matrices use Voigt order (xx, yy, xy) in 2D and
-(xx, yy, zz, yz, xz, xy) in 3D with engineering shear strains, as in seed eq. (2.4).
+The one place that turns (E, ν) into other elastic constants (FEM, cracking, MPM
+materials and the scene size estimate call it). Pure numpy. The D matrices use Voigt
+order (xx, yy, xy) in 2D and (xx, yy, zz, yz, xz, xy) in 3D with engineering shear
+strains, as in Edo (2016), eq. 2.4.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["d_matrix", "lame"]
+__all__ = ["bulk_shear", "d_matrix", "lame", "p_wave_modulus"]
 
 
 def lame(E: float, nu: float, dim: int, plane: str = "stress") -> tuple[float, float]:
@@ -21,6 +23,22 @@ def lame(E: float, nu: float, dim: int, plane: str = "stress") -> tuple[float, f
     if dim == 2 and plane == "stress":
         lam = 2.0 * lam * mu / (lam + 2.0 * mu)
     return lam, mu
+
+
+def bulk_shear(E: float, nu: float) -> tuple[float, float]:
+    """Return (K, G): the bulk modulus E/(3(1-2ν)) and the shear modulus E/(2(1+ν)) (3D)."""
+    return E / (3 * (1 - 2 * nu)), E / (2 * (1 + nu))
+
+
+def p_wave_modulus(E: float, nu: float, dim: int) -> float:
+    """The P-wave modulus M = λ + 2μ of 3D (and plane strain), E in 1D (a bar).
+
+    An elastic wave runs at c = √(M/ρ) (the time step of eq. 4.72).
+    """
+    if dim == 1:
+        return E
+    lam, mu = lame(E, nu, 3)
+    return lam + 2 * mu
 
 
 def d_matrix(E: float, nu: float, dim: int, plane: str = "stress") -> np.ndarray:

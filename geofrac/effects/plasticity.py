@@ -1,7 +1,8 @@
 """Effect ``plasticity``: Drucker-Prager perfect plasticity of the MPM particles (seed 4.3.2).
 
 Yield function f = β I₁ + √J₂ − k (eqs. 4.39-4.43) with return mapping, the Jaumann rate
-(D.30-D.31) applied before each increment; see :mod:`geofrac.mpm.plasticity`. MPM scenes
+(D.30-D.31) applied before each increment: the model :mod:`geofrac.mpm.plasticity` (registry
+:data:`geofrac.mpm.constitutive.MODELS`) built from this table. MPM scenes
 in 2D (plane strain) and 3D only; the plasticity code is imported only when a scene
 declares this effect.
 

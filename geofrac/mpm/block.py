@@ -16,9 +16,10 @@ from typing import Any
 
 import numpy as np
 
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
-from geofrac.mpm.schemes import Elastic, StepSettings, step, time_step
+from geofrac.mpm.schemes import StepSettings, step, time_step
 
 __all__ = ["Throughput", "gravity_block"]
 

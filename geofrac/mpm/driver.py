@@ -54,16 +54,11 @@ from geofrac.io.checkpoint import RunControl
 from geofrac.log import format_seconds, sayer
 from geofrac.model.scene import Scene
 from geofrac.mpm.boundaries import boundary_rows, scene_grid
+from geofrac.mpm.constitutive import ConstitutiveModel
 from geofrac.mpm.energy import CSV_COLUMNS, EnergyLog, StepBudget
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles, concat, take
-from geofrac.mpm.schemes import (
-    Elastic,
-    StepSettings,
-    particle_strain_energy,
-    step,
-    time_step,
-)
+from geofrac.mpm.schemes import StepSettings, particle_strain_energy, step, time_step
 from geofrac.mpm.shapes import support_margin
 from geofrac.timing import Timings
 
@@ -83,12 +78,11 @@ class MpmRun:
         grid: the global background grid.
         local: this rank's grid (``grid`` on one rank).
         particles: this rank's particles.
-        material: :class:`~geofrac.mpm.schemes.Elastic` or a Drucker-Prager material.
+        material: the particles' constitutive model (:mod:`~geofrac.mpm.constitutive`).
         settings: the step settings.
         steps: number of steps to ``t_end``.
         domain: the decomposition, or None on one rank.
         probes: probe name -> particle id (the particle nearest the point at t = 0).
-        friction_angle: φ in degrees with ``plasticity``, else None.
         total: number of particles over all ranks.
         ramp: seconds over which gravity rises from 0 to ``settings.gravity``
             (``[gravity] ramp``; 0: full gravity from the start).
@@ -99,12 +93,11 @@ class MpmRun:
     grid: Grid
     local: Grid
     particles: Particles
-    material: Any
+    material: ConstitutiveModel
     settings: StepSettings
     steps: int
     domain: Any = None
     probes: dict[str, int] = field(default_factory=dict)
-    friction_angle: float | None = None
     total: int = 0
     ramp: float = 0.0
     bodies: dict[str, dict[str, Any]] = field(default_factory=dict)
@@ -240,18 +233,13 @@ def _velocity(components: tuple[float | str, ...], x: np.ndarray, key: str) -> n
     return v
 
 
-def _material(scene: Scene) -> tuple[Any, float | None]:
-    """The particle material and the friction angle (``plasticity``) or None."""
-    mat = scene.material
-    for e in scene.effects:
-        if e.name == "plasticity":
-            from geofrac.mpm.plasticity import DruckerPrager
+def _material(scene: Scene) -> ConstitutiveModel:
+    """The particle material: the model the scene's effects select, from the registry."""
+    from geofrac.mpm import constitutive
 
-            c = e.config
-            return DruckerPrager(
-                mat.E, mat.nu, c.friction_angle, c.cohesion, c.dilatancy_angle
-            ), c.friction_angle
-    return Elastic(mat.E, mat.nu), None
+    name = constitutive.select(scene.effect_names)
+    config = _config(scene, name)
+    return constitutive.load(name).from_scene(scene.material.E, scene.material.nu, config)
 
 
 def _config(scene: Scene, name: str) -> Any:
@@ -277,7 +265,7 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
             f"mpm.grid: {int(np.sum(g.outside(p.x, margin)))} particle(s) start outside the "
             "grid; enlarge mpm.grid or its padding"
         )
-    material, phi = _material(scene)
+    material = _material(scene)
     gravity = _config(scene, "gravity")
     if spec.initial_stress == "geostatic":
         from geofrac.mpm.seeding import geostatic
@@ -332,7 +320,7 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
         smoothing_kind="standard" if smoothing is None else smoothing.kind,
     )
     ramp = gravity.ramp if gravity is not None else 0.0
-    return MpmRun(g, local, p, material, settings, steps, domain, probes, phi, total, ramp, bodies)
+    return MpmRun(g, local, p, material, settings, steps, domain, probes, total, ramp, bodies)
 
 
 def _energies(
@@ -564,8 +552,7 @@ def simulate(
     }
     if resume is not None:
         results["resumed_at_step"] = resume.k
-    if run.friction_angle is not None:
-        results["friction_angle_deg"] = run.friction_angle
+    results.update(run.material.results())
     return results
 
 

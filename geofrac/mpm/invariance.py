@@ -29,9 +29,10 @@ from typing import Any
 
 import numpy as np
 
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.grid import Grid, grid
 from geofrac.mpm.particles import Particles, lattice
-from geofrac.mpm.schemes import Elastic, StepSettings, particle_strain_energy, step, time_step
+from geofrac.mpm.schemes import StepSettings, particle_strain_energy, step, time_step
 
 __all__ = ["CASES", "Divergence", "compare_ranks"]
 

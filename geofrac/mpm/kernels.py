@@ -31,6 +31,7 @@ __all__ = [
     "from_grid",
     "from_grid2",
     "grid_weights",
+    "kinematics",
     "mass_momentum",
     "mass_momentum_bounds",
     "momentum",
@@ -639,13 +640,8 @@ def elastic_update(
     mu: float,
     stress: np.ndarray,
     stress_zz: np.ndarray,
-    volume: np.ndarray,
-    F: np.ndarray,
-    lp0: np.ndarray,
-    lp: np.ndarray,
-    cpgimp: bool,
 ) -> None:
-    """Elastic stress (D.8, D.30), volume (D.9), G_p (4.70), cpGIMP half-widths (4.69).
+    """Elastic stress update (D.8, D.30) of :class:`geofrac.mpm.elastic.Elastic`.
 
     In 2D and 3D the stress is first turned by the Jaumann rate (D.30-D.31),
     σ ← σ + σ Δω − Δω σ with Δω = −Δt/2 (L − Lᵀ), then Δσ = D : Δε is added (as
@@ -660,15 +656,9 @@ def elastic_update(
         mu: Lamé's μ (2D, 3D).
         stress: σ_p, changed, shape=(n, dim, dim).
         stress_zz: plane strain σ_zz (2D), changed, shape=(n,).
-        volume: V_p, changed, shape=(n,).
-        F: G_p, changed, shape=(n, dim, dim).
-        lp0: initial half-widths, shape=(n, dim).
-        lp: half-widths, changed when ``cpgimp``, shape=(n, dim).
-        cpgimp: whether l_p follows G_p.
     """
     n, dim, _ = deps.shape
     two_mu = 2 * mu
-    Fn = np.empty((dim, dim))
     spin = np.empty((dim, dim))
     turned = np.empty((dim, dim))
     for i in range(n):
@@ -697,6 +687,37 @@ def elastic_update(
                     stress[i, a, b] += d + two_mu * deps[i, a, b]
             if dim == 2:
                 stress_zz[i] += lam * tr
+
+
+@_jit
+def kinematics(
+    deps: np.ndarray,
+    L: np.ndarray,
+    dt: float,
+    volume: np.ndarray,
+    F: np.ndarray,
+    lp0: np.ndarray,
+    lp: np.ndarray,
+    cpgimp: bool,
+) -> None:
+    """Volume (D.9), G_p (4.70) and cpGIMP half-widths (4.69) after a stress update.
+
+    Args:
+        deps: strain increments, shape=(n, dim, dim).
+        L: velocity gradients, shape=(n, dim, dim).
+        dt: the step of this update.
+        volume: V_p, changed, shape=(n,).
+        F: G_p, changed, shape=(n, dim, dim).
+        lp0: initial half-widths, shape=(n, dim).
+        lp: half-widths, changed when ``cpgimp``, shape=(n, dim).
+        cpgimp: whether l_p follows G_p.
+    """
+    n, dim, _ = deps.shape
+    Fn = np.empty((dim, dim))
+    for i in range(n):
+        tr = deps[i, 0, 0]
+        for a in range(1, dim):
+            tr += deps[i, a, a]
         volume[i] *= 1.0 + tr
         update_F(i, L, dt, F, Fn)
         if cpgimp:

@@ -1,7 +1,9 @@
-"""Drucker-Prager plasticity with return mapping.
+"""Drucker-Prager plasticity with return mapping: the MPM model ``plasticity``.
 
-Pure functions on full 3×3 stress tensors (plane strain keeps σ_zz), for the MPM's
-``plasticity`` effect (seed 4.3.2, App. D):
+A :class:`~geofrac.mpm.constitutive.ConstitutiveModel` selected by the scene's
+``plasticity`` effect (its table is validated by :mod:`geofrac.effects.plasticity`).
+The return mapping works on full 3×3 stress tensors (plane strain keeps σ_zz), in numpy
+for either backend (Edo (2016), 4.3.2, App. D):
 
 - yield function f = β I₁ + √J₂ − k (4.39) with I₁ = tr σ (4.40), J₂ = ½ s:s (4.41),
   β = tan φ / √(9 + 12 tan² φ) (4.42) and k = 3c / √(9 + 12 tan² φ) (4.43), φ the
@@ -14,7 +16,9 @@ Pure functions on full 3×3 stress tensors (plane strain keeps σ_zz), for the M
   cohesionless soil: no tension).
 
 The Jaumann rotation (D.30-D.31) that precedes every stress update, elastic or
-plastic, is :func:`geofrac.mpm.schemes.rotate_stress`.
+plastic, is :func:`geofrac.mpm.schemes.rotate_stress`. The energy the return takes out
+(``budget.plastic``, :mod:`~geofrac.mpm.energy`) is the stored energy of the rotated
+elastic trial minus that after the return.
 
 The seed gives the yield function only; the flow rule and the apex treatment are the
 standard ones (e.g. de Souza Neto, Perić and Owen, ch. 8) and are documented here
@@ -24,10 +28,38 @@ because the seed is silent on them.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
 
-__all__ = ["DruckerPrager", "yield_function"]
+from geofrac.materials import bulk_shear, p_wave_modulus
+from geofrac.mpm.elastic import Elastic
+from geofrac.mpm.energy import stored
+
+if TYPE_CHECKING:
+    from geofrac.mpm.energy import StepBudget
+    from geofrac.mpm.particles import Particles
+
+__all__ = ["DruckerPrager", "PlasticityParameters", "from_scene", "yield_function"]
+
+
+class PlasticityParameters(Protocol):
+    """The validated ``[plasticity]`` table (:class:`geofrac.effects.plasticity.PlasticityConfig`).
+
+    Attributes:
+        friction_angle: φ in degrees.
+        cohesion: c.
+        dilatancy_angle: ψ in degrees.
+    """
+
+    @property
+    def friction_angle(self) -> float: ...  # noqa: D102
+
+    @property
+    def cohesion(self) -> float: ...  # noqa: D102
+
+    @property
+    def dilatancy_angle(self) -> float: ...  # noqa: D102
 
 
 @dataclass(frozen=True)
@@ -41,6 +73,11 @@ class DruckerPrager:
         cohesion: c (>= 0).
         dilatancy_angle: ψ in degrees (0 <= ψ <= φ; 0: no plastic volume change).
     """
+
+    name: ClassVar[str] = "plasticity"
+    dims: ClassVar[tuple[int, ...]] = (2, 3)
+    state: ClassVar[tuple[str, ...]] = ("stress", "stress_zz", "plastic")
+    compiled: ClassVar[bool] = False
 
     E: float
     nu: float
@@ -79,8 +116,79 @@ class DruckerPrager:
         return float(t / np.sqrt(9 + 12 * t * t))
 
     def moduli(self) -> tuple[float, float]:
-        """(bulk modulus K, shear modulus G)."""
-        return self.E / (3 * (1 - 2 * self.nu)), self.E / (2 * (1 + self.nu))
+        """(bulk modulus K, shear modulus G) (:func:`geofrac.materials.bulk_shear`)."""
+        return bulk_shear(self.E, self.nu)
+
+    def wave_speed(self, density: float, dim: int) -> float:
+        """The elastic P-wave speed c of eq. 4.72 (the return only slows waves)."""
+        return float(np.sqrt(p_wave_modulus(self.E, self.nu, dim) / density))
+
+    def stored_energy(self, p: Particles) -> np.ndarray:
+        """½ V_p σ_p : D⁻¹ : σ_p per particle (the elastic part), shape=(n,)."""
+        return stored(p.stress, p.stress_zz, p.volume, self.E, self.nu)
+
+    def results(self) -> dict[str, float]:
+        """``friction_angle_deg``: φ, the parameter a landslide sweep varies."""
+        return {"friction_angle_deg": self.friction_angle}
+
+    def stress_update(
+        self,
+        p: Particles,
+        deps: np.ndarray,
+        L: np.ndarray,
+        dt: float,
+        backend: str,
+        budget: StepBudget | None,
+    ) -> None:
+        """Jaumann rotation (D.30-D.31) and the return (4.39-4.43) on 3×3 stresses, in place.
+
+        Plane strain in 2D: the strain increment has no zz part, σ_zz is the stored one.
+        ``p.plastic`` gathers the multipliers Δλ. numpy for either ``backend``.
+
+        Args:
+            p: the particles, shape of their stresses (n, dim, dim), dim 2 or 3.
+            deps: strain increments, shape=(n, dim, dim).
+            L: velocity gradients, shape=(n, dim, dim).
+            dt: the step of this update.
+            backend: unused (one implementation).
+            budget: add the dissipation U(rotated trial) − U(returned) to ``budget.plastic``.
+        """
+        from geofrac.mpm.schemes import rotate_stress, spin_increment
+
+        n, d = p.n, p.dim
+        el = Elastic(self.E, self.nu)
+        tr = np.trace(deps, axis1=1, axis2=2)
+        volume = p.volume * (1.0 + tr)  # the volume after this update (D.9)
+        if budget is not None:  # stored energy of the elastic trial σ + D:Δε
+            zz = p.stress_zz + (el.lame()[0] * tr if d == 2 else 0.0)
+            trial = float(
+                np.sum(stored(p.stress + el.increment(deps), zz, volume, self.E, self.nu))
+            )
+        full = np.zeros((n, 3, 3))
+        full[:, :d, :d] = p.stress
+        if d == 2:
+            full[:, 2, 2] = p.stress_zz
+        spin = np.zeros((n, 3, 3))
+        spin[:, :d, :d] = spin_increment(L, dt)
+        deps3 = np.zeros((n, 3, 3))
+        deps3[:, :d, :d] = deps
+        rotated = rotate_stress(full, spin)
+        if budget is not None:  # the rotation's change of the trial's stored energy
+            zero = np.zeros(n)
+            budget.plastic += float(
+                np.sum(
+                    stored(rotated + el.increment(deps3), zero, volume, self.E, self.nu)
+                    - stored(full + el.increment(deps3), zero, volume, self.E, self.nu)
+                )
+            )  # the return starts from the rotated trial
+        new, dlam = self.update(rotated, deps3)
+        p.stress = new[:, :d, :d].copy()
+        if d == 2:
+            p.stress_zz = new[:, 2, 2].copy()
+        p.plastic += dlam
+        if budget is not None:
+            after = stored(p.stress, p.stress_zz, volume, self.E, self.nu)
+            budget.plastic += trial - float(np.sum(after))
 
     def update(self, stress: np.ndarray, deps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Elastic trial and return mapping for strain increments.
@@ -135,3 +243,8 @@ def yield_function(stress: np.ndarray, beta: float, k: float) -> np.ndarray:
     i1 = np.trace(stress, axis1=1, axis2=2)
     s = stress - i1[:, None, None] / 3 * np.eye(3)
     return beta * i1 + np.sqrt(0.5 * np.sum(s * s, axis=(1, 2))) - k
+
+
+def from_scene(E: float, nu: float, config: PlasticityParameters) -> DruckerPrager:
+    """The Drucker-Prager material of a scene's ``[material]`` and ``[plasticity]``."""
+    return DruckerPrager(E, nu, config.friction_angle, config.cohesion, config.dilatancy_angle)

@@ -18,9 +18,11 @@ Schemes (``scheme``):
   USAVG, which the seed cites, and apply half of the step to each (Δt/2 in D.19 and
   D.27), so the stress over a step averages the two velocity fields.
 
-The stress update turns σ by the Jaumann rate (D.30-D.31; :func:`rotate_stress`, in
-2D and 3D, elastic as well as Drucker-Prager, so a spinning body's stress turns with it)
-and adds the elastic increment Δσ = D : Δε (D.8; ``Elastic``), the volume
+The stress update is the material's (:class:`~geofrac.mpm.constitutive.
+ConstitutiveModel`, registry :data:`~geofrac.mpm.constitutive.MODELS`): it turns σ by the
+Jaumann rate (D.30-D.31; :func:`rotate_stress`, in 2D and 3D, so a spinning body's
+stress turns with it) and adds its increment (the elastic Δσ = D : Δε, D.8, of
+:class:`~geofrac.mpm.elastic.Elastic`, or the Drucker-Prager return); the volume
 follows ρ^{k+1} = ρ^k / (1 + tr Δε) (D.9), and the deformation gradient
 G^{k+1} = (I + ∇v Δt) G^k (4.70) drives ``cpgimp``'s half-widths (4.69).
 
@@ -43,15 +45,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from geofrac.errors import RunError
+from geofrac.mpm.elastic import Elastic  # re-exported: tests/mpm build it from here
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles
 from geofrac.mpm.shapes import SHAPES, Weights, support_margin, weights
 
 if TYPE_CHECKING:  # imported only by a step that uses them
+    from geofrac.mpm.constitutive import ConstitutiveModel
     from geofrac.mpm.energy import StepBudget
     from geofrac.mpm.friction import Friction
     from geofrac.mpm.parallel import Domain
-    from geofrac.mpm.plasticity import DruckerPrager
 
 __all__ = [
     "BACKENDS",
@@ -106,70 +109,27 @@ class ParticlesLeftGrid(RunError):
         self.ids, self.positions = ids, positions
 
 
-@dataclass(frozen=True)
-class Elastic:
-    """Linear elastic increments Δσ = D : Δε (eqs. 4.34, D.8).
-
-    In 1D the bar law Δσ = E Δε; in 2D plane strain; in 3D isotropic.
-
-    Attributes:
-        E: Young's modulus.
-        nu: Poisson's ratio (unused in 1D).
-    """
-
-    E: float
-    nu: float = 0.0
-
-    def lame(self) -> tuple[float, float]:
-        """(λ, μ)."""
-        lam = self.E * self.nu / ((1 + self.nu) * (1 - 2 * self.nu))
-        return lam, self.E / (2 * (1 + self.nu))
-
-    def increment(self, deps: np.ndarray) -> np.ndarray:
-        """Δσ of strain increments, both shape=(n, dim, dim)."""
-        if deps.shape[1] == 1:
-            return self.E * deps
-        lam, mu = self.lame()
-        tr = np.trace(deps, axis1=1, axis2=2)
-        return lam * tr[:, None, None] * np.eye(deps.shape[1]) + 2 * mu * deps
-
-    def wave_speed(self, density: float, dim: int) -> float:
-        """The elastic wave speed c of eq. 4.72 (the P wave in 2D and 3D)."""
-        if dim == 1:
-            return float(np.sqrt(self.E / density))
-        lam, mu = self.lame()
-        return float(np.sqrt((lam + 2 * mu) / density))
-
-
-def particle_strain_energy(p: Particles, material: Elastic | DruckerPrager) -> np.ndarray:
-    """½ V_p σ_p : D⁻¹ : σ_p per particle, shape=(n,).
+def particle_strain_energy(p: Particles, material: ConstitutiveModel) -> np.ndarray:
+    """½ V_p σ_p : D⁻¹ : σ_p per particle, shape=(n,) (the material's stored energy).
 
     In 2D the stored out-of-plane stress of plane strain enters (for an elastic history
     it equals ν tr σ).
     """
-    s = p.stress
-    if p.dim == 1:
-        return 0.5 * p.volume * s[:, 0, 0] ** 2 / material.E
-    E, nu = material.E, material.nu
-    tr = np.trace(s, axis1=1, axis2=2)
-    ss = np.sum(s * s, axis=(1, 2))
-    if p.dim == 2:
-        tr, ss = tr + p.stress_zz, ss + p.stress_zz**2
-    return 0.5 * p.volume * ((1 + nu) * ss - nu * tr**2) / E
+    return material.stored_energy(p)
 
 
-def strain_energy(p: Particles, material: Elastic | DruckerPrager) -> float:
+def strain_energy(p: Particles, material: ConstitutiveModel) -> float:
     """Σ ½ V_p σ_p : D⁻¹ : σ_p (the elastic energy stored in the stresses)."""
     return float(np.sum(particle_strain_energy(p, material)))
 
 
 def time_step(
-    courant: float, spacing: float, material: Elastic | DruckerPrager, density: float, dim: int
+    courant: float, spacing: float, material: ConstitutiveModel, density: float, dim: int
 ) -> float:
-    """Δt = α L / c from the Courant number α < 1 (eq. 4.72), c the elastic wave speed."""
+    """Δt = α L / c from the Courant number α < 1 (eq. 4.72), c the material's wave speed."""
     if not 0 < courant < 1:
         raise ValueError(f"the Courant number must lie in (0, 1), got {courant}")
-    return courant * spacing / Elastic(material.E, material.nu).wave_speed(density, dim)
+    return courant * spacing / material.wave_speed(density, dim)
 
 
 @dataclass(frozen=True)
@@ -379,7 +339,7 @@ def _velocity(
 def _update_stress(
     w: Weights,
     p: Particles,
-    material: Elastic | DruckerPrager,
+    material: ConstitutiveModel,
     v: np.ndarray,
     dt: float,
     s: StepSettings,
@@ -406,62 +366,34 @@ def _update_stress(
     raw = deps
     if smooth_at is not None:
         deps = _smoothed(deps, smooth_at, s)
-    plastic = not isinstance(material, Elastic)  # an elastic update dissipates nothing
     if budget is not None:
         s0, v0 = p.stress.copy(), p.volume.copy()
         budget.power_raw += float(np.einsum("p,pij,pij->", v0, s0, raw))
         budget.smoothing += float(np.einsum("p,pij,pij->", v0, s0, deps - raw))
-        trial = float(np.sum(_trial(p, material, deps))) if plastic else 0.0
-    _apply_increment(w, p, material, deps, L, dt, s, budget)
+    _apply_increment(p, material, deps, L, dt, s, budget)
     if budget is not None:
         budget.quadratic += 0.5 * float(np.einsum("p,pij,pij->", v0, p.stress - s0, deps))
-        if plastic:
-            from geofrac.mpm.energy import stored
-
-            after = stored(p.stress, p.stress_zz, p.volume, material.E, material.nu)
-            budget.plastic += trial - float(np.sum(after))
-
-
-def _trial(p: Particles, material: Elastic | DruckerPrager, deps: np.ndarray) -> np.ndarray:
-    """Stored energy of the elastic trial σ + D:Δε at volume V(1 + tr Δε), shape=(n,)."""
-    from geofrac.mpm.energy import stored
-
-    el = Elastic(material.E, material.nu)
-    tr = np.trace(deps, axis1=1, axis2=2)
-    zz = p.stress_zz + (el.lame()[0] * tr if p.dim == 2 else 0.0)
-    nu = material.nu if p.dim > 1 else 0.0
-    return stored(p.stress + el.increment(deps), zz, p.volume * (1.0 + tr), material.E, nu)
 
 
 def _apply_increment(
-    w: Weights,
     p: Particles,
-    material: Elastic | DruckerPrager,
+    material: ConstitutiveModel,
     deps: np.ndarray,
     L: np.ndarray,
     dt: float,
     s: StepSettings,
     budget: StepBudget | None,
 ) -> None:
-    """Stress (D.30 + D.8 or the plastic return), volume (D.9) and G (4.70) from Δε and ∇v."""
-    d = p.dim
-    if isinstance(material, Elastic) and s.backend == "numba":
+    """The material's stress update, then volume (D.9), G (4.70) and cpGIMP's l_p (4.69).
+
+    The kinematics run compiled when the backend and the material's update are.
+    """
+    material.stress_update(p, deps, L, dt, s.backend, budget)
+    if s.backend == "numba" and material.compiled:
         from geofrac.mpm import kernels
 
-        lam, mu = material.lame() if d > 1 else (0.0, 0.0)
-        kernels.elastic_update(
-            deps, L, dt, material.E, lam, mu, p.stress, p.stress_zz, p.volume, p.F,
-            p.lp0, p.lp, s.shape == "cpgimp",
-        )  # fmt: skip
+        kernels.kinematics(deps, L, dt, p.volume, p.F, p.lp0, p.lp, s.shape == "cpgimp")
         return
-    if isinstance(material, Elastic):
-        if d > 1:
-            p.stress = rotate_stress(p.stress, spin_increment(L, dt))
-        p.stress += material.increment(deps)
-        if p.dim == 2:
-            p.stress_zz += material.lame()[0] * np.trace(deps, axis1=1, axis2=2)
-    else:
-        _plastic_update(p, material, deps, L, dt, budget)
     p.volume *= 1.0 + np.trace(deps, axis1=1, axis2=2)
     p.F = np.matmul(np.eye(p.dim) + dt * L, p.F)
     if s.shape == "cpgimp":
@@ -515,52 +447,10 @@ def rotate_stress(stress: np.ndarray, spin: np.ndarray) -> np.ndarray:
     return stress + np.matmul(stress, spin) - np.matmul(spin, stress)
 
 
-def _plastic_update(
-    p: Particles,
-    material: DruckerPrager,
-    deps: np.ndarray,
-    L: np.ndarray,
-    dt: float,
-    budget: StepBudget | None = None,
-) -> None:
-    """Jaumann rotation (D.30-D.31) and Drucker-Prager return (4.39-4.43) on 3×3 stresses.
-
-    Plane strain in 2D: the strain increment has no zz part, σ_zz is the stored one.
-    """
-    n, d = p.n, p.dim
-    full = np.zeros((n, 3, 3))
-    full[:, :d, :d] = p.stress
-    if d == 2:
-        full[:, 2, 2] = p.stress_zz
-    spin = np.zeros((n, 3, 3))
-    spin[:, :d, :d] = spin_increment(L, dt)
-    deps3 = np.zeros((n, 3, 3))
-    deps3[:, :d, :d] = deps
-    rotated = rotate_stress(full, spin)
-    if budget is not None:  # the rotation's change of the trial's stored energy
-        from geofrac.mpm.energy import stored
-
-        tr = np.trace(deps, axis1=1, axis2=2)
-        el = Elastic(material.E, material.nu)
-        volume, zero = p.volume * (1.0 + tr), np.zeros(n)
-        rot = float(
-            np.sum(
-                stored(rotated + el.increment(deps3), zero, volume, material.E, material.nu)
-                - stored(full + el.increment(deps3), zero, volume, material.E, material.nu)
-            )
-        )
-        budget.plastic += rot  # the return starts from the rotated trial
-    new, dlam = material.update(rotated, deps3)
-    p.stress = new[:, :d, :d].copy()
-    if d == 2:
-        p.stress_zz = new[:, 2, 2].copy()
-    p.plastic += dlam
-
-
 def step(
     g: Grid,
     p: Particles,
-    material: Elastic | DruckerPrager,
+    material: ConstitutiveModel,
     s: StepSettings,
     budget: StepBudget | None = None,
 ) -> None:
@@ -582,8 +472,9 @@ def step(
             its volume is not positive (an unstable step); with a domain also when a
             particle's support reaches beyond its rank's halo. On every rank alike.
     """
-    if not isinstance(material, Elastic) and p.dim == 1:
-        raise ValueError("plasticity needs 2D or 3D particles (the 1D bar is elastic)")
+    if p.dim not in material.dims:
+        dims = " or ".join(f"{d}D" for d in material.dims)
+        raise ValueError(f"the {material.name} material needs {dims} particles, got {p.dim}D")
     dom = s.domain
     gimp = s.shape in ("ugimp", "cpgimp")
     spline = s.shape == "bspline2"

@@ -32,6 +32,7 @@ from geofrac.model.table import (
     output_directory,
     short,
 )
+from geofrac.mpm.constitutive import model_effects
 
 __all__ = [
     "FEM_ONLY_TABLES",
@@ -91,8 +92,8 @@ MPM_OUTPUT_FIELDS = (
     "mass",
     "volume",
 )
-#: Effects an MPM scene may declare.
-MPM_EFFECTS = ("gravity", "mls_smoothing", "plasticity", "friction")
+#: Effects an MPM scene may declare (a material model's effect from the model registry).
+MPM_EFFECTS = ("gravity", "mls_smoothing", *model_effects(), "friction")
 #: Tables of finite-element scenes that an MPM scene must not have.
 FEM_ONLY_TABLES = ("discretization", "exact", "bc", "load", "solver")
 #: Kinds of ``mpm.damping``: Cundall's local (non-viscous) damping of the nodal forces.

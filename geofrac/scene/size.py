@@ -251,12 +251,9 @@ def _fractures(config: Any) -> float:
 
 
 def _wave_speed(material: Any, dim: int) -> float:
-    E, nu, rho = material.E, material.nu, material.density
-    if dim == 1:
-        return math.sqrt(E / rho)
-    lam = E * nu / ((1 + nu) * (1 - 2 * nu))
-    mu = E / (2 * (1 + nu))
-    return math.sqrt((lam + 2 * mu) / rho)
+    from geofrac.materials import p_wave_modulus
+
+    return math.sqrt(p_wave_modulus(material.E, material.nu, dim) / material.density)
 
 
 def _mpm(scene: Any, extent: Extent | None, q: dict[str, float], keys: dict[str, str]) -> None:
