@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     import dolfinx.mesh
 
     from geofrac.elements.base import Element
-    from geofrac.fem.elastic import ElasticProblem
+
 
 __all__ = ["ElementSpec"]
 
@@ -65,7 +65,7 @@ class ElementSpec:
         """The DOLFINx element on ``mesh`` (imports its module)."""
         return _resolve(self.factory)(mesh)
 
-    def problem_class(self) -> type[ElasticProblem]:
+    def problem_class(self) -> type:
         """The elastic problem class (imports its module)."""
         return _resolve(self.problem)
 

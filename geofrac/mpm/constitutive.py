@@ -105,8 +105,8 @@ class ConstitutiveModel(Protocol):
         """Turn and update the stresses of ``p`` in place for one strain increment.
 
         In 2D and 3D σ is first turned by the Jaumann rate, σ + σ Δω − Δω σ
-        (D.30-D.31, :func:`geofrac.mpm.schemes.rotate_stress` with
-        :func:`~geofrac.mpm.schemes.spin_increment`; plane strain's σ_zz does not turn),
+        (D.30-D.31, :func:`geofrac.mpm.rotation.rotate_stress` with
+        :func:`~geofrac.mpm.rotation.spin_increment`; plane strain's σ_zz does not turn),
         then the constitutive increment is added. Only the arrays of :attr:`state`
         change; volume, deformation gradient and half-widths are the step's.
 

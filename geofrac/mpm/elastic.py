@@ -15,6 +15,7 @@ import numpy as np
 
 from geofrac.materials import lame, p_wave_modulus
 from geofrac.mpm.energy import stored
+from geofrac.mpm.rotation import rotate_stress, spin_increment
 
 if TYPE_CHECKING:
     from geofrac.mpm.energy import StepBudget
@@ -92,8 +93,6 @@ class Elastic:
             lam, mu = self.lame() if d > 1 else (0.0, 0.0)
             kernels.elastic_update(deps, L, dt, self.E, lam, mu, p.stress, p.stress_zz)
             return
-        from geofrac.mpm.schemes import rotate_stress, spin_increment
-
         if d > 1:
             p.stress = rotate_stress(p.stress, spin_increment(L, dt))
         p.stress += self.increment(deps)

@@ -645,7 +645,7 @@ def elastic_update(
 
     In 2D and 3D the stress is first turned by the Jaumann rate (D.30-D.31),
     σ ← σ + σ Δω − Δω σ with Δω = −Δt/2 (L − Lᵀ), then Δσ = D : Δε is added (as
-    :func:`geofrac.mpm.schemes.rotate_stress` does); plane strain's σ_zz does not turn.
+    :func:`geofrac.mpm.rotation.rotate_stress` does); plane strain's σ_zz does not turn.
 
     Args:
         deps: strain increments, shape=(n, dim, dim).

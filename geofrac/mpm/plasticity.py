@@ -16,7 +16,7 @@ for either backend (Edo (2016), 4.3.2, App. D):
   cohesionless soil: no tension).
 
 The Jaumann rotation (D.30-D.31) that precedes every stress update, elastic or
-plastic, is :func:`geofrac.mpm.schemes.rotate_stress`. The energy the return takes out
+plastic, is :func:`geofrac.mpm.rotation.rotate_stress`. The energy the return takes out
 (``budget.plastic``, :mod:`~geofrac.mpm.energy`) is the stored energy of the rotated
 elastic trial minus that after the return.
 
@@ -35,6 +35,7 @@ import numpy as np
 from geofrac.materials import bulk_shear, p_wave_modulus
 from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.energy import stored
+from geofrac.mpm.rotation import rotate_stress, spin_increment
 
 if TYPE_CHECKING:
     from geofrac.mpm.energy import StepBudget
@@ -153,8 +154,6 @@ class DruckerPrager:
             backend: unused (one implementation).
             budget: add the dissipation U(rotated trial) − U(returned) to ``budget.plastic``.
         """
-        from geofrac.mpm.schemes import rotate_stress, spin_increment
-
         n, d = p.n, p.dim
         el = Elastic(self.E, self.nu)
         tr = np.trace(deps, axis1=1, axis2=2)

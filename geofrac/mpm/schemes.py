@@ -20,8 +20,8 @@ Schemes (``scheme``):
 
 The stress update is the material's (:class:`~geofrac.mpm.constitutive.
 ConstitutiveModel`, registry :data:`~geofrac.mpm.constitutive.MODELS`): it turns σ by the
-Jaumann rate (D.30-D.31; :func:`rotate_stress`, in 2D and 3D, so a spinning body's
-stress turns with it) and adds its increment (the elastic Δσ = D : Δε, D.8, of
+Jaumann rate (D.30-D.31; :func:`~geofrac.mpm.rotation.rotate_stress`, in 2D and 3D, so a
+spinning body's stress turns with it) and adds its increment (the elastic Δσ = D : Δε, D.8, of
 :class:`~geofrac.mpm.elastic.Elastic`, or the Drucker-Prager return); the volume
 follows ρ^{k+1} = ρ^k / (1 + tr Δε) (D.9), and the deformation gradient
 G^{k+1} = (I + ∇v Δt) G^k (4.70) drives ``cpgimp``'s half-widths (4.69).
@@ -45,7 +45,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from geofrac.errors import RunError
-from geofrac.mpm.elastic import Elastic  # re-exported: tests/mpm build it from here
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles
 from geofrac.mpm.shapes import SHAPES, Weights, support_margin, weights
@@ -61,13 +60,10 @@ __all__ = [
     "MASS_FLOOR",
     "SCHEMES",
     "SMOOTHINGS",
-    "Elastic",
     "ParticlesLeftGrid",
     "StepSettings",
     "local_damping",
     "particle_strain_energy",
-    "rotate_stress",
-    "spin_increment",
     "step",
     "strain_energy",
     "time_step",
@@ -414,37 +410,6 @@ def _smoothed(deps: np.ndarray, smooth_at: tuple, s: StepSettings) -> np.ndarray
         return smooth_at[3].apply(deps.reshape(n, d * d)).reshape(n, d, d)
     x0, ids, h = smooth_at[:3]
     return smooth_strain(deps, x0, ids, h, s.backend, s.domain)
-
-
-def spin_increment(L: np.ndarray, dt: float) -> np.ndarray:
-    """The seed's spin increment Δω = Δt/2 (∂v_j/∂x_i − ∂v_i/∂x_j) (D.31).
-
-    With L_ij = ∂v_i/∂x_j this is −Δt W, W = ½ (L − Lᵀ) the usual spin: a rigid
-    rotation at rate ω about z has W = ω [[0, −1], [1, 0]].
-
-    Args:
-        L: velocity gradients ∇v, shape=(n, dim, dim).
-        dt: the step of this update.
-
-    Returns:
-        shape=(n, dim, dim).
-    """
-    return -0.5 * dt * (L - np.swapaxes(L, 1, 2))
-
-
-def rotate_stress(stress: np.ndarray, spin: np.ndarray) -> np.ndarray:
-    """The Jaumann-rotated stress σ + σ Δω − Δω σ (D.30), before D : Δε is added.
-
-    Applied to every 2D and 3D stress update, elastic and Drucker-Prager: a rigidly
-    rotating body keeps its stress turning with it, σ = R σ₀ Rᵀ, to first order in Δt
-    (explicit: over a rotation θ in steps of Δθ the deviator grows by about 2 θ Δθ
-    relative, docs/mpm_physics.md).
-
-    Args:
-        stress: shape=(n, d, d).
-        spin: Δω of :func:`spin_increment`, shape=(n, d, d).
-    """
-    return stress + np.matmul(stress, spin) - np.matmul(spin, stress)
 
 
 def step(

@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 from geofrac.mpm.boundaries import bed_nodes, boundary_rows, scene_grid
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.friction import friction
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
-from geofrac.mpm.schemes import Elastic, StepSettings, step, time_step
+from geofrac.mpm.schemes import StepSettings, step, time_step
 from geofrac.scene import SceneError, load_scene
 
 BED = np.array([[0.0, 2.5], [6.0, 0.5]])  # y = 2.5 - x/3

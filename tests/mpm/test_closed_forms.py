@@ -9,11 +9,12 @@
 import numpy as np
 import pytest
 
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.energy import StepBudget
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
 from geofrac.mpm.plasticity import DruckerPrager
-from geofrac.mpm.schemes import SCHEMES, Elastic, StepSettings, step, strain_energy, time_step
+from geofrac.mpm.schemes import SCHEMES, StepSettings, step, strain_energy, time_step
 from geofrac.mpm.shapes import SHAPES
 
 # --- a rigidly rotating prestressed body ------------------------------------------------

@@ -9,10 +9,11 @@ from mpi4py import MPI
 
 from geofrac.mpm.bar import TRANSLATING_SCENE, translating_bar, translating_overrides
 from geofrac.mpm.driver import simulate
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.energy import EnergyLog, StepBudget
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
-from geofrac.mpm.schemes import SCHEMES, Elastic, StepSettings, step, strain_energy, time_step
+from geofrac.mpm.schemes import SCHEMES, StepSettings, step, strain_energy, time_step
 from geofrac.scene import load_scene
 
 

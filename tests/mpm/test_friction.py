@@ -20,10 +20,11 @@ import pytest
 from mpi4py import MPI
 
 from geofrac.mpm.boundaries import boundary_rows, scene_grid
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.friction import apply_friction, friction
 from geofrac.mpm.parallel import decompose
 from geofrac.mpm.particles import lattice
-from geofrac.mpm.schemes import Elastic, StepSettings, step, strain_energy, time_step
+from geofrac.mpm.schemes import StepSettings, step, strain_energy, time_step
 from geofrac.scene import load_scene
 from tests.conftest import JOBS
 

@@ -8,11 +8,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.friction import friction
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
 from geofrac.mpm.plasticity import DruckerPrager
-from geofrac.mpm.schemes import SCHEMES, Elastic, StepSettings, step, time_step
+from geofrac.mpm.schemes import SCHEMES, StepSettings, step, time_step
 from geofrac.mpm.shapes import SHAPES, weights
 from geofrac.mpm.smoothing import neighbour_pairs, smooth
 

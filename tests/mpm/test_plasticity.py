@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from geofrac.mpm.plasticity import DruckerPrager, yield_function
-from geofrac.mpm.schemes import rotate_stress
+from geofrac.mpm.rotation import rotate_stress
 
 
 def _random_stresses(n: int, scale: float, seed: int = 0) -> np.ndarray:
@@ -119,7 +119,7 @@ def test_cohesionless_block_slumps_and_stays_on_the_cone():
     and every stress ends on or inside the cone. A very strong Drucker-Prager block
     settles like the elastic one (the rest is the Jaumann rotation of a vibrating block).
     """
-    from geofrac.mpm.schemes import Elastic
+    from geofrac.mpm.elastic import Elastic
 
     _, elastic_drop = _column(Elastic(1e6, 0.3))
     soil = DruckerPrager(1e6, 0.3, friction_angle=20.0, cohesion=0.0)

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from geofrac.mpm.boundaries import boundary_rows, scene_grid
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.particles import lattice
-from geofrac.mpm.schemes import Elastic, StepSettings, step, time_step
+from geofrac.mpm.schemes import StepSettings, step, time_step
 from geofrac.mpm.seeding import from_cells, geostatic
 
 
