@@ -18,10 +18,11 @@ from __future__ import annotations
 import numpy as np
 
 from geofrac.elements.kinematics import KINDS, local_prolongation
+from geofrac.elements.spec import ElementSpec
 from geofrac.mls.shape import LinearFit, strain_matrix
 
 __all__ = [
-    "BLOCK_SIZES",
+    "MIDPOINTS",
     "P2_EDGES",
     "MlsTable",
     "fe_matrices",
@@ -30,9 +31,6 @@ __all__ = [
     "principal_max",
     "strain_operator",
 ]
-
-#: DOFs per vertex of the elements the crack driver supports.
-BLOCK_SIZES = {"cst": 2, "p1": 2, "rgnt": 3, "gnt": 6, "efmm": 2}
 
 #: P2 edge nodes in basix order: edge e joins local vertices P2_EDGES[e].
 P2_EDGES = np.array([[1, 2], [0, 2], [0, 1]])
@@ -94,11 +92,12 @@ def _p2_gradients(lam_grad: np.ndarray, bary: np.ndarray) -> np.ndarray:
 MIDPOINTS = np.array([[0.0, 0.5, 0.5], [0.5, 0.0, 0.5], [0.5, 0.5, 0.0]])
 
 
-def strain_operator(element: str, x: np.ndarray, bary: np.ndarray) -> np.ndarray:
+def strain_operator(spec: ElementSpec, x: np.ndarray, bary: np.ndarray) -> np.ndarray:
     """Strain operator at barycentric points: ε = B d for the cell DOFs d.
 
     Args:
-        element: ``cst``, ``rgnt`` or ``gnt``.
+        spec: the element; linear Lagrange (CST) when ``spec.kinematics`` is None, else
+            the vertex-DOF field of :data:`~geofrac.elements.kinematics.KINDS`.
         x: vertex coordinates, shape=(nc, 3, 2).
         bary: barycentric coordinates of the points, shape=(nq, 3).
 
@@ -106,37 +105,37 @@ def strain_operator(element: str, x: np.ndarray, bary: np.ndarray) -> np.ndarray
         B, shape=(nc, nq, 3, 3 bs).
     """
     lam_grad, _ = _barycentric_gradients(x)
-    if element in ("cst", "p1"):
+    if spec.kinematics is None:
         B = _voigt(lam_grad)[:, None]
         return np.broadcast_to(B, (len(x), len(bary), 3, 6))
-    kind = KINDS[element]
+    kind = KINDS[spec.kinematics]
     T = local_prolongation(kind, x, P2_EDGES)  # shape=(nc, 6, 2, 3, bs)
     T = T.reshape(len(x), 12, 3 * kind.block_size)  # rows (node, comp), cols (vertex, dof)
     return _voigt(_p2_gradients(lam_grad, bary)) @ T[:, None]
 
 
 def fe_matrices(
-    element: str, x: np.ndarray, D: np.ndarray, thickness: float, penalty: float = 0.0
+    spec: ElementSpec, x: np.ndarray, D: np.ndarray, thickness: float, penalty: float = 0.0
 ) -> np.ndarray:
     """Stiffness matrices of intact cells.
 
     Args:
-        element: ``cst``, ``rgnt`` or ``gnt``.
+        spec: the element (see :func:`strain_operator`).
         x: vertex coordinates, shape=(nc, 3, 2).
         D: stress-strain matrix (Voigt, engineering shear), shape=(3, 3).
         thickness: t.
-        penalty: α μ of the zero-mode penalty (RGNT, GNT; ignored for CST).
+        penalty: α μ of the zero-mode penalty (vertex-DOF fields; ignored for CST).
 
     Returns:
         K_e with DOFs vertex by vertex, shape=(nc, 3 bs, 3 bs).
     """
     _, area = _barycentric_gradients(x)
-    B = strain_operator(element, x, MIDPOINTS)  # shape=(nc, 3, 3, n)
+    B = strain_operator(spec, x, MIDPOINTS)  # shape=(nc, 3, 3, n)
     w = thickness * area / 3.0
     K = np.einsum("c,cqip,ij,cqjr->cpr", w, B, D, B)
-    if element in ("cst", "p1") or penalty == 0.0:
+    if spec.kinematics is None or penalty == 0.0:
         return K
-    kind = KINDS[element]
+    kind = KINDS[spec.kinematics]
     gdim, bs = 2, kind.block_size
     lam_grad, _ = _barycentric_gradients(x)
     T = local_prolongation(kind, x, P2_EDGES).reshape(len(x), 12, 3 * bs)
@@ -154,11 +153,11 @@ def fe_matrices(
     return K
 
 
-def fe_stresses(element: str, x: np.ndarray, dofs: np.ndarray, D: np.ndarray) -> np.ndarray:
+def fe_stresses(spec: ElementSpec, x: np.ndarray, dofs: np.ndarray, D: np.ndarray) -> np.ndarray:
     """Stress (σ_xx, σ_yy, σ_xy) of intact cells at their three edge midpoints.
 
     Args:
-        element: ``cst``, ``rgnt`` or ``gnt``.
+        spec: the element (see :func:`strain_operator`).
         x: vertex coordinates, shape=(nc, 3, 2).
         dofs: cell DOFs vertex by vertex, shape=(nc, 3 bs).
         D: stress-strain matrix, shape=(3, 3).
@@ -166,7 +165,7 @@ def fe_stresses(element: str, x: np.ndarray, dofs: np.ndarray, D: np.ndarray) ->
     Returns:
         shape=(nc, 3, 3): [cell, local edge j (opposite vertex j), component].
     """
-    B = strain_operator(element, x, MIDPOINTS)  # point q is the midpoint of edge q
+    B = strain_operator(spec, x, MIDPOINTS)  # point q is the midpoint of edge q
     return np.einsum("ij,cqjp,cp->cqi", D, B, dofs)
 
 
