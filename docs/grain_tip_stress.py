@@ -35,7 +35,7 @@ from mpi4py import MPI
 
 from geofrac.effects.cracking import scene_driver
 from geofrac.fracture.cells import principal_max
-from geofrac.fracture.grain_driver import GrainDriver
+from geofrac.fracture.driver import CrackDriver
 from geofrac.meshing.distribute import build_mesh
 from geofrac.scene import load_scene_collective
 
@@ -81,13 +81,13 @@ margin = 1.01
 """
 
 
-def driver(job: Path, overrides: list[str]) -> GrainDriver:
+def driver(job: Path, overrides: list[str]) -> CrackDriver:
     """A grain driver for a scene, without output."""
     comm = MPI.COMM_SELF
     return scene_driver(load_scene_collective(comm, job, overrides), comm)
 
 
-def solve(d: GrainDriver) -> np.ndarray:
+def solve(d: CrackDriver) -> np.ndarray:
     """The unit solution of the current crack state, shape=(num_dofs,)."""
     A, b, _held = d.assemble(np.zeros(d.n_global))
     x = b.duplicate()
@@ -99,9 +99,9 @@ def solve(d: GrainDriver) -> np.ndarray:
             obj.destroy()
 
 
-def report(d: GrainDriver, u: np.ndarray, crack: np.ndarray, near: np.ndarray) -> None:
+def report(d: CrackDriver, u: np.ndarray, crack: np.ndarray, near: np.ndarray) -> None:
     """Print the largest sigma_1 of intact interfaces and the EFMM readout near ``near``."""
-    st, centre = d.state, d.faces.centre
+    st, centre = d.state, d.units.faces.centre
     s1, energy, _ = d.measures(u)
     s1[st.cracked] = -np.inf
     mls = st.is_mls()
@@ -117,8 +117,8 @@ def report(d: GrainDriver, u: np.ndarray, crack: np.ndarray, near: np.ndarray) -
     for k in near[np.argsort(-s1[near])][:6]:
         efmm = []
         for i in st.mesh.edges[k]:
-            op = d._operator(int(i))
-            stress = op.stress_at(d.faces.point[k][None])[0] @ u[d._mls_dofs(op.patch)]
+            op = d.units.operator(int(i))
+            stress = op.stress_at(d.units.faces.point[k][None])[0] @ u[d.ctx.mls_dofs(op.patch)]
             efmm.append(float(principal_max(stress[None])[0]))
         print(f"  x = ({centre[k, 0]:6.1f}, {centre[k, 1]:6.1f})  {s1[k]:6.2f} | "
               f"{efmm[0]:6.2f} {efmm[1]:6.2f}")  # fmt: skip
@@ -198,7 +198,7 @@ def main() -> None:
             job = Path(tmp) / "tension.toml"
             job.write_text(TENSION)
             d = driver(job, args.overrides)
-        m, centre = d.state.mesh, d.faces.centre
+        m, centre = d.state.mesh, d.units.faces.centre
         a, b = m.coords[m.edges[:, 0]], m.coords[m.edges[:, 1]]
         crosses = np.flatnonzero((a[:, 1] - 50.3) * (b[:, 1] - 50.3) < 0)
         crack = crosses[np.argsort(np.abs(centre[crosses, 0] - 50.0))][: args.chain]
@@ -211,7 +211,7 @@ def main() -> None:
         d = driver(job, args.overrides)
         d.state.start(np.zeros(0, dtype=np.int64))
         s1, _, _ = d.measures(solve(d))
-        point = d.faces.point
+        point = d.units.faces.point
         at = p2_stress(job, args.h_ref)
         print(f"holes: {args.holes} holes, unit load, sigma_1 at the interfaces' points")
         print(f"  EFMM grains | P2 (h = {args.h_ref:g}) at the same point")
@@ -228,7 +228,7 @@ def main() -> None:
         overrides = ["geometry.parameters.w=0", 'cracking.precracked=["notch"]', *args.overrides]
         d = driver(REPO / "jobs" / "grain_notched_beam.toml", overrides)
         d.state.start(d.precracked)
-        centre = d.faces.centre
+        centre = d.units.faces.centre
         near = np.flatnonzero(np.hypot(centre[:, 0], centre[:, 1] - 75.0) < 9.0)
         near = near[~d.state.cracked[near]]
         print(f"beam: {len(d.precracked)} interfaces along the notch, before the first event")

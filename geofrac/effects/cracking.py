@@ -43,20 +43,30 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
   ``face``, as x minus ``face_origin`` (the notched beam's ``crack_top_x_mm``); on
   ``efmm`` only the crack joined to the notch (or to the first event's interface) counts.
 
-The event loop is :class:`geofrac.fracture.driver.CrackDriver`; this module only
-validates, and is cheap to import.
+The event loop is :class:`geofrac.fracture.driver.CrackDriver`, composed of the edge or
+grain variant by the element's ``cracking`` mode; this module only validates, and is
+cheap to import.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from geofrac import elements
 from geofrac.effects import ConfigureContext
 from geofrac.fracture import SOLVERS
+from geofrac.fracture.config import CrackingConfig
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import finite, short
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
+
+    from geofrac.fem.solution import Solution
+    from geofrac.fracture.context import JsonValue
+    from geofrac.fracture.driver import CrackDriver
+    from geofrac.model.scene import Scene
 
 __all__ = [
     "KEYS",
@@ -107,33 +117,6 @@ LIMITS: dict[str, float] = {
     "precrack_seed": 2**63 - 1,
     "face_origin": 1e12,
 }
-
-
-@dataclass(frozen=True)
-class CrackingConfig:
-    """Validated ``[cracking]`` settings (see the module docstring for each key)."""
-
-    method: str
-    max_events: int
-    energy_drop: float | None
-    neighbours: int
-    margin: float
-    max_radius_factor: float
-    precracked: tuple[str, ...]
-    mls_region: tuple[float, float, float, float] | None
-    control: str
-    edges_per_event: int
-    batch_tolerance: float
-    solver: str
-    reuse_iterations: int
-    update_dofs: int
-    output_every: int
-    face: str | None
-    face_origin: float
-    tensile_strength: float
-    precracked_fraction: float = 0.0
-    precrack_seed: int = 0
-    switch: str = "patch"
 
 
 def _number(
@@ -291,28 +274,44 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
     )
 
 
-def make_driver(config: CrackingConfig, solution: Any, say: Any, write: bool = False) -> Any:
+def make_driver(
+    config: CrackingConfig,
+    solution: Solution,
+    say: Callable[[str], None],
+    write: bool = False,
+) -> CrackDriver:
     """The event loop of a set-up problem, not yet run.
 
-    A :class:`~geofrac.fracture.grain_driver.GrainDriver` (grain interfaces) on element
-    ``efmm``, else a :class:`~geofrac.fracture.driver.CrackDriver` (element edges).
+    The element's ``cracking`` mode (:class:`~geofrac.elements.spec.ElementSpec`) chooses
+    the composition: ``"grains"`` the grain variant
+    (:data:`~geofrac.fracture.grain_driver.GRAINS`, grain interfaces), ``"edges"`` the
+    edge variant (:data:`~geofrac.fracture.driver.EDGES`, element edges).
     ``write``: write the event log, pictures and XDMF series into ``output.dir``.
     """
-    if solution.scene.discretization.element == "efmm":
-        from geofrac.fracture.grain_driver import GrainDriver
+    from geofrac import elements
+    from geofrac.fracture.driver import EDGES, CrackDriver, Variant
 
-        return GrainDriver(config, solution, say, write)
-    from geofrac.fracture.driver import CrackDriver
+    spec = elements.get(solution.scene.discretization.element)
+    variant: Variant = EDGES
+    if spec.cracking == "grains":
+        from geofrac.fracture.grain_driver import GRAINS
 
-    return CrackDriver(config, solution, say, write)
+        variant = GRAINS
+    elif spec.cracking != "edges":
+        raise ValueError(f"element {spec.name!r} does not support cracking")
+    return CrackDriver(config, solution, say, write, variant)
 
 
-def driver(config: CrackingConfig, solution: Any, say: Any, write: bool) -> dict[str, Any]:
+def driver(
+    config: CrackingConfig, solution: Solution, say: Callable[[str], None], write: bool
+) -> dict[str, JsonValue]:
     """Run the event loop on a set-up problem; return the results (see the driver)."""
     return make_driver(config, solution, say, write).run()
 
 
-def scene_driver(scene: Any, comm: Any, say: Any = None) -> Any:
+def scene_driver(
+    scene: Scene, comm: MPI.Comm, say: Callable[[str], None] | None = None
+) -> CrackDriver:
     """The driver of a loaded scene with ``cracking``: meshed, compiled, not run, no output.
 
     For tests and diagnostics that step the crack state themselves

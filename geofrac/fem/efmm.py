@@ -87,7 +87,7 @@ class EfmmProblem(ElasticProblem):
         self.b = self.load_vector()
         self._constrain()
 
-    def _to_field(self) -> None:
+    def to_field(self) -> None:
         """The stress coefficients e = A⁻¹ C u of the solution."""
         self.e = self.element.stress_coefficients(self.uh)
 

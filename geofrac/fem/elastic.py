@@ -285,17 +285,17 @@ class ElasticProblem:
             self.solver = LinearSolver(
                 self.A, PREFIX, s.preset, s.options, self.element.num_dofs, self._near_nullspace
             )
-        unknown = self._unknown()
+        unknown = self.unknown()
         self.iterations = self.solver.solve(self.b, unknown.x.petsc_vec)
         unknown.x.scatter_forward()
-        self._to_field()
+        self.to_field()
         return self.uh
 
-    def _unknown(self) -> dolfinx.fem.Function:
+    def unknown(self) -> dolfinx.fem.Function:
         """The function the linear system is solved for."""
         return self.uh
 
-    def _to_field(self) -> None:
+    def to_field(self) -> None:
         """Set the displacement ``uh`` from the solved unknowns (nothing to do here)."""
 
     def _near_nullspace(self) -> PETSc.NullSpace:
@@ -423,11 +423,11 @@ class GradientDofProblem(ElasticProblem):
         rows = np.concatenate([r for r, _ in self.bcs]).astype(np.int64)
         return rows, np.concatenate([v for _, v in self.bcs])
 
-    def _unknown(self) -> dolfinx.fem.Function:
+    def unknown(self) -> dolfinx.fem.Function:
         """The vertex DOFs ``wh``."""
         return self.wh
 
-    def _to_field(self) -> None:
+    def to_field(self) -> None:
         """The displacement ``uh`` = T wh."""
         self.element.prolongation().mult(self.wh.x.petsc_vec, self.uh.x.petsc_vec)
         self.uh.x.scatter_forward()

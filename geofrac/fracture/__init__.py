@@ -1,10 +1,15 @@
-"""Crack propagation on element edges: sites, visibility, cell matrices, event driver.
+"""Crack propagation on element edges and grain interfaces: sites, fields, event driver.
 
 Pure numpy modules: :mod:`~geofrac.fracture.topology`, :mod:`~geofrac.fracture.visibility`,
 :mod:`~geofrac.fracture.cells`, :mod:`~geofrac.fracture.state`,
-:mod:`~geofrac.fracture.criterion`, :mod:`~geofrac.fracture.woodbury`. The distributed
-plumbing (PETSc assembly, solve, output) is :mod:`~geofrac.fracture.driver` and
-:mod:`~geofrac.fracture.incremental`.
+:mod:`~geofrac.fracture.grains`, :mod:`~geofrac.fracture.criterion`,
+:mod:`~geofrac.fracture.woodbury`. The driver (:mod:`~geofrac.fracture.driver`) composes
+parts behind protocols: :mod:`~geofrac.fracture.units` (the crack state's
+discretisation), :mod:`~geofrac.fracture.event_criterion`,
+:mod:`~geofrac.fracture.linear` (solver strategies, with
+:mod:`~geofrac.fracture.incremental`), :mod:`~geofrac.fracture.assembly`,
+:mod:`~geofrac.fracture.loop` and :mod:`~geofrac.fracture.output`; the grain variant is
+:mod:`~geofrac.fracture.grain_driver`.
 """
 
 __all__ = ["SOLVERS"]

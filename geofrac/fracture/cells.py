@@ -22,6 +22,7 @@ from geofrac.elements.spec import ElementSpec
 from geofrac.mls.shape import LinearFit, strain_matrix
 
 __all__ = [
+    "MIDPOINTS",
     "P2_EDGES",
     "MlsTable",
     "fe_matrices",
@@ -95,8 +96,8 @@ def strain_operator(spec: ElementSpec, x: np.ndarray, bary: np.ndarray) -> np.nd
     """Strain operator at barycentric points: ε = B d for the cell DOFs d.
 
     Args:
-        spec: the element: linear Lagrange (``spec.kinematics`` None) or a vertex-DOF
-            element (``spec.kinematics`` a key of :data:`~geofrac.elements.kinematics.KINDS`).
+        spec: the element; linear Lagrange (CST) when ``spec.kinematics`` is None, else
+            the vertex-DOF field of :data:`~geofrac.elements.kinematics.KINDS`.
         x: vertex coordinates, shape=(nc, 3, 2).
         bary: barycentric coordinates of the points, shape=(nq, 3).
 
@@ -119,11 +120,11 @@ def fe_matrices(
     """Stiffness matrices of intact cells.
 
     Args:
-        spec: the element, as in :func:`strain_operator`.
+        spec: the element (see :func:`strain_operator`).
         x: vertex coordinates, shape=(nc, 3, 2).
         D: stress-strain matrix (Voigt, engineering shear), shape=(3, 3).
         thickness: t.
-        penalty: α μ of the zero-mode penalty (RGNT, GNT; ignored for CST).
+        penalty: α μ of the zero-mode penalty (vertex-DOF fields; ignored for CST).
 
     Returns:
         K_e with DOFs vertex by vertex, shape=(nc, 3 bs, 3 bs).
@@ -156,7 +157,7 @@ def fe_stresses(spec: ElementSpec, x: np.ndarray, dofs: np.ndarray, D: np.ndarra
     """Stress (σ_xx, σ_yy, σ_xy) of intact cells at their three edge midpoints.
 
     Args:
-        spec: the element, as in :func:`strain_operator`.
+        spec: the element (see :func:`strain_operator`).
         x: vertex coordinates, shape=(nc, 3, 2).
         dofs: cell DOFs vertex by vertex, shape=(nc, 3 bs).
         D: stress-strain matrix, shape=(3, 3).

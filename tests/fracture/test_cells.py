@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from geofrac.elements import get
+from geofrac import elements
 from geofrac.fracture.cells import MlsTable, fe_matrices, principal_max
-from geofrac.fracture.driver import gather_mesh
+from geofrac.fracture.context import gather_mesh
 from geofrac.materials import d_matrix, lame
 from tests.fem.helpers import solve_job
 
@@ -26,11 +26,11 @@ def test_fe_matrices_match_dolfinx(element):
     try:
         mat = sol.scene.material
         _, mu = lame(mat.E, mat.nu, 2, mat.plane)
-        space = p._unknown().function_space
+        space = p.unknown().function_space
         gm = gather_mesh(sol.tagged.mesh, space)
         bs = space.dofmap.index_map_bs
         K = fe_matrices(
-            get(element),
+            elements.get(element),
             gm.coords[gm.cells],
             d_matrix(mat.E, mat.nu, 2, mat.plane),
             mat.thickness,

@@ -7,9 +7,9 @@ from mpi4py import MPI
 from geofrac.effects.cracking import scene_driver
 from geofrac.elements.efmm_numpy import integration_domains
 from geofrac.errors import RunError
-from geofrac.fracture.driver import END_REASONS
-from geofrac.fracture.grain_driver import GrainDriver
+from geofrac.fracture.driver import CrackDriver
 from geofrac.fracture.grains import GrainState, connected_cracks, interfaces, side_sites
+from geofrac.fracture.loop import END_REASONS
 from geofrac.fracture.state import MlsSettings
 from geofrac.fracture.topology import edge_mesh, random_sites
 from geofrac.scene import load_scene_collective
@@ -178,7 +178,7 @@ def test_connected_cracks_follow_shared_triangles_only():
 
 def make_driver(
     *overrides: str, comm: MPI.Comm = MPI.COMM_WORLD, job: str = "grain_notched_beam"
-) -> GrainDriver:
+) -> CrackDriver:
     """The grain driver of ``jobs/<job>.toml`` (the beam on the SMALL mesh), no output."""
     small = SMALL if job == "grain_notched_beam" else ()
     return scene_driver(load_scene_collective(comm, JOBS / f"{job}.toml", small + overrides), comm)
@@ -213,7 +213,7 @@ def test_fully_isolated_grain_is_a_fragment_and_the_run_goes_on():
     d = make_driver("cracking.max_events=3", "cracking.switch=grain")
     c = d.gm.coords
     i = int(np.argmin(np.hypot(c[:, 0] + 150, c[:, 1] - 75)))  # far from the notch
-    d.precracked = np.union1d(d.precracked, d.state.edges_of_node(i))
+    d.sites.add(d.state.edges_of_node(i))
     res = d.run()
     assert d.state.fits[i].order == -1
     assert res["grains_by_field"]["fragment"] >= 1
@@ -244,7 +244,7 @@ MECHANISM = [
 def check_mechanism_is_pinned(comm: MPI.Comm) -> None:
     """Two rotation-only grains seen by one fit: singular until their free DOFs are pinned."""
     d = make_driver("cracking.max_events=0", comm=comm, job="grain_dcn_0pct")
-    centre = d.faces.centre
+    centre = d.units.faces.centre
     pts = np.array(MECHANISM)
     ids = np.array([np.argmin(np.hypot(*(centre - p).T)) for p in pts])
     assert np.hypot(*(centre[ids] - pts).T).max() < 0.01
@@ -252,7 +252,7 @@ def check_mechanism_is_pinned(comm: MPI.Comm) -> None:
     coords = d.gm.coords[:, :2]
     pair = [int(np.argmin(np.hypot(*(coords - p).T))) for p in [(36.02, 49.88), (36.02, 47.54)]]
     assert [d.state.fits[i].order for i in pair] == [0, 0]
-    assert set(pair) <= set(d._stiffless_nodes().tolist())
+    assert set(pair) <= set(d.units.stiffless_nodes().tolist())
 
     def solve() -> float:
         A, b, _ = d.assemble(np.zeros(d.n_global))
@@ -266,10 +266,10 @@ def check_mechanism_is_pinned(comm: MPI.Comm) -> None:
 
     with pytest.raises(RunError, match="singular"):
         solve()
-    assert d._find_fragments()  # no piece is cut free: only the new check acts
-    assert not len(d.fragment_nodes)
-    assert set(d._pinned_nodes.tolist()) == set(pair) and len(d.pinned_dofs) == 4
-    pinned = sorted(d.pinned_dofs.tolist())
+    assert d.assembler.find_fragments()  # no piece is cut free: only the new check acts
+    assert not len(d.assembler.fragment_nodes)
+    assert set(d.assembler.pinned_nodes.tolist()) == set(pair) and len(d.assembler.pinned_dofs) == 4
+    pinned = sorted(d.assembler.pinned_dofs.tolist())
     assert comm.allgather(pinned) == [pinned] * comm.size
     norm = solve()
     assert np.isfinite(norm) and norm > 0
@@ -289,10 +289,10 @@ def test_random_precracks_follow_the_seed():
     a = make_driver("cracking.max_events=0", "cracking.precracked_fraction=0.04")
     b = make_driver("cracking.max_events=0", "cracking.precracked_fraction=0.04",
                     "cracking.precrack_seed=1")  # fmt: skip
-    assert len(a.random_precracked) == len(b.random_precracked) > 0
-    assert not np.array_equal(a.random_precracked, b.random_precracked)
+    assert len(a.sites.random) == len(b.sites.random) > 0
+    assert not np.array_equal(a.sites.random, b.sites.random)
     interior = a.state.crackable & ~a.state.mesh.boundary_edges
-    assert len(a.random_precracked) == round(0.04 * interior.sum())
+    assert len(a.sites.random) == round(0.04 * interior.sum())
     a.destroy()
     b.destroy()
 
@@ -321,16 +321,16 @@ def test_crack_reaches_the_face_only_through_the_crack_from_its_origin():
     d = make_driver("cracking.max_events=0")
     m = d.state.mesh
     chain = crossed(m, 30.37, 80.0)
-    top = d.faces.centre[chain[-1]]
+    top = d.units.faces.centre[chain[-1]]
     assert abs(top[1] - 150.0) < 1e-9  # the chain ends on the top face
     lone = crossed(m, -150.37, 130.0)[-1]  # a top-face interface far from the chain
     d.state.cracked[lone] = True
     d.state.cracked[chain[:-1]] = True
-    assert d._face_x(chain[:1]) is None  # stops one interface short; the lone one is apart
+    assert d.units.face_x(chain[:1]) is None  # stops one interface short; the lone one is apart
     d.state.cracked[chain[-1]] = True
-    assert d._face_x(chain[-1:]) == pytest.approx(top[0])
+    assert d.units.face_x(chain[-1:]) == pytest.approx(top[0])
     assert abs(top[0] - 30.37) < 16.0  # within one element of the line
-    main = d._main_crack()
+    main = d.units.main_crack()
     assert main["interfaces"] == len(chain) and main["nearest_to_face"]["distance"] < 1e-9
     d.destroy()
 
@@ -339,12 +339,12 @@ def test_zero_width_notch_is_one_chain_of_precracked_interfaces():
     """meshes/notched_beam.geo with w = 0: an embedded notch line, cracked on one side."""
     d = make_driver("cracking.max_events=0", "geometry.parameters.w=0",
                     'cracking.precracked=["notch"]')  # fmt: skip
-    m, sites = d.state.mesh, d.group_precracked
+    m, sites = d.state.mesh, d.sites.group
     assert len(sites) >= 75 / 16 and not m.boundary_edges[sites].all()
     mask = np.zeros(len(m.edges), bool)
     mask[sites] = True
     assert connected_cracks(m, mask, sites[:1]).sum() == len(sites)  # one polyline
-    y = d.faces.centre[sites, 1]
+    y = d.units.faces.centre[sites, 1]
     assert y.min() < 16 and abs(y.max() - 75) < 16  # from the bottom face to the tip
     d.destroy()
 

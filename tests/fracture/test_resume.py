@@ -22,8 +22,8 @@ from mpi4py import MPI
 
 from geofrac import interrupt
 from geofrac.effects.cracking import make_driver
-from geofrac.fracture.driver import CrackDriver
-from geofrac.fracture.grain_driver import GrainDriver
+from geofrac.fracture.driver import EDGES
+from geofrac.fracture.grain_driver import GRAINS as GRAIN_VARIANT
 from geofrac.io.checkpoint import CheckpointPolicy, RunControl, latest
 from geofrac.scene import load_scene_collective
 from tests.conftest import JOBS
@@ -33,7 +33,7 @@ BEAM = ("notched_beam", ("geometry.parameters.h_fine=8", "geometry.parameters.h=
 #: The grain beam on a coarse uniform mesh (about 330 nodes), as test_grains.py.
 GRAINS = ("grain_notched_beam", ("geometry.parameters.h=16", "geometry.parameters.h_fine=16"))
 #: The checkpoint kind of each case's driver class.
-KINDS = {BEAM: CrackDriver.CHECKPOINT_KIND, GRAINS: GrainDriver.CHECKPOINT_KIND}
+KINDS = {BEAM: EDGES.kind, GRAINS: GRAIN_VARIANT.kind}
 #: Fields of an event row that are the answer (``iterations`` is the solver's work).
 FIELDS = ("r", "load_factor", "control_displacement", "reaction", "strain_energy", "x", "y")
 RTOL = 1e-10

@@ -1,0 +1,189 @@
+"""Assembly of the crack state's stiffness, and the DOFs held so that it stays regular.
+
+:class:`Assembler` assembles the stiffness of any :class:`~geofrac.fracture.units.Units`
+through PETSc's COO interface (entries of other ranks' rows travel with PETSc's own
+assembly: an MLS cell or a grain couples nodes that are not its vertices, outside any
+finite element sparsity pattern) and owns the *holds*: the nodes of pieces cut free by
+cracks and the DOFs pinned to stop a supported piece's free rigid motion.
+"""
+
+from __future__ import annotations
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import numpy as np
+from petsc4py import PETSc
+
+from geofrac.fracture.context import CrackContext
+from geofrac.fracture.topology import components, free_motion_pins, zero_energy_rows
+from geofrac.fracture.units import Units
+
+__all__ = ["Assembler"]
+
+
+class Assembler:
+    """Stiffness and load of the current crack state, and the held DOFs.
+
+    Args:
+        ctx: the shared set-up data.
+        units: the discretisation of the crack state.
+
+    Attributes:
+        fragment_nodes: nodes of pieces cut free by cracks (no Dirichlet node), held
+            like a node whose every edge is cracked, shape=(k,).
+        pinned_dofs: DOFs pinned at their last displacement to stop a supported piece's
+            free rigid motion, shape=(k,); pinned_nodes: their nodes, shape=(k,).
+    """
+
+    def __init__(self, ctx: CrackContext, units: Units) -> None:
+        self.ctx, self.units = ctx, units
+        self.fragment_nodes = np.zeros(0, dtype=np.int64)
+        self.pinned_dofs = np.zeros(0, dtype=np.int64)
+        self.pinned_nodes = np.zeros(0, dtype=np.int64)
+        self._b0: PETSc.Vec | None = None
+
+    def assemble(self, held_values: np.ndarray) -> tuple[PETSc.Mat, PETSc.Vec, np.ndarray]:
+        """Stiffness and load vector of the current crack state; returns (A, b, held DOFs).
+
+        Dirichlet DOFs and held DOFs (no stiffness, or in a cut-free fragment) are
+        applied with ``MatZeroRowsColumns``; held DOFs keep ``held_values``,
+        shape=(n_global,). The caller destroys A and b.
+        """
+        ctx, units = self.ctx, self.units
+        state = units.state
+        is_mls = state.is_mls()
+        r0, c0, v0 = units.intact_coo(~is_mls[units.own])
+        rows, cols, vals = [r0], [c0], [v0]
+        for c, fit in state.fits.items():
+            block = units.fit_block(c, fit) if units.owned[c] else None
+            if block is None:
+                continue
+            d, k = block
+            rows.append(np.repeat(d, len(d)))
+            cols.append(np.tile(d, len(d)))
+            vals.append(k.ravel())
+        diag = np.arange(ctx.row0, ctx.row0 + ctx.n_local, dtype=np.int64)
+        rows.append(diag)
+        cols.append(diag)
+        vals.append(np.zeros(len(diag)))
+        A = PETSc.Mat().create(ctx.comm)
+        A.setSizes(((ctx.n_local, ctx.n_global), (ctx.n_local, ctx.n_global)))
+        A.setType(PETSc.Mat.Type.AIJ)
+        A.setPreallocationCOO(
+            np.concatenate(rows).astype(PETSc.IntType), np.concatenate(cols).astype(PETSc.IntType)
+        )
+        A.setValuesCOO(np.concatenate(vals), addv=PETSc.InsertMode.ADD_VALUES)
+        A.assemble()
+        used = units.use_counts(is_mls) > 0
+        used[ctx.node_dofs(self.fragment_nodes)] = False
+        used[self.pinned_dofs] = False
+        used[ctx.bc_rows] = True
+        held = np.flatnonzero(~used)
+        fixed = np.concatenate([ctx.bc_rows, held])
+        values = np.concatenate([ctx.bc_vals, held_values[held]])
+        mine = (fixed >= ctx.row0) & (fixed < ctx.row0 + ctx.n_local)
+        if self._b0 is None:
+            self._b0 = ctx.problem.load_vector()
+        b = self._b0.copy()
+        g = A.createVecRight()
+        g.setValues(fixed[mine].astype(PETSc.IntType), values[mine])
+        g.assemble()
+        A.zeroRowsColumns(fixed[mine].astype(PETSc.IntType), 1.0, g, b)
+        g.destroy()
+        return A, b, held
+
+    def find_fragments(self) -> bool:
+        """Hold what the supports no longer hold; True if anything new is held (collective).
+
+        Pieces are the nodes joined by units with stiffness. A piece with no Dirichlet
+        DOF is cut free: all its nodes are held at their last displacement. A piece
+        whose Dirichlet and pinned DOFs leave a rigid motion free
+        (:func:`~geofrac.fracture.topology.constraint_rank` < 3; e.g. a column split off
+        between the loading platens, free to slide sideways) gets the fewest u_x/u_y DOFs
+        pinned at their last displacement that remove the free motions
+        (:func:`~geofrac.fracture.topology.free_motion_pins`), so it goes on carrying load.
+        Both choices depend on coordinates only (rank-independent).
+        """
+        ctx, units = self.ctx, self.units
+        gm, bs = ctx.gm, ctx.bs
+        a, b = units.links(units.state.is_mls())
+        labels = components(len(gm.coords), a, b)
+        anchored = np.unique(labels[np.unique(ctx.bc_row_nodes)])
+        touched = np.zeros(len(gm.coords), dtype=bool)
+        touched[a] = True
+        touched[b] = True
+        loose = np.flatnonzero(touched & ~np.isin(labels, anchored))
+        new = np.setdiff1d(loose, self.fragment_nodes)
+        if len(new):
+            self.fragment_nodes = np.union1d(self.fragment_nodes, new)
+            ctx.say(f"cracking: {len(new)} nodes of cut-free fragments are held")
+        rows = np.concatenate([ctx.bc_rows, self.pinned_dofs])
+        nodes = np.concatenate([ctx.bc_row_nodes, self.pinned_nodes])
+        xy = gm.coords[:, :2]
+        pinned = []
+        for label in anchored:
+            on = labels[nodes] == label
+            members = np.flatnonzero(touched & (labels == label))
+            if not len(members):
+                continue  # no cell left to move
+            pins = free_motion_pins(xy[nodes[on]], rows[on] % bs, units.rotation, xy[members])
+            pinned += [(int(members[i]), comp) for i, comp in pins]
+        if pinned:
+            pn = np.array([p[0] for p in pinned], dtype=np.int64)
+            self.pinned_nodes = np.concatenate([self.pinned_nodes, pn])
+            dofs = gm.node_block[pn] * bs + np.array([p[1] for p in pinned])
+            self.pinned_dofs = np.concatenate([self.pinned_dofs, dofs])
+            ctx.say(f"cracking: {len(pinned)} DOFs pinned to stop free rigid motions")
+        held = self.hold_zero_energy_modes()
+        return len(new) > 0 or len(pinned) > 0 or held
+
+    def hold_zero_energy_modes(self) -> bool:
+        """Pin the DOFs of the units' stiffless nodes that move without strain energy.
+
+        The block of the assembled stiffness on the DOFs of
+        :meth:`~geofrac.fracture.units.Units.stiffless_nodes` (Dirichlet, held and
+        pinned ones left out) is gathered to every rank; the rows in its zero-energy
+        modes (:func:`~geofrac.fracture.topology.zero_energy_rows`, eigenvalues below
+        1e-10 of the mean diagonal entry) are pinned at their last displacement, as a
+        piece's free rigid motion is. True if any DOF was pinned. Collective.
+        """
+        ctx = self.ctx
+        nodes = np.setdiff1d(self.units.stiffless_nodes(), self.fragment_nodes)
+        if not len(nodes):
+            return False
+        A, b, held = self.assemble(np.zeros(ctx.n_global))
+        dofs = ctx.node_dofs(nodes)
+        dofs = dofs[~np.isin(dofs, np.concatenate([ctx.bc_rows, held, self.pinned_dofs]))]
+        if not len(dofs):  # the same on every rank
+            A.destroy()
+            b.destroy()
+            return False
+        index = PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        diag = A.createVecLeft()
+        try:
+            A.getDiagonal(diag)
+            scale = diag.norm(PETSc.NormType.NORM_1) / ctx.n_global
+            (sub,) = A.createSubMatrices(index)
+            K = sub.convert(PETSc.Mat.Type.DENSE).getDenseArray().copy()
+            sub.destroy()
+        finally:
+            for obj in (A, b, index, diag):
+                obj.destroy()
+        free = dofs[zero_energy_rows(K, 1e-10 * scale)]
+        if not len(free):
+            return False
+        owner = np.empty(len(ctx.gm.node_block), dtype=np.int64)
+        owner[ctx.gm.node_block] = np.arange(len(ctx.gm.node_block))
+        self.pinned_nodes = np.concatenate([self.pinned_nodes, owner[free // ctx.bs]])
+        self.pinned_dofs = np.concatenate([self.pinned_dofs, free])
+        ctx.say(
+            f"cracking: {len(free)} DOFs of grains without stiffness of their own pinned "
+            "(they moved without strain energy)"
+        )
+        return True
+
+    def destroy(self) -> None:
+        """Free the load vector."""
+        if self._b0 is not None:
+            self._b0.destroy()
+        self._b0 = None

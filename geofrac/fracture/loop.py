@@ -1,0 +1,431 @@
+"""The sequentially linear event loop (Edo (2016), Fig. 2.6), on any composition of parts.
+
+Each event: unit load (the scene's prescribed displacements as given) → solve
+(:class:`~geofrac.fracture.linear.SolverStrategy`) → σ1 of the units
+(:class:`~geofrac.fracture.units.Units`) → σ1 per site and the sites of least
+r = f_t/σ1 (:class:`~geofrac.fracture.event_criterion.EventCriterion`) → the solution
+scaled by r is the state of the event (2.21) → record
+(:class:`~geofrac.fracture.output.OutputWriter`) → refit the changed units → repeat.
+
+With a :class:`~geofrac.io.checkpoint.RunControl` the loop asks it after each event
+whether to write a checkpoint or to stop on a signal, and continues from
+``control.resume`` when given.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+import numpy as np
+from mpi4py import MPI
+
+from geofrac.errors import RunError
+from geofrac.fracture.assembly import Assembler
+from geofrac.fracture.context import CrackContext, JsonValue, Sites
+from geofrac.fracture.event_criterion import EventCriterion
+from geofrac.fracture.incremental import Gather
+from geofrac.fracture.linear import SolverStrategy, Timing
+from geofrac.fracture.output import OutputWriter, Row, read_checkpoint, save_checkpoint
+from geofrac.fracture.units import Units
+from geofrac.io.checkpoint import Checkpoint, RunControl
+from geofrac.log import format_seconds
+
+__all__ = ["END_REASONS", "SEPARATED", "EventLoop"]
+
+#: Why an event loop ends.
+END_REASONS = ("max_events", "energy_drop", "no_tensile_edge", "separated", "singular")
+
+#: The body is *separated* when the unit-load strain energy falls below this fraction of
+#: its value at the first event: no load path is left between the control group and the
+#: supports (the seed's "unstable" end, reached without a singular matrix because both
+#: pieces are held by Dirichlet conditions).
+SEPARATED = 1e-9
+
+
+@dataclass
+class _Start:
+    """The loop's state at the start of an event (what a checkpoint restarts from)."""
+
+    event: int
+    u_prev: np.ndarray
+    fragment_nodes: np.ndarray
+    pinned_dofs: np.ndarray
+    pinned_nodes: np.ndarray
+    face_hit: tuple[int, float] | None
+    extra: dict[str, JsonValue]
+    timing: dict[str, JsonValue]
+
+
+class EventLoop:
+    """Runs events on the parts until an end condition.
+
+    Args:
+        ctx: the shared set-up data.
+        units, criterion, strategy, assembler, output: the parts.
+        sites: the pre-cracked sites.
+        timing: the phases and solver counts (shared with ``strategy``).
+        control: checkpoints, signal stop and resume data, or None.
+    """
+
+    def __init__(
+        self,
+        ctx: CrackContext,
+        units: Units,
+        criterion: EventCriterion,
+        strategy: SolverStrategy,
+        assembler: Assembler,
+        output: OutputWriter,
+        sites: Sites,
+        timing: Timing,
+        control: RunControl | None,
+    ) -> None:
+        self.ctx, self.units, self.criterion = ctx, units, criterion
+        self.strategy, self.assembler, self.output = strategy, assembler, output
+        self.sites, self.timing, self.control = sites, timing, control
+        #: the rows of the event log, set when the loop ends.
+        self.rows: list[Row] = []
+        self.gather: Gather | None = None
+
+    def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
+        """Run; put the last state into ``unknown``; return the JSON results (collective)."""
+        ctx, cfg, units, control = self.ctx, self.ctx.config, self.units, self.control
+        state, timing, strategy, output = units.state, self.timing, self.strategy, self.output
+        say = ctx.say
+        t0 = time.perf_counter()
+        state.start(self.sites.precracked)
+        work = dolfinx.fem.Function(unknown.function_space)  # a ghosted vector
+        x = work.x.petsc_vec
+        self.gather = gather = Gather(x)
+        u_unit = np.zeros(ctx.n_global)
+        rows: list[Row] = []
+        #: the sites cracked by each event, in order (what a checkpoint replays).
+        batches: list[list[int]] = []
+        end, peak, first_energy = "max_events", 0.0, 0.0
+        face_hit: tuple[int, float] | None = None
+        first = 1  # the first event to compute
+        done = 0  # events already in the log (a resumed run recomputes those after first)
+        resume = control.resume if control is not None else None
+        if resume is not None:
+            assert control is not None
+            control.check_resume()  # the same scene and number of ranks
+            rows, batches, u_unit, first, first_energy, face_hit = self._restore(resume)
+            done = len(rows)
+            peak = max((r["strain_energy"] for r in rows[: first - 1]), default=0.0)
+        setup = format_seconds(time.perf_counter() - t0)
+        say(
+            "cracking: "
+            f"{units.state_text(len(self.sites.precracked), len(self.sites.random))}; "
+            f"set-up {setup}"
+        )
+        if resume is not None:
+            say(
+                f"cracking: resuming after event {done} from {resume.path} (events {first}-"
+                f"{done} are recomputed from the factorisation they used)"
+            )
+        output.open(rows, None if resume is None else float(done))
+        started = time.perf_counter()
+        error = None
+        if cfg.max_events == 0:
+            u_unit, _ = strategy.solve(u_unit, x, gather)
+            if ctx.problem.exact is not None:
+                error = units.l2_error(u_unit)
+                say(f"cracking: displacement error (2.22) {error:.4e}")
+        # the loop's state at the start of the event whose solve factorised last: a
+        # checkpoint restarts from there, so that a resumed run repeats the solver's
+        # arithmetic (the update and reuse solvers reuse that factorisation)
+        ref: _Start | None = None
+        try:
+            for event in range(first, cfg.max_events + 1):
+                replay = event <= done
+                start = self._event_start(event, u_unit, face_hit)
+                try:
+                    u_unit, its = strategy.solve(u_unit, x, gather)
+                except RunError as exc:
+                    if replay:
+                        raise RunError(f"--resume: event {event} failed on replay: {exc}") from None
+                    end = "singular"
+                    say(f"cracking: event {event}: the system is singular ({exc})")
+                    break
+                if timing.factorizations > start.timing["factorizations"] or ref is None:  # type: ignore[operator]
+                    ref = start
+                    # a resumed run factorises this event without a stale reference to
+                    # drop: it keeps the reasons and refinements counted by this solve
+                    ref.timing["stale"] = dict(timing.stale)  # type: ignore[assignment]
+                    ref.timing["refinements"] = timing.refinements
+                timing.iterations += its
+                t = time.perf_counter()
+                unit_s1, energy_unit, reaction_unit = units.measures(u_unit)
+                sigma1 = self.criterion.site_stress(unit_s1)
+                first_energy = energy_unit if event == 1 else first_energy
+                if energy_unit <= SEPARATED * first_energy:
+                    end = "separated"
+                    break
+                edges, r = self.criterion.select(sigma1)
+                t = timing.add("criterion", t)
+                if len(edges) == 0:
+                    end = "no_tensile_edge"
+                    break
+                energy = r * r * energy_unit
+                cracked = [int(e) for e in edges]
+                if replay:
+                    if cracked != batches[event - 1]:
+                        raise RunError(
+                            f"--resume: event {event} cracked edges {cracked}, the interrupted "
+                            f"run {batches[event - 1]}; the checkpoint does not reproduce it"
+                        )
+                else:
+                    row = self._row(event, edges, r, its, energy, reaction_unit)
+                    rows.append(row)
+                    batches.append(cracked)
+                changed = state.crack_many(cracked)
+                strategy.changed(changed)
+                units.changed(changed)
+                if face_hit is None and ctx.face_nodes is not None:
+                    x_hit = units.face_x(edges)
+                    if x_hit is not None:
+                        face_hit = (event, x_hit)
+                peak = max(peak, energy)
+                timing.add("update", t)
+                if replay:
+                    continue
+                if event % cfg.output_every == 0 or event == 1:
+                    output.frame(event, r * u_unit)
+                output.row(row)  # flushed: a killed run keeps every completed event
+                if event % max(1, cfg.max_events // 20) == 0:
+                    rate = (event - first + 1) / (time.perf_counter() - started)
+                    say(
+                        f"cracking: event {event}/{cfg.max_events}, r = {r:.4g}, energy "
+                        f"{energy:.4g}, {rate:.2f} events/s, {timing.factorizations} factorisations"
+                    )
+                if cfg.energy_drop is not None and energy < (1.0 - cfg.energy_drop) * peak:
+                    end = "energy_drop"
+                    break
+                if control is not None and event < cfg.max_events:
+                    save, stop = control.poll(event)
+                    if save:
+                        assert ref is not None
+                        output.sync()  # the log on disk holds the checkpoint's rows
+                        self._checkpoint(control, event, rows, batches, first_energy, ref)
+                    if stop:
+                        control.interrupt(f"event {event}")
+        finally:
+            strategy.drop()
+            output.close()
+        elapsed = time.perf_counter() - started
+        if rows:
+            # the final pattern; it replaces a frame already written for this event, so
+            # each time appears once in the series
+            output.frame(int(rows[-1]["event"]), rows[-1]["load_factor"] * u_unit)
+        self._finish_field(unknown, rows[-1]["load_factor"] * u_unit if rows else u_unit)
+        self.rows = rows
+        output.finish(rows)
+        self.destroy()
+        results = self._results(rows, end, elapsed, face_hit, len(rows) - first + 1)
+        if resume is not None:
+            results["resumed_after_event"] = done
+        if error is not None:
+            results["displacement_error_l2"] = error
+        say(
+            f"cracking: {len(rows)} events in {format_seconds(elapsed)} "
+            f"({results['events_per_s']:.2f} events/s), end: {end}"
+        )
+        return results
+
+    def _row(
+        self,
+        event: int,
+        edges: np.ndarray,
+        r: float,
+        its: int,
+        energy: float,
+        reaction_unit: float,
+    ) -> Row:
+        """The event log's row of an event that cracked ``edges`` (the first is reported)."""
+        gm, state = self.ctx.gm, self.units.state
+        a, b = state.mesh.edges[edges[0]]
+        mid = self.units.site_point(int(edges[0]))
+        return {
+            "event": event,
+            "edge": int(edges[0]),
+            "node_a": int(gm.input_ids[a]),
+            "node_b": int(gm.input_ids[b]),
+            "x": float(mid[0]),
+            "y": float(mid[1]),
+            "r": r,
+            "load_factor": r,
+            "control_displacement": r * self.ctx.control_unit,
+            "reaction": r * reaction_unit,
+            "strain_energy": energy,
+            "edges_cracked": len(edges),
+            "iterations": its,
+        }
+
+    def _finish_field(self, unknown: dolfinx.fem.Function, u: np.ndarray) -> None:
+        """Put the last event's state into the problem's displacement (results.xdmf)."""
+        ctx = self.ctx
+        v = unknown.x.petsc_vec
+        v.setArray(u[ctx.row0 : ctx.row0 + ctx.n_local])
+        unknown.x.scatter_forward()
+        ctx.problem.to_field()
+
+    # -- checkpoints -----------------------------------------------------------------
+    def _event_start(
+        self, event: int, u_prev: np.ndarray, face_hit: tuple[int, float] | None
+    ) -> _Start:
+        """What a checkpoint needs to restart at ``event``: the state before its solve.
+
+        ``u_prev`` is kept by reference (the loop replaces, never changes, the array).
+        """
+        t, held = self.timing, self.assembler
+        return _Start(
+            event=event,
+            u_prev=u_prev,
+            fragment_nodes=held.fragment_nodes,
+            pinned_dofs=held.pinned_dofs,
+            pinned_nodes=held.pinned_nodes,
+            face_hit=face_hit,
+            extra=self.units.checkpoint_extra(),
+            timing={
+                "factorizations": t.factorizations,
+                "iterations": t.iterations,
+                "refinements": t.refinements,
+                "stale": dict(t.stale),  # type: ignore[dict-item]
+            },
+        )
+
+    def _checkpoint(
+        self,
+        control: RunControl,
+        event: int,
+        rows: list[Row],
+        batches: list[list[int]],
+        first_energy: float,
+        ref: _Start,
+    ) -> None:
+        """Write checkpoint ``event`` (collective).
+
+        It holds the event log and each event's cracked sites up to ``event`` (JSON),
+        and the state at the start of event ``ref.event``, whose solve factorised last:
+        the unit solution before it and the held and pinned DOFs (arrays alike on every
+        rank, written once). A resumed run recomputes the events from there with the
+        same factorisation, so it repeats the interrupted run's arithmetic.
+        """
+        data: dict[str, JsonValue] = {
+            "rows": rows,  # type: ignore[dict-item]
+            "batches": batches,  # type: ignore[dict-item]
+            "first_energy": first_energy,
+            "replay_from": ref.event,
+            "face_hit": None if ref.face_hit is None else list(ref.face_hit),
+            "timing": ref.timing,
+            "extra": ref.extra,
+        }
+        arrays = {
+            "u_prev": ref.u_prev,
+            "fragment_nodes": ref.fragment_nodes,
+            "pinned_dofs": ref.pinned_dofs,
+            "pinned_nodes": ref.pinned_nodes,
+        }
+        save_checkpoint(control, event, data, arrays)
+
+    def _restore(
+        self, ck: Checkpoint
+    ) -> tuple[list[Row], list[list[int]], np.ndarray, int, float, tuple[int, float] | None]:
+        """Bring the parts to the start of checkpoint ``ck``'s replay event.
+
+        The crack state is rebuilt by cracking the sites of each event before it again,
+        in event order (the fits are a function of the cracked sites); the held and
+        pinned DOFs and the unit solution before that event (whose values held DOFs
+        keep) are read back. Returns (rows, batches, u_unit, replay_from, first_energy,
+        face_hit).
+        """
+        data, arrays = read_checkpoint(ck, self.ctx.n_global)
+        replay_from = int(data["replay_from"])  # type: ignore[arg-type]
+        batches: list[list[int]] = data["batches"]  # type: ignore[assignment]
+        for batch in batches[: replay_from - 1]:
+            self.units.state.crack_many([int(e) for e in batch])
+        held = self.assembler
+        held.fragment_nodes = arrays["fragment_nodes"].astype(np.int64)
+        held.pinned_dofs = arrays["pinned_dofs"].astype(np.int64)
+        held.pinned_nodes = arrays["pinned_nodes"].astype(np.int64)
+        self.strategy.reset()
+        self.units.reset()
+        t: dict[str, JsonValue] = data["timing"]  # type: ignore[assignment]
+        self.timing.factorizations = int(t["factorizations"])  # type: ignore[arg-type]
+        self.timing.iterations = int(t["iterations"])  # type: ignore[arg-type]
+        self.timing.refinements = int(t["refinements"])  # type: ignore[arg-type]
+        self.timing.stale = {k: int(v) for k, v in t["stale"].items()}  # type: ignore[union-attr, arg-type]
+        self.units.restore_extra(data.get("extra", {}))  # type: ignore[arg-type]
+        hit = data["face_hit"]
+        face_hit = None if hit is None else (int(hit[0]), float(hit[1]))  # type: ignore[index, arg-type]
+        return (
+            data["rows"],  # type: ignore[return-value]
+            batches,
+            np.array(arrays["u_prev"], dtype=float),
+            replay_from,
+            float(data["first_energy"]),  # type: ignore[arg-type]
+            face_hit,
+        )
+
+    # -- results ---------------------------------------------------------------------
+    def _results(
+        self,
+        rows: list[Row],
+        end: str,
+        elapsed: float,
+        face_hit: tuple[int, float] | None,
+        done: int,
+    ) -> dict[str, JsonValue]:
+        """The loop's JSON results; ``done``: events this run computed."""
+        ctx, state, t, held = self.ctx, self.units.state, self.timing, self.assembler
+        cfg = ctx.config
+        n_pre = len(self.sites.precracked)
+        out: dict[str, JsonValue] = {
+            "events": len(rows),
+            "end_reason": end,
+            "cracked_edges": int(state.cracked.sum()),
+            "new_cracked_edges": int(state.cracked.sum()) - n_pre,
+            "precracked_edges": n_pre,
+            "mls_cells": len(state.fits),
+            "void_cells": len(state.void_cells()),
+            "fragment_nodes": len(held.fragment_nodes),
+            "pinned_dofs": len(held.pinned_dofs),
+            "edges": len(state.mesh.edges),
+            "dofs": ctx.n_global,
+            "events_per_s": done / elapsed if elapsed > 0 else float("nan"),
+            "phase_s": {k: ctx.comm.allreduce(v, op=MPI.MAX) for k, v in t.seconds.items()},
+            "factorizations": t.factorizations,
+            "refactor_reasons": dict(sorted(t.stale.items())),
+            "refinement_solves": t.refinements,
+            "cg_iterations": t.iterations,
+            "solver": cfg.solver,
+        }
+        if rows:
+            peak = max(rows, key=lambda r: r["reaction"])
+            out |= {
+                "peak_reaction": peak["reaction"],
+                "peak_event": peak["event"],
+                "final_strain_energy": rows[-1]["strain_energy"],
+            }
+        if cfg.face is not None:
+            x = None if face_hit is None else face_hit[1] - cfg.face_origin
+            out["crack_face"] = {
+                "group": cfg.face,
+                "event": None if face_hit is None else face_hit[0],
+                "x_from_origin": x,
+            }
+            if cfg.face == "top":
+                out["crack_top_x_mm"] = x
+        self.units.results(out, n_pre, len(self.sites.random))
+        return out
+
+    def destroy(self) -> None:
+        """Free the solvers, the load vector and the gather."""
+        self.strategy.destroy()
+        self.assembler.destroy()
+        if self.gather is not None:
+            self.gather.destroy()
+        self.gather = None
