@@ -35,7 +35,7 @@ from mpi4py import MPI
 from geofrac import kernels
 from geofrac.elements.efmm_numpy import NodeOperator, integration_domains, node_operator
 from geofrac.errors import RunError
-from geofrac.fracture.cells import principal_max
+from geofrac.fracture.criterion import normal_stress
 from geofrac.fracture.driver import GAUSS_6, CrackDriver
 from geofrac.fracture.grains import GrainState, connected_cracks, interfaces, side_sites
 from geofrac.fracture.state import MlsSettings, segment_distance
@@ -256,7 +256,9 @@ class GrainDriver(CrackDriver):
         p = live[self._pair_unit]
         ud_pairs = u_ext[self._int_dofs[self._pair_unit[p]]]
         stress = np.einsum("psd,pd->ps", self._pair_S[p], ud_pairs)
-        s1[self._pair_edge[p], self._pair_slot[p]] = principal_max(stress)
+        s1[self._pair_edge[p], self._pair_slot[p]] = normal_stress(
+            stress, self.faces.normal[self._pair_edge[p]]
+        )
         ud = u_ext[self._int_dofs[live]]
         ku = np.einsum("nij,nj->ni", self._int_K[live], ud)
         energy = 0.5 * float(np.sum(ud * ku))
@@ -272,7 +274,7 @@ class GrainDriver(CrackDriver):
                 B = fit.strain_matrix(self.faces.point[edges])  # shape=(k, 3, nd)
                 sig = np.einsum("ij,kjd,d->ki", self.D, B, uf)
                 slot = (state.mesh.edges[edges, 1] == i).astype(np.int64)
-                s1[edges, slot] = principal_max(sig)
+                s1[edges, slot] = normal_stress(sig, self.faces.normal[edges])
                 k = self._mls_stiffness(i, fit)
                 f = k @ uf
                 energy += 0.5 * float(uf @ f)
