@@ -15,7 +15,8 @@ DefineConstant[
   w = {2, Name "Parameters/w"},
   h = {12, Name "Parameters/h"},
   h_fine = {2.2, Name "Parameters/h_fine"},
-  transition = {100, Name "Parameters/transition"}
+  transition = {100, Name "Parameters/transition"},
+  algorithm = {6, Name "Parameters/algorithm"}  // gmsh Mesh.Algorithm: 6 frontal-Delaunay, 5 Delaunay, 1 MeshAdapt
 ];
 
 L = 675;
@@ -92,6 +93,7 @@ Background Field = 1;
 Mesh.MeshSizeFromPoints = 0;
 Mesh.MeshSizeFromCurvature = 0;
 Mesh.MeshSizeExtendFromBoundary = 0;
+Mesh.Algorithm = algorithm;
 
 Physical Surface("domain") = {1};
 Physical Curve("notch") = {notch[]};

@@ -17,7 +17,7 @@ import numpy as np
 
 from geofrac.fracture.topology import EdgeMesh
 
-__all__ = ["TIE_TOLERANCE", "edge_principal", "select_edges"]
+__all__ = ["TIE_TOLERANCE", "edge_principal", "normal_stress", "select_edges"]
 
 #: Relative difference of r below which two edges count as tied.
 TIE_TOLERANCE = 1e-9
@@ -37,6 +37,20 @@ def edge_principal(mesh: EdgeMesh, s1: np.ndarray) -> np.ndarray:
     total = np.bincount(mesh.cell_edges.ravel(), weights=s1.ravel(), minlength=len(mesh.edges))
     count = np.bincount(mesh.cell_edges.ravel(), minlength=len(mesh.edges))
     return total / np.maximum(count, 1)
+
+
+def normal_stress(stress: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Normal traction n · σ n on planes of unit normal n.
+
+    Args:
+        stress: (σ_xx, σ_yy, σ_xy), shape=(k, 3).
+        normal: unit normals, shape=(k, 2).
+
+    Returns:
+        shape=(k,).
+    """
+    nx, ny = normal[:, 0], normal[:, 1]
+    return stress[:, 0] * nx * nx + stress[:, 1] * ny * ny + 2.0 * stress[:, 2] * nx * ny
 
 
 def select_edges(

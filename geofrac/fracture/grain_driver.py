@@ -12,11 +12,12 @@ tie-break, fragment handling and end conditions, with these parts of its own:
   uses its C-MultiMLSM stiffness (eq. 3.28) on itself and its visible satellites,
   computed by the compiled kernel ``cmulti`` (:mod:`geofrac.mls.cmulti`); rotation-only
   and fragment grains carry no stiffness;
-- :class:`GrainCriterion`: the interface stress (seed 3.3.1, Fig. 3.4) is the larger of
-  the two grains' largest principal stresses at the interface centre X_ij, each from the
-  grain's own field (the EFMM patch stress P(x) A_i⁻¹ C_i u, or D B(x) u of the
-  C-MultiMLSM field); the least r = f_t / σ1 (3.8) cracks and the state is r times the
-  unit solution (3.9)-(3.10);
+- :class:`GrainCriterion`: the interface stress is the larger of the two grains'
+  tractions normal to the interface, n·σ n, at the interface centre X_ij (Edo (2016),
+  3.3.1 and Fig. 3.4 take the direction-blind σ1 there; only the traction across an
+  interface opens it, docs/granular.md), each from the grain's own field (the EFMM patch
+  stress P(x) A_i⁻¹ C_i u, or D B(x) u of the C-MultiMLSM field); the least
+  r = f_t / σ_n (3.8) cracks and the state is r times the unit solution (3.9)-(3.10);
 - :class:`GrainDrawing`: interfaces as grain polylines in ``cracks.xdmf`` and
   ``cracks.png``, node fields in ``damage.xdmf``, fragment grains filled, and the grain
   file of the last state (:func:`geofrac.io.grains.write_grains`).
@@ -41,8 +42,8 @@ from mpi4py import MPI
 from geofrac import kernels
 from geofrac.elements.efmm_numpy import NodeOperator, integration_domains, node_operator
 from geofrac.errors import RunError
-from geofrac.fracture.cells import principal_max
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
+from geofrac.fracture.criterion import normal_stress
 from geofrac.fracture.event_criterion import EventCriterion, next_sites
 from geofrac.fracture.grains import GrainState, connected_cracks, interfaces, side_sites
 from geofrac.fracture.output import FrameData, SiteDrawing
@@ -305,10 +306,11 @@ class GrainUnits:
         """Nothing cached."""
 
     def measures(self, u: np.ndarray) -> tuple[np.ndarray, float, float]:
-        """(σ1 of each interface's two grains, strain energy, control reaction) of u.
+        """(normal traction of each interface's two grains, strain energy, reaction) of u.
 
-        σ1 has shape=(num_interfaces, 2): [interface, its node 0 / node 1 grain] at its
-        centre (seed 3.3.1); each rank evaluates the grains it owns. Collective.
+        The tractions n·σ n (the criterion's σ1) have shape=(num_interfaces, 2):
+        [interface, its node 0 / node 1 grain] at its centre; each rank evaluates the
+        grains it owns. Collective.
         """
         state, ctx = self.state, self.ctx
         is_mls = state.is_mls()
@@ -319,7 +321,9 @@ class GrainUnits:
         p = live[self._pair_unit]
         ud_pairs = u_ext[self._int_dofs[self._pair_unit[p]]]
         stress = np.einsum("psd,pd->ps", self._pair_S[p], ud_pairs)
-        s1[self._pair_edge[p], self._pair_slot[p]] = principal_max(stress)
+        s1[self._pair_edge[p], self._pair_slot[p]] = normal_stress(
+            stress, self.faces.normal[self._pair_edge[p]]
+        )
         ud = u_ext[self._int_dofs[live]]
         ku = np.einsum("nij,nj->ni", self._int_K[live], ud)
         energy = 0.5 * float(np.sum(ud * ku))
@@ -335,7 +339,7 @@ class GrainUnits:
                 B = fit.strain_matrix(self.faces.point[edges])  # shape=(k, 3, nd)
                 sig = np.einsum("ij,kjd,d->ki", ctx.D, B, uf)
                 slot = (state.mesh.edges[edges, 1] == i).astype(np.int64)
-                s1[edges, slot] = principal_max(sig)
+                s1[edges, slot] = normal_stress(sig, self.faces.normal[edges])
                 k = self._stiffness(i, fit)
                 f = k @ uf
                 energy += 0.5 * float(uf @ f)

@@ -59,6 +59,8 @@ class Interfaces:
             p_T–X for a boundary one (X lies on the boundary), shape=(num_edges, 2).
         segments: its two segments p_T1–X and X–p_T2 (a boundary edge repeats p_T–X),
             shape=(num_edges, 2, 2, 2): [edge, segment, end, xy].
+        normal: unit normal of the interface's chord p_T1 → p_T2 (p_T → X on a boundary
+            edge), the direction in which the interface opens, shape=(num_edges, 2).
         grain_offsets: CSR offsets of each node's sub-triangles, shape=(num_nodes + 1,).
         grain_order: the domains' sub-triangles grouped by node (indices into the
             :class:`~geofrac.elements.efmm_numpy.Domains`), shape=(num_sub,).
@@ -68,6 +70,7 @@ class Interfaces:
     centre: np.ndarray
     point: np.ndarray
     segments: np.ndarray
+    normal: np.ndarray
     grain_offsets: np.ndarray
     grain_order: np.ndarray
     grain_subs: np.ndarray
@@ -102,9 +105,11 @@ def interfaces(mesh: EdgeMesh, domains: Domains) -> Interfaces:
     p1 = np.where((c1 >= 0)[:, None], inner[np.maximum(c1, 0)], p0)
     segments = np.stack([np.stack([p0, centre], 1), np.stack([centre, p1], 1)], 1)
     point = np.where((c1 >= 0)[:, None], centre, 0.5 * (p0 + centre))
+    chord = np.where((c1 >= 0)[:, None], p1 - p0, centre - p0)
+    normal = np.stack([-chord[:, 1], chord[:, 0]], axis=1) / np.hypot(*chord.T)[:, None]
     order = np.argsort(domains.node, kind="stable")
     offsets = np.searchsorted(domains.node[order], np.arange(n + 1))
-    return Interfaces(centre, point, segments, offsets, order, domains.corners[order])
+    return Interfaces(centre, point, segments, normal, offsets, order, domains.corners[order])
 
 
 def connected_cracks(mesh: EdgeMesh, cracked: np.ndarray, seeds: np.ndarray) -> np.ndarray:
