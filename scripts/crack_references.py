@@ -79,6 +79,19 @@ CASES: dict[str, Case] = {
         "Edo (2016) 2.5.1, Model 1 coarsened: new cracks start at the tips of pre-existing "
         "fractures (DFN set 1, seed 1) and run parallel to the compression.",
     ),
+    "grain_notched_beam": Case(
+        "jobs/grain_notched_beam.toml",
+        (
+            "geometry.parameters.h=12",
+            "geometry.parameters.h_fine=12",
+            "cracking.max_events=40",
+        ),
+        12.0,
+        "Edo (2016) 3.5.1: the notched beam cracked along EFMM grain interfaces (grain size "
+        "12 mm): the crack runs from the notch tip towards the load point and meets the top "
+        "within two grain sizes of the edge crack (tests/fracture/test_grain_edge_path.py).",
+        (-120.0, 200.0, 0.0, 150.0),
+    ),
 }
 
 
@@ -120,7 +133,7 @@ def draw(case: str, events: Events, path: Path, view: tuple[float, ...] | None) 
     height = min(5.0, max(2.0, 4.0 * span[1] / span[0] + 0.8))
     fig, ax = plt.subplots(figsize=(min(6.0, 0.9 * height * span[0] / span[1] + 1.6), height))
     lines = LineCollection(events.sites, cmap="viridis", linewidths=2.0)
-    lines.set_array(range(1, events.count + 1))
+    lines.set_array(events.site_event)
     ax.add_collection(lines)
     ax.add_collection(LineCollection(events.outline, colors="0.3", linewidths=0.6))
     fig.colorbar(lines, ax=ax, label="event", shrink=0.8)

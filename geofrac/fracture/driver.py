@@ -157,8 +157,8 @@ class CrackDriver:
         self.assembler = Assembler(ctx, self.units)
         self.timing = Timing()
         self.strategy: SolverStrategy = make_strategy(ctx, self.assembler, self.timing)
-        drawing = variant.drawing(ctx, self.units, self.sites)
-        output = EventOutput(ctx, self.units.state, drawing, self.sites, write)
+        self.drawing: SiteDrawing = variant.drawing(ctx, self.units, self.sites)
+        output = EventOutput(ctx, self.units.state, self.drawing, self.sites, write)
         self.loop = EventLoop(
             ctx,
             self.units,

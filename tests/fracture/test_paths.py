@@ -46,4 +46,10 @@ def test_plate_path_on_two_ranks_matches_reference():
 
 
 def test_every_case_has_a_reference():
-    assert set(CASES) == {"notched_beam", "plate_hole", "dcn_plate", "dfn_model1"}
+    assert set(CASES) == {
+        "notched_beam",
+        "plate_hole",
+        "dcn_plate",
+        "dfn_model1",
+        "grain_notched_beam",
+    }

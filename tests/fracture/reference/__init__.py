@@ -61,15 +61,18 @@ class Events:
         xy: crack-site midpoint of each event's first cracked site, shape=(num_events, 2).
         load_factor: r = f_t / σ1 of each event (eq. 2.20), shape=(num_events,).
         end_reason: why the run ended (``max_events``, ``separated``, ...).
-        sites: end points of each event's first cracked edge, shape=(num_events, 2, 2)
-            (drawing only; None unless asked for).
-        outline: the boundary and pre-cracked edges, shape=(m, 2, 2) (drawing only).
+        sites: segments drawing each event's first cracked site (an edge: one segment; a
+            grain interface: its two), shape=(k, 2, 2) (drawing only; None unless asked).
+        site_event: the event (1, 2, ...) of each of those segments, shape=(k,).
+        outline: the boundary edges and the pre-cracked sites, shape=(m, 2, 2) (drawing
+            only).
     """
 
     xy: np.ndarray
     load_factor: np.ndarray
     end_reason: str
     sites: np.ndarray | None = None
+    site_event: np.ndarray | None = None
     outline: np.ndarray | None = None
 
     @property
@@ -101,10 +104,12 @@ def run_case(
     if not drawing:
         return events
     mesh = driver.state.mesh
-    ends = mesh.coords[mesh.edges]  # shape=(num_edges, 2, 2)
-    sites = ends[[row["edge"] for row in rows]].reshape(-1, 2, 2)
-    outline = np.union1d(np.flatnonzero(mesh.boundary_edges), driver.precracked)
-    return Events(xy, r, events.end_reason, sites, ends[outline])
+    segments = [driver.drawing.segments(np.array([row["edge"]])) for row in rows]
+    sites = np.concatenate(segments).reshape(-1, 2, 2) if rows else np.zeros((0, 2, 2))
+    site_event = np.repeat(np.arange(1, len(rows) + 1), [len(s) for s in segments])
+    boundary = mesh.coords[mesh.edges[mesh.boundary_edges]]
+    outline = np.concatenate([boundary, driver.drawing.segments(driver.precracked)])
+    return Events(xy, r, events.end_reason, sites, site_event, outline.reshape(-1, 2, 2))
 
 
 def domain_size(ref: dict) -> float:
