@@ -61,6 +61,7 @@ REGISTRY: dict[str, ElementSpec] = {
             {2: 2, 3: 3},
             "geofrac.elements.lagrange:p2",
             _LAGRANGE,
+            degree=2,
         ),
         ElementSpec(
             "p3",
@@ -69,6 +70,7 @@ REGISTRY: dict[str, ElementSpec] = {
             {2: 2, 3: 3},
             "geofrac.elements.lagrange:p3",
             _LAGRANGE,
+            degree=3,
         ),
         ElementSpec(
             "rgnt",

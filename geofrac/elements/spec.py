@@ -46,6 +46,9 @@ class ElementSpec:
             ``"gradient"`` (displacement DOFs, and the gradient DOFs per
             ``discretization.gradient_bc``), ``"nodes"`` (node displacements of the patch
             method).
+        degree: polynomial degree of a Lagrange displacement that carries DOFs on edges
+            and faces too (about degree^dim nodes per vertex); 1 for elements whose
+            unknowns all sit at the vertices.
     """
 
     name: str
@@ -60,6 +63,7 @@ class ElementSpec:
     cracking: Literal["edges", "grains"] | None = None
     locking_nu: float | None = None
     hold: Literal["components", "gradient", "nodes"] = "components"
+    degree: int = 1
 
     def build(self, mesh: dolfinx.mesh.Mesh) -> Element:
         """The DOLFINx element on ``mesh`` (imports its module)."""

@@ -15,8 +15,9 @@ work.
   (parameters named ``n``, ``nx``, ``ny``, ``nz``, ``n_*``), the structured count
   ``2 · Π n`` (2D) or ``6 · Π n`` (3D; a single ``n`` counts per direction). The larger
   wins. A ``.msh`` file gives its real count. A DFN domain: ``2.31 A / mesh_size²``.
-- vertices: cells / 2 (2D), cells / 5.5 (3D); DOFs: vertices × DOFs per vertex
-  (:data:`VERTEX_DOFS`; P2/P3: gdim × p^dim per vertex).
+- vertices: cells / 2 (2D), cells / 5.5 (3D); DOFs: vertices × the element's unknowns
+  per vertex × degree^dim (:class:`~geofrac.elements.spec.ElementSpec`; P2/P3 carry
+  about p^dim nodes per vertex).
 - MPM: particles = Π counts (lattice) or the cell estimate (one per simplex); grid
   nodes Π (cells per axis + 2 padding + 1); steps = t_end / Δt with
   Δt = α L / c (c the P-wave speed, as :func:`geofrac.mpm.schemes.time_step`) or the
@@ -36,13 +37,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from geofrac import elements
 from geofrac.model.errors import SceneError
 
 __all__ = [
     "CAPS",
     "HARD_LIMITS",
     "RATES",
-    "VERTEX_DOFS",
     "Extent",
     "SizeEstimate",
     "check_size",
@@ -83,8 +84,6 @@ RATES: dict[str, tuple[float, str]] = {
     "cells": (2e5, "cells/s (gmsh)"),
     "blocks": (5e4, "blocks/s"),
 }
-#: DOFs per mesh vertex of each element (Lagrange P2/P3: gdim · p^dim, see module doc).
-VERTEX_DOFS: dict[str, int] = {"cst": 1, "p1": 1, "efmm": 1, "rgnt": 3, "gnt": 6, "rgnq": 6}
 #: Words of each quantity in messages.
 _WORDS = {
     "cells": "cells",
@@ -219,10 +218,8 @@ def _fem_cells(scene: Any, extent: Extent | None) -> float:
 
 
 def _dofs(cells: float, dim: int, element: str) -> float:
-    vertices = cells * _VERTICES_PER_CELL[dim]
-    if element in ("p2", "p3"):
-        return vertices * dim * int(element[1]) ** dim
-    return vertices * dim * VERTEX_DOFS.get(element, 1)
+    spec = elements.get(element)
+    return cells * _VERTICES_PER_CELL[dim] * spec.vertex_dofs[dim] * spec.degree**dim
 
 
 def _mean_length(lmin: float, lmax: float, n: float) -> float:

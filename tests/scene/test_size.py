@@ -20,6 +20,9 @@ def test_estimates_match_the_structured_meshes_and_the_terrain():
     quick = load_scene(JOBS / "quickstart.toml").size.quantities
     assert quick["cells"] == 320  # 40 x 4 squares, two triangles each
     assert quick["dofs"] == pytest.approx(2 * 4 * 160)  # P2: 2 x 4 nodes per vertex
+    for element, per_vertex in (("cst", 2), ("rgnt", 3), ("gnt", 6)):  # (u, v), (u, v, θ), ...
+        dofs = load_scene(JOBS / "quickstart.toml", [f"discretization.element={element}"])
+        assert dofs.size.quantities["dofs"] == pytest.approx(per_vertex * 160), element
     bar = load_scene(JOBS / "mpm_bar_w1000.toml").size.quantities
     assert bar["particles"] == 100 and bar["grid_nodes"] == 59
     assert bar["steps"] == 500  # t_end 0.05, dt = 0.1 * 1 / sqrt(1e6 / 1)
