@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from geofrac.errors import RunError
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.friction import friction
 from geofrac.mpm.grid import grid
 from geofrac.mpm.invariance import compare_ranks
@@ -22,7 +23,6 @@ from geofrac.mpm.particles import lattice
 from geofrac.mpm.plasticity import DruckerPrager
 from geofrac.mpm.schemes import (
     SCHEMES,
-    Elastic,
     ParticlesLeftGrid,
     StepSettings,
     step,

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
+from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice, particles
 from geofrac.mpm.schemes import (
     SCHEMES,
-    Elastic,
     ParticlesLeftGrid,
     StepSettings,
     _nodal_velocity,
