@@ -5,18 +5,21 @@ no event loop, one linear solve each, 1 rank:
 
 1. ``tension``: a 100 x 100 plate (E = 30000, nu = 0.25, h = 4) stretched to
    sigma_yy = 30, with one interface cracked at its centre, or a chain of
-   ``--chain`` interfaces along y = 50.3. It prints the largest sigma_1 of the intact
+   ``--chain`` interfaces along y = 50.3. It prints the largest sigma_n of the intact
    interfaces, how far each lies from the crack and which of its two grains use
    C-MultiMLSM, and the strain energy (150 uncracked; Griffith: 150 - pi a^2 sigma^2 / E).
 2. ``beam``: jobs/grain_notched_beam.toml with the notch as a line of pre-cracked
-   interfaces (``w = 0``) before the first event: sigma_1 at the interfaces round the
+   interfaces (``w = 0``) before the first event: sigma_n at the interfaces round the
    notch tip (from the C-MultiMLSM fits), and the EFMM patch stress of the same
    displacement at those interfaces for comparison.
 
 3. ``holes``: jobs/grain_holes3.toml (``--holes 5``: grain_holes5) before the first
-   event: the largest interface sigma_1 of the EFMM grains beside sigma_1 of a P2
+   event: the largest interface sigma_n of the EFMM grains beside sigma_n of a P2
    solution on a mesh of size ``--h-ref`` (0.4) at the same points, and the P2 sigma_xx
    above and below each hole.
+
+sigma_n is the criterion's interface stress, the traction n . sigma n normal to the
+interface (its chord's normal), docs/granular.md.
 
 ``--set KEY=VALUE`` passes scene overrides (``cracking.neighbours=6``, say).
 """
@@ -34,7 +37,7 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.effects.cracking import scene_driver
-from geofrac.fracture.cells import principal_max
+from geofrac.fracture.criterion import normal_stress
 from geofrac.fracture.driver import CrackDriver
 from geofrac.meshing.distribute import build_mesh
 from geofrac.scene import load_scene_collective
@@ -100,7 +103,7 @@ def solve(d: CrackDriver) -> np.ndarray:
 
 
 def report(d: CrackDriver, u: np.ndarray, crack: np.ndarray, near: np.ndarray) -> None:
-    """Print the largest sigma_1 of intact interfaces and the EFMM readout near ``near``."""
+    """Print the largest sigma_n of intact interfaces and the EFMM readout near ``near``."""
     st, centre = d.state, d.units.faces.centre
     s1, energy, _ = d.measures(u)
     s1[st.cracked] = -np.inf
@@ -109,17 +112,17 @@ def report(d: CrackDriver, u: np.ndarray, crack: np.ndarray, near: np.ndarray) -
     for k in np.argsort(-s1)[:8]:
         dist = np.hypot(*(centre[crack] - centre[k]).T).min()
         grains = "".join("M" if mls[i] else "E" for i in st.mesh.edges[k])
-        print(f"  x = ({centre[k, 0]:6.1f}, {centre[k, 1]:6.1f})  sigma_1 = {s1[k]:7.2f}  "
+        print(f"  x = ({centre[k, 0]:6.1f}, {centre[k, 1]:6.1f})  sigma_n = {s1[k]:7.2f}  "
               f"{dist:5.1f} from the crack  grains {grains}")  # fmt: skip
     if not len(near):
         return
-    print("  at the tip: sigma_1 as used | EFMM patch stress of the same u (both grains)")
+    print("  at the tip: sigma_n as used | EFMM patch stress of the same u (both grains)")
     for k in near[np.argsort(-s1[near])][:6]:
         efmm = []
         for i in st.mesh.edges[k]:
             op = d.units.operator(int(i))
             stress = op.stress_at(d.units.faces.point[k][None])[0] @ u[d.ctx.mls_dofs(op.patch)]
-            efmm.append(float(principal_max(stress[None])[0]))
+            efmm.append(float(normal_stress(stress[None], d.units.faces.normal[k][None])[0]))
         print(f"  x = ({centre[k, 0]:6.1f}, {centre[k, 1]:6.1f})  {s1[k]:6.2f} | "
               f"{efmm[0]:6.2f} {efmm[1]:6.2f}")  # fmt: skip
 
@@ -211,12 +214,12 @@ def main() -> None:
         d = driver(job, args.overrides)
         d.state.start(np.zeros(0, dtype=np.int64))
         s1, _, _ = d.measures(solve(d))
-        point = d.units.faces.point
+        point, normal = d.units.faces.point, d.units.faces.normal
         at = p2_stress(job, args.h_ref)
-        print(f"holes: {args.holes} holes, unit load, sigma_1 at the interfaces' points")
+        print(f"holes: {args.holes} holes, unit load, sigma_n at the interfaces' points")
         print(f"  EFMM grains | P2 (h = {args.h_ref:g}) at the same point")
         for k in np.argsort(-s1)[:8]:
-            ref = float(principal_max(at(*point[k]).reshape(1, 3))[0])
+            ref = float(normal_stress(at(*point[k]).reshape(1, 3), normal[k][None])[0])
             print(f"  ({point[k, 0]:6.2f}, {point[k, 1]:6.2f})  {s1[k]:6.2f} | {ref:6.2f}")
         print("  P2 sigma_xx at 0.05, 0.3, 1, 2 mm above and below each hole:")
         holes = [(50, 100, 10), (30, 60, 6), (70, 140, 6), (72, 68, 4), (28, 132, 4)]
