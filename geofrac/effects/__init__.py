@@ -41,7 +41,7 @@ from geofrac.model.scene import EffectSpec
 if TYPE_CHECKING:
     from geofrac.fem.elastic import LinearTerm
 
-__all__ = ["REGISTRY", "ConfigureContext", "available", "driven", "linear_terms", "load"]
+__all__ = ["REGISTRY", "ConfigureContext", "available", "driven", "drives", "linear_terms", "load"]
 
 #: effect name -> module implementing it.
 REGISTRY: dict[str, str] = {
@@ -90,12 +90,17 @@ def load(name: str) -> ModuleType:
     return importlib.import_module(REGISTRY[name])
 
 
+def drives(name: str) -> bool:
+    """Whether effect ``name`` brings its own ``driver`` loop (imports its module)."""
+    return hasattr(load(name), "driver")
+
+
 def driven(effects: Sequence[EffectSpec]) -> EffectSpec | None:
     """The declared effect that brings its own ``driver`` loop, or None.
 
     The loader has checked that there is at most one.
     """
-    owners = [spec for spec in effects if hasattr(load(spec.name), "driver")]
+    owners = [spec for spec in effects if drives(spec.name)]
     assert len(owners) <= 1, f"more than one driver-owning effect: {owners}"
     return owners[0] if owners else None
 

@@ -479,7 +479,7 @@ def _check_drivers(file: Path, declared: Sequence[str]) -> None:
 
     Such a loop replaces the single solve: two would each want to be the run.
     """
-    owners = [name for name in declared if hasattr(effects.load(name), "driver")]
+    owners = [name for name in declared if effects.drives(name)]
     if len(owners) > 1:
         raise SceneError(
             file,
