@@ -49,6 +49,9 @@ class ElementSpec:
         degree: polynomial degree of a Lagrange displacement that carries DOFs on edges
             and faces too (about degree^dim nodes per vertex); 1 for elements whose
             unknowns all sit at the vertices.
+        curved: represents cells of a second-order (curved) gmsh geometry: an
+            isoparametric or higher Lagrange displacement. Others are refused on curved
+            geometry at load time (they would fail the patch test there).
     """
 
     name: str
@@ -64,6 +67,7 @@ class ElementSpec:
     locking_nu: float | None = None
     hold: Literal["components", "gradient", "nodes"] = "components"
     degree: int = 1
+    curved: bool = False
 
     def build(self, mesh: dolfinx.mesh.Mesh) -> Element:
         """The DOLFINx element on ``mesh`` (imports its module)."""

@@ -19,6 +19,7 @@ __all__ = [
     "EffectSpec",
     "ExactSpec",
     "Geometry",
+    "Line",
     "Load",
     "Material",
     "MpmSpec",
@@ -96,7 +97,8 @@ class Discretization:
             per-element default is the element's ``ElementSpec.zero_mode_penalty``;
             0 for the other elements, which have none).
         gradient_bc: how a Dirichlet condition acts on the extra vertex DOFs of RGNT, GNT
-            and RGNQ. ``"fixed"``: they are fixed too, to the values that reproduce the
+            and RGNQ. ``"consistent"`` (default): only what the condition implies
+            (docs/elements.md, "Boundary DOFs"). ``"fixed"``: they are fixed too, to the values that reproduce the
             exact field (½ its rotation/strain) for ``value = "exact"`` and to 0 for a
             constant value, so that the boundary edges follow the prescribed data between
             the vertices (passes the patch test). ``"free"``: only the translations are
@@ -110,7 +112,7 @@ class Discretization:
     element: str
     quadrature_degree: int | None = None
     zero_mode_penalty: float = 0.0
-    gradient_bc: Literal["fixed", "free"] = "fixed"
+    gradient_bc: Literal["consistent", "fixed", "free"] = "consistent"
     q_rand: float = 0.0
     domain_seed: int = 0
 
@@ -136,11 +138,15 @@ class BoundaryCondition:
         group: physical group name (dimension ``dim - 1`` or lower).
         value: prescribed values, one per component, or ``"exact"``.
         components: indices of the constrained components, shape=(len(value),).
+        symmetry: the group is a mirror-symmetry line/plane: the one held component is
+            its normal, and vertex-DOF elements (RGNT, GNT, RGNQ) also hold what mirror
+            symmetry implies for their gradient DOFs (docs/elements.md).
     """
 
     group: str
     value: tuple[float, ...] | Literal["exact"]
     components: tuple[int, ...]
+    symmetry: bool = False
 
 
 @dataclass(frozen=True)
@@ -148,13 +154,19 @@ class Load:
     """A load term.
 
     Attributes:
-        type: ``"traction"`` (on a boundary group) or ``"body_force"`` (per volume).
-        value: vector of length gdim, or ``"exact"`` (traction σ_exact·n).
-        group: physical group (traction), or None (body force on the whole domain).
+        type: ``"traction"`` (force per area on a boundary group), ``"body_force"``
+            (per volume), ``"pressure"`` (scalar normal pressure on a boundary group,
+            positive pushing into the body: traction -p n) or ``"point"`` (a force on a
+            physical point, dimension 0).
+        value: components, shape=(gdim,) (traction, body force, point) or shape=(1,)
+            (pressure); each a number or an expression text of x, y, z
+            (:mod:`geofrac.model.expr`; not for ``point``); or ``"exact"`` (traction
+            σ_exact·n, body force -div σ_exact).
+        group: physical group (traction, pressure, point), or None (body force).
     """
 
-    type: Literal["traction", "body_force"]
-    value: tuple[float, ...] | Literal["exact"]
+    type: Literal["traction", "body_force", "pressure", "point"]
+    value: tuple[float | str, ...] | Literal["exact"]
     group: str | None = None
 
 
@@ -172,6 +184,23 @@ class Solver:
 
 
 @dataclass(frozen=True)
+class Line:
+    """A segment along which fields are sampled into CSV and a PNG plot.
+
+    Attributes:
+        start: first end point, shape=(gdim,).
+        end: second end point, shape=(gdim,).
+        points: number of equally spaced sample points, ends included.
+        fields: probe field names sampled (see ``geofrac.scene.load.PROBE_FIELDS``).
+    """
+
+    start: tuple[float, ...]
+    end: tuple[float, ...]
+    points: int = 101
+    fields: tuple[str, ...] = ("displacement",)
+
+
+@dataclass(frozen=True)
 class Output:
     """What a run writes.
 
@@ -182,6 +211,10 @@ class Output:
         probes: name -> point, shape=(gdim,), where the displacement is reported.
         checkpoint_every: events or steps between checkpoints of a long loop (0: off).
         checkpoint_minutes: wall-time minutes between checkpoints (0: off).
+        probe_fields: fields reported at every probe (``geofrac.scene.load.PROBE_FIELDS``).
+        lines: name -> segment sampled into ``lines/<name>.csv`` and ``.png``.
+        nominal_stress: a stress the stress probes are divided by (a concentration
+            factor is printed beside them), or None.
     """
 
     dir: Path
@@ -190,6 +223,9 @@ class Output:
     probes: dict[str, tuple[float, ...]]
     checkpoint_every: int = 0
     checkpoint_minutes: float = 10.0
+    probe_fields: tuple[str, ...] = ("displacement",)
+    lines: dict[str, Line] = field(default_factory=dict)
+    nominal_stress: float | None = None
 
 
 @dataclass(frozen=True)

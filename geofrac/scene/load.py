@@ -81,10 +81,20 @@ SECTION_KEYS: dict[str, tuple[str, ...]] = {
         "q_rand",
         "domain_seed",
     ),
-    "bc": ("group", "value", "components"),
+    "bc": ("group", "value", "components", "symmetry"),
     "load": ("type", "group", "value"),
     "solver": ("preset", "options"),
-    "output": ("dir", "fields", "xdmf", "probes", "checkpoint_every", "checkpoint_minutes"),
+    "output": (
+        "dir",
+        "fields",
+        "xdmf",
+        "probes",
+        "probe_fields",
+        "lines",
+        "nominal_stress",
+        "checkpoint_every",
+        "checkpoint_minutes",
+    ),
 }
 #: Field names ``output.fields`` may list.
 OUTPUT_FIELDS = ("displacement", "stress", "strain", "von_mises", "stress_nodal", "strain_nodal")
