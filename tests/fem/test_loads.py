@@ -37,10 +37,10 @@ def _problem(path: Path, *overrides: str) -> ElasticProblem:
 
 
 def _sums(problem: ElasticProblem, weight: int | None = None) -> np.ndarray:
-    """Σ_i b_i,c (or Σ_i b_i,c x_i[weight]) over the owned nodes of the load vector on
-    ``element.space``, summed over ranks, shape=(gdim,).
+    """Σ_i b_i,c, or Σ_i b_i,c x_i[weight], over all ranks, shape=(gdim,).
 
-    With ``weight``, Σ b·v for v = x[weight] e_c, which P1 and P2 interpolate exactly.
+    b is the load vector on ``element.space`` (owned nodes). With ``weight``, Σ b·v for
+    v = x[weight] e_c, which P1 and P2 interpolate exactly.
     """
     V = problem.element.space
     b = ElasticProblem.load_vector(problem)  # on the displacement space itself
