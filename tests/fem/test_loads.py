@@ -56,6 +56,30 @@ def _sums(problem: ElasticProblem, weight: int | None = None) -> np.ndarray:
 # --- Lamé's thick cylinder ------------------------------------------------------------
 
 
+@pytest.mark.parametrize(("plane", "dim"), [("strain", 2), ("stress", 2), ("strain", 3)])
+def test_lame_solution_satisfies_its_boundary_conditions_and_hooke(plane, dim):
+    # σ_rr(a) = -p, σ_rr(b) = -p_outer, and σ = λ tr ε I + 2μ ε with ε from the
+    # displacement (complex-step gradient), in the plane of the solution
+    from geofrac.analytic import displacement_gradient, make_exact
+    from geofrac.materials import lame
+
+    name = "lame_cylinder" if dim == 2 else "lame_cylinder_3d"
+    ex = make_exact(name, {"a": 1.0, "b": 2.5, "p": 7.0, "p_outer": 2.0}, 900.0, 0.3, plane)
+    assert ex.radial_stress(1.0) == pytest.approx(-7.0, rel=1e-14)
+    assert ex.radial_stress(2.5) == pytest.approx(-2.0, rel=1e-14)
+    rng = np.random.default_rng(1)
+    r, t = rng.uniform(1.0, 2.5, 20), rng.uniform(0.0, np.pi / 2, 20)
+    pts = np.stack([r * np.cos(t), r * np.sin(t), np.zeros(20)], axis=1)[:, :dim]
+    g = displacement_gradient(ex, pts)
+    eps = 0.5 * (g + g.transpose(0, 2, 1))
+    lam, mu = lame(900.0, 0.3, dim, plane)
+    hooke = lam * np.trace(eps, axis1=1, axis2=2)[:, None, None] * np.eye(dim) + 2 * mu * eps
+    stress = np.array(ex.stress(*pts.T), dtype=float).transpose(2, 0, 1)
+    assert np.allclose(hooke, stress, rtol=0, atol=1e-12 * 7.0)
+    u = np.array(ex.displacement(*pts.T), dtype=float)
+    assert np.allclose(u[0] * pts[:, 0] + u[1] * pts[:, 1], r * ex.radial_displacement(r))
+
+
 def _lame_errors(h: float, plane: str) -> tuple[float, float]:
     """(relative error of u_r at (a, 0), relative energy error) of jobs/thick_cylinder."""
     sol = solve_job(
