@@ -13,7 +13,9 @@ from typing import Any
 
 __all__ = [
     "EXACT_SOLUTIONS",
+    "OPTIONAL_PARAMETERS",
     "ExactSolution",
+    "LameCylinder",
     "ManufacturedBox",
     "TimoshenkoCantilever",
     "UniformStrain",
@@ -181,6 +183,104 @@ class ManufacturedBox(ExactSolution):
         )
 
 
+@dataclass(frozen=True)
+class LameCylinder(ExactSolution):
+    """Lamé's thick-walled cylinder under internal and external pressure.
+
+    Timoshenko & Goodier, Theory of Elasticity (3rd ed., 1970), §28: the cylinder
+    ``a <= r <= b`` about the z axis with pressure ``p`` on ``r = a`` and ``p_outer`` on
+    ``r = b`` (positive pushing into the wall) has
+
+    σ_rr = A - B/r², σ_θθ = A + B/r²,
+    A = (p a² - p_outer b²)/(b² - a²), B = (p - p_outer) a² b²/(b² - a²),
+
+    and the radial displacement u_r = (1+ν)/E ((1-2ν) A r + B/r) in plane strain
+    (σ_zz = 2ν A, u_z = 0), u_r = ((1-ν) A r + (1+ν) B/r)/E in plane stress (σ_zz = 0).
+    In 3D (``dim = 3``) the field is the plane-strain one with u_z = 0: the solution of a
+    length of cylinder whose ends are held by rollers. Cartesian components use
+    r² = x² + y² only (no square root): u_x = u_r x/r, σ_xx = A + B (y² - x²)/r⁴,
+    σ_yy = A + B (x² - y²)/r⁴, σ_xy = -2 B x y/r⁴.
+
+    Attributes:
+        a: inner radius.
+        b: outer radius, > a.
+        p: internal pressure.
+        p_outer: external pressure.
+        E: Young's modulus.
+        nu: Poisson's ratio.
+        plane: ``"strain"`` or ``"stress"`` (2D; 3D is plane strain).
+        dim: 2 or 3.
+    """
+
+    a: float
+    b: float
+    p: float
+    p_outer: float
+    E: float
+    nu: float
+    plane: str = "strain"
+    dim: int = 2
+
+    def __post_init__(self) -> None:
+        """Refuse radii that are not 0 < a < b (ValueError)."""
+        if not 0.0 < self.a < self.b:
+            raise ValueError(f"needs 0 < a < b, got a = {self.a!r}, b = {self.b!r}")
+
+    @property
+    def A(self) -> float:
+        """(p a² - p_outer b²)/(b² - a²)."""
+        a2, b2 = self.a * self.a, self.b * self.b
+        return (self.p * a2 - self.p_outer * b2) / (b2 - a2)
+
+    @property
+    def B(self) -> float:
+        """(p - p_outer) a² b²/(b² - a²)."""
+        a2, b2 = self.a * self.a, self.b * self.b
+        return (self.p - self.p_outer) * a2 * b2 / (b2 - a2)
+
+    def _coefficients(self) -> tuple[float, float]:
+        """(c1, c2) with u_r = c1 r + c2 / r."""
+        E, nu, A, B = self.E, self.nu, self.A, self.B
+        if self.plane == "stress" and self.dim == 2:
+            return (1.0 - nu) * A / E, (1.0 + nu) * B / E
+        return (1.0 + nu) * (1.0 - 2.0 * nu) * A / E, (1.0 + nu) * B / E
+
+    def radial_displacement(self, r: Any) -> Any:
+        """u_r at radius r."""
+        c1, c2 = self._coefficients()
+        return c1 * r + c2 / r
+
+    def radial_stress(self, r: Any) -> Any:
+        """σ_rr at radius r."""
+        return self.A - self.B / (r * r)
+
+    def hoop_stress(self, r: Any) -> Any:
+        """σ_θθ at radius r."""
+        return self.A + self.B / (r * r)
+
+    def displacement(self, x: Any, y: Any, z: Any = None) -> tuple[Any, ...]:
+        """(u_x, u_y) in 2D, (u_x, u_y, 0) in 3D."""
+        c1, c2 = self._coefficients()
+        r2 = x * x + y * y
+        scale = c1 + c2 / r2  # u_r / r
+        out = (scale * x, scale * y)
+        return out if self.dim == 2 else (*out, 0.0 * x)
+
+    def stress(self, x: Any, y: Any, z: Any = None) -> tuple[tuple[Any, ...], ...]:
+        """In-plane stress rows; in 3D with σ_zz = 2ν A (plane strain)."""
+        A, B = self.A, self.B
+        r2 = x * x + y * y
+        r4 = r2 * r2
+        sxx = A + B * (y * y - x * x) / r4
+        syy = A + B * (x * x - y * y) / r4
+        sxy = -2.0 * B * x * y / r4
+        if self.dim == 2:
+            return ((sxx, sxy), (sxy, syy))
+        zero = 0.0 * x
+        szz = 2.0 * self.nu * A + zero
+        return ((sxx, sxy, zero), (sxy, syy, zero), (zero, zero, szz))
+
+
 def displacement_gradient(exact: ExactSolution, x: Any) -> Any:
     """∂u_r/∂x_s of an exact solution by complex-step differentiation (exact to round-off).
 
@@ -229,6 +329,15 @@ def _manufactured_box(params: dict[str, float], E: float, nu: float, plane: str)
     return ManufacturedBox(params["a"], lam, mu)
 
 
+def _lame(dim: int) -> Callable[[dict[str, float], float, float, str], LameCylinder]:
+    def factory(params: dict[str, float], E: float, nu: float, plane: str) -> LameCylinder:
+        a, b = params["a"], params["b"]
+        p_outer = params.get("p_outer", 0.0)
+        return LameCylinder(a, b, params["p"], p_outer, E, nu, plane if dim == 2 else "strain", dim)
+
+    return factory
+
+
 #: name -> (dimension, required parameter names, factory(params, E, nu, plane)).
 EXACT_SOLUTIONS: dict[
     str, tuple[int, tuple[str, ...], Callable[[dict[str, float], float, float, str], ExactSolution]]
@@ -236,6 +345,13 @@ EXACT_SOLUTIONS: dict[
     "timoshenko_cantilever": (2, ("P", "L", "D"), _timoshenko),
     "uniform_strain": (2, ("exx", "eyy", "gxy"), _uniform_strain),
     "manufactured_box": (3, ("a",), _manufactured_box),
+    "lame_cylinder": (2, ("a", "b", "p"), _lame(2)),
+    "lame_cylinder_3d": (3, ("a", "b", "p"), _lame(3)),
+}
+#: name -> parameters that may be left out, with their defaults.
+OPTIONAL_PARAMETERS: dict[str, dict[str, float]] = {
+    "lame_cylinder": {"p_outer": 0.0},
+    "lame_cylinder_3d": {"p_outer": 0.0},
 }
 
 

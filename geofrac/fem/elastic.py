@@ -21,6 +21,7 @@ from geofrac.analytic import ExactSolution, displacement_gradient, make_exact
 from geofrac.elements.base import Element
 from geofrac.elements.kinematics import dofs_from_gradient
 from geofrac.errors import RunError
+from geofrac.fem import loads
 from geofrac.materials import lame
 from geofrac.meshing.distribute import TaggedMesh
 from geofrac.model.scene import Scene
@@ -126,6 +127,7 @@ class ElasticProblem:
         u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
         self._a = forms.stiffness_form(u, v, self.lam, self.mu, self.thickness, self.dx)
         self._L = self._linear_form(v)
+        self.point_forces = loads.point_forces(tagged, V, scene.loads, float(self.thickness.value))
         self.bcs = self._boundary_conditions()
         self.uh = dolfinx.fem.Function(V, name="displacement")
         self.a: dolfinx.fem.Form | None = None
@@ -136,9 +138,13 @@ class ElasticProblem:
         self.iterations = 0
 
     def _linear_form(self, v: Any) -> Any:
+        """The distributed loads (:mod:`geofrac.fem.loads`) and the effects' terms as one form."""
         mesh, gdim = self.mesh, self.mesh.geometry.dim
         terms = []
         for load in self.scene.loads:
+            if load.type == "point":
+                continue  # added to the assembled vector (self.point_forces)
+            value = None
             if load.value == "exact":
                 assert self.exact is not None
                 u_ex, sig = exact_ufl(self.exact, mesh)
@@ -146,19 +152,24 @@ class ElasticProblem:
                     value = sig * ufl.FacetNormal(mesh)
                 else:  # the body force that makes u_exact an equilibrium state
                     value = -ufl.div(forms.sigma(u_ex, self.lam, self.mu))
-            else:
-                value = dolfinx.fem.Constant(mesh, np.asarray(load.value, dtype=PETSc.ScalarType))
-            if load.type == "traction":
-                _, tag = self.tagged.groups[load.group]  # type: ignore[index]
-                terms.append(forms.traction_form(v, value, self.thickness, self.ds(tag)))
-            else:
-                terms.append(forms.body_force_form(v, value, self.thickness, self.dx))
+            terms.append(
+                loads.load_form(load, v, self.tagged, self.ds, self.dx, self.thickness, value)
+            )
         ctx = FormContext(mesh, v, self.dx, self.thickness)
         terms += [term(ctx) for term in self.terms]
         if not terms:
             zero = dolfinx.fem.Constant(mesh, np.zeros(gdim, dtype=PETSc.ScalarType))
             terms.append(ufl.inner(zero, v) * self.dx)
         return sum(terms[1:], terms[0])
+
+    def _add_point_forces(self, b: PETSc.Vec) -> None:
+        """Add the point loads to an assembled vector on ``element.space``.
+
+        When a load is an expression, a vector with inf or NaN entries is refused.
+        """
+        self.point_forces.add_to(b)
+        if loads.has_expressions(self.scene.loads):
+            loads.require_finite(b, self.comm)
 
     def _bc_entities(self, i: int) -> tuple[int, np.ndarray]:
         """(dimension, local entities, shape=(n,)) of Dirichlet condition ``i``.
@@ -209,6 +220,7 @@ class ElasticProblem:
         self.b = dolfinx.fem.petsc.assemble_vector(self.L)
         dolfinx.fem.petsc.apply_lifting(self.b, [self.a], bcs=[self.bcs])
         self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self._add_point_forces(self.b)
         dolfinx.fem.petsc.set_bc(self.b, self.bcs)
 
     def _constrain(self) -> None:
@@ -252,11 +264,15 @@ class ElasticProblem:
         return error_norms(self.uh, u_exact, self.lam, self.mu)
 
     def load_vector(self) -> PETSc.Vec:
-        """The assembled load vector on the unknowns, without Dirichlet conditions."""
+        """The assembled load vector on the unknowns, without Dirichlet conditions.
+
+        Point loads are included.
+        """
         if self.L is None:
             self.compile()
         b = dolfinx.fem.petsc.assemble_vector(self.L)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self._add_point_forces(b)
         return b
 
     def dirichlet(self) -> tuple[np.ndarray, np.ndarray]:

@@ -18,6 +18,7 @@ from typing import Any
 
 from geofrac import analytic, effects, elements
 from geofrac.meshing.geo import define_constants, inspect_geometry
+from geofrac.model import expr
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.scene import (
     SCHEMA_VERSION,
@@ -32,13 +33,21 @@ from geofrac.model.scene import (
     Scene,
     Solver,
 )
-from geofrac.model.table import MAX_DEPTH, check_name, checkpoint_keys, first_too_deep, short
+from geofrac.model.table import (
+    MAX_DEPTH,
+    check_name,
+    checkpoint_keys,
+    first_too_deep,
+    is_number,
+    short,
+)
 from geofrac.model.table import Table as _Table
 from geofrac.model.table import output_directory as _output_directory
 from geofrac.scene.size import Extent, check_size, estimate
 
 __all__ = [
     "DEFAULT_OUTPUT_FIELDS",
+    "LOAD_TYPES",
     "METHODS",
     "OUTPUT_FIELDS",
     "SECTION_KEYS",
@@ -294,21 +303,35 @@ def _exact(file: Path, raw: Any, geometry: Geometry) -> ExactSpec:
     head = _Table(file, "exact", raw, list(raw) if isinstance(raw, dict) else ())
     name = head.string("name", choices=tuple(analytic.EXACT_SOLUTIONS))
     sol_dim, required, _ = analytic.EXACT_SOLUTIONS[name]
-    t = _Table(file, "exact", raw, ("name", *required))
+    optional = analytic.OPTIONAL_PARAMETERS.get(name, {})
+    t = _Table(file, "exact", raw, ("name", *required, *optional))
     if sol_dim != geometry.dim:
         raise t.error("name", f"'{name}' is a {sol_dim}D solution, the geometry is {geometry.dim}D")
     params = {}
-    for k in required:
+    for k in (*required, *optional):
         if t.has(k):
             params[k] = float(t.number(k))  # type: ignore[arg-type]
         elif k in geometry.parameters:
             params[k] = geometry.parameters[k]
+        elif k in optional:
+            params[k] = optional[k]
         else:
             raise t.error(k, f"missing (required by '{name}'; not in geometry.parameters either)")
+    try:  # the solution's own parameter checks (material constants do not enter them)
+        analytic.make_exact(name, params, 1.0, 0.25, "strain")
+    except ValueError as exc:
+        raise t.error("name", f"'{name}' {exc}") from None
     return ExactSpec(name, params)
 
 
-def _value(t: _Table, n: int, exact: ExactSpec | None) -> tuple[float, ...] | str:
+def _value(
+    t: _Table, n: int, exact: ExactSpec | None, names: Sequence[str] = ()
+) -> tuple[float | str, ...] | str:
+    """``value``: ``n`` numbers, or ``"exact"``.
+
+    With ``names``, each entry may also be an expression text of those coordinate names
+    (:mod:`geofrac.model.expr`), checked here and kept as text.
+    """
     if not t.has("value"):
         raise t.error("value", "missing (required)")
     value = t.data["value"]
@@ -316,7 +339,42 @@ def _value(t: _Table, n: int, exact: ExactSpec | None) -> tuple[float, ...] | st
         if exact is None:
             raise t.error("value", "'exact' needs an [exact] table naming the analytical solution")
         return "exact"
-    return t.vector("value", n)
+    if not names or not isinstance(value, list) or not any(isinstance(c, str) for c in value):
+        return t.vector("value", n)
+    if len(value) != n:
+        raise t.error("value", f"must be a list of {n} numbers or expressions, got {short(value)}")
+    out: list[float | str] = []
+    for i, c in enumerate(value):
+        if isinstance(c, str):
+            try:
+                expr.parse(c, names)
+            except expr.ExpressionError as exc:
+                raise t.error("value", f"entry {i} {short(c)} {exc}") from None
+            out.append(c)
+        else:
+            out.append(t.vector("value", 1, [c])[0])
+    return tuple(out)
+
+
+def _pressure(t: _Table, names: Sequence[str]) -> tuple[float | str]:
+    """A pressure's ``value``: one number or one expression text (or a list of one)."""
+    if not t.has("value"):
+        raise t.error("value", "missing (required)")
+    value = t.data["value"]
+    if isinstance(value, list) and len(value) == 1:
+        value = value[0]
+    if isinstance(value, str):
+        try:
+            expr.parse(value, names)
+        except expr.ExpressionError as exc:
+            raise t.error("value", f"{short(value)} {exc}") from None
+        return (value,)
+    if not is_number(value):
+        axes = ", ".join(names)
+        raise t.error(
+            "value", f"must be one number or one expression of {axes}, got {short(value)}"
+        )
+    return (t.vector("value", 1, [value])[0],)
 
 
 def _groups(file: Path, key: str, group: str, geometry: Geometry, dims: Sequence[int]) -> None:
@@ -364,20 +422,41 @@ def _bcs(
     return tuple(out)
 
 
+#: Load types a ``[[load]]`` may name (docs/scenes.md, "Loads").
+LOAD_TYPES = ("traction", "body_force", "pressure", "point")
+
+
 def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) -> tuple[Load, ...]:
+    """``[[load]]`` entries (docs/scenes.md, "Loads").
+
+    traction and body force: gdim numbers or expression texts of x, y[, z], or
+    ``"exact"``; pressure: one number or expression on a group of dimension gdim - 1;
+    point: gdim numbers on a physical point (dimension 0).
+    """
     if not isinstance(raw, list):
         raise SceneError(file, "load", "must be an array of tables ([[load]])")
     out = []
+    dim = geometry.dim
+    names = _AXES[:dim]
     for i, entry in enumerate(raw):
         t = _Table(file, f"load[{i}]", entry, SECTION_KEYS["load"])
-        kind = t.string("type", choices=("traction", "body_force"))
+        kind = t.string("type", choices=LOAD_TYPES)
         group = None
-        if kind == "traction":
+        if kind == "body_force":
+            if t.has("group"):
+                raise t.error("group", "a body force acts on the whole domain; remove 'group'")
+        else:
             group = t.string("group")
-            _groups(file, t.path("group"), group, geometry, (geometry.dim - 1,))
-        elif t.has("group"):
-            raise t.error("group", "a body force acts on the whole domain; remove 'group'")
-        value = _value(t, geometry.dim, exact)
+            dims = (0,) if kind == "point" else (dim - 1,)
+            _groups(file, t.path("group"), group, geometry, dims)
+        if kind == "pressure":
+            value = _pressure(t, names)
+        elif kind == "point":
+            if t.data.get("value") == "exact":
+                raise t.error("value", "'exact' applies to traction and body_force loads")
+            value = _value(t, dim, None)
+        else:
+            value = _value(t, dim, exact, names)
         out.append(Load(kind, value, group))  # type: ignore[arg-type]
     return tuple(out)
 
