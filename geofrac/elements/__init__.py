@@ -62,6 +62,7 @@ REGISTRY: dict[str, ElementSpec] = {
             "geofrac.elements.lagrange:p2",
             _LAGRANGE,
             degree=2,
+            curved=True,
         ),
         ElementSpec(
             "p3",
@@ -71,6 +72,7 @@ REGISTRY: dict[str, ElementSpec] = {
             "geofrac.elements.lagrange:p3",
             _LAGRANGE,
             degree=3,
+            curved=True,
         ),
         ElementSpec(
             "rgnt",

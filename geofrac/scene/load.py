@@ -233,7 +233,14 @@ def _geometry(file: Path, raw: Any) -> Geometry:
                 "(groups of lower dimension may)",
             )
     return Geometry(
-        path, parameters, mesh_size, info.dim, info.groups, trusted=trusted, time_limit=time_limit
+        path,
+        parameters,
+        mesh_size,
+        info.dim,
+        info.groups,
+        trusted=trusted,
+        time_limit=time_limit,
+        order=info.order,
     )
 
 
@@ -634,6 +641,46 @@ def _geometry_from_effect(
     return geometry, {name: config}
 
 
+def _check_curved(file: Path, geometry: Geometry, element: str, declared: Sequence[str]) -> None:
+    """Curved cells (``geometry.order > 1``) need an element that represents them.
+
+    An element represents cells of order k when it is isoparametric or of higher degree
+    (``ElementSpec.curved`` and ``degree >= k``): P2 for k = 2, P3 for k <= 3; any other
+    fails the patch test there. An effect whose module sets ``STRAIGHT_CELLS`` (cracking:
+    MLS-cracked cells assume straight edges) is refused too.
+
+    Raises:
+        SceneError: one line naming the element or effect and the fix.
+    """
+    order = geometry.order
+    if order == 1:
+        return
+    able = [
+        n
+        for n, spec in elements.REGISTRY.items()
+        if spec.curved and spec.degree >= order and geometry.dim in spec.dims
+    ]
+    name = geometry.file.name if geometry.file is not None else "the geometry"
+    curved = f"the curved cells of '{name}' (Mesh.ElementOrder = {order})"
+    if not able:
+        raise SceneError(file, "geometry.file", f"no element represents {curved}; lower the order")
+    if element not in able:
+        raise SceneError(
+            file,
+            "discretization.element",
+            f"element '{element}' cannot represent {curved}; use element "
+            f"{' or '.join(map(repr, able))}, or Mesh.ElementOrder = 1",
+        )
+    for effect in declared:
+        if getattr(effects.load(effect), "STRAIGHT_CELLS", False):
+            raise SceneError(
+                file,
+                "effects",
+                f"effect '{effect}' assumes straight cells, not {curved}; "
+                "use Mesh.ElementOrder = 1",
+            )
+
+
 def _warnings(file: Path, material: Material, disc: Discretization, dim: int) -> tuple[str, ...]:
     """Load-time warnings of a valid scene.
 
@@ -820,6 +867,7 @@ def _validate(
     geometry, configured = provided or (_geometry(file, data["geometry"]), {})
     material = _material(file, data["material"], geometry.dim)
     discretization = _discretization(file, data["discretization"], geometry.dim)
+    _check_curved(file, geometry, discretization.element, declared)
     exact = _exact(file, data["exact"], geometry) if "exact" in data else None
     bcs = _bcs(file, data.get("bc", []), geometry, exact)
     if not bcs:
