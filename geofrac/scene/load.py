@@ -684,19 +684,21 @@ def _check_curved(file: Path, geometry: Geometry, element: str, declared: Sequen
 def _warnings(file: Path, material: Material, disc: Discretization, dim: int) -> tuple[str, ...]:
     """Load-time warnings of a valid scene.
 
-    Volumetric locking: in plane strain and 3D, above the element's measured
-    ``locking_nu`` (docs/elements.md).
+    Volumetric locking: in plane strain and 3D, at or above the element's measured
+    ``locking_nu`` (docs/stability.md, "Locking"), naming the elements that do not lock
+    in that dimension (``locking_nu`` None: P2, P3) as the remedy. The CLI prints them
+    once, on rank 0.
     """
     out = []
     constrained = dim == 3 or material.plane == "strain"
     threshold = elements.get(disc.element).locking_nu
-    if threshold is not None and constrained and material.nu > threshold:
+    if threshold is not None and constrained and material.nu >= threshold:
         free = [n for n, s in elements.REGISTRY.items() if s.locking_nu is None and dim in s.dims]
         out.append(
             f"{file}: material.nu: {material.nu} with element '{disc.element}' in "
-            f"{'3D' if dim == 3 else 'plane strain'} locks volumetrically above nu = "
-            f"{threshold} (displacements far too small); use element "
-            f"{' or '.join(repr(n) for n in free)}"
+            f"{'3D' if dim == 3 else 'plane strain'} locks volumetrically from nu = "
+            f"{threshold} (displacements far too small; docs/stability.md, Locking); use "
+            f"element {' or '.join(repr(n) for n in free)}"
         )
     return tuple(out)
 
