@@ -13,7 +13,6 @@ from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
-import dolfinx
 import numpy as np
 from mpi4py import MPI
 
@@ -163,13 +162,7 @@ def _write_xdmf(solution: Solution) -> None:
     mesh = solution.tagged.mesh
     functions = []
     if "displacement" in scene.output.fields:
-        uh = problem.uh
-        if problem.element.degree != 1:  # XDMF stores node data on the P1 geometry
-            p1 = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (mesh.geometry.dim,)))
-            u1 = dolfinx.fem.Function(p1, name="displacement")
-            u1.interpolate(uh)
-            uh = u1
-        functions.append(uh)
+        functions.append(problem.uh)  # write_fields brings it to the geometry degree
     wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
     fields = problem.tensor_fields(wanted)
     functions += [fields[f] for f in wanted]

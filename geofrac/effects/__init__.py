@@ -15,6 +15,9 @@ An effect is a module named in :data:`REGISTRY` that provides
   :class:`~geofrac.model.scene.Geometry` carries a builder that makes the gmsh model on
   one rank.
 
+- optionally ``STRAIGHT_CELLS = True``: the effect assumes straight cells (``cracking``:
+  MLS-cracked cells); the loader refuses it on curved geometry
+  (:attr:`geofrac.model.scene.Geometry.order` > 1).
 - optionally ``driver(config, solution, say, write)``: the effect replaces the single
   elastic solve by its own loop (``cracking``: the sequentially linear event loop); see
   :func:`geofrac.effects.cracking.driver`. A scene declares at most one such effect

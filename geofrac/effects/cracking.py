@@ -71,6 +71,7 @@ if TYPE_CHECKING:
 __all__ = [
     "KEYS",
     "LIMITS",
+    "STRAIGHT_CELLS",
     "CrackingConfig",
     "configure",
     "driver",
@@ -78,6 +79,9 @@ __all__ = [
     "scene_driver",
 ]
 
+#: MLS-cracked cells and the crack geometry assume straight cell edges: the loader refuses
+#: this effect on curved (second-order) geometry.
+STRAIGHT_CELLS = True
 #: Keys of the ``[cracking]`` table.
 KEYS = (
     "method",

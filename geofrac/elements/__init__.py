@@ -28,9 +28,9 @@ _GRADIENT_OPTIONS = frozenset({"quadrature_degree", "zero_mode_penalty", "gradie
 #: there, so a small α (1e-3) is best; RGNT and RGNQ reproduce few quadratics and their
 #: penalty pulls the rotations off the Galerkin solution, so α is kept near the limit
 #: α → 0, where it only pins the spurious zero-energy modes. ``locking_nu`` is measured
-#: (docs/elements.md, "Volumetric locking", ``docs/locking.py``): the ν at which the
-#: plane-strain cantilever's displacement error passes 10 times its ν = 0.3 value (and 1 %);
-#: None where it does not down to ν = 0.4999.
+#: (docs/stability.md, "Locking", ``docs/locking.py``): the smallest ν at which the
+#: plane-strain cantilever's displacement error or Cook's membrane's tip error exceeds
+#: 10 times its ν = 0.3 value and 5 %; None where neither does down to ν = 0.49999.
 REGISTRY: dict[str, ElementSpec] = {
     spec.name: spec
     for spec in (
@@ -62,6 +62,7 @@ REGISTRY: dict[str, ElementSpec] = {
             "geofrac.elements.lagrange:p2",
             _LAGRANGE,
             degree=2,
+            curved=True,
         ),
         ElementSpec(
             "p3",
@@ -71,6 +72,7 @@ REGISTRY: dict[str, ElementSpec] = {
             "geofrac.elements.lagrange:p3",
             _LAGRANGE,
             degree=3,
+            curved=True,
         ),
         ElementSpec(
             "rgnt",
@@ -97,6 +99,7 @@ REGISTRY: dict[str, ElementSpec] = {
             zero_mode_penalty=1e-3,
             kinematics="gnt",
             cracking="edges",
+            locking_nu=0.49999,
             hold="gradient",
         ),
         ElementSpec(

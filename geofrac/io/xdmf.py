@@ -6,6 +6,12 @@ every function in its own temporal collection and shares the mesh through
 crashes. After DOLFINx has written, rank 0 rewrites only the small XML part into one
 temporal collection whose steps carry every field, referring to the same HDF5
 datasets. See :func:`regroup_xdmf`.
+
+XDMF stores node data at the nodes of the mesh geometry: on straight cells the vertices,
+on curved cells (a second-order gmsh geometry) the vertices and edge midpoints, written as
+``Triangle_6`` / ``Tetrahedron_10`` cells that ParaView draws curved. :func:`on_geometry`
+brings each continuous field to the degree of the geometry; cell (DG0) fields are written
+as they are.
 """
 
 from __future__ import annotations
@@ -21,7 +27,36 @@ from dolfinx.io import XDMFFile
 
 from geofrac.io.series import write_xml
 
-__all__ = ["regroup_xdmf", "write_fields", "write_meshtags"]
+__all__ = ["on_geometry", "regroup_xdmf", "write_fields", "write_meshtags"]
+
+
+def on_geometry(fn: dolfinx.fem.Function) -> dolfinx.fem.Function:
+    """``fn`` as XDMF can store it: a Lagrange field of the mesh's geometry degree.
+
+    A DG0 field, or a Lagrange field of that degree, is returned as it is. Another
+    Lagrange field is interpolated into Lagrange of the geometry degree with the same
+    value shape and name: a P2 or P3 displacement on straight cells goes to P1 (its
+    vertex values); a P1 nodal average on curved cells goes to P2 exactly (P1 is linear
+    in the reference cell, which P2 contains).
+
+    Raises:
+        ValueError: a discontinuous field of degree > 0 (no node data to write).
+    """
+    space = fn.function_space
+    mesh = space.mesh
+    geometry_degree = mesh.geometry.cmaps[0].degree
+    element = space.ufl_element()
+    degree = element.embedded_superdegree
+    if element.discontinuous:
+        if degree != 0:
+            raise ValueError(f"XDMF cannot store '{fn.name}': discontinuous of degree {degree}")
+        return fn
+    if degree == geometry_degree:
+        return fn
+    target = dolfinx.fem.functionspace(mesh, ("Lagrange", geometry_degree, space.value_shape))
+    out = dolfinx.fem.Function(target, name=fn.name)
+    out.interpolate(fn)
+    return out
 
 
 def write_fields(
@@ -29,8 +64,8 @@ def write_fields(
 ) -> Path:
     """Write ``functions`` at time ``t`` to ``path`` (.xdmf) and its sibling ``.h5``.
 
-    Functions must be P1 Lagrange (node data) or DG0 (cell data) on ``mesh``; higher
-    order displacements are interpolated to P1 by the caller.
+    Functions are Lagrange (node data, brought to the geometry degree by
+    :func:`on_geometry`) or DG0 (cell data) on ``mesh``.
 
     Returns:
         ``path``.
@@ -38,7 +73,7 @@ def write_fields(
     with XDMFFile(mesh.comm, str(path), "w") as f:
         f.write_mesh(mesh)
         for fn in functions:
-            f.write_function(fn, t)
+            f.write_function(on_geometry(fn), t)
     mesh.comm.barrier()
     if mesh.comm.rank == 0:
         regroup_xdmf(path)

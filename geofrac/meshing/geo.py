@@ -89,11 +89,15 @@ class GeoInfo:
         groups: physical group name -> dimension.
         overlaps: physical groups of one dimension that share a model entity, as
             (dimension, group, other group, entity tag), one per pair.
+        order: polynomial order of the geometry of the cells: 1 (straight), 2 (curved,
+            ``Mesh.ElementOrder = 2``), ...; from the elements of a meshed file, else from
+            the ``Mesh.ElementOrder`` option the ``.geo`` file set.
     """
 
     dim: int
     groups: dict[str, int]
     overlaps: tuple[tuple[int, str, str, int], ...] = ()
+    order: int = 1
 
 
 def define_constants(text: str) -> list[str]:
@@ -159,7 +163,7 @@ def failure_message(exc: BaseException, gmsh: Any = None) -> str:
 
 
 def inspect_model(model: Any) -> GeoInfo:
-    """Dimension, physical groups and overlapping groups of the gmsh ``model``."""
+    """Dimension, physical groups, overlapping groups and cell order of the gmsh ``model``."""
     groups: dict[str, int] = {}
     owners: dict[tuple[int, int], str] = {}
     overlaps: dict[tuple[int, str, str], int] = {}
@@ -170,11 +174,28 @@ def inspect_model(model: Any) -> GeoInfo:
             other = owners.setdefault((d, int(entity)), name)
             if other != name:
                 overlaps.setdefault((d, other, name), int(entity))
+    dim = int(model.getDimension())
     return GeoInfo(
-        dim=int(model.getDimension()),
+        dim=dim,
         groups=groups,
         overlaps=tuple((d, a, b, e) for (d, a, b), e in overlaps.items()),
+        order=_cell_order(model, dim),
     )
+
+
+def _cell_order(model: Any, dim: int) -> int:
+    """Order of the ``dim``-dimensional elements of ``model``.
+
+    A meshed model (a ``.msh`` file) answers with its highest element order; an unmeshed
+    one (a ``.geo`` file read without meshing) with the ``Mesh.ElementOrder`` option, which
+    the file may have set and which gmsh applies when it meshes.
+    """
+    import gmsh
+
+    types = model.mesh.getElementTypes(dim) if dim > 0 else []
+    if len(types):
+        return max(int(model.mesh.getElementProperties(t)[2]) for t in types)
+    return int(gmsh.option.getNumber("Mesh.ElementOrder"))
 
 
 def _python_path() -> str:
@@ -258,6 +279,7 @@ def inspect_geometry(
         dim=result["dim"],
         groups=dict(result["groups"]),
         overlaps=tuple(tuple(o) for o in result["overlaps"]),  # type: ignore[misc]
+        order=int(result["order"]),
     )
 
 

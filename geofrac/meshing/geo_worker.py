@@ -5,7 +5,8 @@ Run as ``python -m geofrac.meshing.geo_worker REQUEST``.
 ``parameters``, ``answer`` (where to write the JSON answer), and for ``"mesh"`` also
 ``mesh_size``, ``dim``, ``out`` (the ``.msh`` to write), ``options`` (gmsh options set
 before writing) and ``verbose``. The answer is ``{"ok": true, ...}`` (``"inspect"``:
-``dim``, ``groups`` as [name, dim] pairs, ``overlaps``) or ``{"ok": false, "error": ...}``.
+``dim``, ``groups`` as [name, dim] pairs, ``overlaps``, ``order``) or
+``{"ok": false, "error": ...}``.
 
 Loads gmsh and nothing of MPI, so it is safe to start from an MPI rank.
 """
@@ -38,6 +39,7 @@ def run(request: dict[str, Any]) -> dict[str, Any]:
                         "dim": info.dim,
                         "groups": list(info.groups.items()),
                         "overlaps": [list(o) for o in info.overlaps],
+                        "order": info.order,
                     }
                 gmsh.model.mesh.generate(int(request["dim"]))
                 for name, value in request.get("options", {}).items():

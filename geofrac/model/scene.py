@@ -52,6 +52,10 @@ class Geometry:
             (:mod:`geofrac.meshing.geo_guard`).
         time_limit: seconds gmsh may take to read (check) or read and mesh (run) the
             ``.geo`` file; None: 60 s to read, 600 s to mesh.
+        order: polynomial order of the cell geometry, read from the file: 1 straight
+            cells, 2 curved (``Mesh.ElementOrder = 2`` in the ``.geo``, or second-order
+            elements in a ``.msh``). Only elements with ``ElementSpec.curved`` and a
+            degree of at least ``order`` accept ``order > 1`` (docs/elements.md).
     """
 
     file: Path | None
@@ -62,6 +66,7 @@ class Geometry:
     builder: Any = None
     trusted: bool = False
     time_limit: float | None = None
+    order: int = 1
 
 
 @dataclass(frozen=True)

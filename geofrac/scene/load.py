@@ -242,7 +242,14 @@ def _geometry(file: Path, raw: Any) -> Geometry:
                 "(groups of lower dimension may)",
             )
     return Geometry(
-        path, parameters, mesh_size, info.dim, info.groups, trusted=trusted, time_limit=time_limit
+        path,
+        parameters,
+        mesh_size,
+        info.dim,
+        info.groups,
+        trusted=trusted,
+        time_limit=time_limit,
+        order=info.order,
     )
 
 
@@ -713,22 +720,64 @@ def _geometry_from_effect(
     return geometry, {name: config}
 
 
+def _check_curved(file: Path, geometry: Geometry, element: str, declared: Sequence[str]) -> None:
+    """Curved cells (``geometry.order > 1``) need an element that represents them.
+
+    An element represents cells of order k when it is isoparametric or of higher degree
+    (``ElementSpec.curved`` and ``degree >= k``): P2 for k = 2, P3 for k <= 3; any other
+    fails the patch test there. An effect whose module sets ``STRAIGHT_CELLS`` (cracking:
+    MLS-cracked cells assume straight edges) is refused too.
+
+    Raises:
+        SceneError: one line naming the element or effect and the fix.
+    """
+    order = geometry.order
+    if order == 1:
+        return
+    able = [
+        n
+        for n, spec in elements.REGISTRY.items()
+        if spec.curved and spec.degree >= order and geometry.dim in spec.dims
+    ]
+    name = geometry.file.name if geometry.file is not None else "the geometry"
+    curved = f"the curved cells of '{name}' (Mesh.ElementOrder = {order})"
+    if not able:
+        raise SceneError(file, "geometry.file", f"no element represents {curved}; lower the order")
+    if element not in able:
+        raise SceneError(
+            file,
+            "discretization.element",
+            f"element '{element}' cannot represent {curved}; use element "
+            f"{' or '.join(map(repr, able))}, or Mesh.ElementOrder = 1",
+        )
+    for effect in declared:
+        if getattr(effects.load(effect), "STRAIGHT_CELLS", False):
+            raise SceneError(
+                file,
+                "effects",
+                f"effect '{effect}' assumes straight cells, not {curved}; "
+                "use Mesh.ElementOrder = 1",
+            )
+
+
 def _warnings(file: Path, material: Material, disc: Discretization, dim: int) -> tuple[str, ...]:
     """Load-time warnings of a valid scene.
 
-    Volumetric locking: in plane strain and 3D, above the element's measured
-    ``locking_nu`` (docs/elements.md).
+    Volumetric locking: in plane strain and 3D, at or above the element's measured
+    ``locking_nu`` (docs/stability.md, "Locking"), naming the elements that do not lock
+    in that dimension (``locking_nu`` None: P2, P3) as the remedy. The CLI prints them
+    once, on rank 0.
     """
     out = []
     constrained = dim == 3 or material.plane == "strain"
     threshold = elements.get(disc.element).locking_nu
-    if threshold is not None and constrained and material.nu > threshold:
+    if threshold is not None and constrained and material.nu >= threshold:
         free = [n for n, s in elements.REGISTRY.items() if s.locking_nu is None and dim in s.dims]
         out.append(
             f"{file}: material.nu: {material.nu} with element '{disc.element}' in "
-            f"{'3D' if dim == 3 else 'plane strain'} locks volumetrically above nu = "
-            f"{threshold} (displacements far too small); use element "
-            f"{' or '.join(repr(n) for n in free)}"
+            f"{'3D' if dim == 3 else 'plane strain'} locks volumetrically from nu = "
+            f"{threshold} (displacements far too small; docs/stability.md, Locking); use "
+            f"element {' or '.join(repr(n) for n in free)}"
         )
     return tuple(out)
 
@@ -899,6 +948,7 @@ def _validate(
     geometry, configured = provided or (_geometry(file, data["geometry"]), {})
     material = _material(file, data["material"], geometry.dim)
     discretization = _discretization(file, data["discretization"], geometry.dim)
+    _check_curved(file, geometry, discretization.element, declared)
     exact = _exact(file, data["exact"], geometry) if "exact" in data else None
     bcs = _bcs(file, data.get("bc", []), geometry, exact)
     if not bcs:
