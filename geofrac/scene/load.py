@@ -473,7 +473,13 @@ def _effects(
 ) -> tuple[EffectSpec, ...]:
     """Configure each declared effect (``configured``: those already done, by name)."""
     ctx = effects.ConfigureContext(
-        str(file), geometry.dim, material, discretization.element, dict(geometry.groups), bcs
+        str(file),
+        geometry.dim,
+        material,
+        discretization.element,
+        dict(geometry.groups),
+        bcs,
+        gradient_bc=discretization.gradient_bc,
     )
     _check_methods(file, declared, "fem")
     _check_drivers(file, declared)
