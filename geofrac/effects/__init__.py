@@ -72,6 +72,7 @@ class ConfigureContext:
         method: the scene's ``method``, ``"fem"`` or ``"mpm"``. An effect module lists
             the methods it serves in ``METHODS`` (absent: ``("fem",)``); for MPM scenes
             ``groups`` names the walled grid sides and ``"bed"``.
+        gradient_bc: the scene's ``discretization.gradient_bc``.
     """
 
     file: str
@@ -81,6 +82,7 @@ class ConfigureContext:
     groups: dict[str, int] = field(default_factory=dict)
     bcs: tuple = ()
     method: str = "fem"
+    gradient_bc: str = "consistent"
 
 
 def available() -> tuple[str, ...]:

@@ -55,6 +55,7 @@ from typing import TYPE_CHECKING, Any
 
 from geofrac import elements
 from geofrac.effects import ConfigureContext
+from geofrac.elements.kinematics import KINDS
 from geofrac.fracture import SOLVERS
 from geofrac.fracture.config import CrackingConfig
 from geofrac.model.errors import SceneError, did_you_mean
@@ -149,6 +150,29 @@ def _number(
     return kind(value)
 
 
+def _check_basis(file: str, ctx: ConfigureContext) -> None:
+    """Refuse conditions that give the vertex DOFs a change of basis (w = Q h).
+
+    The crack driver assembles its cell matrices in the vertex DOFs w. With
+    ``gradient_bc = "consistent"`` a constant-value condition on a line holds mixes of an
+    element's extra DOFs when it has several (GNT: (G t)_c = 0 mixes θ, εx, εy, γxy)
+    unless it is a symmetry condition (docs/elements.md, "Boundary DOFs"). One extra DOF
+    (RGNT) never mixes.
+    """
+    name = elements.get(ctx.element).kinematics
+    if name is None or len(KINDS[name].names) == 1 or ctx.gradient_bc != "consistent":
+        return
+    for i, bc in enumerate(ctx.bcs):
+        if bc.value != "exact" and not bc.symmetry and ctx.groups.get(bc.group, 0) >= 1:
+            raise SceneError(
+                file,
+                f"bc[{i}]",
+                f"cracking with element '{ctx.element}' needs gradient_bc = 'fixed' or "
+                f"symmetry conditions: a held line ('{bc.group}') mixes its vertex DOFs, "
+                "which the crack driver cannot assemble",
+            )
+
+
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
     """Validate ``[cracking]`` against the material, element, groups and conditions."""
     file = ctx.file
@@ -165,6 +189,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "discretization.element",
             f"effect 'cracking' supports {', '.join(supported)}, not '{ctx.element}'",
         )
+    _check_basis(file, ctx)
     ft = getattr(ctx.material, "tensile_strength", None)
     if ft is None:
         raise SceneError(

@@ -22,7 +22,13 @@ import numpy as np
 from petsc4py import PETSc
 
 from geofrac.elements.base import Element
-from geofrac.elements.kinematics import KINDS, GradientDofKind, dofs_from_gradient
+from geofrac.elements.kinematics import (
+    KINDS,
+    GradientDofKind,
+    condition_functionals,
+    dofs_from_gradient,
+    symmetry_functionals,
+)
 from geofrac.elements.kinematics import local_prolongation as _local_prolongation
 from geofrac.solvers import orthonormal_nullspace
 
@@ -148,8 +154,104 @@ class GradientDofElement(Element):
         )
         return rows, vals[:, comps].ravel()
 
-    def rigid_body_modes(self) -> PETSc.NullSpace:
-        """Orthonormal rigid body modes on W: translations, and rotations with g = ½ Π ω."""
+    def vertex_blocks(self, dim: int, entities: np.ndarray) -> np.ndarray:
+        """W blocks (local, ghosts included) of the vertices of mesh entities.
+
+        Args:
+            dim: entity dimension.
+            entities: local entity indices, shape=(n,).
+
+        Returns:
+            blocks, shape=(n, dim + 1), in the entity's vertex order.
+        """
+        topology = self.dof_space.mesh.topology
+        tdim = topology.dim
+        topology.create_connectivity(dim, 0)
+        topology.create_connectivity(tdim, 0)
+        c2v = topology.connectivity(tdim, 0)
+        num_vertices = topology.index_map(0).size_local + topology.index_map(0).num_ghosts
+        block_of = np.empty(num_vertices, dtype=np.int64)
+        block_of[c2v.array] = self.dof_space.dofmap.list.ravel()  # P1: one block per vertex
+        e2v = topology.connectivity(dim, 0).array.reshape(-1, dim + 1)  # simplices
+        return block_of[e2v[entities]]
+
+    def boundary_gram(
+        self, conditions: list[tuple[int, np.ndarray, tuple[int, ...], int | None]]
+    ) -> np.ndarray:
+        """Gram matrices of the functionals conditions impose on the extra DOFs (collective).
+
+        Each condition holds ``components`` constant on the entities: along every edge
+        direction t of an entity, (G t)_c = 0 at its vertices
+        (:func:`~geofrac.elements.kinematics.condition_functionals`); a mirror-symmetry
+        condition about the plane normal to ``axis`` adds (G e_axis)_s = 0 for s ≠ axis
+        (:func:`~geofrac.elements.kinematics.symmetry_functionals`). A vertex of no entity
+        of dimension ≥ 1 gets nothing. Contributions are summed over the entities of
+        every rank onto the vertex owner (a vertex seen twice only scales its Gram matrix,
+        which leaves its range unchanged), so 1 and 2 ranks agree.
+
+        Args:
+            conditions: (entity dimension, local entities shape=(n,), held components,
+                symmetry axis or None) per condition.
+
+        Returns:
+            M_i = Σ a aᵀ per owned vertex block, shape=(num_owned, k, k).
+        """
+        W, kind = self.dof_space, self.kind
+        gdim, k = kind.gdim, len(kind.names)
+        imap = W.dofmap.index_map
+        acc = dolfinx.la.vector(imap, bs=k * k)
+        local = acc.array.reshape(-1, k, k)
+        local[:] = 0.0  # not initialised by dolfinx.la.vector
+        x = W.tabulate_dof_coordinates()[:, :gdim]
+        for dim, entities, components, axis in conditions:
+            if dim == 0 or len(entities) == 0:
+                continue
+            blocks = self.vertex_blocks(dim, entities)  # shape=(n, dim + 1)
+            t = x[blocks[:, 1:]] - x[blocks[:, :1]]  # edges from the first vertex
+            t /= np.linalg.norm(t, axis=2, keepdims=True)
+            a = condition_functionals(kind, components, t.reshape(-1, gdim))
+            a = a.reshape(len(entities), -1, k)  # shape=(n, dim * q, k)
+            if axis is not None:
+                sym = symmetry_functionals(kind, axis)
+                a = np.concatenate([a, np.broadcast_to(sym, (len(entities), *sym.shape))], 1)
+            gram = np.einsum("npk,npl->nkl", a, a)  # shape=(n, k, k)
+            for j in range(dim + 1):
+                np.add.at(local, blocks[:, j], gram)
+        acc.scatter_reverse(dolfinx.la.InsertMode.add)
+        return local[: imap.size_local].copy()
+
+    def basis_change(self, Q: np.ndarray) -> PETSc.Mat:
+        """The block-diagonal orthogonal map w = Q h on W (identity on the translations).
+
+        Args:
+            Q: per owned vertex, the extra DOFs' new basis, shape=(num_owned, k, k).
+
+        Returns:
+            Q as a square AIJ matrix on W (the caller destroys it).
+        """
+        W, gdim, bs = self.dof_space, self.kind.gdim, self.kind.block_size
+        imap = W.dofmap.index_map
+        n = imap.size_local
+        block = np.zeros((n, bs, bs))
+        block[:, np.arange(gdim), np.arange(gdim)] = 1.0
+        block[:, gdim:, gdim:] = Q
+        cols = (imap.local_range[0] + np.arange(n))[:, None, None] * bs + np.arange(bs)
+        cols = np.broadcast_to(cols, (n, bs, bs)).reshape(-1).astype(PETSc.IntType)
+        indptr = (np.arange(n * bs + 1) * bs).astype(PETSc.IntType)
+        M = PETSc.Mat().createAIJ(
+            size=((n * bs, imap.size_global * bs), (n * bs, imap.size_global * bs)),
+            csr=(indptr, cols, block.reshape(-1)),
+            comm=W.mesh.comm,
+        )
+        M.assemble()
+        return M
+
+    def rigid_body_modes(self, Q: np.ndarray | None = None) -> PETSc.NullSpace:
+        """Orthonormal rigid body modes on W: translations, and rotations with g = ½ Π ω.
+
+        With ``Q`` (per owned vertex, shape=(num_owned, k, k)) the modes are given in the
+        DOFs h of the basis w = Q h: h = Qᵀ w on the extra DOFs.
+        """
         W, kind = self.dof_space, self.kind
         gdim, bs = kind.gdim, kind.block_size
         n = W.dofmap.index_map.size_local
@@ -167,6 +269,9 @@ class GradientDofElement(Element):
             grad[0, b, a], grad[0, a, b] = 1.0, -1.0
             m[:, gdim:] = dofs_from_gradient(kind, grad)[0]
             modes.append(m)
+        if Q is not None:
+            for m in modes:
+                m[:, gdim:] = np.einsum("nkj,nk->nj", Q, m[:, gdim:])
         return orthonormal_nullspace([m.ravel() for m in modes], W.mesh.comm)
 
     def destroy(self) -> None:

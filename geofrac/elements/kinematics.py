@@ -38,8 +38,11 @@ import numpy as np
 __all__ = [
     "KINDS",
     "GradientDofKind",
+    "condition_functionals",
+    "constrained_bases",
     "dofs_from_gradient",
     "local_prolongation",
+    "symmetry_functionals",
     "vertex_field",
 ]
 
@@ -169,3 +172,77 @@ def vertex_field(
     rel = points[:, None, :] - coords[None, :, :]  # shape=(n, nv, gdim)
     local = dofs[None, :, :gdim] + np.einsum("irs,nis->nir", G, rel)
     return np.einsum("ni,nir->nr", N, local)
+
+
+def condition_functionals(
+    kind: GradientDofKind, components: tuple[int, ...], tangents: np.ndarray
+) -> np.ndarray:
+    """What holding components ``components`` at a constant value implies for the DOFs.
+
+    Along a tangent t of the held boundary entity u_c is constant, so t·∇u_c = 0 at the
+    vertex, i.e. (G t)_c = Σ_k g_k (E_k t)_c = 0 (Edo (2016), eq. 2.1, 2.5, 2.29 give E_k).
+    Each row a of the result is one such functional, a · g = 0.
+
+    Args:
+        kind: the DOF layout.
+        components: held displacement components, shape=(q,).
+        tangents: tangent directions of the entity, shape=(m, gdim).
+
+    Returns:
+        functionals, shape=(m * q, k).
+    """
+    rows = kind.basis[:, list(components), :]  # shape=(k, q, gdim)
+    return np.einsum("kcs,ms->mck", rows, tangents).reshape(-1, len(kind.names))
+
+
+def symmetry_functionals(kind: GradientDofKind, axis: int) -> np.ndarray:
+    """What mirror symmetry about the plane x_axis = const implies beyond the held normal.
+
+    The tangential components u_s (s ≠ axis) are even in x_axis, so ∂u_s/∂n = 0 with
+    n = e_axis: (G n)_s = Σ_k g_k (E_k)_{s, axis} = 0.
+
+    Returns:
+        functionals, shape=(gdim - 1, k).
+    """
+    others = [s for s in range(kind.gdim) if s != axis]
+    return kind.basis[:, others, axis].T.copy()
+
+
+def constrained_bases(
+    gram: np.ndarray, tol: float = 1e-8, floor: float = 1e-12
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per vertex, an orthonormal DOF basis that separates constrained and free directions.
+
+    The constrained directions span the row space of the vertex's functionals, the range
+    of their Gram matrix M = Σ a aᵀ (eigenvalues above ``tol`` times the largest and
+    above ``floor``: the functionals are of unit scale, unit tangents and basis entries
+    of at most 1, so a functional below 1e-6 is the round-off of a straight line). When
+    that space is spanned by coordinate axes of the DOF layout the basis is the identity
+    and the constrained DOFs are those axes; otherwise the basis is the eigenvectors,
+    constrained ones first.
+
+    Args:
+        gram: Gram matrices, shape=(n, k, k) (all zero: nothing constrained).
+        tol: relative eigenvalue threshold.
+        floor: absolute eigenvalue threshold.
+
+    Returns:
+        (Q, fixed): Q orthogonal with the new DOF directions as columns, shape=(n, k, k);
+        fixed[i, j] whether new DOF j of vertex i is held at 0, shape=(n, k).
+    """
+    n, k, _ = gram.shape
+    Q = np.broadcast_to(np.eye(k), (n, k, k)).copy()
+    fixed = np.zeros((n, k), dtype=bool)
+    if n == 0:
+        return Q, fixed
+    lam, vec = np.linalg.eigh(gram)  # ascending
+    lam, vec = lam[:, ::-1], vec[:, :, ::-1]  # descending: constrained first
+    top = lam[:, :1]
+    cons = (lam > tol * top) & (lam > floor)
+    proj = np.einsum("nij,nkj,nj->nik", vec, vec, cons.astype(float))  # projector on the span
+    diag = np.round(np.einsum("nii->ni", proj))
+    aligned = np.abs(proj - np.einsum("ni,ij->nij", diag, np.eye(k))).max(axis=(1, 2)) < 1e-10
+    fixed[aligned] = diag[aligned] == 1.0
+    Q[~aligned] = vec[~aligned]
+    fixed[~aligned] = cons[~aligned]
+    return Q, fixed

@@ -19,7 +19,7 @@ from petsc4py import PETSc
 from geofrac import elements
 from geofrac.analytic import ExactSolution, displacement_gradient, make_exact
 from geofrac.elements.base import Element
-from geofrac.elements.kinematics import dofs_from_gradient
+from geofrac.elements.kinematics import constrained_bases, dofs_from_gradient
 from geofrac.errors import RunError
 from geofrac.fem import loads
 from geofrac.materials import lame
@@ -77,6 +77,20 @@ def exact_ufl(exact: ExactSolution, mesh: dolfinx.mesh.Mesh) -> tuple[Any, Any]:
     x = ufl.SpatialCoordinate(mesh)
     coords = [x[i] for i in range(mesh.geometry.dim)]
     return ufl.as_vector(exact.displacement(*coords)), ufl.as_matrix(exact.stress(*coords))
+
+
+#: largest |t_axis| / |t| of a symmetry group's edge directions t (mesh round-off).
+SYMMETRY_TOLERANCE = 1e-8
+
+
+def _tilt(mesh: dolfinx.mesh.Mesh, dim: int, entities: np.ndarray, axis: int) -> float:
+    """Largest |t_axis| / |t| over the edge directions t of local entities (0 if none)."""
+    if len(entities) == 0 or dim == 0:
+        return 0.0
+    nodes = dolfinx.mesh.entities_to_geometry(mesh, dim, entities.astype(np.int32))
+    x = mesh.geometry.x[nodes]  # shape=(n, nodes per entity, 3)
+    t = x[:, 1:] - x[:, :1]
+    return float(np.max(np.abs(t[..., axis]) / np.linalg.norm(t, axis=2)))
 
 
 class ElasticProblem:
@@ -162,6 +176,9 @@ class ElasticProblem:
             terms.append(ufl.inner(zero, v) * self.dx)
         return sum(terms[1:], terms[0])
 
+    #: whether the unknowns are in a changed basis (:class:`GradientDofProblem`).
+    changes_basis = False
+
     def _add_point_forces(self, b: PETSc.Vec) -> None:
         """Add the point loads to an assembled vector on ``element.space``.
 
@@ -175,13 +192,25 @@ class ElasticProblem:
         """(dimension, local entities, shape=(n,)) of Dirichlet condition ``i``.
 
         Raises:
-            RunError: collectively, when the group has no entities on any rank.
+            RunError: collectively, when the group has no entities on any rank, or when a
+                ``symmetry`` condition's group is not a plane normal to its held axis.
         """
-        group = self.scene.bcs[i].group
-        dim, entities = self.tagged.entities(group)
+        bc = self.scene.bcs[i]
+        dim, entities = self.tagged.entities(bc.group)
         self.mesh.topology.create_connectivity(dim, self.mesh.topology.dim)
         if self.comm.allreduce(len(entities), op=MPI.SUM) == 0:
-            raise RunError(f"bc[{i}].group: physical group '{group}' has no mesh entities")
+            raise RunError(f"bc[{i}].group: physical group '{bc.group}' has no mesh entities")
+        if bc.symmetry:
+            axis = bc.components[0]
+            tilt = _tilt(self.mesh, dim, entities, axis)
+            tilt = self.comm.allreduce(tilt, op=MPI.MAX)
+            if tilt > SYMMETRY_TOLERANCE:
+                name = "xyz"[axis]
+                raise RunError(
+                    f"bc[{i}].symmetry: group '{bc.group}' is not a plane {name} = const "
+                    f"(a symmetry condition holds the normal component '{name}'; an edge "
+                    f"leaves the plane by {tilt:.2g} of its length)"
+                )
         return dim, entities
 
     def _boundary_conditions(self) -> list[dolfinx.fem.DirichletBC]:
@@ -340,11 +369,22 @@ class GradientDofProblem(ElasticProblem):
     reduced matrix with ``MatZeroRowsColumns`` (symmetric, with lifting). The displacement
     ``uh`` is the P2 field T w of the solution ``wh``.
 
-    Dirichlet conditions fix the translations of the vertices on the group and, with
-    ``discretization.gradient_bc = "fixed"`` (the default), their extra DOFs: to the
-    exact field's values for ``value = "exact"``, to 0 for a constant value, so the
-    boundary edges follow the data between the vertices (see docs/elements.md).
+    Dirichlet conditions fix the translations of the vertices on the group. For the extra
+    DOFs, ``discretization.gradient_bc`` (docs/elements.md, "Boundary DOFs"):
+    ``"consistent"`` (default) holds what a constant-value condition implies, (G t)_c = 0
+    for each held component c and edge direction t of the group (plus ∂u_s/∂n = 0 on a
+    mirror-symmetry condition), possibly in a per-vertex orthogonal basis w = Q h
+    (:attr:`basis`); ``"fixed"`` holds them all at 0; ``"free"`` holds none. A
+    ``value = "exact"`` condition holds them at the exact field's values (all modes but
+    ``"free"``).
+
+    Attributes:
+        basis: per owned vertex the basis Q_i of the extra DOFs, shape=(num_owned, k, k),
+            or None when every vertex keeps the DOF axes (no change of basis). With a basis
+            the system is solved for h (:meth:`unknown`), K' = Qᵀ K Q, b' = Qᵀ b.
     """
+
+    basis: np.ndarray | None = None
 
     def __init__(
         self,
@@ -368,13 +408,30 @@ class GradientDofProblem(ElasticProblem):
         self._a = self._a + pen_vv
         self.a_wv: dolfinx.fem.Form | None = None
         self.a_ww: dolfinx.fem.Form | None = None
+        self._Q: PETSc.Mat | None = None
+        self.hh: dolfinx.fem.Function | None = None
+        if self.basis is not None:
+            self._Q = element.basis_change(self.basis)
+            self.hh = dolfinx.fem.Function(W, name="vertex_dofs_rotated")
+
+    @property
+    def changes_basis(self) -> bool:
+        """Whether the unknowns are the rotated DOFs h (w = Q h), not w."""
+        return self.basis is not None
 
     def _boundary_conditions(self) -> list[tuple[np.ndarray, np.ndarray]]:  # type: ignore[override]
-        """(global DOF indices, values) per Dirichlet condition, owned DOFs only."""
+        """(global DOF indices, values) per Dirichlet condition, owned DOFs only.
+
+        With ``gradient_bc = "consistent"`` the last entry holds the extra DOFs that the
+        constant-value conditions imply (:meth:`_implied_constraints`), in the basis of
+        :attr:`basis`.
+        """
         element = self.element
         kind = element.kind
         gdim, bs = kind.gdim, kind.block_size
+        mode = self.scene.discretization.gradient_bc
         out = []
+        conditions = []
         for i, bc in enumerate(self.scene.bcs):
             dim, entities = self._bc_entities(i)
             if bc.value == "exact":
@@ -387,6 +444,8 @@ class GradientDofProblem(ElasticProblem):
                     return np.hstack([u, g])
 
                 comps = tuple(range(gdim))
+                if mode != "free":  # the exact field's extra DOFs are data
+                    comps = (*comps, *range(gdim, bs))
             else:
                 fixed = np.zeros(bs)  # the extra DOFs of a constant boundary value are 0
                 fixed[list(bc.components)] = bc.value
@@ -395,10 +454,47 @@ class GradientDofProblem(ElasticProblem):
                     return np.tile(fixed, (len(x), 1))
 
                 comps = bc.components
-            if self.scene.discretization.gradient_bc == "fixed":
-                comps = (*comps, *range(gdim, bs))
+                if mode == "fixed":
+                    comps = (*comps, *range(gdim, bs))
+                elif mode == "consistent":
+                    axis = bc.components[0] if bc.symmetry else None
+                    conditions.append((dim, entities, bc.components, axis))
             out.append(element.vertex_constraints(dim, entities, values, comps))
+        if mode == "consistent":
+            out.append(self._implied_constraints(conditions, out))
         return out  # type: ignore[return-value]
+
+    def _implied_constraints(
+        self,
+        conditions: list[tuple[int, np.ndarray, tuple[int, ...], int | None]],
+        explicit: list[tuple[np.ndarray, np.ndarray]],
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The extra DOFs a constant-value condition implies, held at 0 (collective).
+
+        Per vertex the functionals of :meth:`GradientDofElement.boundary_gram` span the
+        constrained directions (:func:`~geofrac.elements.kinematics.constrained_bases`).
+        Where they are coordinate axes of the DOF layout those DOFs are held; elsewhere the
+        vertex's extra DOFs get the orthogonal basis Q_i (w = Q h), stored in
+        :attr:`basis`, and the constrained new DOFs are held. Vertices whose extra DOFs an
+        ``exact`` condition already fixes are left to it.
+
+        Returns:
+            (global indices, shape=(p,), zeros, shape=(p,)).
+        """
+        element = self.element
+        gdim, bs = element.kind.gdim, element.kind.block_size
+        imap = element.unknowns.dofmap.index_map
+        gram = element.boundary_gram(conditions)
+        rows = np.concatenate([r for r, _ in explicit]).astype(np.int64)
+        taken = rows[rows % bs >= gdim] // bs - imap.local_range[0]
+        gram[taken] = 0.0
+        Q, fixed = constrained_bases(gram)
+        rotated = ~np.all(np.eye(Q.shape[1]) == Q, axis=(1, 2))
+        if self.comm.allreduce(bool(rotated.any()), op=MPI.LOR):
+            self.basis = Q
+        blocks, slots = np.nonzero(fixed)
+        g = imap.local_to_global(blocks.astype(np.int32)).astype(np.int64)
+        return g * bs + gdim + slots, np.zeros(len(blocks))
 
     def compile(self) -> None:
         """JIT-compile the forms and build the vertex-to-P2 map T (set-up, timed here)."""
@@ -421,35 +517,59 @@ class GradientDofProblem(ElasticProblem):
         finally:
             for M in mats:
                 M.destroy()
+        if self._Q is not None:
+            K = self.A
+            self.A = K.ptap(self._Q)
+            K.destroy()
         self.b = self.load_vector()
         self._constrain()
 
     def load_vector(self) -> PETSc.Vec:
-        """Tᵀ b_P2: the load vector on the vertex DOFs, without Dirichlet conditions."""
+        """Qᵀ Tᵀ b_P2: the load vector on the unknowns, without Dirichlet conditions."""
         b_v = super().load_vector()
         try:
             b = self.element.prolongation().createVecRight()
             self.element.prolongation().multTranspose(b_v, b)
         finally:
             b_v.destroy()
+        if self._Q is not None:
+            w = b
+            b = w.duplicate()
+            self._Q.multTranspose(w, b)
+            w.destroy()
         return b
 
     def dirichlet(self) -> tuple[np.ndarray, np.ndarray]:
-        """(global vertex-DOF indices, values) fixed by the Dirichlet conditions (owned)."""
+        """(global indices, values) of the unknowns the Dirichlet conditions fix (owned)."""
         rows = np.concatenate([r for r, _ in self.bcs]).astype(np.int64)
         return rows, np.concatenate([v for _, v in self.bcs])
 
     def unknown(self) -> dolfinx.fem.Function:
-        """The vertex DOFs ``wh``."""
-        return self.wh
+        """The vertex DOFs ``wh``, or their rotated values ``hh`` (:attr:`basis`)."""
+        return self.wh if self.hh is None else self.hh
 
     def to_field(self) -> None:
-        """The displacement ``uh`` = T wh."""
+        """The vertex DOFs ``wh`` = Q hh (with a basis) and the displacement ``uh`` = T wh."""
+        if self.hh is not None and self.basis is not None:
+            gdim, bs = self.element.kind.gdim, self.element.kind.block_size
+            n = len(self.basis)
+            h = self.hh.x.array[: n * bs].reshape(n, bs)
+            w = self.wh.x.array[: n * bs].reshape(n, bs)
+            w[:, :gdim] = h[:, :gdim]
+            w[:, gdim:] = np.einsum("nkj,nj->nk", self.basis, h[:, gdim:])
+            self.wh.x.scatter_forward()
         self.element.prolongation().mult(self.wh.x.petsc_vec, self.uh.x.petsc_vec)
         self.uh.x.scatter_forward()
 
     def _near_nullspace(self) -> PETSc.NullSpace:
-        return self.element.rigid_body_modes()
+        return self.element.rigid_body_modes(self.basis)
+
+    def destroy(self) -> None:
+        """Free the PETSc objects, the basis change Q included."""
+        super().destroy()
+        if self._Q is not None:
+            self._Q.destroy()
+            self._Q = None
 
 
 def make_problem(

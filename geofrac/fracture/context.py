@@ -22,6 +22,7 @@ from mpi4py import MPI
 
 from geofrac import elements
 from geofrac.elements.spec import ElementSpec
+from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem
 from geofrac.fem.solution import Solution
 from geofrac.fracture.config import CrackingConfig
@@ -242,6 +243,13 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
     scene, problem, tagged = solution.scene, solution.problem, solution.tagged
     comm = tagged.mesh.comm
     spec = elements.get(scene.discretization.element)
+    if problem.changes_basis:
+        raise RunError(
+            "cracking: the boundary conditions give the vertex DOFs of "
+            f"'{scene.discretization.element}' a change of basis (a held line that is not "
+            "along a DOF axis), which the crack driver cannot assemble; set "
+            "discretization.gradient_bc = 'fixed' or use symmetry conditions"
+        )
     bs = spec.vertex_dofs[2]
     space = problem.unknown().function_space
     gm = gather_mesh(tagged.mesh, space)

@@ -103,11 +103,12 @@ class Discretization:
             0 for the other elements, which have none).
         gradient_bc: how a Dirichlet condition acts on the extra vertex DOFs of RGNT, GNT
             and RGNQ. ``"consistent"`` (default): only what the condition implies
-            (docs/elements.md, "Boundary DOFs"). ``"fixed"``: they are fixed too, to
-            the values that reproduce the exact field (½ its rotation/strain) for
-            ``value = "exact"`` and to 0 for a constant value. ``"free"``: only the
-            translations are fixed; boundary edges may bulge between vertices (fails the
-            patch test; kept for comparison, docs/elements.md).
+            (docs/elements.md, "Boundary DOFs"). ``"fixed"``: they are fixed too, to the
+            values that reproduce the exact field (½ its rotation/strain) for
+            ``value = "exact"`` and to 0 for a constant value (on rollers this also holds
+            what the condition does not imply: GNT's strains along the line).
+            ``"free"``: only the translations are fixed; boundary edges may bulge between
+            vertices (fails the patch test; kept for comparison, docs/elements.md).
         q_rand: ``efmm`` only: randomness of the integration domains' inner points in
             [0, 1] (seed Fig. 3.13); 0 takes the incentres.
         domain_seed: ``efmm`` only: seed of those random points.

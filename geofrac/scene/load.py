@@ -294,7 +294,9 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
         raise t.error("domain_seed", f"must be >= 0, got {domain_seed!r}")
     alpha_default = 0.0 if spec.zero_mode_penalty is None else spec.zero_mode_penalty
     alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True, maximum=1e6)
-    gradient_bc = t.string("gradient_bc", default="fixed", choices=("fixed", "free"))
+    gradient_bc = t.string(
+        "gradient_bc", default="consistent", choices=("consistent", "fixed", "free")
+    )
     return Discretization(
         element,
         None if q is None else int(q),
@@ -425,7 +427,21 @@ def _bcs(
         value = _value(t, len(comps), exact)
         if value == "exact" and len(comps) != geometry.dim:
             raise t.error("components", "value 'exact' constrains all components")
-        out.append(BoundaryCondition(group, value, tuple(axes.index(c) for c in comps)))  # type: ignore[arg-type]
+        symmetry = t.boolean("symmetry", False)
+        if symmetry and len(comps) != 1:
+            raise t.error(
+                "symmetry",
+                f"a symmetry condition holds exactly one component (the normal), got {comps!r}",
+            )
+        if symmetry and geometry.groups[group] != geometry.dim - 1:
+            raise t.error(
+                "symmetry",
+                f"a symmetry condition needs a {'line' if geometry.dim == 2 else 'surface'} "
+                f"group (dimension {geometry.dim - 1}); '{group}' has dimension "
+                f"{geometry.groups[group]}",
+            )
+        components = tuple(axes.index(c) for c in comps)
+        out.append(BoundaryCondition(group, value, components, bool(symmetry)))  # type: ignore[arg-type]
     return tuple(out)
 
 
@@ -543,7 +559,13 @@ def _effects(
 ) -> tuple[EffectSpec, ...]:
     """Configure each declared effect (``configured``: those already done, by name)."""
     ctx = effects.ConfigureContext(
-        str(file), geometry.dim, material, discretization.element, dict(geometry.groups), bcs
+        str(file),
+        geometry.dim,
+        material,
+        discretization.element,
+        dict(geometry.groups),
+        bcs,
+        gradient_bc=discretization.gradient_bc,
     )
     _check_methods(file, declared, "fem")
     _check_drivers(file, declared)
