@@ -18,16 +18,17 @@ from mpi4py import MPI
 
 from geofrac import effects as effect_registry
 from geofrac.elements import make_element
-from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem, make_problem
 from geofrac.fem.post import (
     TENSOR_FIELDS,
     integrate,
     locate_points,
-    probe,
+    probe_fields,
+    tensor_components,
 )
 from geofrac.fem.solution import Solution
 from geofrac.io.checkpoint import RunControl
+from geofrac.io.lines import locate_line, write_line
 from geofrac.io.xdmf import write_fields, write_meshtags
 from geofrac.log import format_seconds, sayer
 from geofrac.meshing.distribute import build_mesh, check_fracture_cover
@@ -91,10 +92,8 @@ def solve_scene(
         points[i, : scene.gdim] = scene.output.probes[name]
     with timings.phase("setup"):
         element = make_element(scene.discretization.element, mesh)
-        try:
-            cells = locate_points(mesh, points)
-        except RunError as exc:
-            raise RunError(f"output.probes: {exc}") from None
+        cells = locate_points(mesh, points, [f"output.probes.{n}" for n in names])
+        line_cells = {n: locate_line(mesh, n, ln) for n, ln in scene.output.lines.items()}
         problem = make_problem(tagged, element, scene, effect_registry.linear_terms(scene.effects))
     solution = Solution(scene, tagged, problem, timings=timings, control=control)
     counts = solution.mesh_counts()
@@ -116,8 +115,10 @@ def solve_scene(
         raise
     uh = problem.uh
     with timings.phase("postprocess"):
-        values = probe(uh, points, cells)
-        results: dict[str, Any] = {"probes": {n: values[i].tolist() for i, n in enumerate(names)}}
+        results = _probe_results(problem, scene, points, cells)
+        for name, (s, xyz, where) in line_cells.items():
+            fields = scene.output.lines[name].fields
+            solution.lines[name] = (s, xyz, probe_fields(problem, fields, xyz, where))
         if driven is not None:
             results[driven.name] = loop
         else:
@@ -137,6 +138,75 @@ def solve_scene(
             }
     solution.results = results
     return solution
+
+
+def _probe_results(
+    problem: ElasticProblem, scene: Scene, points: np.ndarray, cells: np.ndarray
+) -> dict[str, Any]:
+    """``probes`` (displacements), and ``probe_fields`` and ``stress_concentration`` if asked.
+
+    ``probe_fields``: name -> field -> value (stress and strain as component -> value,
+    :func:`~geofrac.fem.post.tensor_components`; ``principal_stress`` [σ1, σ2, σ3]).
+    ``stress_concentration`` (with ``output.nominal_stress``): name -> ``principal``
+    σ1/σ_nominal, and the normal stress along the load axis over σ_nominal (``yy`` for
+    loads along y) when every traction load is along one axis.
+    """
+    output, gdim = scene.output, scene.gdim
+    names = list(output.probes)
+    fields = ["displacement", *(f for f in output.probe_fields if f != "displacement")]
+    if output.nominal_stress is not None and "principal_stress" not in fields:
+        fields.append("principal_stress")
+    if output.nominal_stress is not None and "stress" not in fields:
+        fields.append("stress")
+    values = probe_fields(problem, fields, points, cells) if names else {}
+    results: dict[str, Any] = {
+        "probes": {n: values["displacement"][i].tolist() for i, n in enumerate(names)}
+    }
+    extra = [f for f in output.probe_fields if f != "displacement"]
+    components = tensor_components(gdim)
+    if names and extra:
+        results["probe_fields"] = {
+            n: {f: _probe_entry(values[f][i], f, components) for f in output.probe_fields}
+            for i, n in enumerate(names)
+        }
+    if names and output.nominal_stress is not None:
+        axis = _load_axis(scene)
+        concentration = {}
+        for i, n in enumerate(names):
+            factors = {"principal": float(values["principal_stress"][i, 0]) / output.nominal_stress}
+            if axis is not None:
+                key = "xyz"[axis] * 2
+                factors[key] = (
+                    float(values["stress"][i, components.index(key)]) / output.nominal_stress
+                )
+            concentration[n] = factors
+        results["stress_concentration"] = concentration
+        results["nominal_stress"] = output.nominal_stress
+    return results
+
+
+def _probe_entry(value: np.ndarray, field: str, components: tuple[str, ...]) -> Any:
+    """One probe field's JSON value: a tensor as component -> value, von Mises a number."""
+    if field in ("stress", "strain"):
+        return {c: float(v) for c, v in zip(components, value, strict=True)}
+    if field == "von_mises":
+        return float(value[0])
+    return [float(v) for v in value]
+
+
+def _load_axis(scene: Scene) -> int | None:
+    """The axis every traction load of ``scene`` acts along, or None (no clear one)."""
+    axes = set()
+    for load in scene.loads:
+        if load.type != "traction" or not isinstance(load.value, tuple):
+            return None
+        if any(isinstance(c, str) for c in load.value):
+            return None
+        nonzero = [k for k, c in enumerate(load.value) if c != 0.0]
+        if len(nonzero) != 1:
+            return None
+        axes.add(nonzero[0])
+    return axes.pop() if len(axes) == 1 else None
 
 
 def _solve_phases(problem: ElasticProblem, timings: Timings, say: Callable[[str], None]) -> None:
@@ -194,6 +264,17 @@ def _write_fractures(solution: Solution) -> None:
     write_meshtags(solution.scene.output.dir / "fractures.xdmf", tagged.mesh, tags)
 
 
+def _write_lines(solution: Solution, comm: MPI.Comm) -> dict[str, Any]:
+    """Write each sampled line's CSV and PNG; the summary's ``lines`` entry."""
+    scene = solution.scene
+    return {
+        name: write_line(
+            scene.output.dir, scene.name, name, scene.output.lines[name], s, xyz, values, comm
+        )
+        for name, (s, xyz, values) in solution.lines.items()
+    }
+
+
 class FemMethod:
     """The FEM method of the run pipeline (:class:`geofrac.pipeline.Method`)."""
 
@@ -215,6 +296,9 @@ class FemMethod:
                     _write_xdmf(solution)
                     if solution.tagged.fractures is not None:
                         _write_fractures(solution)
+            if solution.lines:
+                with timings.phase("output"):
+                    solution.results["lines"] = _write_lines(solution, comm)
             if solution.tagged.fractures is not None and comm.rank == 0:
                 from geofrac.dfn.io import save_network
 
@@ -228,15 +312,38 @@ class FemMethod:
             solution.problem.destroy()
 
     def report(self, summary: dict[str, Any]) -> list[str]:
-        """Probes (with the exact values) and the error norms."""
+        """Probes (with the exact values and the probe fields), lines and the error norms."""
         results = summary["results"]
         exact = results.get("exact_probes", {})
+        fields = results.get("probe_fields", {})
+        concentration = results.get("stress_concentration", {})
+        nominal = results.get("nominal_stress")
         lines = []
         for name, value in results["probes"].items():
             line = f"probe {name}: u = [{_numbers(value)}]"
             if name in exact:
                 line += f"  (exact [{_numbers(exact[name])}])"
             lines.append(line)
+            for field, v in fields.get(name, {}).items():
+                if field == "displacement":
+                    continue
+                if isinstance(v, dict):
+                    text = ", ".join(f"{c} {x + 0.0:.6g}" for c, x in v.items())
+                elif isinstance(v, list):
+                    text = _numbers(v) + " (σ1 >= σ2 >= σ3)"
+                else:
+                    text = f"{v + 0.0:.6g}"
+                lines.append(f"  {field.replace('_', ' ')}: {text}")
+            if name in concentration:
+                factors = concentration[name]
+                text = f"σ1/σ_nominal = {factors['principal']:.4f}"
+                for key, k in factors.items():
+                    if key != "principal":
+                        text += f", σ{key}/σ_nominal = {k:.4f}"
+                suffix = "" if nominal is None else f" (σ_nominal = {nominal:g})"
+                lines.append(f"  stress concentration: {text}{suffix}")
+        for name, entry in results.get("lines", {}).items():
+            lines.append(f"line {name}: {entry['points']} points -> {entry['csv']}, {entry['png']}")
         if "errors" in results:
             e = results["errors"]
             lines.append(

@@ -47,6 +47,16 @@ def _tensor(voigt: np.ndarray, problem: ElasticProblem) -> np.ndarray:
     return out.reshape(-1, 9)
 
 
+def _contains(triangle: np.ndarray, x: np.ndarray, tol: float = 1e-10) -> bool:
+    """Whether point ``x``, shape=(2,), lies in ``triangle``, shape=(3, 2) (borders included)."""
+    a, b, c = triangle
+    m = np.column_stack([b - a, c - a])
+    if abs(np.linalg.det(m)) == 0.0:  # a degenerate part (a crossing at a vertex)
+        return False
+    l1, l2 = np.linalg.solve(m, x - a)
+    return bool(min(l1, l2, 1.0 - l1 - l2) >= -tol)
+
+
 class EfmmProblem(ElasticProblem):
     """Linear elasticity with EFMM (seed 3.2); see the module text.
 
@@ -157,6 +167,46 @@ class EfmmProblem(ElasticProblem):
         values = out.x.array.reshape(-1, 9)
         values[T.dofmap.list.ravel()] = _tensor(e[E.dofmap.list.ravel()][:, [0, 3, 6]], self)
         return out
+
+    def point_tensors(
+        self, names: Sequence[str], points: np.ndarray, cells: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        """The stress of the node whose integration domain holds each point (eq. 3.3).
+
+        In the located cell, the point's node part is the one of its six sub-triangles
+        (:func:`~geofrac.elements.efmm_numpy.cell_subtriangles`) that contains it; on a
+        border between parts the node with the smallest input index wins (the same on
+        any number of ranks). σ = e_i0 + e_i1 ξ + e_i2 η, (ξ, η) = (x - x_i) / h, with
+        σzz of the plane (:func:`_tensor`); the strain is the compliance of that 3×3
+        stress, ε = ((1 + ν) σ - ν tr(σ) I) / E (εzz = 0 in plane strain).
+
+        Returns:
+            name -> values, shape=(n, 3, 3), identical on every rank.
+        """
+        from geofrac.elements.efmm_numpy import cell_subtriangles
+
+        assert self.element.domains is not None
+        data = self.cell_data()
+        mine = np.flatnonzero(cells >= 0)
+        local = np.zeros((len(points), 9))
+        for i in mine:
+            c = int(cells[i])
+            x = points[i, :2]
+            subs = cell_subtriangles(data["x"][c : c + 1], data["domain"][c : c + 1])[0]
+            inside = [j for j in range(3) if any(_contains(t, x) for t in subs[j])]
+            j = min(inside or range(3), key=lambda k: data["gid"][c, k])
+            coef = data["e"][c, j].reshape(3, 3)  # (σx, σy, τxy) x (1, ξ, η)
+            xi = (x - data["x"][c, j]) / self.element.domains.length
+            local[i] = _tensor((coef @ np.array([1.0, *xi]))[None, :], self)[0]
+        stress = np.empty_like(local)
+        self.comm.Allreduce(local, stress, op=MPI.SUM)
+        stress = stress.reshape(-1, 3, 3)
+        out = {"stress": stress}
+        if "strain" in names:
+            mat = self.scene.material
+            trace = np.trace(stress, axis1=1, axis2=2)[:, None, None]
+            out["strain"] = ((1 + mat.nu) * stress - mat.nu * trace * np.eye(3)) / mat.E
+        return {n: out[n] for n in names}
 
     def tensor_fields(self, names: list[str]) -> dict[str, dolfinx.fem.Function]:
         """As the base class; ``stress_nodal`` is each node's own stress (node_stress)."""

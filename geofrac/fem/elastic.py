@@ -276,6 +276,24 @@ class ElasticProblem:
         plane = self.scene.material.plane
         return tensor_fields(self.uh, self.lam, self.mu, plane, names)
 
+    def point_tensors(
+        self, names: Sequence[str], points: np.ndarray, cells: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        """3×3 ``stress``/``strain`` of the solution at points (see :func:`post.point_tensors`).
+
+        Args:
+            names: ``"stress"`` and/or ``"strain"``.
+            points: coordinates, shape=(n, 3).
+            cells: the cell of each point on its owning rank (:func:`post.locate_points`).
+
+        Returns:
+            name -> values, shape=(n, 3, 3), identical on every rank.
+        """
+        from geofrac.fem.post import point_tensors
+
+        plane = self.scene.material.plane
+        return point_tensors(self.uh, self.lam, self.mu, plane, names, points, cells)
+
     def write_extra(self, directory: Path) -> list[Path]:
         """Write the discretisation's own output files (collective); none here."""
         return []

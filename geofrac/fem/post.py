@@ -1,4 +1,9 @@
-"""Post-processing in parallel: global integrals, point probes, stress fields, error norms."""
+"""Post-processing in parallel: global integrals, point probes, stress fields, error norms.
+
+A probe's stress is the element's own field in one cell (discontinuous across cells for
+CST and P1); :func:`locate_points` says which cell wins on a shared edge or vertex. The
+nodal average of XDMF's ``stress_nodal`` is a separate recovery that probes do not use.
+"""
 
 from __future__ import annotations
 
@@ -18,10 +23,16 @@ from geofrac_forms import elasticity as forms
 __all__ = [
     "TENSOR_FIELDS",
     "error_norms",
+    "field_columns",
     "integrate",
     "locate_points",
+    "point_tensors",
+    "principal_of",
     "probe",
+    "probe_fields",
+    "tensor_components",
     "tensor_fields",
+    "von_mises_of",
 ]
 
 
@@ -31,40 +42,50 @@ def integrate(form: Any, comm: MPI.Comm) -> float:
     return float(comm.allreduce(local, op=MPI.SUM))
 
 
-def locate_points(mesh: dolfinx.mesh.Mesh, points: np.ndarray) -> np.ndarray:
-    """Owning cell of each point on this rank, or -1; each point is owned by exactly one rank.
+def locate_points(
+    mesh: dolfinx.mesh.Mesh, points: np.ndarray, labels: Sequence[str] | None = None
+) -> np.ndarray:
+    """The cell each point is evaluated in, on its owning rank; -1 elsewhere.
+
+    A point on an edge or vertex shared by several cells goes to the one with the
+    smallest original (input) cell index, so the choice, and a discontinuous field's
+    value there, is the same on any number of ranks.
 
     Args:
         mesh: the mesh.
         points: coordinates, shape=(num_points, 3).
+        labels: what to call each point in an error (default ``point i``).
 
     Returns:
         local cell indices, shape=(num_points,); -1 where another rank owns the point.
 
     Raises:
-        RunError: a point lies outside the mesh (on every rank).
+        RunError: a point lies outside the mesh (on every rank), naming the first.
     """
     tdim = mesh.topology.dim
     num_owned = mesh.topology.index_map(tdim).size_local
     tree = dolfinx.geometry.bb_tree(mesh, tdim, entities=np.arange(num_owned, dtype=np.int32))
     candidates = dolfinx.geometry.compute_collisions_points(tree, points)
     colliding = dolfinx.geometry.compute_colliding_cells(mesh, candidates, points)
+    original = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)
+    none = np.iinfo(np.int64).max
     cells = np.full(len(points), -1, dtype=np.int32)
+    key = np.full(len(points), none, dtype=np.int64)
     for i in range(len(points)):
         links = colliding.links(i)
         if len(links):
-            cells[i] = links[0]
-    comm = mesh.comm
-    big = comm.size
-    owner = np.where(cells >= 0, comm.rank, big).astype(np.int32)
-    first = np.empty_like(owner)
-    comm.Allreduce(owner, first, op=MPI.MIN)
-    missing = np.flatnonzero(first == big)
+            best = int(np.argmin(original[links]))
+            cells[i], key[i] = links[best], original[links[best]]
+    first = np.empty_like(key)
+    mesh.comm.Allreduce(key, first, op=MPI.MIN)
+    missing = np.flatnonzero(first == none)
     if len(missing):
-        raise RunError(
-            f"point(s) {points[missing, : mesh.geometry.dim].tolist()} lie outside the mesh"
-        )
-    cells[first != comm.rank] = -1
+        i = int(missing[0])
+        label = labels[i] if labels is not None else f"point {i}"
+        where = [float(c) for c in points[i, : mesh.geometry.dim]]
+        more = f" ({len(missing)} points in all)" if len(missing) > 1 else ""
+        raise RunError(f"{label} at {where} lies outside the mesh{more}")
+    cells[key != first] = -1
     return cells
 
 
@@ -92,6 +113,107 @@ def probe(
     values = np.empty_like(local)
     mesh.comm.Allreduce(local, values, op=MPI.SUM)
     return values
+
+
+def tensor_components(gdim: int) -> tuple[str, ...]:
+    """Names of the components a probed stress or strain reports, in order.
+
+    2D: ``xx, yy, zz, xy`` (zz of the analysis plane); 3D: ``xx, yy, zz, xy, yz, xz``.
+    Strain components are tensor components (ε_xy = γ_xy / 2).
+    """
+    return ("xx", "yy", "zz", "xy") if gdim == 2 else ("xx", "yy", "zz", "xy", "yz", "xz")
+
+
+_INDEX = {"xx": (0, 0), "yy": (1, 1), "zz": (2, 2), "xy": (0, 1), "yz": (1, 2), "xz": (0, 2)}
+
+
+def field_columns(field: str, gdim: int) -> tuple[str, ...]:
+    """Column names of probe field ``field`` (``geofrac.scene.load.PROBE_FIELDS``)."""
+    if field == "displacement":
+        return tuple(f"u_{a}" for a in "xyz"[:gdim])
+    if field in ("stress", "strain"):
+        return tuple(f"{field}_{c}" for c in tensor_components(gdim))
+    if field == "principal_stress":
+        return ("stress_1", "stress_2", "stress_3")
+    return (field,)
+
+
+def von_mises_of(stress: np.ndarray) -> np.ndarray:
+    """Von Mises stress sqrt(3/2 s:s), s the deviator; stress shape=(n, 3, 3) -> (n,)."""
+    s = stress - np.trace(stress, axis1=1, axis2=2)[:, None, None] / 3.0 * np.eye(3)
+    return np.sqrt(1.5 * np.einsum("nij,nij->n", s, s))
+
+
+def principal_of(stress: np.ndarray) -> np.ndarray:
+    """Principal stresses σ1 >= σ2 >= σ3; stress shape=(n, 3, 3) -> (n, 3)."""
+    return np.linalg.eigvalsh(stress)[:, ::-1]
+
+
+def probe_fields(
+    problem: Any, fields: Sequence[str], points: np.ndarray, cells: np.ndarray
+) -> dict[str, np.ndarray]:
+    """The probe fields at points, each evaluated in the cell :func:`locate_points` chose.
+
+    Stress and strain come from ``problem.point_tensors`` (the element's own field in
+    that cell); von Mises and the principal stresses from the same stress tensor.
+    Collective; identical on every rank.
+
+    Args:
+        problem: the solved :class:`~geofrac.fem.elastic.ElasticProblem`.
+        fields: names from ``geofrac.scene.load.PROBE_FIELDS``.
+        points: coordinates, shape=(n, 3).
+        cells: result of :func:`locate_points`.
+
+    Returns:
+        field -> values, shape=(n, len(field_columns(field, gdim))).
+    """
+    gdim = problem.mesh.geometry.dim
+    out: dict[str, np.ndarray] = {}
+    if "displacement" in fields:
+        out["displacement"] = probe(problem.uh, points, cells)
+    wanted = {"strain"} & set(fields)
+    if {"stress", "von_mises", "principal_stress"} & set(fields):
+        wanted.add("stress")
+    tensors = problem.point_tensors(sorted(wanted), points, cells) if wanted else {}
+    pairs = [_INDEX[c] for c in tensor_components(gdim)]
+    for name in ("stress", "strain"):
+        if name in fields:
+            out[name] = np.stack([tensors[name][:, i, j] for i, j in pairs], axis=1)
+    if "von_mises" in fields:
+        out["von_mises"] = von_mises_of(tensors["stress"])[:, None]
+    if "principal_stress" in fields:
+        out["principal_stress"] = principal_of(tensors["stress"])
+    return out
+
+
+def point_tensors(
+    uh: dolfinx.fem.Function,
+    lam: Any,
+    mu: Any,
+    plane: str,
+    names: Sequence[str],
+    points: np.ndarray,
+    cells: np.ndarray,
+) -> dict[str, np.ndarray]:
+    """3×3 stress and/or strain of ``uh`` at points, in the given cells (collective).
+
+    The cell's field (:func:`_quantities`) is interpolated into discontinuous Lagrange
+    of the degree of ``uh`` and evaluated at the point: exact on affine cells, where the
+    gradient of a degree-k field is a polynomial of degree k - 1 (Qk on parallelograms).
+
+    Returns:
+        name -> values, shape=(n, 3, 3), identical on every rank.
+    """
+    mesh = uh.function_space.mesh
+    degree = uh.function_space.ufl_element().embedded_superdegree
+    exprs = _quantities(uh, lam, mu, plane)
+    space = dolfinx.fem.functionspace(mesh, ("DG", degree, (3, 3)))
+    out = {}
+    for name in names:
+        f = dolfinx.fem.Function(space)
+        f.interpolate(dolfinx.fem.Expression(exprs[name], space.element.interpolation_points))
+        out[name] = probe(f, points, cells).reshape(-1, 3, 3)
+    return out
 
 
 def error_norms(

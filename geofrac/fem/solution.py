@@ -34,6 +34,9 @@ class Solution:
     timings: Timings = field(default_factory=Timings)
     #: checkpoints, signal stop and resume data for an effect's loop (None: a plain run).
     control: RunControl | None = None
+    #: the sampled ``output.lines``: name -> (s, points, field -> values), written by the run
+    #: pipeline (:func:`geofrac.io.lines.write_line`).
+    lines: dict[str, Any] = field(default_factory=dict)
 
     def mesh_counts(self) -> dict[str, int]:
         """Global numbers of cells and vertices, and the topological dimension."""

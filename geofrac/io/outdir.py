@@ -40,10 +40,13 @@ from geofrac.io.checkpoint import CheckpointPolicy, RunControl, latest
 from geofrac.io.summary import finish_summary, write_json
 from geofrac.log import sayer
 
-__all__ = ["INCOMPLETE", "OutputDir", "claim", "owned_run"]
+__all__ = ["INCOMPLETE", "SUBDIRECTORIES", "OutputDir", "claim", "owned_run"]
 
 #: The staging directory's name inside the output directory.
 INCOMPLETE = "incomplete"
+#: Sub-directories whose files a run publishes too, listed as ``sub/name`` in ``files``
+#: (``lines``: :data:`geofrac.io.lines.DIRECTORY`).
+SUBDIRECTORIES = ("lines",)
 _LOCK = ".lock"
 _CHECKPOINT = "checkpoint"
 
@@ -90,11 +93,7 @@ class OutputDir:
         error = None
         if self.comm.rank == 0:
             try:
-                new = sorted(
-                    p.name
-                    for p in self.stage.iterdir()
-                    if p.is_file() and p.name != "summary.json" and not _is_temporary(p.name)
-                )
+                new = _staged_files(self.stage)
                 summary["files"] = new
                 old = _published_files(self.final, legacy)
                 (self.final / "summary.json").unlink(missing_ok=True)  # first: never stale
@@ -102,7 +101,11 @@ class OutputDir:
                     target = self.final / name
                     if target.is_file() or target.is_symlink():
                         target.unlink()
+                for sub in SUBDIRECTORIES:  # gone when the old run's files were all it held
+                    with contextlib.suppress(OSError):
+                        (self.final / sub).rmdir()
                 for name in new:
+                    (self.final / name).parent.mkdir(exist_ok=True)
                     os.replace(self.stage / name, self.final / name)
             except OSError as exc:
                 error = f"output.dir: cannot publish the results into {self.final}: {exc}"
@@ -125,6 +128,33 @@ def _is_temporary(name: str) -> bool:
     return name.endswith(".tmp") or name.startswith(".")
 
 
+def _staged_files(stage: Path) -> list[str]:
+    """The run's files in ``stage``: plain names, and ``sub/name`` in :data:`SUBDIRECTORIES`."""
+    files = [
+        p.name
+        for p in stage.iterdir()
+        if p.is_file() and p.name != "summary.json" and not _is_temporary(p.name)
+    ]
+    for sub in SUBDIRECTORIES:
+        if (stage / sub).is_dir():
+            files += [
+                f"{sub}/{p.name}"
+                for p in (stage / sub).iterdir()
+                if p.is_file() and not _is_temporary(p.name)
+            ]
+    return sorted(files)
+
+
+def _is_published_name(name: Any) -> bool:
+    """A plain file name, or ``sub/name`` with ``sub`` in :data:`SUBDIRECTORIES`."""
+    if not isinstance(name, str) or not name:
+        return False
+    sub, _, rest = name.rpartition("/")
+    return (
+        (not sub or sub in SUBDIRECTORIES) and rest == Path(rest).name and rest[:1] not in ("", ".")
+    )
+
+
 def _published_files(final: Path, legacy: Sequence[str]) -> list[str]:
     """The files of the run published in ``final``: its summary's ``files``, else ``legacy``."""
     try:
@@ -133,8 +163,8 @@ def _published_files(final: Path, legacy: Sequence[str]) -> list[str]:
         files = None
     if not isinstance(files, list):
         files = list(legacy)
-    # only plain names: a summary.json edited by hand must not delete anything else
-    return [f for f in files if isinstance(f, str) and f and f == Path(f).name and f[0] != "."]
+    # only the run's own names: a summary.json edited by hand must not delete anything else
+    return [f for f in files if _is_published_name(f)]
 
 
 def _describe_holder(lock: Path) -> str:

@@ -21,6 +21,7 @@ __all__ = [
     "checkpoint_keys",
     "finite",
     "first_too_deep",
+    "is_name",
     "is_number",
     "output_directory",
     "short",
@@ -88,13 +89,18 @@ def checkpoint_keys(t: Table) -> tuple[int, float]:
     return int(every), float(minutes)  # type: ignore[arg-type]
 
 
+def is_name(text: str) -> bool:
+    """A safe file name: 1 to 100 letters, digits, ``-``, ``_``, ``.``, not starting with ``.``."""
+    return len(text) <= MAX_NAME_LENGTH and _NAME.fullmatch(text) is not None
+
+
 def check_name(file: Path, name: str, given: bool) -> str:
     """A scene name is a name, not a path: letters, digits, ``-``, ``_``, ``.``.
 
     No leading dot (so neither ``.`` nor ``..``), no ``/``, 1 to 100 characters.
     ``given``: the scene sets ``name`` (else it is the file's stem).
     """
-    if len(name) <= MAX_NAME_LENGTH and _NAME.fullmatch(name):
+    if is_name(name):
         return name
     what = f"{short(name)}" if given else f"the file stem {short(name)} (the default)"
     raise SceneError(

@@ -27,6 +27,7 @@ from geofrac.model.scene import (
     EffectSpec,
     ExactSpec,
     Geometry,
+    Line,
     Load,
     Material,
     Output,
@@ -38,6 +39,7 @@ from geofrac.model.table import (
     check_name,
     checkpoint_keys,
     first_too_deep,
+    is_name,
     is_number,
     short,
 )
@@ -50,6 +52,7 @@ __all__ = [
     "LOAD_TYPES",
     "METHODS",
     "OUTPUT_FIELDS",
+    "PROBE_FIELDS",
     "SECTION_KEYS",
     "TOP_LEVEL_KEYS",
     "apply_overrides",
@@ -109,6 +112,13 @@ SECTION_KEYS: dict[str, tuple[str, ...]] = {
 OUTPUT_FIELDS = ("displacement", "stress", "strain", "von_mises", "stress_nodal", "strain_nodal")
 #: Fields written when ``output.fields`` is not given.
 DEFAULT_OUTPUT_FIELDS = ("displacement", "stress", "von_mises")
+#: Fields ``output.probe_fields`` and ``output.lines.NAME.fields`` may list (the value of
+#: the element's own field at the point: docs/output.md, "Probes and lines").
+PROBE_FIELDS = ("displacement", "stress", "strain", "von_mises", "principal_stress")
+#: Keys of one ``[output.lines.NAME]`` table.
+LINE_KEYS = ("start", "end", "points", "fields")
+#: Most sample points of one line.
+MAX_LINE_POINTS = 10000
 _AXES = ("x", "y", "z")
 #: Upper limits of material constants (any unit system: E of diamond is 1.2e12 Pa).
 MAX_MODULUS = 1e15
@@ -502,8 +512,15 @@ def _solver(file: Path, raw: Any) -> Solver:
 
 
 def _output(
-    file: Path, raw: Any, name: str, dim: int, out: Path | None, trusted: bool = False
+    file: Path,
+    raw: Any,
+    name: str,
+    dim: int,
+    out: Path | None,
+    trusted: bool = False,
+    driver: str | None = None,
 ) -> Output:
+    """The ``[output]`` table; ``driver``: the declared effect that drives the run, if any."""
     t = _Table(file, "output", raw, SECTION_KEYS["output"])
     directory = _output_directory(t, name, out, trusted)
     fields = t.data.get("fields", list(DEFAULT_OUTPUT_FIELDS))
@@ -519,8 +536,73 @@ def _output(
     probes_raw = t.data.get("probes", {})
     p = _Table(file, "output.probes", probes_raw, list(probes_raw))
     probes = {k: p.vector(k, dim) for k in probes_raw}
+    probe_fields = _probe_fields(t, "probe_fields", driver)
+    lines_raw = t.data.get("lines", {})
+    lt = _Table(file, "output.lines", lines_raw, list(lines_raw))
+    lines = {k: _line(lt, k, dim, driver) for k in lines_raw}
+    nominal = t.number("nominal_stress", positive=True)
+    if nominal is not None and driver is not None:
+        raise t.error(
+            "nominal_stress",
+            f"effect '{driver}' drives the run: its probes report displacement only",
+        )
     every, minutes = checkpoint_keys(t)
-    return Output(directory, tuple(fields), t.boolean("xdmf", True), probes, every, minutes)
+    return Output(
+        directory,
+        tuple(fields),
+        t.boolean("xdmf", True),
+        probes,
+        every,
+        minutes,
+        probe_fields,
+        lines,
+        None if nominal is None else float(nominal),
+    )
+
+
+def _probe_fields(t: _Table, key: str, driver: str | None) -> tuple[str, ...]:
+    """A distinct list of :data:`PROBE_FIELDS` (default displacement only).
+
+    A run driven by an effect's loop (cracking) reports displacement only: its cracked
+    cells carry no element stress field.
+    """
+    value = t.data.get(key, ["displacement"])
+    if (
+        not isinstance(value, list)
+        or not value
+        or not all(isinstance(f, str) for f in value)
+        or len(set(value)) != len(value)
+    ):
+        raise t.error(key, f"must be a list of distinct names from {list(PROBE_FIELDS)}")
+    for f in value:
+        if f not in PROBE_FIELDS:
+            raise t.error(key, f"unknown field {f!r}" + did_you_mean(f, PROBE_FIELDS))
+    if driver is not None and value != ["displacement"]:
+        raise t.error(
+            key,
+            f"effect '{driver}' drives the run: only ['displacement'] can be probed "
+            "(its cracked cells have no element stress)",
+        )
+    return tuple(value)
+
+
+def _line(lines: _Table, name: str, dim: int, driver: str | None) -> Line:
+    """One ``[output.lines.NAME]`` table: a segment of distinct end points."""
+    if not is_name(name):
+        raise lines.error(
+            name,
+            "is not a line name: use 1 to 100 letters, digits, '-', '_' or '.', not starting "
+            "with '.' (the name becomes lines/<name>.csv)",
+        )
+    t = _Table(lines.file, lines.path(name), lines.data[name], LINE_KEYS)
+    for key in ("start", "end"):
+        if not t.has(key):
+            raise t.error(key, "missing (required)")
+    start, end = t.vector("start", dim), t.vector("end", dim)
+    if start == end:
+        raise t.error("end", f"must differ from start, both are {list(start)}")
+    points = t.number("points", default=101, integer=True, minimum=2, maximum=MAX_LINE_POINTS)
+    return Line(start, end, int(points), _probe_fields(t, "fields", driver))  # type: ignore[arg-type]
 
 
 def _declared(file: Path, data: dict[str, Any]) -> list[str]:
@@ -986,6 +1068,7 @@ def _validate(
         geometry.dim,
         None if out is None else Path(out),
         trusted,
+        next((e for e in declared if effects.drives(e)), None),
     )
     specs = _effects(file, data, declared, geometry, material, discretization, bcs, configured)
     return Scene(
