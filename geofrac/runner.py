@@ -17,6 +17,7 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac import effects as effect_registry
+from geofrac.analytic import ExactSolution
 from geofrac.elements import make_element
 from geofrac.fem.elastic import ElasticProblem, make_problem
 from geofrac.fem.post import (
@@ -136,8 +137,24 @@ def solve_scene(
                 n: [float(c) for c in problem.exact.displacement(*points[i, : scene.gdim])]
                 for i, n in enumerate(names)
             }
+            if "stress" in scene.output.probe_fields:
+                results["exact_probe_stress"] = {
+                    n: _exact_stress(problem.exact, points[i, : scene.gdim])
+                    for i, n in enumerate(names)
+                }
     solution.results = results
     return solution
+
+
+def _exact_stress(exact: ExactSolution, point: np.ndarray) -> dict[str, float]:
+    """The exact solution's stress at ``point``, shape=(gdim,), by component name.
+
+    In-plane components only in 2D (the exact solutions give the gdim × gdim tensor).
+    """
+    sigma = np.array(exact.stress(*point), dtype=float)
+    names = ("xx", "yy", "xy") if len(point) == 2 else ("xx", "yy", "zz", "xy", "yz", "xz")
+    index = {"xx": (0, 0), "yy": (1, 1), "zz": (2, 2), "xy": (0, 1), "yz": (1, 2), "xz": (0, 2)}
+    return {c: float(sigma[index[c]]) for c in names}
 
 
 def _probe_results(
@@ -315,6 +332,7 @@ class FemMethod:
         """Probes (with the exact values and the probe fields), lines and the error norms."""
         results = summary["results"]
         exact = results.get("exact_probes", {})
+        exact_stress = results.get("exact_probe_stress", {})
         fields = results.get("probe_fields", {})
         concentration = results.get("stress_concentration", {})
         nominal = results.get("nominal_stress")
@@ -333,6 +351,9 @@ class FemMethod:
                     text = _numbers(v) + " (σ1 >= σ2 >= σ3)"
                 else:
                     text = f"{v + 0.0:.6g}"
+                if field == "stress" and name in exact_stress:
+                    pairs = exact_stress[name].items()
+                    text += "  (exact " + ", ".join(f"{c} {x + 0.0:.6g}" for c, x in pairs) + ")"
                 lines.append(f"  {field.replace('_', ' ')}: {text}")
             if name in concentration:
                 factors = concentration[name]
