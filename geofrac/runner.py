@@ -23,16 +23,17 @@ from geofrac.fem.elastic import ElasticProblem, make_problem
 from geofrac.fem.post import (
     TENSOR_FIELDS,
     integrate,
+    locate_line,
     locate_points,
     probe_fields,
-    tensor_components,
 )
 from geofrac.fem.solution import Solution
 from geofrac.io.checkpoint import RunControl
-from geofrac.io.lines import locate_line, write_line
+from geofrac.io.lines import write_line
 from geofrac.io.xdmf import write_fields, write_meshtags
 from geofrac.log import format_seconds, sayer
 from geofrac.meshing.distribute import build_mesh, check_fracture_cover
+from geofrac.model.fields import COMPONENT_INDEX, tensor_components
 from geofrac.model.scene import Scene
 from geofrac.timing import Timings
 from geofrac_forms.elasticity import strain_energy_form
@@ -153,8 +154,7 @@ def _exact_stress(exact: ExactSolution, point: np.ndarray) -> dict[str, float]:
     """
     sigma = np.array(exact.stress(*point), dtype=float)
     names = ("xx", "yy", "xy") if len(point) == 2 else ("xx", "yy", "zz", "xy", "yz", "xz")
-    index = {"xx": (0, 0), "yy": (1, 1), "zz": (2, 2), "xy": (0, 1), "yz": (1, 2), "xz": (0, 2)}
-    return {c: float(sigma[index[c]]) for c in names}
+    return {c: float(sigma[COMPONENT_INDEX[c]]) for c in names}
 
 
 def _probe_results(
@@ -163,7 +163,7 @@ def _probe_results(
     """``probes`` (displacements), and ``probe_fields`` and ``stress_concentration`` if asked.
 
     ``probe_fields``: name -> field -> value (stress and strain as component -> value,
-    :func:`~geofrac.fem.post.tensor_components`; ``principal_stress`` [σ1, σ2, σ3]).
+    :func:`~geofrac.model.fields.tensor_components`; ``principal_stress`` [σ1, σ2, σ3]).
     ``stress_concentration`` (with ``output.nominal_stress``): name -> ``principal``
     σ1/σ_nominal, and the normal stress along the load axis over σ_nominal (``yy`` for
     loads along y) when every traction load is along one axis.

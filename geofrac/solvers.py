@@ -17,6 +17,7 @@ import ctypes
 import functools
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import dolfinx_solver  # orders MPI before the DOLFINx bindings; its lib/ holds libpetsc
 
@@ -30,6 +31,7 @@ __all__ = [
     "AUTO_DIRECT_MAX_DOFS",
     "MAX_RELATIVE_RESIDUAL",
     "LinearSolver",
+    "block_diagonal",
     "mumps_inverse_entries",
     "mumps_sparse_solve",
     "orthonormal_nullspace",
@@ -340,3 +342,24 @@ class LinearSolver:
         self.ksp.destroy()
         if self._nullspace is not None:
             self._nullspace.destroy()
+
+
+def block_diagonal(blocks: np.ndarray, space: Any) -> PETSc.Mat:
+    """A block-diagonal AIJ matrix on ``space`` from owned blocks, shape=(n_owned, bs, bs).
+
+    ``space`` is a blocked DOLFINx function space of block size bs; the caller destroys
+    the matrix.
+    """
+    imap, bs = space.dofmap.index_map, space.dofmap.index_map_bs
+    n = imap.size_local
+    first = imap.local_range[0] * bs
+    cols = first + (np.arange(n)[:, None, None] * bs + np.arange(bs)[None, None, :])
+    cols = np.broadcast_to(cols, (n, bs, bs)).reshape(-1).astype(PETSc.IntType)
+    indptr = (np.arange(n * bs + 1) * bs).astype(PETSc.IntType)
+    M = PETSc.Mat().createAIJ(
+        size=((n * bs, imap.size_global * bs), (n * bs, imap.size_global * bs)),
+        csr=(indptr, cols, blocks.reshape(-1)),
+        comm=space.mesh.comm,
+    )
+    M.assemble()
+    return M

@@ -39,6 +39,7 @@ from geofrac.elements.base import Element
 from geofrac.elements.efmm_numpy import edge_crossings
 from geofrac.errors import RunError
 from geofrac.geometry.triangles import inner_points
+from geofrac.solvers import block_diagonal
 
 __all__ = ["DomainData", "EfmmElement", "domain_data", "efmm"]
 
@@ -213,7 +214,7 @@ class EfmmElement(Element):
         blocks = np.empty((n, 9, 9))
         owned = np.flatnonzero(to_e[: S.dofmap.index_map.size_local] < n)
         blocks[to_e[owned]] = mass.array.reshape(-1, 9, 9)[owned]
-        self._Ainv = _block_diagonal(np.linalg.inv(blocks), E)
+        self._Ainv = block_diagonal(np.linalg.inv(blocks), E)
 
     def stiffness(self) -> PETSc.Mat:
         """K = Cᵀ A⁻¹ C on the displacement DOFs (a new matrix; the caller destroys it)."""
@@ -243,23 +244,6 @@ class EfmmElement(Element):
             if M is not None:
                 M.destroy()
         self._C = self._Ainv = None
-
-
-def _block_diagonal(blocks: np.ndarray, space: Any) -> PETSc.Mat:
-    """A block-diagonal AIJ matrix on ``space`` from owned blocks, shape=(n_owned, bs, bs)."""
-    imap, bs = space.dofmap.index_map, space.dofmap.index_map_bs
-    n = imap.size_local
-    first = imap.local_range[0] * bs
-    cols = first + (np.arange(n)[:, None, None] * bs + np.arange(bs)[None, None, :])
-    cols = np.broadcast_to(cols, (n, bs, bs)).reshape(-1).astype(PETSc.IntType)
-    indptr = (np.arange(n * bs + 1) * bs).astype(PETSc.IntType)
-    M = PETSc.Mat().createAIJ(
-        size=((n * bs, imap.size_global * bs), (n * bs, imap.size_global * bs)),
-        csr=(indptr, cols, blocks.reshape(-1)),
-        comm=space.mesh.comm,
-    )
-    M.assemble()
-    return M
 
 
 def efmm(mesh: dolfinx.mesh.Mesh) -> EfmmElement:

@@ -30,7 +30,7 @@ from geofrac.elements.kinematics import (
     symmetry_functionals,
 )
 from geofrac.elements.kinematics import local_prolongation as _local_prolongation
-from geofrac.solvers import orthonormal_nullspace
+from geofrac.solvers import block_diagonal, orthonormal_nullspace
 
 __all__ = ["GradientDofElement", "gnt", "rgnq", "rgnt"]
 
@@ -230,21 +230,11 @@ class GradientDofElement(Element):
             Q as a square AIJ matrix on W (the caller destroys it).
         """
         W, gdim, bs = self.dof_space, self.kind.gdim, self.kind.block_size
-        imap = W.dofmap.index_map
-        n = imap.size_local
+        n = W.dofmap.index_map.size_local
         block = np.zeros((n, bs, bs))
         block[:, np.arange(gdim), np.arange(gdim)] = 1.0
         block[:, gdim:, gdim:] = Q
-        cols = (imap.local_range[0] + np.arange(n))[:, None, None] * bs + np.arange(bs)
-        cols = np.broadcast_to(cols, (n, bs, bs)).reshape(-1).astype(PETSc.IntType)
-        indptr = (np.arange(n * bs + 1) * bs).astype(PETSc.IntType)
-        M = PETSc.Mat().createAIJ(
-            size=((n * bs, imap.size_global * bs), (n * bs, imap.size_global * bs)),
-            csr=(indptr, cols, block.reshape(-1)),
-            comm=W.mesh.comm,
-        )
-        M.assemble()
-        return M
+        return block_diagonal(block, W)
 
     def rigid_body_modes(self, Q: np.ndarray | None = None) -> PETSc.NullSpace:
         """Orthonormal rigid body modes on W: translations, and rotations with g = ½ Π ω.

@@ -18,19 +18,21 @@ import ufl
 from mpi4py import MPI
 
 from geofrac.errors import RunError
+from geofrac.io.lines import sample_points
+from geofrac.model.fields import COMPONENT_INDEX, tensor_components
+from geofrac.model.scene import Line
 from geofrac_forms import elasticity as forms
 
 __all__ = [
     "TENSOR_FIELDS",
     "error_norms",
-    "field_columns",
     "integrate",
+    "locate_line",
     "locate_points",
     "point_tensors",
     "principal_of",
     "probe",
     "probe_fields",
-    "tensor_components",
     "tensor_fields",
     "von_mises_of",
 ]
@@ -89,6 +91,22 @@ def locate_points(
     return cells
 
 
+def locate_line(
+    mesh: dolfinx.mesh.Mesh, name: str, line: Line
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The samples of ``line`` and their cells (:func:`locate_points`).
+
+    Returns:
+        ``s`` shape=(points,), the points shape=(points, 3), the cells shape=(points,).
+
+    Raises:
+        RunError: collectively, naming the line and its first sample outside the mesh.
+    """
+    s, xyz = sample_points(line)
+    labels = [f"output.lines.{name}: sample {i} (s = {s[i]:.6g})" for i in range(len(s))]
+    return s, xyz, locate_points(mesh, xyz, labels)
+
+
 def probe(
     u: dolfinx.fem.Function, points: np.ndarray, cells: np.ndarray | None = None
 ) -> np.ndarray:
@@ -113,29 +131,6 @@ def probe(
     values = np.empty_like(local)
     mesh.comm.Allreduce(local, values, op=MPI.SUM)
     return values
-
-
-def tensor_components(gdim: int) -> tuple[str, ...]:
-    """Names of the components a probed stress or strain reports, in order.
-
-    2D: ``xx, yy, zz, xy`` (zz of the analysis plane); 3D: ``xx, yy, zz, xy, yz, xz``.
-    Strain components are tensor components (ε_xy = γ_xy / 2).
-    """
-    return ("xx", "yy", "zz", "xy") if gdim == 2 else ("xx", "yy", "zz", "xy", "yz", "xz")
-
-
-_INDEX = {"xx": (0, 0), "yy": (1, 1), "zz": (2, 2), "xy": (0, 1), "yz": (1, 2), "xz": (0, 2)}
-
-
-def field_columns(field: str, gdim: int) -> tuple[str, ...]:
-    """Column names of probe field ``field`` (``geofrac.scene.load.PROBE_FIELDS``)."""
-    if field == "displacement":
-        return tuple(f"u_{a}" for a in "xyz"[:gdim])
-    if field in ("stress", "strain"):
-        return tuple(f"{field}_{c}" for c in tensor_components(gdim))
-    if field == "principal_stress":
-        return ("stress_1", "stress_2", "stress_3")
-    return (field,)
 
 
 def von_mises_of(stress: np.ndarray) -> np.ndarray:
@@ -175,7 +170,7 @@ def probe_fields(
     if {"stress", "von_mises", "principal_stress"} & set(fields):
         wanted.add("stress")
     tensors = problem.point_tensors(sorted(wanted), points, cells) if wanted else {}
-    pairs = [_INDEX[c] for c in tensor_components(gdim)]
+    pairs = [COMPONENT_INDEX[c] for c in tensor_components(gdim)]
     for name in ("stress", "strain"):
         if name in fields:
             out[name] = np.stack([tensors[name][:, i, j] for i, j in pairs], axis=1)

@@ -2,7 +2,8 @@
 
 A line (``[output.lines.NAME]``) is sampled at ``points`` equally spaced points, ends
 included. Every sample must lie in the mesh: a point outside stops the run before the
-solve (:func:`locate_line`), so a file never holds a NaN or a silently shortened line.
+solve (:func:`geofrac.fem.post.locate_line`), so a file never holds a NaN or a silently
+shortened line.
 The values are those of the probes (:func:`geofrac.fem.post.probe_fields`): the
 element's own field in the cell holding the point.
 """
@@ -12,15 +13,14 @@ from __future__ import annotations
 import csv
 from pathlib import Path
 
-import dolfinx
 import numpy as np
 from mpi4py import MPI
 
 from geofrac.errors import RunError
-from geofrac.fem.post import field_columns, locate_points
+from geofrac.model.fields import field_columns
 from geofrac.model.scene import Line
 
-__all__ = ["DIRECTORY", "columns", "locate_line", "sample_points", "write_line"]
+__all__ = ["DIRECTORY", "columns", "sample_points", "write_line"]
 
 #: The sub-directory of the output directory that holds the lines' files.
 DIRECTORY = "lines"
@@ -38,22 +38,6 @@ def sample_points(line: Line) -> tuple[np.ndarray, np.ndarray]:
     xyz = np.zeros((line.points, 3))
     xyz[:, : len(start)] = start + t[:, None] * (end - start)
     return t * float(np.linalg.norm(end - start)), xyz
-
-
-def locate_line(
-    mesh: dolfinx.mesh.Mesh, name: str, line: Line
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The samples of ``line`` and their cells (:func:`~geofrac.fem.post.locate_points`).
-
-    Returns:
-        ``s`` shape=(points,), the points shape=(points, 3), the cells shape=(points,).
-
-    Raises:
-        RunError: collectively, naming the line and its first sample outside the mesh.
-    """
-    s, xyz = sample_points(line)
-    labels = [f"output.lines.{name}: sample {i} (s = {s[i]:.6g})" for i in range(len(s))]
-    return s, xyz, locate_points(mesh, xyz, labels)
 
 
 def columns(fields: tuple[str, ...], gdim: int) -> list[str]:
