@@ -28,8 +28,6 @@ total force on the specimen is t F); in 3D it is a force.
 
 from __future__ import annotations
 
-import ast
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -70,13 +68,6 @@ _UFL_FUNCTIONS: dict[str, Callable[..., Any]] = {
     "min": ufl.min_value,
     "max": ufl.max_value,
 }
-_UFL_BINARY: dict[type, Callable[[Any, Any], Any]] = {
-    ast.Add: lambda a, b: a + b,
-    ast.Sub: lambda a, b: a - b,
-    ast.Mult: lambda a, b: a * b,
-    ast.Div: lambda a, b: a / b,
-    ast.Pow: lambda a, b: a**b,
-}
 
 
 def expression_ufl(text: str, mesh: dolfinx.mesh.Mesh) -> Any:
@@ -91,24 +82,7 @@ def expression_ufl(text: str, mesh: dolfinx.mesh.Mesh) -> Any:
     tree = expr.parse(text, names).tree
     x = ufl.SpatialCoordinate(mesh)
     coordinates = {name: x[i] for i, name in enumerate(names)}
-
-    def build(node: ast.expr) -> Any:
-        if isinstance(node, ast.Constant):
-            try:
-                return float(node.value)
-            except OverflowError:  # an integer literal beyond float64, as expr does
-                return math.inf
-        if isinstance(node, ast.Name):
-            return coordinates[node.id] if node.id in coordinates else expr.CONSTANTS[node.id]
-        if isinstance(node, ast.UnaryOp):
-            operand = build(node.operand)
-            return -operand if isinstance(node.op, ast.USub) else operand
-        if isinstance(node, ast.BinOp):
-            return _UFL_BINARY[type(node.op)](build(node.left), build(node.right))
-        assert isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
-        return _UFL_FUNCTIONS[node.func.id](*(build(a) for a in node.args))
-
-    return ufl.as_ufl(build(tree))
+    return ufl.as_ufl(expr.fold(tree, coordinates, _UFL_FUNCTIONS, lambda v: v))
 
 
 def value_ufl(value: Sequence[float | str], mesh: dolfinx.mesh.Mesh) -> Any:

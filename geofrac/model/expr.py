@@ -17,8 +17,11 @@ every point. Pure Python + numpy.
 from __future__ import annotations
 
 import ast
+import math
+import operator
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -29,6 +32,7 @@ __all__ = [
     "Expression",
     "ExpressionError",
     "evaluate",
+    "fold",
     "parse",
 ]
 
@@ -50,16 +54,19 @@ FUNCTIONS: dict[str, tuple[Callable[..., np.ndarray], int]] = {
 }
 #: Named constants.
 CONSTANTS = {"pi": float(np.pi)}
-_BINARY: dict[type, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {
-    ast.Add: np.add,
-    ast.Sub: np.subtract,
-    ast.Mult: np.multiply,
-    ast.Div: np.divide,
-    ast.Pow: np.power,
+#: The arithmetic of each operator node; Python's operators, so that the same tree folds
+#: over float64 numpy arrays (:meth:`Expression.__call__`) and over other algebras, such as
+#: UFL expressions (:func:`fold`).
+_BINARY: dict[type, Callable[[Any, Any], Any]] = {
+    ast.Add: operator.add,
+    ast.Sub: operator.sub,
+    ast.Mult: operator.mul,
+    ast.Div: operator.truediv,
+    ast.Pow: operator.pow,
 }
-_UNARY: dict[type, Callable[[np.ndarray], np.ndarray]] = {
-    ast.UAdd: np.positive,
-    ast.USub: np.negative,
+_UNARY: dict[type, Callable[[Any], Any]] = {
+    ast.UAdd: operator.pos,
+    ast.USub: operator.neg,
 }
 
 
@@ -89,7 +96,9 @@ class Expression:
         """
         n = len(next(iter(values.values()))) if values else 1
         with np.errstate(all="ignore"):
-            out = _eval(self.tree, {k: np.asarray(v, dtype=np.float64) for k, v in values.items()})
+            variables = {k: np.asarray(v, dtype=np.float64) for k, v in values.items()}
+            numpy = {name: f for name, (f, _) in FUNCTIONS.items()}
+            out = fold(self.tree, variables, numpy, lambda v: np.asarray(v, np.float64))
             return np.broadcast_to(np.asarray(out, dtype=np.float64), (n,)).copy()
 
 
@@ -156,32 +165,40 @@ def _check(node: ast.AST, names: tuple[str, ...]) -> None:
     raise ExpressionError(f"contains {type(node).__name__}, which is not arithmetic")
 
 
-def _eval(node: ast.expr, values: dict[str, np.ndarray]) -> np.ndarray | float:
-    """Evaluate a checked tree (its depth is bounded by :data:`MAX_NODES`)."""
-    if isinstance(node, ast.Constant | ast.Name):
-        return _leaf(node, values)
-    if isinstance(node, ast.UnaryOp):
-        return _UNARY[type(node.op)](np.float64(_eval(node.operand, values)))
-    if isinstance(node, ast.BinOp):
-        a = np.asarray(_eval(node.left, values), np.float64)
-        b = np.asarray(_eval(node.right, values), np.float64)
-        return _BINARY[type(node.op)](a, b)
-    if isinstance(node, ast.Call):
-        func = FUNCTIONS[node.func.id][0]  # type: ignore[attr-defined]
-        return func(*(np.asarray(_eval(a, values), np.float64) for a in node.args))
-    raise ExpressionError(f"contains {type(node).__name__}")  # unreachable after _check
+def fold(
+    tree: ast.expr,
+    variables: Mapping[str, Any],
+    functions: Mapping[str, Callable[..., Any]],
+    lift: Callable[[Any], Any],
+) -> Any:
+    """Evaluate a checked tree in an algebra: numpy arrays, UFL expressions, ...
 
+    Args:
+        tree: :attr:`Expression.tree` (its depth is bounded by :data:`MAX_NODES`).
+        variables: name -> value of each name the expression may use.
+        functions: name -> the algebra's function, for each of :data:`FUNCTIONS`.
+        lift: turns a number or a value into the algebra's operand type before every
+            operation (float64 arrays for numpy, so that ``**`` follows numpy's rules).
+    """
 
-def _leaf(node: ast.Constant | ast.Name, values: dict[str, np.ndarray]) -> np.ndarray | float:
-    """A number literal, a constant or a coordinate."""
-    if isinstance(node, ast.Constant):
-        try:
-            return float(node.value)
-        except OverflowError:  # an integer literal beyond float64
-            return np.inf
-    if node.id in CONSTANTS:
-        return CONSTANTS[node.id]
-    return values[node.id]
+    def walk(node: ast.expr) -> Any:
+        if isinstance(node, ast.Constant):
+            try:
+                return float(node.value)
+            except OverflowError:  # an integer literal beyond float64
+                return math.inf
+        if isinstance(node, ast.Name):
+            return CONSTANTS[node.id] if node.id in CONSTANTS else variables[node.id]
+        if isinstance(node, ast.UnaryOp):
+            return _UNARY[type(node.op)](lift(walk(node.operand)))
+        if isinstance(node, ast.BinOp):
+            return _BINARY[type(node.op)](lift(walk(node.left)), lift(walk(node.right)))
+        if isinstance(node, ast.Call):
+            call = functions[node.func.id]  # type: ignore[attr-defined]
+            return call(*(lift(walk(a)) for a in node.args))
+        raise ExpressionError(f"contains {type(node).__name__}")  # unreachable after _check
+
+    return walk(tree)
 
 
 def evaluate(expression: Expression, points: np.ndarray) -> np.ndarray:
