@@ -117,10 +117,20 @@ def solve_scene(
         raise
     uh = problem.uh
     with timings.phase("postprocess"):
-        results = _probe_results(problem, scene, points, cells)
-        for name, (s, xyz, where) in line_cells.items():
-            fields = scene.output.lines[name].fields
-            solution.lines[name] = (s, xyz, probe_fields(problem, fields, xyz, where))
+        # probes and lines in one evaluation (point_tensors interpolates on the whole mesh)
+        fields = _probe_field_names(scene)
+        for line in scene.output.lines.values():
+            fields += [f for f in line.fields if f not in fields]
+        xyz = np.vstack([points, *(x for _, x, _ in line_cells.values())])
+        where = np.concatenate([cells, *(w for _, _, w in line_cells.values())])
+        values = probe_fields(problem, fields, xyz, where) if len(xyz) else {}
+        start = len(points)
+        results = _probe_results(scene, {f: v[:start] for f, v in values.items()})
+        for name, (s, x, _) in line_cells.items():
+            stop = start + len(s)
+            wanted = scene.output.lines[name].fields
+            solution.lines[name] = (s, x, {f: values[f][start:stop] for f in wanted})
+            start = stop
         if driven is not None:
             results[driven.name] = loop
         else:
@@ -157,11 +167,26 @@ def _exact_stress(exact: ExactSolution, point: np.ndarray) -> dict[str, float]:
     return {c: float(sigma[COMPONENT_INDEX[c]]) for c in names}
 
 
-def _probe_results(
-    problem: ElasticProblem, scene: Scene, points: np.ndarray, cells: np.ndarray
-) -> dict[str, Any]:
+def _probe_field_names(scene: Scene) -> list[str]:
+    """The fields the probes are evaluated for.
+
+    Displacement, ``output.probe_fields``, and the principal stress and stress that
+    ``output.nominal_stress`` needs.
+    """
+    output = scene.output
+    fields = ["displacement", *(f for f in output.probe_fields if f != "displacement")]
+    if output.nominal_stress is not None and "principal_stress" not in fields:
+        fields.append("principal_stress")
+    if output.nominal_stress is not None and "stress" not in fields:
+        fields.append("stress")
+    return fields
+
+
+def _probe_results(scene: Scene, values: dict[str, np.ndarray]) -> dict[str, Any]:
     """``probes`` (displacements), and ``probe_fields`` and ``stress_concentration`` if asked.
 
+    ``values``: field -> value at each probe (:func:`_probe_field_names`), shape=(num_probes,
+    components); empty without probes.
     ``probe_fields``: name -> field -> value (stress and strain as component -> value,
     :func:`~geofrac.model.fields.tensor_components`; ``principal_stress`` [σ1, σ2, σ3]).
     ``stress_concentration`` (with ``output.nominal_stress``): name -> ``principal``
@@ -170,12 +195,6 @@ def _probe_results(
     """
     output, gdim = scene.output, scene.gdim
     names = list(output.probes)
-    fields = ["displacement", *(f for f in output.probe_fields if f != "displacement")]
-    if output.nominal_stress is not None and "principal_stress" not in fields:
-        fields.append("principal_stress")
-    if output.nominal_stress is not None and "stress" not in fields:
-        fields.append("stress")
-    values = probe_fields(problem, fields, points, cells) if names else {}
     results: dict[str, Any] = {
         "probes": {n: values["displacement"][i].tolist() for i, n in enumerate(names)}
     }
