@@ -220,6 +220,32 @@ class Table:
                 raise self.error(name, f"entry {i} must be finite, got {short(c)}")
         return tuple(float(c) for c in value)
 
+    def names(
+        self,
+        name: str,
+        choices: Sequence[str],
+        default: Sequence[str],
+        kind: str = "field",
+        empty: bool = True,
+    ) -> tuple[str, ...]:
+        """A list of distinct names from ``choices`` (``default`` when absent).
+
+        ``kind`` names an entry in the error for an unknown one; ``empty``: whether the
+        list may be empty.
+        """
+        value = self.data.get(name, list(default))
+        if (
+            not isinstance(value, list)
+            or (not empty and not value)
+            or not all(isinstance(f, str) for f in value)
+            or len(set(value)) != len(value)
+        ):
+            raise self.error(name, f"must be a list of distinct names from {list(choices)}")
+        for f in value:
+            if f not in choices:
+                raise self.error(name, f"unknown {kind} {f!r}" + did_you_mean(f, choices))
+        return tuple(value)
+
     def boolean(self, name: str, default: bool) -> bool:
         """True or false, ``default`` when absent."""
         value = self.data.get(name, default)

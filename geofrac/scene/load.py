@@ -523,16 +523,7 @@ def _output(
     """The ``[output]`` table; ``driver``: the declared effect that drives the run, if any."""
     t = _Table(file, "output", raw, SECTION_KEYS["output"])
     directory = _output_directory(t, name, out, trusted)
-    fields = t.data.get("fields", list(DEFAULT_OUTPUT_FIELDS))
-    if (
-        not isinstance(fields, list)
-        or not all(isinstance(f, str) for f in fields)
-        or len(set(fields)) != len(fields)
-    ):
-        raise t.error("fields", f"must be a list of distinct names from {list(OUTPUT_FIELDS)}")
-    for f in fields:
-        if f not in OUTPUT_FIELDS:
-            raise t.error("fields", f"unknown field {f!r}" + did_you_mean(str(f), OUTPUT_FIELDS))
+    fields = t.names("fields", OUTPUT_FIELDS, DEFAULT_OUTPUT_FIELDS)
     probes_raw = t.data.get("probes", {})
     p = _Table(file, "output.probes", probes_raw, list(probes_raw))
     probes = {k: p.vector(k, dim) for k in probes_raw}
@@ -566,24 +557,14 @@ def _probe_fields(t: _Table, key: str, driver: str | None) -> tuple[str, ...]:
     A run driven by an effect's loop (cracking) reports displacement only: its cracked
     cells carry no element stress field.
     """
-    value = t.data.get(key, ["displacement"])
-    if (
-        not isinstance(value, list)
-        or not value
-        or not all(isinstance(f, str) for f in value)
-        or len(set(value)) != len(value)
-    ):
-        raise t.error(key, f"must be a list of distinct names from {list(PROBE_FIELDS)}")
-    for f in value:
-        if f not in PROBE_FIELDS:
-            raise t.error(key, f"unknown field {f!r}" + did_you_mean(f, PROBE_FIELDS))
-    if driver is not None and value != ["displacement"]:
+    value = t.names(key, PROBE_FIELDS, ("displacement",), empty=False)
+    if driver is not None and value != ("displacement",):
         raise t.error(
             key,
             f"effect '{driver}' drives the run: only ['displacement'] can be probed "
             "(its cracked cells have no element stress)",
         )
-    return tuple(value)
+    return value
 
 
 def _line(lines: _Table, name: str, dim: int, driver: str | None) -> Line:

@@ -502,18 +502,7 @@ def mpm_output(
         ("dir", "fields", "xdmf", "probes", "checkpoint_every", "checkpoint_minutes"),
     )
     directory = output_directory(t, name, out, trusted)
-    fields = t.data.get("fields", list(MPM_OUTPUT_FIELDS))
-    if (
-        not isinstance(fields, list)
-        or not all(isinstance(f, str) for f in fields)
-        or len(set(fields)) != len(fields)
-    ):
-        raise t.error("fields", f"must be a list of distinct names from {list(MPM_OUTPUT_FIELDS)}")
-    for f in fields:
-        if f not in MPM_OUTPUT_FIELDS:
-            raise t.error(
-                "fields", f"unknown particle field {f!r}" + did_you_mean(str(f), MPM_OUTPUT_FIELDS)
-            )
+    fields = t.names("fields", MPM_OUTPUT_FIELDS, MPM_OUTPUT_FIELDS, kind="particle field")
     probes_raw = t.data.get("probes", {})
     p = Table(file, "output.probes", probes_raw, list(probes_raw))
     probes = {k: p.vector(k, dim) for k in probes_raw}
