@@ -37,7 +37,7 @@ import importlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from types import ModuleType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from geofrac.model.scene import EffectSpec
 
@@ -73,6 +73,8 @@ class ConfigureContext:
             the methods it serves in ``METHODS`` (absent: ``("fem",)``); for MPM scenes
             ``groups`` names the walled grid sides and ``"bed"``.
         gradient_bc: the scene's ``discretization.gradient_bc``.
+        previous: the configurations of the effects declared before this one, by name
+            (``cracking`` reads the ``dfn`` fracture sets' names).
     """
 
     file: str
@@ -83,6 +85,7 @@ class ConfigureContext:
     bcs: tuple = ()
     method: str = "fem"
     gradient_bc: str = "consistent"
+    previous: dict[str, Any] = field(default_factory=dict)
 
 
 def available() -> tuple[str, ...]:

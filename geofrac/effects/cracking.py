@@ -42,6 +42,19 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
 - ``face``, ``face_origin`` (0): report where the crack first reaches the facet group
   ``face``, as x minus ``face_origin`` (the notched beam's ``crack_top_x_mm``); on
   ``efmm`` only the crack joined to the notch (or to the first event's interface) counts.
+- ``contact`` (false): the two faces of every cracked edge are in contact when they
+  close: no interpenetration, Coulomb friction, joint slip events (docs/cracking.md,
+  "Crack faces in contact"). Element edges only.
+- ``friction`` (0.6), ``cohesion`` (0): μ and c of the faces of new cracks, and of
+  pre-existing ones without a ``joints`` entry.
+- ``[cracking.joints.NAME]`` with ``friction``, ``cohesion``: the faces of the
+  ``precracked`` group NAME or of the DFN fracture set NAME.
+- ``contact_penalty`` (100): stiffness of closed faces in units of E / edge length.
+- ``contact_iterations`` (30): active-set iterations per event; a state that has not
+  settled by then ends the run (``end_reason = "contact"``).
+
+Material ``cohesion`` (and ``friction_angle``, degrees) adds shear events: an intact edge
+cracks in shear when the traction on it reaches |τ| = c − σn tan φ (σn > 0 in tension).
 
 The event loop is :class:`geofrac.fracture.driver.CrackDriver`, composed of the edge or
 grain variant by the element's ``cracking`` mode; this module only validates, and is
@@ -57,7 +70,7 @@ from geofrac import elements
 from geofrac.effects import ConfigureContext
 from geofrac.elements.kinematics import KINDS
 from geofrac.fracture import SOLVERS
-from geofrac.fracture.config import CrackingConfig
+from geofrac.fracture.config import CrackingConfig, JointProperties
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import finite, short
 
@@ -105,7 +118,16 @@ KEYS = (
     "precracked_fraction",
     "precrack_seed",
     "switch",
+    "contact",
+    "friction",
+    "cohesion",
+    "joints",
+    "contact_penalty",
+    "contact_iterations",
 )
+
+#: Keys of a ``[cracking.joints.NAME]`` table.
+JOINT_KEYS = ("friction", "cohesion")
 
 
 #: Upper limits of the open-ended keys (``max_events``: the size cap of
@@ -121,6 +143,10 @@ LIMITS: dict[str, float] = {
     "output_every": 1e9,
     "precrack_seed": 2**63 - 1,
     "face_origin": 1e12,
+    "friction": 10.0,
+    "cohesion": 1e15,
+    "contact_penalty": 1e8,
+    "contact_iterations": 1000,
 }
 
 
@@ -133,6 +159,7 @@ def _number(
     lo: float,
     hi: float = float("inf"),
     closed: bool = True,
+    prefix: str = "",
 ) -> Any:
     value = table.get(key, default)
     if value is None:
@@ -146,8 +173,65 @@ def _number(
         high = f"≤ {hi:g}" if hi != float("inf") else ""
         span = " and ".join(s for s in (low, high) if s)
         what = "an integer" if kind is int else "a finite number"
-        raise SceneError(file, f"cracking.{key}", f"must be {what} {span}, got {short(value)}")
+        raise SceneError(
+            file, f"cracking.{prefix}{key}", f"must be {what} {span}, got {short(value)}"
+        )
     return kind(value)
+
+
+def _joint(file: str, prefix: str, table: Any, default: JointProperties) -> JointProperties:
+    """μ and c of one face table (``[cracking]`` itself or a ``joints`` entry)."""
+    return JointProperties(
+        _number(table, file, "friction", default.friction, float, 0.0, prefix=prefix),
+        _number(table, file, "cohesion", default.cohesion, float, 0.0, prefix=prefix),
+    )
+
+
+def _contact(table: dict[str, Any], ctx: ConfigureContext, precracked: list[str]) -> dict[str, Any]:
+    """The contact settings of ``[cracking]`` (the keys of :data:`KEYS` after ``switch``)."""
+    file = ctx.file
+    contact = table.get("contact", False)
+    if not isinstance(contact, bool):
+        raise SceneError(file, "cracking.contact", f"must be true or false, got {short(contact)}")
+    faces = _joint(file, "", table, JointProperties(0.6, 0.0))
+    raw = table.get("joints", {})
+    if not isinstance(raw, dict):
+        raise SceneError(file, "cracking.joints", "must be a table of [cracking.joints.NAME]")
+    dfn = ctx.previous.get("dfn")
+    sets = [s.name for s in getattr(dfn, "sets", ())]
+    joints = []
+    for name, entry in raw.items():
+        if name not in precracked and name not in sets:
+            raise SceneError(
+                file,
+                f"cracking.joints.{name}",
+                "names no 'precracked' group or DFN fracture set"
+                + did_you_mean(name, [*precracked, *sets]),
+            )
+        if not isinstance(entry, dict):
+            raise SceneError(file, f"cracking.joints.{name}", "must be a table")
+        for key in entry:
+            if key not in JOINT_KEYS:
+                raise SceneError(
+                    file,
+                    f"cracking.joints.{name}.{key}",
+                    "unknown key" + did_you_mean(key, JOINT_KEYS),
+                )
+        joints.append((name, _joint(file, f"joints.{name}.", entry, faces)))
+    used = [
+        k
+        for k in ("friction", "cohesion", "joints", "contact_penalty", "contact_iterations")
+        if k in table
+    ]
+    if used and not contact:
+        raise SceneError(file, f"cracking.{used[0]}", "applies with cracking.contact = true only")
+    return {
+        "contact": contact,
+        "crack_faces": faces,
+        "joints": tuple(joints),
+        "contact_penalty": _number(table, file, "contact_penalty", 100.0, float, 0.0, closed=False),
+        "contact_iterations": _number(table, file, "contact_iterations", 30, int, 1),
+    }
 
 
 def _check_basis(file: str, ctx: ConfigureContext) -> None:
@@ -278,6 +362,19 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         raise SceneError(
             file, "cracking.solver", f"must be one of {', '.join(SOLVERS)}, got {short(solver)}"
         )
+    contact = _contact(table, ctx, precracked)
+    if contact["contact"] and spec.cracking != "edges":
+        raise SceneError(
+            file, "cracking.contact", f"applies to elements cracked at edges, not '{ctx.element}'"
+        )
+    if contact["contact"] and solver == "reuse":
+        raise SceneError(
+            file,
+            "cracking.solver",
+            "'reuse' (CG) needs a symmetric system; friction on slipping faces makes it "
+            "unsymmetric: use 'update' or 'refactor' with contact",
+        )
+    shear_c = getattr(ctx.material, "cohesion", None)
     return CrackingConfig(
         method=method,
         max_events=max_events,
@@ -300,6 +397,9 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         precracked_fraction=_number(table, file, "precracked_fraction", 0.0, float, 0.0, 1.0),
         precrack_seed=_number(table, file, "precrack_seed", 0, int, 0),
         switch=switch,
+        shear_cohesion=None if shear_c is None else float(shear_c),
+        shear_friction_angle=float(getattr(ctx.material, "friction_angle", 0.0)),
+        **contact,
     )
 
 

@@ -9,7 +9,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["CrackingConfig"]
+__all__ = ["CrackingConfig", "JointProperties"]
+
+
+@dataclass(frozen=True)
+class JointProperties:
+    """Coulomb friction coefficient μ and cohesion c of crack faces in contact.
+
+    Attributes:
+        friction: μ ≥ 0.
+        cohesion: c ≥ 0, in stress units; lost when the faces first slip or open.
+    """
+
+    friction: float
+    cohesion: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -37,3 +50,17 @@ class CrackingConfig:
     precracked_fraction: float = 0.0
     precrack_seed: int = 0
     switch: str = "patch"
+    #: crack faces in contact (docs/cracking.md, "Crack faces in contact").
+    contact: bool = False
+    #: the faces of new cracks (and of pre-existing ones without a ``joints`` entry).
+    crack_faces: JointProperties = JointProperties(0.6, 0.0)
+    #: per ``precracked`` group or DFN fracture set name.
+    joints: tuple[tuple[str, JointProperties], ...] = ()
+    #: normal and tangential stiffness of closed faces, in units of E / (edge length).
+    contact_penalty: float = 100.0
+    #: active-set iterations per event before the run ends (``contact``).
+    contact_iterations: int = 30
+    #: Mohr-Coulomb shear strength of intact edges (material ``cohesion``,
+    #: ``friction_angle`` in degrees): None for tension-only cracking.
+    shear_cohesion: float | None = None
+    shear_friction_angle: float = 0.0

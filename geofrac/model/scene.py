@@ -80,6 +80,9 @@ class Material:
         thickness: out-of-plane thickness t (2D), multiplies stiffness and loads.
         density: mass density, or None when the scene needs none.
         tensile_strength: f_t, or None when no effect needs it.
+        cohesion: c of the Mohr-Coulomb shear strength c + σn tan φ of intact rock
+            (``cracking``: edges crack in shear), or None (no shear events).
+        friction_angle: φ in degrees, with ``cohesion`` (0 when absent).
     """
 
     E: float
@@ -88,6 +91,8 @@ class Material:
     thickness: float = 1.0
     density: float | None = None
     tensile_strength: float | None = None
+    cohesion: float | None = None
+    friction_angle: float = 0.0
 
 
 @dataclass(frozen=True)

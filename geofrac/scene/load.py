@@ -84,7 +84,16 @@ METHODS = ("fem", "mpm", "blocks")
 #: Keys each table accepts (the single source for validation and for docs/scenes.md).
 SECTION_KEYS: dict[str, tuple[str, ...]] = {
     "geometry": ("file", "parameters", "mesh_size", "trusted", "time_limit"),
-    "material": ("E", "nu", "plane", "thickness", "density", "tensile_strength"),
+    "material": (
+        "E",
+        "nu",
+        "plane",
+        "thickness",
+        "density",
+        "tensile_strength",
+        "cohesion",
+        "friction_angle",
+    ),
     "discretization": (
         "element",
         "quadrature_degree",
@@ -273,6 +282,10 @@ def _material(file: Path, raw: Any, dim: int) -> Material:
     plane = t.string("plane", default="stress", choices=("stress", "strain"))
     if dim == 3 and t.has("plane"):
         raise t.error("plane", "applies to 2D geometries only")
+    cohesion = t.number("cohesion", positive=True, maximum=MAX_MODULUS)
+    friction_angle = float(t.number("friction_angle", default=0.0, minimum=0.0, maximum=89.0))  # type: ignore[arg-type]
+    if t.has("friction_angle") and cohesion is None:
+        raise t.error("friction_angle", "needs material.cohesion (the Mohr-Coulomb shear strength)")
     return Material(
         E=float(E),
         nu=float(nu),
@@ -280,6 +293,8 @@ def _material(file: Path, raw: Any, dim: int) -> Material:
         thickness=float(t.number("thickness", default=1.0, positive=True, maximum=MAX_LENGTH)),  # type: ignore[arg-type]
         density=t.number("density", positive=True, maximum=MAX_DENSITY),
         tensile_strength=t.number("tensile_strength", positive=True, maximum=MAX_MODULUS),
+        cohesion=cohesion,
+        friction_angle=friction_angle,
     )
 
 
@@ -639,6 +654,7 @@ def _effects(
             continue
         config = effects.load(name).configure(_effect_table(file, data, name), ctx)
         specs.append(EffectSpec(name, config))
+        ctx.previous[name] = config
     return tuple(specs)
 
 
