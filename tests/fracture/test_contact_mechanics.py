@@ -1,0 +1,166 @@
+"""Crack faces in contact against closed forms (docs/cracking.md, "Crack faces in contact").
+
+All scenes are jobs/jaeger_joint.toml (meshes/jaeger_joint.geo: a 40 x 80 specimen in
+uniaxial compression between smooth platens, crossed by one straight joint at β to the x
+axis), coarsened for speed, run through the crack driver in-process:
+
+- Jaeger's single plane of weakness (Jaeger, Cook and Zimmerman, Fundamentals of Rock
+  Mechanics, 4th ed., 2007, §4.7): a joint of cohesion c and friction μ whose normal
+  makes β with the load slips at σ1 = 2c / ((1 − μ cot β) sin 2β), never for β ≤ atan μ;
+- two blocks pressed together across a through crack transmit the intact load;
+- a block on an inclined crack without cohesion sticks for μ > tan θ and slips otherwise;
+- a crack pulled open carries nothing, the same crack pressed shut carries the load.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import pytest
+from mpi4py import MPI
+
+from geofrac.effects.cracking import scene_driver
+from geofrac.scene import load_scene_collective
+from tests.conftest import JOBS
+
+JOB = JOBS / "jaeger_joint.toml"
+#: The scene's specimen (width, height), thickness, E, joint cohesion and friction.
+W, H, THICKNESS, E, C, MU = 40.0, 80.0, 1.0, 10000.0, 1.0, 0.5
+#: Mesh size of the tests: about 300 triangles (the stress is uniform).
+MESH_H = 5.0
+COARSE = (f"geometry.parameters.h={MESH_H}",)
+#: Relative tolerance of the joint's slip load against Jaeger's law.
+JAEGER_RTOL = 0.03
+#: Axial stiffness of the intact specimen between smooth platens: E W t / H.
+INTACT = E * W * THICKNESS / H
+#: Relative tolerance of a closed crack's stiffness against the intact one: the penalty
+#: (contact_penalty = 100) adds a compliance of 1 / 100 of a cell, h / (100 H) = 0.06 %.
+STIFFNESS_RTOL = 0.02
+#: No cohesion on the crack faces (the contact tests).
+FRICTIONAL = ("cracking.joints.joint.cohesion=0",)
+
+
+def jaeger_sigma1(beta: float, c: float = C, mu: float = MU) -> float:
+    """Axial stress at which the joint slips; inf for β ≤ atan μ (Jaeger et al. 2007, §4.7)."""
+    b = math.radians(beta)
+    if math.tan(b) <= mu:
+        return math.inf
+    return 2.0 * c / ((1.0 - mu / math.tan(b)) * math.sin(2.0 * b))
+
+
+def run(*overrides: str, comm: MPI.Comm = MPI.COMM_SELF, job: Path = JOB) -> tuple[list, dict]:
+    """(event rows, results) of ``job`` on the coarse mesh with ``overrides``."""
+    scene = load_scene_collective(comm, job, [*COARSE, *overrides])
+    driver = scene_driver(scene, comm)
+    try:
+        res = driver.run()
+        return driver.rows, res
+    finally:
+        driver.problem.destroy()
+
+
+def no_contact_job(tmp_path: Path) -> Path:
+    """jobs/jaeger_joint.toml with ``contact = false`` (and so without its joint table)."""
+    text = re.sub(r"\[cracking\.joints\.joint\][^\[]*", "", JOB.read_text())
+    text = text.replace("contact = true", "contact = false")
+    text = text.replace('"../meshes/', f'"{JOB.parent.parent / "meshes"}/')
+    path = tmp_path / "no_contact.toml"
+    path.write_text(text)
+    return path
+
+
+def stiffness(row: dict) -> float:
+    """Reaction / control displacement of an event, relative to the intact specimen's."""
+    return row["reaction"] / row["control_displacement"] / INTACT
+
+
+def penetration_bound(row: dict) -> float:
+    """Twice the penalty's penetration σ h / (penalty E) under the event's mean stress."""
+    return 2.0 * abs(row["reaction"]) / (W * THICKNESS) * MESH_H / (100.0 * E)
+
+
+def slip_stress(beta: float, comm: MPI.Comm = MPI.COMM_SELF) -> float:
+    """σ1 = reaction / (W t) at the first event, which must be the joint's slip."""
+    rows, res = run(f"geometry.parameters.beta={beta}", "cracking.max_events=1", comm=comm)
+    assert rows, f"no event at beta = {beta}: {res['end_reason']}"
+    assert rows[0]["mode"] == "slip"
+    return rows[0]["reaction"] / (W * THICKNESS)
+
+
+@pytest.mark.parametrize("beta", [30.0, 45.0, 60.0, 75.0])
+def test_joint_slips_at_jaegers_load(beta):
+    assert slip_stress(beta) == pytest.approx(jaeger_sigma1(beta), rel=JAEGER_RTOL)
+
+
+@pytest.mark.parametrize("beta", [20.0, 25.0])
+def test_joint_flatter_than_the_friction_angle_never_slips(beta):
+    """β ≤ atan μ = 26.6°: the shear never reaches c + μ σn, however large the load."""
+    rows, res = run(f"geometry.parameters.beta={beta}")
+    assert all(r["mode"] != "slip" for r in rows), (rows, res["end_reason"])
+
+
+@pytest.mark.mpi(min_size=2)
+def test_slip_load_is_the_same_on_1_and_n_ranks():
+    world = MPI.COMM_WORLD
+    parallel = slip_stress(60.0, world)
+    serial = slip_stress(60.0, MPI.COMM_SELF)
+    assert parallel == pytest.approx(serial, rel=1e-8)
+    loads = world.allgather(parallel)
+    assert all(x == loads[0] for x in loads)
+    assert parallel == pytest.approx(jaeger_sigma1(60.0), rel=JAEGER_RTOL)
+
+
+def test_blocks_pressed_together_across_a_crack_carry_the_intact_load():
+    """A horizontal through crack without cohesion, pressed shut: the specimen's stiffness.
+
+    Before the first event (a tensile crack of the intact rock at a huge load) every
+    face pair is closed and sticking (τ = 0), the stiffness is the intact E W t / H and
+    the faces interpenetrate by no more than twice the penalty's σ h / (penalty E).
+    """
+    rows, res = run("geometry.parameters.beta=0", *FRICTIONAL, "cracking.max_events=1")
+    assert rows, res["end_reason"]
+    row = rows[0]
+    assert row["open"] == row["slip"] == 0 and row["stick"] == res["contact"]["pairs"] > 0
+    assert stiffness(row) == pytest.approx(1.0, rel=STIFFNESS_RTOL)
+    assert res["contact"]["worst_gap"] >= -penetration_bound(row)
+
+
+@pytest.mark.parametrize(("friction", "sticks"), [(0.8, True), (0.4, False)])
+def test_block_on_an_inclined_crack_sticks_only_if_friction_exceeds_its_slope(friction, sticks):
+    """A crack at θ = 30° (tan θ = 0.577) without cohesion under uniaxial compression.
+
+    μ > tan θ: every pair sticks and the specimen is as stiff as the intact one. μ < tan θ:
+    the top block slides off along the crack on its smooth platen (u_x free), the faces
+    slip and nothing is carried: the unit-load energy is nil (``separated``), or the
+    stiffness collapses.
+    """
+    rows, res = run(
+        "geometry.parameters.beta=30",
+        *FRICTIONAL,
+        f"cracking.joints.joint.friction={friction}",
+        "cracking.max_events=1",
+    )
+    contact = res["contact"]
+    if sticks:
+        assert rows, res["end_reason"]
+        assert rows[0]["stick"] == contact["pairs"] > 0
+        assert stiffness(rows[0]) == pytest.approx(1.0, rel=STIFFNESS_RTOL)
+    else:
+        assert contact["slip"] == contact["pairs"] > 0
+        assert res["end_reason"] == "separated" or stiffness(rows[0]) < 1e-3
+
+
+def test_crack_pulled_open_carries_nothing_and_pressed_shut_carries_the_load():
+    """A crack opened in tension carries nothing; pressed shut, it carries the load again.
+
+    In tension the horizontal crack opens: every pair is open and there is no load path
+    (``separated``); the same specimen in compression has the intact stiffness again.
+    """
+    rows, res = run("geometry.parameters.beta=0", *FRICTIONAL, "bc.2.value=[0.01]")
+    assert res["end_reason"] == "separated" and not rows
+    assert res["contact"]["open"] == res["contact"]["pairs"] > 0
+    rows, res = run("geometry.parameters.beta=0", *FRICTIONAL, "cracking.max_events=1")
+    assert rows and rows[0]["open"] == 0
+    assert stiffness(rows[0]) == pytest.approx(1.0, rel=STIFFNESS_RTOL)
