@@ -9,6 +9,8 @@ cracks and the DOFs pinned to stop a supported piece's free rigid motion.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import numpy as np
@@ -17,6 +19,9 @@ from petsc4py import PETSc
 from geofrac.fracture.context import CrackContext
 from geofrac.fracture.topology import components, free_motion_pins, zero_energy_rows
 from geofrac.fracture.units import Units
+
+if TYPE_CHECKING:
+    from geofrac.fracture.faces import Faces
 
 __all__ = ["Assembler"]
 
@@ -41,6 +46,8 @@ class Assembler:
         self.pinned_dofs = np.zeros(0, dtype=np.int64)
         self.pinned_nodes = np.zeros(0, dtype=np.int64)
         self._b0: PETSc.Vec | None = None
+        #: crack-face contact (:class:`~geofrac.fracture.faces.Faces`), or None.
+        self.contact: Faces | None = None
 
     def assemble(self, held_values: np.ndarray) -> tuple[PETSc.Mat, PETSc.Vec, np.ndarray]:
         """Stiffness and load vector of the current crack state; returns (A, b, held DOFs).
@@ -59,6 +66,10 @@ class Assembler:
             if block is None:
                 continue
             d, k = block
+            rows.append(np.repeat(d, len(d)))
+            cols.append(np.tile(d, len(d)))
+            vals.append(k.ravel())
+        for d, k in self.contact.owned_blocks() if self.contact is not None else []:
             rows.append(np.repeat(d, len(d)))
             cols.append(np.tile(d, len(d)))
             vals.append(k.ravel())
@@ -107,6 +118,9 @@ class Assembler:
         ctx, units = self.ctx, self.units
         gm, bs = ctx.gm, ctx.bs
         a, b = units.links(units.state.is_mls())
+        if self.contact is not None:  # closed faces join pieces too
+            ca, cb = self.contact.pairs.links()
+            a, b = np.concatenate([a, ca]), np.concatenate([b, cb])
         labels = components(len(gm.coords), a, b)
         anchored = np.unique(labels[np.unique(ctx.bc_row_nodes)])
         touched = np.zeros(len(gm.coords), dtype=bool)

@@ -17,7 +17,14 @@ import numpy as np
 
 from geofrac.fracture.topology import EdgeMesh
 
-__all__ = ["TIE_TOLERANCE", "edge_principal", "normal_stress", "select_edges"]
+__all__ = [
+    "TIE_TOLERANCE",
+    "edge_means",
+    "edge_principal",
+    "least",
+    "normal_stress",
+    "select_edges",
+]
 
 #: Relative difference of r below which two edges count as tied.
 TIE_TOLERANCE = 1e-9
@@ -37,6 +44,40 @@ def edge_principal(mesh: EdgeMesh, s1: np.ndarray) -> np.ndarray:
     total = np.bincount(mesh.cell_edges.ravel(), weights=s1.ravel(), minlength=len(mesh.edges))
     count = np.bincount(mesh.cell_edges.ravel(), minlength=len(mesh.edges))
     return total / np.maximum(count, 1)
+
+
+def edge_means(mesh: EdgeMesh, values: np.ndarray) -> np.ndarray:
+    """Per edge, the mean over its cells of their values at the edge.
+
+    Args:
+        mesh: the triangle mesh with edges.
+        values: per cell and local edge j, shape=(num_cells, 3, c).
+
+    Returns:
+        shape=(num_edges, c).
+    """
+    ne = len(mesh.edges)
+    ids = mesh.cell_edges.ravel()
+    count = np.maximum(np.bincount(ids, minlength=ne), 1)
+    flat = values.reshape(len(ids), -1)
+    return np.stack(
+        [np.bincount(ids, weights=flat[:, k], minlength=ne) / count for k in range(flat.shape[1])],
+        axis=1,
+    )
+
+
+def least(ids: np.ndarray, r: np.ndarray) -> tuple[int, float]:
+    """The id of least finite r (ties within :data:`TIE_TOLERANCE`: lowest id), and r.
+
+    Returns (-1, inf) when no r is finite.
+    """
+    ok = np.isfinite(r)
+    if not np.any(ok):
+        return -1, float("inf")
+    ids, r = ids[ok], r[ok]
+    r_min = float(r.min())
+    tied = ids[r <= r_min * (1.0 + TIE_TOLERANCE)]
+    return int(tied.min()), r_min
 
 
 def normal_stress(stress: np.ndarray, normal: np.ndarray) -> np.ndarray:

@@ -50,6 +50,7 @@ from geofrac.fracture.context import (
     facet_nodes,
 )
 from geofrac.fracture.event_criterion import EdgeCriterion, EventCriterion
+from geofrac.fracture.faces import Faces
 from geofrac.fracture.linear import SolverStrategy, Timing, make_strategy
 from geofrac.fracture.loop import EventLoop
 from geofrac.fracture.output import EdgeDrawing, EventOutput, Row, SiteDrawing
@@ -155,6 +156,12 @@ class CrackDriver:
         self.sites = _sites(ctx, self.units)
         self.criterion: EventCriterion = variant.criterion(ctx, self.units)
         self.assembler = Assembler(ctx, self.units)
+        #: crack-face contact (``cracking.contact``), or None.
+        self.contact: Faces | None = None
+        if config.contact:
+            assert isinstance(self.units, EdgeUnits)
+            self.contact = Faces(ctx, self.units, self.sites)
+            self.assembler.contact = self.contact
         self.timing = Timing()
         self.strategy: SolverStrategy = make_strategy(ctx, self.assembler, self.timing)
         self.drawing: SiteDrawing = variant.drawing(ctx, self.units, self.sites)
@@ -169,6 +176,7 @@ class CrackDriver:
             self.sites,
             self.timing,
             self.control,
+            self.contact,
         )
 
     # -- views ---------------------------------------------------------------------------

@@ -101,6 +101,8 @@ class IncrementalSolver:
         x: a vector of A's layout to solve into (ghosted DOLFINx vector).
         gather: copies vectors of x's layout to every rank (the caller's; not owned).
         capacity: the largest |T|.
+        solver_t: a factorisation of Aᵀ when A is unsymmetric (friction on slipping
+            crack faces): the new rows of A⁻¹ on T are its columns. Owned from now on.
 
     Raises:
         geofrac.errors.RunError: the reference solve failed (singular system).
@@ -117,8 +119,9 @@ class IncrementalSolver:
         x: PETSc.Vec,
         gather: Gather,
         capacity: int,
+        solver_t: LinearSolver | None = None,
     ) -> None:
-        self.A, self.b, self.solver = A, b, solver
+        self.A, self.b, self.solver, self.solver_t = A, b, solver, solver_t
         self.fixed, self.bc_mask, self.bc_values = fixed, bc_mask, bc_values
         self.comm = A.getComm().tompi4py()
         self.row0, self.row1 = A.getOwnershipRange()
@@ -131,6 +134,7 @@ class IncrementalSolver:
         self.b_full = self.gather(b)
         self._b_norm2 = float(self.b_full @ self.b_full)
         self.factor = solver.ksp.getPC().getFactorMatrix()
+        self.factor_t = None if solver_t is None else solver_t.ksp.getPC().getFactorMatrix()
         #: refinement steps with solves by A₀ taken so far (after the refinement on T)
         self.refinements = 0
         e = b.duplicate()
@@ -165,7 +169,10 @@ class IncrementalSolver:
             raise Stale("capacity", f"{lu.m + len(new)} changed DOFs exceed the update capacity")
         if len(new):
             rows = np.concatenate([lu.dofs, new])
-            lu.grow(new, mumps_inverse_entries(self.factor, rows, new))
+            transposed = None
+            if self.factor_t is not None and lu.m:
+                transposed = mumps_inverse_entries(self.factor_t, lu.dofs, new).T
+            lu.grow(new, mumps_inverse_entries(self.factor, rows, new), transposed)
         for dofs, k in blocks:
             free = ~bc[dofs]
             lu.add(dofs[free], k[np.ix_(free, free)])
@@ -261,3 +268,7 @@ class IncrementalSolver:
         # the factor's Python wrapper holds a PETSc reference of its own
         for obj in (self.factor, self.solver, self.A, self.b, self.y_vec):
             obj.destroy()
+        if self.solver_t is not None:
+            assert self.factor_t is not None
+            self.factor_t.destroy()
+            self.solver_t.destroy()

@@ -91,6 +91,10 @@ class SolverStrategy(Protocol):
         """Units whose field the last event changed, shape=(k,)."""
         ...
 
+    def contact_changed(self, blocks: list[Block]) -> None:
+        """Signed changes (new +, old −) of crack-face contact blocks since the last solve."""
+        ...
+
     def reset(self) -> None:
         """Forget the changed units (the state was rebuilt from a checkpoint)."""
         ...
@@ -165,6 +169,9 @@ class RefactorSolver:
 
     def changed(self, units: np.ndarray) -> None:
         """Nothing to note: every event assembles afresh."""
+
+    def contact_changed(self, blocks: list[Block]) -> None:
+        """Nothing to note: the assembly reads the contact blocks afresh."""
 
     def reset(self) -> None:
         """Nothing to forget."""
@@ -247,25 +254,33 @@ class UpdateSolver(RefactorSolver):
         self._applied: dict[int, Fit | str] = {}
         # units giving stiffness to each DOF as applied to inc, shape=(n_global,)
         self._use = np.zeros(0, dtype=np.int64)
+        # contact block changes not yet applied to inc
+        self._contact: list[Block] = []
 
     def changed(self, units: np.ndarray) -> None:
         """Apply these units' changes before the next solve."""
         self._pending = np.union1d(self._pending, units)
 
+    def contact_changed(self, blocks: list[Block]) -> None:
+        """Apply these contact block changes before the next solve."""
+        self._contact += blocks
+
     def reset(self) -> None:
         """Forget the pending changes."""
         self._pending = np.zeros(0, dtype=np.int64)
+        self._contact = []
 
     def solve(self, u_prev: np.ndarray, x: PETSc.Vec, gather: Gather) -> tuple[np.ndarray, int]:
         """Correct the reference solution, or start a new reference; 0 iterations."""
         timing = self.timing
         t = time.perf_counter()
-        if self.inc is not None and len(self._pending):
+        if self.inc is not None and (len(self._pending) or self._contact):
             try:
-                self._apply_changes(self._pending, u_prev)
+                self._apply_changes(self._pending, u_prev, self._contact)
             except Stale as exc:
                 self._drop_reference(exc)
         self._pending = np.zeros(0, dtype=np.int64)
+        self._contact = []
         t = timing.add("assemble", t)
         if self.inc is not None:
             try:
@@ -286,15 +301,30 @@ class UpdateSolver(RefactorSolver):
             t = self.timing.add("assemble", t)
             fixed = bc.copy()
             fixed[held] = True
+            solver_t = None
             try:
                 solver = self._refactor(A)
+                contact = assembler.contact
+                if contact is not None and contact.has_slip():
+                    solver_t = self._transposed(A)
                 self.inc = IncrementalSolver(
-                    A, b, fixed, bc, ctx.bc_full, solver, x, gather, ctx.config.update_dofs
+                    A,
+                    b,
+                    fixed,
+                    bc,
+                    ctx.bc_full,
+                    solver,
+                    x,
+                    gather,
+                    ctx.config.update_dofs,
+                    solver_t,
                 )
                 self.solver = None  # the reference owns it now
                 break
             except RunError:
                 self._drop_reference()
+                if solver_t is not None and self.inc is None:
+                    solver_t.destroy()
                 A.destroy()
                 b.destroy()
                 if attempt or not assembler.find_fragments():
@@ -308,6 +338,15 @@ class UpdateSolver(RefactorSolver):
         assert self.inc is not None
         return self.inc.y.copy()
 
+    def _transposed(self, A: PETSc.Mat) -> LinearSolver:
+        """A factorisation of Aᵀ (the rows of A⁻¹ when friction makes A unsymmetric)."""
+        At = A.transpose(PETSc.Mat())  # a new matrix (no argument: in place)
+        try:
+            s = self.ctx.scene.solver
+            return LinearSolver(At, PREFIX + "t_", "direct", dict(s.options), self.ctx.n_global)
+        finally:
+            At.destroy()  # the solver keeps its own reference
+
     def _drop_reference(self, why: Stale | None = None) -> None:
         """Free the reference factorisation; count ``why`` in the refactor reasons."""
         if why is not None:
@@ -318,10 +357,14 @@ class UpdateSolver(RefactorSolver):
         self.inc = None
         self._free()
 
-    def _apply_changes(self, units: np.ndarray, u_prev: np.ndarray) -> None:
+    def _apply_changes(
+        self, units: np.ndarray, u_prev: np.ndarray, contact: list[Block] | None = None
+    ) -> None:
         """Pass the changed units' matrices (new − old) to the reference's correction.
 
         DOFs that lose their last unit are held at ``u_prev``, as the assembly does.
+        ``contact``: signed contact block changes, passed on as they are (they give no
+        DOF its only stiffness).
 
         Raises:
             Stale: the change needs a new factorisation.
@@ -346,6 +389,7 @@ class UpdateSolver(RefactorSolver):
                 dofs, k = block
                 self._use[dofs] += int(sign)
                 blocks.append((dofs, sign * k))
+        blocks += contact or []
         if not blocks:
             return
         inc = self.inc

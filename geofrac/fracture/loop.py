@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -25,7 +26,9 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.fracture.assembly import Assembler
+from geofrac.fracture.contact import SLIP, edge_frames, edge_tractions, shear_factors
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
+from geofrac.fracture.criterion import TIE_TOLERANCE, edge_means, least
 from geofrac.fracture.event_criterion import EventCriterion
 from geofrac.fracture.incremental import Gather
 from geofrac.fracture.linear import SolverStrategy, Timing
@@ -34,10 +37,31 @@ from geofrac.fracture.units import Units
 from geofrac.io.checkpoint import Checkpoint, RunControl
 from geofrac.log import format_seconds
 
-__all__ = ["END_REASONS", "SEPARATED", "EventLoop"]
+if TYPE_CHECKING:
+    from petsc4py import PETSc
 
-#: Why an event loop ends.
-END_REASONS = ("max_events", "energy_drop", "no_tensile_edge", "separated", "singular")
+    from geofrac.fracture.faces import Faces
+
+__all__ = ["END_REASONS", "MODES", "SEPARATED", "ContactUnsettled", "EventLoop"]
+
+#: Why an event loop ends ("contact": the crack faces' states did not settle).
+END_REASONS = (
+    "max_events",
+    "energy_drop",
+    "no_tensile_edge",
+    "separated",
+    "singular",
+    "contact",
+)
+
+#: Event modes (``events.csv`` column ``mode``): an edge cracks in tension (2.20) or in
+#: shear (Mohr-Coulomb), or a bonded joint starts to slip.
+MODES = ("tension", "shear", "slip")
+
+
+class ContactUnsettled(Exception):
+    """The crack faces' states still changed after ``contact_iterations`` iterations."""
+
 
 #: The body is *separated* when the unit-load strain energy falls below this fraction of
 #: its value at the first event: no load path is left between the control group and the
@@ -69,6 +93,7 @@ class EventLoop:
         sites: the pre-cracked sites.
         timing: the phases and solver counts (shared with ``strategy``).
         control: checkpoints, signal stop and resume data, or None.
+        contact: crack-face contact, or None.
     """
 
     def __init__(
@@ -82,8 +107,12 @@ class EventLoop:
         sites: Sites,
         timing: Timing,
         control: RunControl | None,
+        contact: Faces | None = None,
     ) -> None:
         self.ctx, self.units, self.criterion = ctx, units, criterion
+        self.contact = contact
+        #: how each edge cracked: 0 not (or before loading), 1 + index in MODES.
+        self.modes = np.zeros(0, dtype=np.int8)
         self.strategy, self.assembler, self.output = strategy, assembler, output
         self.sites, self.timing, self.control = sites, timing, control
         #: the rows of the event log, set when the loop ends.
@@ -97,6 +126,10 @@ class EventLoop:
         say = ctx.say
         t0 = time.perf_counter()
         state.start(self.sites.precracked)
+        contact = self.contact
+        if contact is not None:
+            contact.start(np.flatnonzero(state.cracked))
+        self.modes = np.zeros(len(state.cracked), dtype=np.int8)
         work = dolfinx.fem.Function(unknown.function_space)  # a ghosted vector
         x = work.x.petsc_vec
         self.gather = gather = Gather(x)
@@ -109,6 +142,8 @@ class EventLoop:
         first = 1  # the first event to compute
         done = 0  # events already in the log (a resumed run recomputes those after first)
         resume = control.resume if control is not None else None
+        if resume is not None and contact is not None:
+            raise RunError("--resume: runs with cracking.contact write no checkpoints yet")
         if resume is not None:
             assert control is not None
             control.check_resume()  # the same scene and number of ranks
@@ -150,6 +185,18 @@ class EventLoop:
                     end = "singular"
                     say(f"cracking: event {event}: the system is singular ({exc})")
                     break
+                changes: list[tuple[int, int, int]] = []
+                if contact is not None:
+                    try:
+                        u_unit, changes = self._settle(u_unit, x, gather)
+                    except ContactUnsettled as exc:
+                        end = "contact"
+                        say(f"cracking: event {event}: {exc}")
+                        break
+                    except RunError as exc:
+                        end = "singular"
+                        say(f"cracking: event {event}: the system is singular ({exc})")
+                        break
                 if timing.factorizations > start.timing["factorizations"] or ref is None:  # type: ignore[operator]
                     ref = start
                     # a resumed run factorises this event without a stale reference to
@@ -165,6 +212,7 @@ class EventLoop:
                     end = "separated"
                     break
                 edges, r = self.criterion.select(sigma1)
+                edges, r, mode = self._other_modes(edges, r)
                 t = timing.add("criterion", t)
                 if len(edges) == 0:
                     end = "no_tensile_edge"
@@ -179,11 +227,28 @@ class EventLoop:
                         )
                 else:
                     row = self._row(event, edges, r, its, energy, reaction_unit)
+                    row["mode"] = mode
+                    if contact is not None:
+                        row |= contact.record(r)
+                        row["contact_changes"] = len(changes)
+                        pairs = contact.pairs
+                        output.contact_changes(
+                            event,
+                            [(e, a, b, r * pairs.gap[e], r * pairs.slip[e]) for e, a, b in changes],
+                        )
                     rows.append(row)
                     batches.append(cracked)
-                changed = state.crack_many(cracked)
-                strategy.changed(changed)
-                units.changed(changed)
+                if mode == "slip":
+                    assert contact is not None
+                    contact.pairs.unbond(cracked[0])
+                    changed = np.zeros(0, dtype=np.int64)
+                else:
+                    self.modes[cracked] = 1 + MODES.index(mode)
+                    changed = state.crack_many(cracked)
+                    strategy.changed(changed)
+                    units.changed(changed)
+                    if contact is not None:
+                        strategy.contact_changed(contact.cracked(edges, changed))
                 if face_hit is None and ctx.face_nodes is not None:
                     x_hit = units.face_x(edges)
                     if x_hit is not None:
@@ -193,7 +258,7 @@ class EventLoop:
                 if replay:
                     continue
                 if event % cfg.output_every == 0 or event == 1:
-                    output.frame(event, r * u_unit)
+                    output.frame(event, r * u_unit, self._edge_data(r))
                 output.row(row)  # flushed: a killed run keeps every completed event
                 if event % max(1, cfg.max_events // 20) == 0:
                     rate = (event - first + 1) / (time.perf_counter() - started)
@@ -204,7 +269,7 @@ class EventLoop:
                 if cfg.energy_drop is not None and energy < (1.0 - cfg.energy_drop) * peak:
                     end = "energy_drop"
                     break
-                if control is not None and event < cfg.max_events:
+                if control is not None and event < cfg.max_events and contact is None:
                     save, stop = control.poll(event)
                     if save:
                         assert ref is not None
@@ -219,10 +284,11 @@ class EventLoop:
         if rows:
             # the final pattern; it replaces a frame already written for this event, so
             # each time appears once in the series
-            output.frame(int(rows[-1]["event"]), rows[-1]["load_factor"] * u_unit)
+            r_last = rows[-1]["load_factor"]
+            output.frame(int(rows[-1]["event"]), r_last * u_unit, self._edge_data(r_last))
         self._finish_field(unknown, rows[-1]["load_factor"] * u_unit if rows else u_unit)
         self.rows = rows
-        output.finish(rows)
+        output.finish(rows, self.modes, self._slipping())
         self.destroy()
         results = self._results(rows, end, elapsed, face_hit, len(rows) - first + 1)
         if resume is not None:
@@ -263,6 +329,96 @@ class EventLoop:
             "edges_cracked": len(edges),
             "iterations": its,
         }
+
+    def _settle(
+        self, u: np.ndarray, x: PETSc.Vec, gather: Gather
+    ) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
+        """Active-set iteration on the crack faces from the solution u (collective).
+
+        Every pair whose state the solution violates changes at once. When that returns
+        to a set of states seen before (a cycle: no set of states satisfies every
+        pair's conditions, which penalty friction without load steps allows), each
+        pair that changed since is held in the state it violated least for the rest of
+        the event (counted, with the largest violation, in the results). Returns the
+        settled solution and every state change (edge, old, new) made.
+
+        Raises:
+            ContactUnsettled: states still change after ``contact_iterations`` solves.
+            RunError: a solve failed.
+        """
+        contact, cfg = self.contact, self.ctx.config
+        assert contact is not None
+        made: list[tuple[int, int, int]] = []
+        seen = {contact.signature()}
+        history: dict[int, dict[int, tuple[float, float]]] = {}
+        pairs = contact.pairs
+        cycles = 0
+        for it in range(cfg.contact_iterations + 1):
+            changes, blocks = contact.update(u)
+            if not changes:
+                if pairs.frozen.any():
+                    self.strategy.contact_changed(contact.thaw())
+                return u, made
+            for e, old, _ in changes:
+                history.setdefault(e, {})[old] = (float(pairs.violation[e]), float(pairs.sign[e]))
+            made += changes
+            if it == cfg.contact_iterations:
+                break
+            key = contact.signature()
+            if key in seen:  # a cycle: hold the cycling pairs in their least violated state
+                cycles += 1
+                contact.freeze_least_violated(history)
+                blocks = contact.resync(list(history))
+                history = {}
+                seen = set()
+            seen.add(key)
+            self.strategy.contact_changed(blocks)
+            u, _ = self.strategy.solve(u, x, self.gather or gather)
+            contact.iterations += 1
+        raise ContactUnsettled(
+            f"the crack faces' contact states did not settle in {cfg.contact_iterations} "
+            f"iterations ({len(changes)} pairs still changed state, e.g. edge "
+            f"{changes[0][0]}); raise cracking.contact_iterations or contact_penalty"
+        )
+
+    def _other_modes(self, edges: np.ndarray, r: float) -> tuple[np.ndarray, float, str]:
+        """The event of least r over tension (given), shear and joint slip.
+
+        Ties within :data:`~geofrac.fracture.criterion.TIE_TOLERANCE` keep the earlier
+        mode of :data:`MODES`, then the lowest edge id.
+        """
+        cfg, state = self.ctx.config, self.units.state
+        mode = "tension"
+        if cfg.shear_cohesion is not None:
+            sigma = edge_means(state.mesh, self.units.midpoint_stress)  # type: ignore[attr-defined]
+            cand = np.flatnonzero(~state.cracked & state.crackable)
+            t, n = edge_frames(state.mesh)
+            sn, tau = edge_tractions(sigma[cand], t[cand], n[cand])
+            r_s = shear_factors(sn, tau, cfg.shear_cohesion, cfg.shear_friction_angle)
+            e, rs = least(cand, r_s)
+            if rs < r * (1.0 - TIE_TOLERANCE):
+                edges, r, mode = np.array([e]), rs, "shear"
+        if self.contact is not None:
+            pairs, r_j = self.contact.pairs.slip_factors()
+            e, rj = least(pairs, r_j)
+            if rj < r * (1.0 - TIE_TOLERANCE):
+                edges, r, mode = np.array([e]), rj, "slip"
+        return edges, r, mode
+
+    def _edge_data(self, r: float) -> dict[str, np.ndarray]:
+        """Per-edge fields of the crack series beside ``crack``: mode, contact at load r."""
+        out = {"mode": self.modes.astype(float)}
+        if self.contact is not None:
+            out |= self.contact.frame(r)
+        return out
+
+    def _slipping(self) -> np.ndarray:
+        """Edges whose faces slip in the last state, shape=(k,)."""
+        if self.contact is None:
+            return np.zeros(0, dtype=np.int64)
+        pairs = self.contact.pairs
+        act = pairs.active()
+        return act[pairs.state[act] == SLIP]
 
     def _finish_field(self, unknown: dolfinx.fem.Function, u: np.ndarray) -> None:
         """Put the last event's state into the problem's displacement (results.xdmf)."""
@@ -420,6 +576,10 @@ class EventLoop:
             if cfg.face == "top":
                 out["crack_top_x_mm"] = x
         self.units.results(out, n_pre, len(self.sites.random))
+        out["events_by_mode"] = {m: sum(1 for r in rows if r.get("mode") == m) for m in MODES}
+        if self.contact is not None:
+            control = max((abs(r["control_displacement"]) for r in rows), default=0.0)
+            out["contact"] = self.contact.summary(len(rows), control)  # type: ignore[assignment]
         return out
 
     def destroy(self) -> None:

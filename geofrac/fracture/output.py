@@ -31,6 +31,8 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
 __all__ = [
+    "CHANGE_COLUMNS",
+    "CONTACT_COLUMNS",
     "EVENT_COLUMNS",
     "EdgeDrawing",
     "EventLog",
@@ -58,7 +60,19 @@ EVENT_COLUMNS = (
     "strain_energy",
     "edges_cracked",
     "iterations",
+    "mode",
 )
+
+#: Columns of ``events.csv`` added with crack-face contact: pairs per state, the most
+#: negative gap of a closed pair at the event's load, state changes in the event.
+CONTACT_COLUMNS = ("open", "stick", "slip", "min_gap", "contact_changes")
+
+#: Columns of ``contact.csv``: each state change of a face pair.
+CHANGE_COLUMNS = ("event", "edge", "x", "y", "from", "to", "gap", "slip")
+
+#: Colours of new cracks in ``cracks.png`` by mode (tension, shear), of slipping faces.
+MODE_COLOURS = ("tab:red", "tab:blue")
+SLIP_COLOUR = "tab:orange"
 
 #: One event's row of ``events.csv`` (keys :data:`EVENT_COLUMNS`).
 Row = dict[str, int | float]
@@ -178,8 +192,19 @@ class OutputWriter(Protocol):
         """Append one event's row (flushed)."""
         ...
 
-    def frame(self, event: int, u: np.ndarray) -> None:
-        """A frame of the series at ``event`` with the solution u, shape=(n_global,)."""
+    def frame(
+        self, event: int, u: np.ndarray, edge_data: dict[str, np.ndarray] | None = None
+    ) -> None:
+        """A frame of the series at ``event`` with the solution u, shape=(n_global,).
+
+        ``edge_data``: more per-site fields of the crack series (mode, contact state).
+        """
+        ...
+
+    def contact_changes(
+        self, event: int, changes: list[tuple[int, int, int, float, float]]
+    ) -> None:
+        """Log the face pairs' state changes (edge, old, new, gap, slip) of an event."""
         ...
 
     def sync(self) -> None:
@@ -190,8 +215,12 @@ class OutputWriter(Protocol):
         """Close the event log."""
         ...
 
-    def finish(self, rows: list[Row]) -> None:
-        """The pictures and the variant's files of the final state."""
+    def finish(self, rows: list[Row], modes: np.ndarray, slipping: np.ndarray) -> None:
+        """The pictures and the variant's files of the final state.
+
+        ``modes``: per site, 0 or 1 + the index of its crack mode in
+        :data:`~geofrac.fracture.loop.MODES`; ``slipping``: sites whose faces slip.
+        """
         ...
 
 
@@ -219,6 +248,8 @@ class EventOutput:
         self.out_dir = ctx.scene.output.dir
         self._log: EventLog | None = None
         self._series: tuple[XdmfSeries, XdmfSeries] | None = None
+        self._changes: tuple[IO[str], csv.writer] | None = None  # type: ignore[valid-type]
+        self._contact = ctx.config.contact
 
     def _open_series(
         self, name: str, coords: np.ndarray, cells: np.ndarray, keep: float | None
@@ -240,24 +271,65 @@ class EventOutput:
                 self._open_series("damage.xdmf", gm.coords, gm.cells, keep_until),
             )
         handle = open(self.out_dir / "events.csv", "w", newline="")  # noqa: SIM115
-        writer = csv.DictWriter(handle, fieldnames=EVENT_COLUMNS)
+        columns = EVENT_COLUMNS + (CONTACT_COLUMNS if self._contact else ())
+        writer = csv.DictWriter(handle, fieldnames=columns)
         writer.writeheader()
         writer.writerows(rows)
         handle.flush()
         self._log = EventLog(handle, writer)
+        if self._contact:
+            log = open(self.out_dir / "contact.csv", "w", newline="")  # noqa: SIM115
+            changes = csv.writer(log)
+            changes.writerow(CHANGE_COLUMNS)
+            self._changes = (log, changes)
+
+    def contact_changes(
+        self, event: int, changes: list[tuple[int, int, int, float, float]]
+    ) -> None:
+        """Append the state changes of ``event`` to ``contact.csv`` (flushed).
+
+        ``changes``: (edge, old state, new state, gap, slip at the event's load).
+        """
+        if self._changes is None or not changes:
+            return
+        from geofrac.fracture.contact import STATES
+
+        log, writer = self._changes
+        m = self.state.mesh
+        for e, old, new, g, sl in changes:
+            x, y = m.coords[m.edges[e]].mean(axis=0)
+            writer.writerow(
+                [
+                    event,
+                    e,
+                    f"{x:.6g}",
+                    f"{y:.6g}",
+                    STATES[old],
+                    STATES[new],
+                    f"{g:.6e}",
+                    f"{sl:.6e}",
+                ]
+            )
+        log.flush()
 
     def row(self, row: Row) -> None:
         """Append one event's row (flushed: a killed run keeps every completed event)."""
         if self._log is not None:
             self._log.writerow(row)
 
-    def frame(self, event: int, u: np.ndarray) -> None:
+    def frame(
+        self, event: int, u: np.ndarray, edge_data: dict[str, np.ndarray] | None = None
+    ) -> None:
         """Write (or replace) the frame of ``event``."""
         if self._series is None:
             return
         ctx = self.ctx
         disp = u[(ctx.gm.node_block[:, None] * ctx.bs + np.arange(2))]
         crack_data, point_data, cell_data = self.drawing.frame(disp)
+        n_lines = len(crack_data["crack"])
+        for name, values in (edge_data or {}).items():
+            if len(values) == n_lines:  # the series draws one line per site
+                crack_data[name] = values
         cracks, damage = self._series
         cracks.write(float(event), cell_data=crack_data)
         damage.write(float(event), point_data=point_data, cell_data=cell_data)
@@ -268,12 +340,15 @@ class EventOutput:
             self._log.sync()
 
     def close(self) -> None:
-        """Close the event log."""
+        """Close the event log (and ``contact.csv``)."""
         if self._log is not None:
             self._log.close()
         self._log = None
+        if self._changes is not None:
+            self._changes[0].close()
+        self._changes = None
 
-    def finish(self, rows: list[Row]) -> None:
+    def finish(self, rows: list[Row], modes: np.ndarray, slipping: np.ndarray) -> None:
         """``load_displacement.png``, ``cracks.png`` and the drawing's own files."""
         if not self.on or not rows:
             return
@@ -290,11 +365,15 @@ class EventOutput:
         fig.tight_layout()
         fig.savefig(self.out_dir / "load_displacement.png", dpi=90)
         plt.close(fig)
-        self._plot_cracks()
+        self._plot_cracks(modes, slipping)
         self.drawing.write_extra(self.out_dir)
 
-    def _plot_cracks(self) -> None:
-        """``cracks.png``: the mesh outline, pre-existing (grey) and new (red) cracks."""
+    def _plot_cracks(self, modes: np.ndarray, slipping: np.ndarray) -> None:
+        """``cracks.png``: the outline, pre-existing (grey) and new cracks by mode.
+
+        New cracks are red (tension) or blue (shear); faces slipping in the final state
+        are drawn over them in orange, thicker.
+        """
         import matplotlib.pyplot as plt
         from matplotlib.collections import LineCollection
 
@@ -311,9 +390,28 @@ class EventOutput:
         ax.add_collection(LineCollection(outline, colors="k", linewidths=0.6))
         self.drawing.draw_extra(ax)
         ax.add_collection(LineCollection(self.drawing.segments(pre), colors="0.6", linewidths=0.5))
-        ax.add_collection(
-            LineCollection(self.drawing.segments(new), colors="tab:red", linewidths=1.0)
-        )
+        shear = new & (modes == 2) if len(modes) == len(new) else np.zeros_like(new)
+        for mask, colour, label in (
+            (new & ~shear, MODE_COLOURS[0], "new crack, tension"),
+            (shear, MODE_COLOURS[1], "new crack, shear"),
+        ):
+            if mask.any():
+                ax.add_collection(
+                    LineCollection(
+                        self.drawing.segments(mask), colors=colour, linewidths=1.0, label=label
+                    )
+                )
+        if len(slipping):
+            ax.add_collection(
+                LineCollection(
+                    self.drawing.segments(slipping),
+                    colors=SLIP_COLOUR,
+                    linewidths=1.8,
+                    label="faces slipping",
+                )
+            )
+        if shear.any() or len(slipping):
+            ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")

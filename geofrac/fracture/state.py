@@ -69,6 +69,9 @@ class CrackState:
         forced: cells that use MLS from the start, shape=(num_cells,).
         settings: neighbourhood settings.
         mapper: runs the neighbourhood searches of a refit (:data:`Mapper`).
+        cut: cells touching a *cut* node (one where two cracked edges meet, or a
+            boundary node of a cracked edge) use MLS too, so that no element cell ties
+            the two faces of a crack together at its nodes (crack-face contact).
     """
 
     mesh: EdgeMesh
@@ -76,9 +79,18 @@ class CrackState:
     forced: np.ndarray
     settings: MlsSettings = field(default_factory=MlsSettings)
     mapper: Mapper = serial_map
+    cut: bool = False
 
     def __post_init__(self) -> None:  # noqa: D105
         m = self.mesh
+        n_nodes = len(m.coords)
+        #: cracked edges at each node, shape=(num_nodes,).
+        self.node_cracks = np.zeros(n_nodes, dtype=np.int64)
+        self._on_boundary = np.zeros(n_nodes, dtype=bool)
+        self._on_boundary[m.edges[m.boundary_edges].ravel()] = True
+        order = np.argsort(m.cells.ravel(), kind="stable")
+        self._star = order // 3  # cells around each node, grouped by node
+        self._star_ptr = np.searchsorted(m.cells.ravel()[order], np.arange(n_nodes + 1))
         self.cracked = np.zeros(len(m.edges), dtype=bool)
         self.fits: dict[int, LinearFit | None] = {}
         self.centroids = m.centroids()
@@ -120,7 +132,23 @@ class CrackState:
         cells = set(np.flatnonzero(self.forced).tolist())
         for e in np.flatnonzero(self.cracked):
             cells.update(c for c in self.mesh.edge_cells[e] if c >= 0)
+        cells.update(self._cut_cells(np.flatnonzero(self.node_cracks)))
         return self.refit(np.array(sorted(cells), dtype=np.int64))
+
+    def is_cut(self, nodes: np.ndarray) -> np.ndarray:
+        """Whether each node is cut (two cracked edges, or one on the boundary), same shape."""
+        k = self.node_cracks[nodes]
+        return (k >= 2) | ((k >= 1) & self._on_boundary[nodes])
+
+    def _cut_cells(self, nodes: np.ndarray) -> list[int]:
+        """Cells around the cut ones of ``nodes`` (none unless ``cut``)."""
+        if not self.cut or not len(nodes):
+            return []
+        nodes = np.asarray(nodes, dtype=np.int64)
+        out: list[int] = []
+        for v in nodes[self.is_cut(nodes)].tolist():
+            out += self._star[self._star_ptr[v] : self._star_ptr[v + 1]].tolist()
+        return out
 
     def crack(self, edge: int) -> np.ndarray:
         """Crack one edge; refit; return the cells whose field changed, sorted, shape=(k,)."""
@@ -146,6 +174,8 @@ class CrackState:
                 a, b = self.segments[e]
                 d = segment_distance(self.centroids[mls], a, b)
                 near.update(mls[d < self._h[mls]].tolist())
+        ends = self.mesh.edges[np.asarray(edges, dtype=np.int64)].ravel()
+        own.update(c for c in self._cut_cells(ends) if c not in self.fits)
         seg = self.segments[np.asarray(edges, dtype=np.int64)]
         coords, target = self.mesh.coords, self.settings.neighbours
         for c in sorted(near - own):
@@ -160,6 +190,7 @@ class CrackState:
 
     def _mark(self, e: int) -> None:
         self.cracked[e] = True
+        self.node_cracks[self.mesh.edges[e]] += 1
         a, b = self.segments[e]
         self.crack_bins.add(e, np.minimum(a, b), np.maximum(a, b))
 

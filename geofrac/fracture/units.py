@@ -206,7 +206,9 @@ class EdgeUnits:
         frozen, forced = unit_masks(ctx, mesh_e, mesh_e.centroids())
         cfg = ctx.config
         settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
-        self.state: CrackState = CrackState(mesh_e, frozen, forced, settings, ctx.rank_map)
+        self.state: CrackState = CrackState(
+            mesh_e, frozen, forced, settings, ctx.rank_map, cut=cfg.contact
+        )
         self._edge_keys = mesh_e.edges[:, 0] * len(gm.coords) + mesh_e.edges[:, 1]
         own = np.flatnonzero(gm.owned)
         self.own = own
@@ -230,6 +232,11 @@ class EdgeUnits:
         self._table_dirty: list[int] = []
         # cell -> (its fit, the fit's stiffness): assembly and measures share it
         self._mls_k: dict[int, tuple[LinearFit, np.ndarray]] = {}
+        #: keep the stress tensors of :meth:`measures` (shear events need them).
+        self.keep_stress = cfg.shear_cohesion is not None
+        #: (σ_xx, σ_yy, σ_xy) of each cell at its edge midpoints from the last
+        #: :meth:`measures` when ``keep_stress``, shape=(num_cells, 3, 3).
+        self.midpoint_stress = np.zeros((0, 3, 3))
 
     # -- sites ------------------------------------------------------------------------
     def group_sites(self, pairs: np.ndarray) -> np.ndarray:
@@ -357,6 +364,9 @@ class EdgeUnits:
         fe = ~is_mls[own]
         stress = _matvecs(self._stress_op_t, ud).reshape(3, 3, -1)  # (midpoint, component, cell)
         s1[own[fe]] = principal_max(np.moveaxis(stress, 1, 2)).T[fe]
+        full = np.zeros((len(ctx.gm.cells), 3, 3)) if self.keep_stress else None
+        if full is not None:
+            full[own[fe]] = np.moveaxis(stress, 2, 0)[fe]
         ku = _matvecs(self._K_fe_t, ud)  # shape=(nd, n_own)
         energy = 0.5 * float(np.sum(ud * ku, axis=0) @ fe)
         sign = ctx.control_sign
@@ -369,6 +379,10 @@ class EdgeUnits:
         sig = eps @ ctx.D.T
         live = table.cells >= 0
         s1[table.cells[live]] = principal_max(sig[live])[:, None]
+        if full is not None:
+            full[table.cells[live]] = sig[live][:, None, :]
+            ctx.comm.Allreduce(MPI.IN_PLACE, full, op=MPI.SUM)
+            self.midpoint_stress = full
         energy += 0.5 * float(np.sum(table.weight * np.sum(eps * sig, axis=1)))
         force = table.weight[:, None] * np.einsum("rip,ri->rp", table.B, sig)
         reaction += float(np.sum(force * sign[table.dofs]))

@@ -88,13 +88,14 @@ class LocalUpdate:
         d = np.unique(np.asarray(dofs, dtype=np.int64))
         return d[self._pos[d] < 0]
 
-    def grow(self, new: np.ndarray, block: np.ndarray) -> None:
+    def grow(self, new: np.ndarray, block: np.ndarray, rows: np.ndarray | None = None) -> None:
         """Append DOFs ``new`` to T with their entries of A₀⁻¹.
 
         Args:
             new: DOFs not in T, shape=(k,).
             block: (A₀⁻¹)[T ∪ new, new] with rows in the order (old T, new), shape=(m + k, k).
-                A₀ is symmetric, so the new rows are the transposed new columns.
+            rows: (A₀⁻¹)[new, old T], shape=(k, m); None when A₀ is symmetric (the new
+                rows are then the transposed new columns).
 
         Raises:
             ValueError: T would exceed ``capacity`` or a DOF is already in T.
@@ -106,10 +107,11 @@ class LocalUpdate:
             raise ValueError("a DOF is already in T")
         self._pos[new] = np.arange(m, m + k)
         self._dofs[m : m + k] = new
+        S_nT = block[:m].T if rows is None else rows
         self._S[: m + k, m : m + k] = block
-        self._S[m : m + k, :m] = block[:m].T
+        self._S[m : m + k, :m] = S_nT
         # N⁻¹ gains the block row [-S_nT ΔC N⁻¹, I] (ΔC is zero on the new DOFs)
-        self._Ninv[m : m + k, :m] = -((block[:m].T @ self.dC) @ self.Ninv)
+        self._Ninv[m : m + k, :m] = -((S_nT @ self.dC) @ self.Ninv)
         self._Ninv[: m + k, m : m + k] = 0.0
         self._Ninv[np.arange(m, m + k), np.arange(m, m + k)] = 1.0
         self.m = m + k

@@ -1,0 +1,360 @@
+"""Crack faces in contact: face pairs, their open/stick/slip states, joint slip (pure numpy).
+
+Every cracked interior edge is a *face pair*: the fields of its two cells (MLS fits,
+Edo (2016), eqs. 2.10-2.18) meet on it. With n the edge's unit normal pointing from the
+*minus* cell into the *plus* cell and t = (x_b − x_a)/L its tangent, the faces' relative
+displacement at the edge midpoint m is
+
+    [u] = u₊(m) − u₋(m) = Σ_q w_q u_q,    g = n · [u] (opening > 0),   s = t · [u] (slip),
+
+a fixed linear combination of the two fits' satellite displacements. Closed faces are held
+by a penalty (one-point rule at the midpoint, weight t·L):
+
+- *stick*: normal and tangential springs, tractions p = −k g (compression > 0), τ = k s;
+- *slip*: the normal spring, and Coulomb's tangential traction τ = μ p sgn, with sgn the
+  direction of the slip: the block t·L·k (BₙᵀBₙ − μ sgn BₜᵀBₙ) is unsymmetric;
+- *open*: nothing;
+
+with k = ``penalty`` · E / L, so the pair's block t · penalty · E · BᵀB does not depend on
+L. A closed pair penetrates by p / k: ``penalty`` = 100 leaves 1 % of the elastic
+shortening of a cell of size L under the same stress.
+
+The states are settled per event by an active-set iteration on the unit-load solution
+(:meth:`FacePairs.update`): closed pairs in tension open, open pairs that interpenetrate
+close (stick), sticking pairs whose τ exceeds μ p slip in the direction of s, slipping
+pairs whose slip reverses stick. Under the unit load every traction is proportional to the
+load (no cohesion enters the system), so the settled states hold at the event's load.
+Cohesion c enters as a strength, like f_t (2.20): a *bonded* pair (c > 0, never slipped
+or opened) sticks whatever its τ, and slips as an event at the load factor
+r = c / (|τ| − μ p) (:meth:`FacePairs.slip_factors`); the first such event is the onset of
+slip on a joint (Jaeger's single plane of weakness). Slipping or opening breaks the bond
+(c is a peak strength; the residual strength is friction only, as the residual tensile
+strength of a cracked edge is zero).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from geofrac.fracture.topology import EdgeMesh
+from geofrac.mls.shape import LinearFit
+
+__all__ = [
+    "NO_PAIR",
+    "OPEN",
+    "SLIP",
+    "STATES",
+    "STICK",
+    "FacePairs",
+    "PairOperator",
+    "edge_frames",
+    "edge_tractions",
+    "shear_factors",
+]
+
+#: Pair states (``-1``: the edge is no face pair).
+NO_PAIR, OPEN, STICK, SLIP = -1, 0, 1, 2
+#: Names of the states, by value.
+STATES = ("open", "stick", "slip")
+
+#: Relative tolerance of the state tests (of the largest |g|, |s| over the pairs).
+STATE_TOLERANCE = 1e-9
+
+
+def edge_frames(mesh: EdgeMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Unit tangents t = (x_b − x_a)/L and normals n = (−t_y, t_x) of every edge.
+
+    Returns:
+        (t, n), each shape=(num_edges, 2).
+    """
+    d = mesh.coords[mesh.edges[:, 1]] - mesh.coords[mesh.edges[:, 0]]
+    t = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    return t, np.column_stack([-t[:, 1], t[:, 0]])
+
+
+def edge_tractions(
+    stress: np.ndarray, tangent: np.ndarray, normal: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Normal traction σn = n·σn (tension > 0) and shear traction τ = t·σn on planes.
+
+    Args:
+        stress: (σ_xx, σ_yy, σ_xy), shape=(k, 3).
+        tangent: unit tangents of the planes, shape=(k, 2).
+        normal: unit normals of the planes, shape=(k, 2).
+
+    Returns:
+        (σn, τ), each shape=(k,).
+    """
+    sx, sy, sxy = stress.T
+    tx = sx * normal[:, 0] + sxy * normal[:, 1]
+    ty = sxy * normal[:, 0] + sy * normal[:, 1]
+    return tx * normal[:, 0] + ty * normal[:, 1], tx * tangent[:, 0] + ty * tangent[:, 1]
+
+
+def shear_factors(
+    sigma_n: np.ndarray, tau: np.ndarray, cohesion: float, friction_angle: float
+) -> np.ndarray:
+    """Load factor r at which Mohr-Coulomb shear failure |τ| = c − σn tan φ is reached.
+
+    Tractions under the unit load scale with r, so r (|τ| + σn tan φ) = c.
+
+    Args:
+        sigma_n: normal tractions (tension > 0), shape=(k,).
+        tau: shear tractions, shape=(k,).
+        cohesion: c > 0.
+        friction_angle: φ in degrees.
+
+    Returns:
+        r per plane (inf where the tractions never reach the envelope), shape=(k,).
+    """
+    drive = np.abs(tau) + sigma_n * np.tan(np.radians(friction_angle))
+    out = np.full(len(tau), np.inf)
+    ok = drive > 0.0
+    out[ok] = cohesion / drive[ok]
+    return out
+
+
+@dataclass(frozen=True)
+class PairOperator:
+    """The jump [u] of one face pair as a combination of nodal displacements.
+
+    Attributes:
+        nodes: satellite nodes of the two fits, shape=(q,).
+        weights: [u] = Σ weights_q u(nodes_q), shape=(q,).
+    """
+
+    nodes: np.ndarray
+    weights: np.ndarray
+
+
+def pair_operator(plus: LinearFit, minus: LinearFit, point: np.ndarray) -> PairOperator:
+    """[u] = u₊(point) − u₋(point) of two linear fits."""
+    nodes = np.concatenate([plus.nodes, minus.nodes]).astype(np.int64)
+    w = np.concatenate(
+        [plus.shape_functions(point[None])[0], -minus.shape_functions(point[None])[0]]
+    )
+    unique, inverse = np.unique(nodes, return_inverse=True)
+    return PairOperator(unique, np.bincount(inverse, weights=w, minlength=len(unique)))
+
+
+class FacePairs:
+    """Face pairs of the cracked interior edges: operators, states, tractions (replicated).
+
+    Args:
+        mesh: the triangle mesh with edges.
+        friction: μ per edge, shape=(num_edges,).
+        cohesion: c per edge, shape=(num_edges,).
+        modulus: E of the penalty k = penalty · E / L.
+        penalty: see the module docstring.
+
+    Attributes:
+        state: per edge, :data:`NO_PAIR` or a state, shape=(num_edges,) int8.
+        sign: slip direction of slipping pairs (±1), shape=(num_edges,).
+        bonded: pairs whose cohesion still holds, shape=(num_edges,) bool.
+        gap, slip: g and s of the last :meth:`update`, shape=(num_edges,).
+    """
+
+    def __init__(
+        self,
+        mesh: EdgeMesh,
+        friction: np.ndarray,
+        cohesion: np.ndarray,
+        modulus: float,
+        penalty: float,
+    ) -> None:
+        self.mesh = mesh
+        self.friction = np.asarray(friction, dtype=float)
+        self.cohesion = np.asarray(cohesion, dtype=float)
+        ne = len(mesh.edges)
+        self.tangent, self.normal = edge_frames(mesh)
+        seg = mesh.coords[mesh.edges]
+        self.midpoint = seg.mean(axis=1)
+        self.length = np.hypot(*(seg[:, 1] - seg[:, 0]).T)
+        self.k = penalty * modulus / self.length  # k per unit area, shape=(ne,)
+        self.block_scale = penalty * modulus  # t L k = t · penalty · E (times thickness)
+        centroids = mesh.centroids()
+        c0, c1 = mesh.edge_cells[:, 0], mesh.edge_cells[:, 1]
+        side = np.einsum("ij,ij->i", centroids[np.maximum(c1, 0)] - self.midpoint, self.normal)
+        #: cell on the +n side and on the −n side of each edge (−1: boundary edge).
+        self.plus = np.where(side > 0.0, c1, c0)
+        self.minus = np.where(side > 0.0, c0, c1)
+        self.plus[c1 < 0] = -1
+        self.minus[c1 < 0] = -1
+        self.state = np.full(ne, NO_PAIR, dtype=np.int8)
+        self.sign = np.ones(ne)
+        self.bonded = np.zeros(ne, dtype=bool)
+        self.gap = np.zeros(ne)
+        self.slip = np.zeros(ne)
+        #: pairs whose state the active set may not change (after a cycle).
+        self.frozen = np.zeros(ne, dtype=bool)
+        #: how far the last :meth:`update` found each pair outside its state's
+        #: conditions, in units of the largest |g|, |s| (0: consistent).
+        self.violation = np.zeros(ne)
+        #: the jump operator of each pair with fits on both sides (absent: inactive).
+        self.ops: dict[int, PairOperator] = {}
+
+    # -- topology --------------------------------------------------------------------
+    def add(self, edges: np.ndarray) -> np.ndarray:
+        """Make newly cracked interior ``edges`` pairs; returns the new ones, shape=(k,).
+
+        New pairs are closed and sticking, bonded when their cohesion is positive.
+        """
+        edges = np.asarray(edges, dtype=np.int64)
+        new = edges[(self.plus[edges] >= 0) & (self.state[edges] == NO_PAIR)]
+        self.state[new] = STICK
+        self.bonded[new] = self.cohesion[new] > 0.0
+        return new
+
+    def pairs_of_cells(self, cells: np.ndarray) -> np.ndarray:
+        """The pairs with ``cells`` on either side, sorted, shape=(k,)."""
+        m = self.mesh
+        e = np.unique(m.cell_edges[np.asarray(cells, dtype=np.int64)].ravel())
+        return e[self.state[e] != NO_PAIR]
+
+    def refresh(self, edges: np.ndarray, fits: dict[int, LinearFit | None]) -> np.ndarray:
+        """Recompute the operators of pairs ``edges`` from the cells' ``fits``.
+
+        A pair with a void cell (no fit) is inactive. Returns the pairs whose operator
+        changed (new, dropped or different), shape=(k,).
+        """
+        changed = []
+        for e in np.asarray(edges, dtype=np.int64).tolist():
+            fp, fm = fits.get(int(self.plus[e])), fits.get(int(self.minus[e]))
+            old = self.ops.get(e)
+            if fp is None or fm is None:
+                if old is not None:
+                    del self.ops[e]
+                    changed.append(e)
+                continue
+            op = pair_operator(fp, fm, self.midpoint[e])
+            if old is None or not (
+                np.array_equal(old.nodes, op.nodes) and np.array_equal(old.weights, op.weights)
+            ):
+                self.ops[e] = op
+                changed.append(e)
+        return np.array(changed, dtype=np.int64)
+
+    # -- mechanics -------------------------------------------------------------------
+    def jumps(self, u_nodes: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(g, s) of active pairs ``edges`` for nodal displacements, shape=(num_nodes, 2)."""
+        g = np.zeros(len(edges))
+        s = np.zeros(len(edges))
+        for i, e in enumerate(edges.tolist()):
+            op = self.ops[e]
+            j = op.weights @ u_nodes[op.nodes]
+            g[i] = j @ self.normal[e]
+            s[i] = j @ self.tangent[e]
+        return g, s
+
+    def active(self) -> np.ndarray:
+        """Pairs with an operator, sorted, shape=(k,)."""
+        return np.array(sorted(self.ops), dtype=np.int64)
+
+    def tractions(self, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(p, τ) of pairs ``edges`` at the last :meth:`update` (p > 0 in compression)."""
+        st = self.state[edges]
+        closed = (st == STICK) | (st == SLIP)
+        p = np.where(closed, -self.k[edges] * self.gap[edges], 0.0)
+        tau = np.where(st == STICK, self.k[edges] * self.slip[edges], 0.0)
+        slip = st == SLIP
+        tau[slip] = self.friction[edges][slip] * p[slip] * self.sign[edges][slip]
+        return p, tau
+
+    def update(self, u_nodes: np.ndarray, single: bool = False) -> list[tuple[int, int, int]]:
+        """One active-set step from the solution; returns (edge, old, new) per change.
+
+        Args:
+            u_nodes: nodal displacements, shape=(num_nodes, 2).
+            single: change only the pair that violates its state most (relative to the
+                largest |g|, |s|): the fallback when the full step cycles.
+        """
+        edges = self.active()
+        if not len(edges):
+            return []
+        g, s = self.jumps(u_nodes, edges)
+        self.gap[edges], self.slip[edges] = g, s
+        scale = max(float(np.abs(g).max()), float(np.abs(s).max()), 1e-300)
+        tol = STATE_TOLERANCE * scale
+        st = self.state[edges].copy()
+        new = st.copy()
+        k, mu = self.k[edges], self.friction[edges]
+        p = -k * g
+        closed = (st == STICK) | (st == SLIP)
+        violation = np.zeros(len(edges))
+        close = (st == OPEN) & (g < -tol)
+        new[close], violation[close] = STICK, -g[close]
+        opens = closed & (g > tol)
+        new[opens], violation[opens] = OPEN, g[opens]
+        excess = np.abs(s) - mu * p / k
+        slips = (st == STICK) & ~self.bonded[edges] & (g <= tol) & (excess > tol)
+        new[slips], violation[slips] = SLIP, excess[slips]
+        back = (st == SLIP) & (g <= tol) & (self.sign[edges] * s < -tol)
+        new[back], violation[back] = STICK, -self.sign[edges][back] * s[back]
+        self.violation[edges] = violation / scale
+        new[self.frozen[edges]] = st[self.frozen[edges]]
+        change = np.flatnonzero(new != st)
+        if single and len(change) > 1:
+            change = change[[int(np.argmax(violation[change]))]]
+        for i in change.tolist():
+            e = edges[i]
+            self.state[e] = new[i]
+            if new[i] == SLIP:
+                self.sign[e] = np.sign(s[i])
+            if new[i] == OPEN:
+                self.bonded[e] = False
+        return [(int(edges[i]), int(st[i]), int(new[i])) for i in change]
+
+    def slip_factors(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bonded sticking pairs and the load factor r = c / (|τ| − μ p) of their slip.
+
+        Returns:
+            (pairs, r), shape=(k,) each; pairs whose τ never reaches c + μ p are left out.
+        """
+        edges = np.flatnonzero(self.bonded & (self.state == STICK))
+        edges = edges[np.isin(edges, self.active())]
+        p, tau = self.tractions(edges)
+        drive = np.abs(tau) - self.friction[edges] * p
+        ok = drive > 0.0
+        return edges[ok], self.cohesion[edges[ok]] / drive[ok]
+
+    def unbond(self, edge: int) -> None:
+        """The pair's cohesion is lost (its slip event)."""
+        self.bonded[edge] = False
+
+    def block(self, edge: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """(nodes, shape=(q,); matrix, shape=(2q, 2q)) of a pair's current state.
+
+        Per unit thickness; None when the pair carries nothing (open or inactive). The
+        matrix acts on (u_x, u_y) of ``nodes`` interleaved.
+        """
+        op = self.ops.get(edge)
+        st = int(self.state[edge])
+        if op is None or st not in (STICK, SLIP):
+            return None
+        q = len(op.nodes)
+        Bn = np.zeros(2 * q)
+        Bt = np.zeros(2 * q)
+        n, t = self.normal[edge], self.tangent[edge]
+        Bn[0::2], Bn[1::2] = op.weights * n[0], op.weights * n[1]
+        Bt[0::2], Bt[1::2] = op.weights * t[0], op.weights * t[1]
+        if st == STICK:
+            K = np.outer(Bn, Bn) + np.outer(Bt, Bt)
+        else:
+            K = np.outer(Bn, Bn) - self.friction[edge] * self.sign[edge] * np.outer(Bt, Bn)
+        return op.nodes, self.block_scale * K
+
+    def links(self) -> tuple[np.ndarray, np.ndarray]:
+        """Node pairs (a, b) joined across closed faces: the pieces' graph."""
+        a, b = [], []
+        for e, op in self.ops.items():
+            if self.state[e] in (STICK, SLIP) and len(op.nodes) > 1:
+                a += [int(op.nodes[0])] * (len(op.nodes) - 1)
+                b += op.nodes[1:].tolist()
+        return np.array(a, dtype=np.int64), np.array(b, dtype=np.int64)
+
+    def counts(self) -> dict[str, int]:
+        """Active pairs per state."""
+        st = self.state[self.active()]
+        return {name: int((st == i).sum()) for i, name in enumerate(STATES)}

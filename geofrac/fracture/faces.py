@@ -1,0 +1,232 @@
+"""Crack-face contact in the event loop: the face pairs' blocks, states and joint properties.
+
+The mechanics are pure numpy in :mod:`geofrac.fracture.contact`; this module maps them to
+the global DOFs and the scene: friction and cohesion per edge from ``[cracking]``
+(new cracks), ``[cracking.joints.NAME]`` (a ``precracked`` group or a DFN fracture set),
+the stiffness blocks of the closed pairs for the assembly, and the signed block changes
+(new − old) that the ``update`` solver folds into its factorisation
+(:meth:`~geofrac.fracture.linear.UpdateSolver.contact_changed`).
+
+Per event the loop calls :meth:`Faces.settle`: an active-set iteration (solve, update the
+states, apply the changed blocks, solve again) until no pair changes state, at most
+``contact_iterations`` times; a state that does not settle ends the run with
+``end_reason = "contact"``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from geofrac.fracture.contact import SLIP, STATES, STICK, FacePairs
+from geofrac.fracture.context import CrackContext, Sites, facet_nodes
+from geofrac.fracture.units import Block, EdgeUnits
+
+__all__ = ["Faces", "joint_properties"]
+
+
+def joint_properties(
+    ctx: CrackContext, units: EdgeUnits, sites: Sites
+) -> tuple[np.ndarray, np.ndarray]:
+    """Friction μ and cohesion c per edge, each shape=(num_edges,) (collective).
+
+    New cracks and pre-existing ones without an entry take ``cracking.friction`` and
+    ``cracking.cohesion``; a ``joints`` entry naming a ``precracked`` group sets its
+    edges; one naming a DFN fracture set sets the edges of that set's traces (matched
+    to the meshed network, :func:`geofrac.dfn.check.match_facets`).
+    """
+    cfg = ctx.config
+    ne = len(units.state.mesh.edges)
+    mu = np.full(ne, cfg.crack_faces.friction)
+    c = np.full(ne, cfg.crack_faces.cohesion)
+    if not cfg.joints:
+        return mu, c
+    network = ctx.tagged.fractures
+    mesh = units.state.mesh
+    for name, props in cfg.joints:
+        if name in cfg.precracked:
+            pairs = np.sort(facet_nodes(ctx.tagged, ctx.gm, name), axis=1)
+            edges = units.group_sites(pairs)
+        else:
+            from geofrac.dfn.check import match_facets
+
+            set_of = network.network.set_index[network.edge_fracture]
+            on = match_facets(mesh.coords[mesh.edges[sites.group]], network)
+            ok = on >= 0
+            chosen = np.zeros(len(on), dtype=bool)
+            chosen[ok] = np.array(network.network.set_names)[set_of[on[ok]]] == name
+            edges = sites.group[chosen]
+        mu[edges] = props.friction
+        c[edges] = props.cohesion
+    return mu, c
+
+
+class Faces:
+    """The face pairs of the crack state and what they add to the linear system.
+
+    Args:
+        ctx: the shared set-up data.
+        units: the edge units (cells and their MLS fits).
+        sites: the pre-cracked sites.
+    """
+
+    def __init__(self, ctx: CrackContext, units: EdgeUnits, sites: Sites) -> None:
+        self.ctx, self.units = ctx, units
+        mu, c = joint_properties(ctx, units, sites)
+        E = float(ctx.scene.material.E)
+        self.pairs = FacePairs(units.state.mesh, mu, c, E, ctx.config.contact_penalty)
+        n_nodes = len(ctx.gm.coords)
+        self._node_dofs = ctx.node_dofs(np.arange(n_nodes), 2).reshape(n_nodes, 2)
+        #: the block of each pair as it is in the system now (absent: nothing).
+        self.applied: dict[int, Block] = {}
+        #: active-set iterations (solves after the first) over the run.
+        self.iterations = 0
+        #: state changes of the last :meth:`settle`: (edge, old, new).
+        self.last_changes: list[tuple[int, int, int]] = []
+        #: most negative gap times the load factor over the run (penetration < 0).
+        self.worst_gap = 0.0
+        #: pairs held in their least violated state after a cycle, over the run, and
+        #: the largest violation so held (units of the largest |g|, |s|).
+        self.frozen_pairs = 0
+        self.worst_violation = 0.0
+
+    # -- the system ------------------------------------------------------------------
+    def _block(self, edge: int) -> Block | None:
+        b = self.pairs.block(edge)
+        if b is None:
+            return None
+        nodes, K = b
+        return self.ctx.mls_dofs(nodes), self.ctx.t * K
+
+    def owned_blocks(self) -> list[Block]:
+        """The blocks of the pairs whose plus cell this rank owns (for the assembly)."""
+        owned = self.units.owned
+        return [b for e, b in self.applied.items() if owned[self.pairs.plus[e]]]
+
+    def has_slip(self) -> bool:
+        """Whether a slipping pair makes the system unsymmetric."""
+        return bool(np.any(self.pairs.state[list(self.applied)] == SLIP)) if self.applied else False
+
+    def _diff(self, edges: np.ndarray) -> list[Block]:
+        """Bring ``applied`` to the pairs' state; the signed changes (old −, new +)."""
+        out: list[Block] = []
+        for e in np.unique(np.asarray(edges, dtype=np.int64)).tolist():
+            old = self.applied.pop(e, None)
+            new = self._block(e)
+            if old is not None:
+                out.append((old[0], -old[1]))
+            if new is not None:
+                out.append(new)
+                self.applied[e] = new
+        return out
+
+    def start(self, cracked: np.ndarray) -> None:
+        """Pairs of the edges cracked before loading (their blocks go into the assembly)."""
+        new = self.pairs.add(cracked)
+        self.pairs.refresh(new, self.units.state.fits)
+        self._diff(new)
+
+    def cracked(self, edges: np.ndarray, changed_cells: np.ndarray) -> list[Block]:
+        """New pairs for ``edges`` and new operators where cells changed; the block changes."""
+        new = self.pairs.add(edges)
+        touched = np.union1d(new, self.pairs.pairs_of_cells(changed_cells))
+        self.pairs.refresh(touched, self.units.state.fits)
+        return self._diff(touched)
+
+    # -- the active set --------------------------------------------------------------
+    def nodal(self, u: np.ndarray) -> np.ndarray:
+        """Nodal displacements of a global solution, shape=(num_nodes, 2)."""
+        return u[self._node_dofs]
+
+    def update(
+        self, u: np.ndarray, single: bool = False
+    ) -> tuple[list[tuple[int, int, int]], list[Block]]:
+        """One active-set step (:meth:`FacePairs.update`): (state changes, block changes)."""
+        changes = self.pairs.update(self.nodal(u), single)
+        blocks = self._diff(np.array([e for e, _, _ in changes], dtype=np.int64))
+        return changes, blocks
+
+    def freeze_least_violated(self, history: dict[int, dict[int, tuple[float, float]]]) -> int:
+        """Hold each pair that cycled in the state it violated least; returns how many.
+
+        ``history``: per pair, per visited state, (violation, slip direction). The
+        violations stay in :attr:`FacePairs.violation` and the results report the largest.
+        """
+        pairs = self.pairs
+        held = []
+        for e, seen in history.items():
+            if len(seen) < 2:
+                continue
+            state = min(seen, key=lambda k: seen[k][0])
+            pairs.state[e] = state
+            pairs.sign[e] = seen[state][1]
+            pairs.frozen[e] = True
+            held.append(e)
+        self.frozen_pairs += len(held)
+        self.worst_violation = max(
+            [self.worst_violation] + [history[e][int(pairs.state[e])][0] for e in held]
+        )
+        return len(held)
+
+    def resync(self, edges: list[int]) -> list[Block]:
+        """The block changes that bring the system to the pairs' states on ``edges``."""
+        return self._diff(np.array(edges, dtype=np.int64))
+
+    def thaw(self) -> list[Block]:
+        """Release the frozen pairs (a new event); the block changes of frozen states."""
+        pairs = self.pairs
+        frozen = np.flatnonzero(pairs.frozen)
+        pairs.frozen[:] = False
+        return self._diff(frozen)
+
+    def signature(self) -> bytes:
+        """The states and slip directions of the active pairs (to detect cycles)."""
+        act = self.pairs.active()
+        return self.pairs.state[act].tobytes() + np.signbit(self.pairs.sign[act]).tobytes()
+
+    def record(self, r: float) -> dict[str, int | float]:
+        """Counts and the worst gap of the settled state scaled by r (event log columns)."""
+        pairs = self.pairs
+        act = pairs.active()
+        st = pairs.state[act]
+        closed = (st == STICK) | (st == SLIP)
+        gap = float(r * pairs.gap[act][closed].min()) if np.any(closed) else 0.0
+        self.worst_gap = min(self.worst_gap, gap)
+        out: dict[str, int | float] = {name: int((st == i).sum()) for i, name in enumerate(STATES)}
+        out["min_gap"] = gap
+        return out
+
+    def summary(self, events: int, control: float) -> dict[str, int | float]:
+        """The ``contact`` entry of the results.
+
+        ``control``: the largest |control displacement| of the run (the gap's scale).
+        """
+        out: dict[str, int | float] = {"pairs": len(self.pairs.active())}
+        out |= self.pairs.counts()
+        out["bonded"] = int(np.count_nonzero(self.pairs.bonded))
+        out["worst_gap"] = self.worst_gap
+        out["worst_gap_relative"] = self.worst_gap / control if control > 0 else 0.0
+        out["frozen_pairs"] = self.frozen_pairs
+        out["worst_violation"] = self.worst_violation
+        out["iterations"] = self.iterations
+        out["iterations_per_event"] = self.iterations / events if events else 0.0
+        return out
+
+    def frame(self, r: float) -> dict[str, np.ndarray]:
+        """Per-edge fields of the crack series at load factor r (−1 state: no pair)."""
+        pairs = self.pairs
+        ne = len(pairs.state)
+        state = np.full(ne, -1.0)
+        act = pairs.active()
+        state[act] = pairs.state[act]
+        p, tau = pairs.tractions(act)
+        out = {"contact_state": state}
+        for name, values in (
+            ("gap", pairs.gap[act]),
+            ("slip", pairs.slip[act]),
+            ("normal_traction", p),
+            ("shear_traction", tau),
+        ):
+            full = np.zeros(ne)
+            full[act] = r * values
+            out[name] = full
+        return out
