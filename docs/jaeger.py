@@ -109,7 +109,7 @@ def _plot(rows: list[tuple[float, float, float | None]], c: float, mu: float, ou
     none = [b for b, _, s in rows if s is None]
     if hit:
         ax.plot(*zip(*hit, strict=True), "o", ms=6, mfc="none", mec="C3", label="geofrac: slip")
-    top = 20.0 * c
+    top = max([20.0 * c] + [1.15 * s for _, s in hit])
     if none:
         ax.plot(none, [0.95 * top] * len(none), "x", ms=7, color="C0", label="geofrac: no slip")
     ax.set_ylim(0.0, top * 1.05)
