@@ -262,13 +262,13 @@ class FacePairs:
         tau[slip] = self.friction[edges][slip] * p[slip] * self.sign[edges][slip]
         return p, tau
 
-    def update(self, u_nodes: np.ndarray, single: bool = False) -> list[tuple[int, int, int]]:
+    def update(self, u_nodes: np.ndarray) -> list[tuple[int, int, int]]:
         """One active-set step from the solution; returns (edge, old, new) per change.
+
+        Pairs in :attr:`frozen` keep their state.
 
         Args:
             u_nodes: nodal displacements, shape=(num_nodes, 2).
-            single: change only the pair that violates its state most (relative to the
-                largest |g|, |s|): the fallback when the full step cycles.
         """
         edges = self.active()
         if not len(edges):
@@ -295,8 +295,6 @@ class FacePairs:
         self.violation[edges] = violation / scale
         new[self.frozen[edges]] = st[self.frozen[edges]]
         change = np.flatnonzero(new != st)
-        if single and len(change) > 1:
-            change = change[[int(np.argmax(violation[change]))]]
         for i in change.tolist():
             e = edges[i]
             self.state[e] = new[i]

@@ -41,9 +41,7 @@ def edge_principal(mesh: EdgeMesh, s1: np.ndarray) -> np.ndarray:
     Returns:
         shape=(num_edges,).
     """
-    total = np.bincount(mesh.cell_edges.ravel(), weights=s1.ravel(), minlength=len(mesh.edges))
-    count = np.bincount(mesh.cell_edges.ravel(), minlength=len(mesh.edges))
-    return total / np.maximum(count, 1)
+    return edge_means(mesh, s1[:, :, None])[:, 0]
 
 
 def edge_means(mesh: EdgeMesh, values: np.ndarray) -> np.ndarray:

@@ -137,11 +137,9 @@ class Faces:
         """Nodal displacements of a global solution, shape=(num_nodes, 2)."""
         return u[self._node_dofs]
 
-    def update(
-        self, u: np.ndarray, single: bool = False
-    ) -> tuple[list[tuple[int, int, int]], list[Block]]:
+    def update(self, u: np.ndarray) -> tuple[list[tuple[int, int, int]], list[Block]]:
         """One active-set step (:meth:`FacePairs.update`): (state changes, block changes)."""
-        changes = self.pairs.update(self.nodal(u), single)
+        changes = self.pairs.update(self.nodal(u))
         blocks = self._diff(np.array([e for e, _, _ in changes], dtype=np.int64))
         return changes, blocks
 

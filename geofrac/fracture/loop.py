@@ -113,6 +113,8 @@ class EventLoop:
         self.contact = contact
         #: how each edge cracked: 0 not (or before loading), 1 + index in MODES.
         self.modes = np.zeros(0, dtype=np.int8)
+        # unit tangents and normals of the edges (shear events), computed once
+        self._frames: tuple[np.ndarray, np.ndarray] | None = None
         self.strategy, self.assembler, self.output = strategy, assembler, output
         self.sites, self.timing, self.control = sites, timing, control
         #: the rows of the event log, set when the loop ends.
@@ -352,7 +354,6 @@ class EventLoop:
         seen = {contact.signature()}
         history: dict[int, dict[int, tuple[float, float]]] = {}
         pairs = contact.pairs
-        cycles = 0
         for it in range(cfg.contact_iterations + 1):
             changes, blocks = contact.update(u)
             if not changes:
@@ -366,7 +367,6 @@ class EventLoop:
                 break
             key = contact.signature()
             if key in seen:  # a cycle: hold the cycling pairs in their least violated state
-                cycles += 1
                 contact.freeze_least_violated(history)
                 blocks = contact.resync(list(history))
                 history = {}
@@ -392,7 +392,9 @@ class EventLoop:
         if cfg.shear_cohesion is not None:
             sigma = edge_means(state.mesh, self.units.midpoint_stress)  # type: ignore[attr-defined]
             cand = np.flatnonzero(~state.cracked & state.crackable)
-            t, n = edge_frames(state.mesh)
+            if self._frames is None:
+                self._frames = edge_frames(state.mesh)
+            t, n = self._frames
             sn, tau = edge_tractions(sigma[cand], t[cand], n[cand])
             r_s = shear_factors(sn, tau, cfg.shear_cohesion, cfg.shear_friction_angle)
             e, rs = least(cand, r_s)
