@@ -55,12 +55,13 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
 
     if args.events < 1:
         raise SystemExit("--events must be >= 1")
+    user = tuple(getattr(args, "overrides", None) or ())
     records = []
     for case in [c.strip() for c in args.cases.split(",") if c.strip()]:
         if case == "patch":
             for h in PATCH_H:
                 scene = load_scene_collective(
-                    comm, _JOBS / "crack_patch_test.toml", [f"geometry.parameters.h={h}"]
+                    comm, _JOBS / "crack_patch_test.toml", [f"geometry.parameters.h={h}", *user]
                 )
                 sol = solve_scene(scene, comm, verbose=False)
                 res = sol.results["cracking"]
@@ -85,7 +86,7 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
         if case not in CASES:
             raise SystemExit(f"unknown case '{case}'; choose from {', '.join([*CASES, 'patch'])}")
         name, extra = CASES[case]
-        records.append(event_case(case, name, extra, args.events, args.solver, comm))
+        records.append(event_case(case, name, (*extra, *user), args.events, args.solver, comm))
     if args.json is not None and comm.rank == 0:
         write_json(args.json, records)
     return records
@@ -98,7 +99,8 @@ def event_case(
 
     The record holds the DOFs, events, events/s, solver counts, the end reason, the
     seconds of each phase (maximum over ranks) and the scene's ``results.cracking``
-    under ``results``.
+    under ``results``; with ``cracking.contact``, the contact iterations per event, the
+    pairs held after cycles and the worst gap.
     """
     from geofrac.log import echo
     from geofrac.runner import solve_scene
@@ -124,6 +126,12 @@ def event_case(
         **{f"{k}_s": v for k, v in res["phase_s"].items()},
         "results": res,
     }
+    contact = res.get("contact")
+    if contact is not None:
+        record["contact_iterations_per_event"] = contact["iterations_per_event"]
+        record["contact_frozen_pairs"] = contact["frozen_pairs"]
+        record["contact_worst_gap"] = contact["worst_gap"]
+        record["contact_worst_gap_relative"] = contact["worst_gap_relative"]
     echo(
         comm,
         f"{case}: {record['dofs']} DOFs, {record['events']} events on {comm.size} rank(s): "
@@ -133,4 +141,13 @@ def event_case(
         f"{record['cg_iterations']} CG iterations, "
         f"{record['refinement_solves']} refinement solves; end {record['end_reason']}",
     )
+    if contact is not None:
+        echo(
+            comm,
+            f"{case}: contact: {contact['iterations_per_event']:.2f} iterations/event, "
+            f"{contact['pairs']} face pairs ({contact['open']} open, {contact['stick']} stick, "
+            f"{contact['slip']} slip), {contact['frozen_pairs']} held after cycles, worst gap "
+            f"{contact['worst_gap']:.3g} ({contact['worst_gap_relative']:.2%} of the control "
+            "displacement)",
+        )
     return record
