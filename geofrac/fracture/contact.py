@@ -19,10 +19,20 @@ with k = ``penalty`` · E / L, so the pair's block t · penalty · E · BᵀB do
 L. A closed pair penetrates by p / k: ``penalty`` = 100 leaves 1 % of the elastic
 shortening of a cell of size L under the same stress.
 
-The states are settled per event by an active-set iteration on the unit-load solution
-(:meth:`FacePairs.update`): closed pairs in tension open, open pairs that interpenetrate
-close (stick), sticking pairs whose τ exceeds μ p slip in the direction of s, slipping
-pairs whose slip reverses stick. Under the unit load every traction is proportional to the
+The springs transmit the load, but their tractions k [u] are a poor measure of it: [u] is
+the small difference of two fits at one point, and along a joint under uniform stress the
+spring tractions of neighbouring pairs scatter by a factor of several about the true
+traction. The states are therefore judged on the *faces' stress*: the mean of the two
+cells' (constant) MLS stresses σ̄ = ½ D (B₊ u₊ + B₋ u₋) (eq. 2.19), resolved on the edge,
+
+    p = −n · σ̄ n (compression > 0),    τ = t · σ̄ n,
+
+which is exact for a uniform field and, like the stress of the tensile criterion, an
+average over the fits' satellites. The states are settled per event by an active-set
+iteration on the unit-load solution (:meth:`FacePairs.update`): closed pairs whose faces'
+stress is tensile (p < 0) open, open pairs that interpenetrate (g < 0) close (stick),
+sticking pairs with |τ| > μ p slip in the direction of τ, slipping pairs whose slip
+reverses stick. Under the unit load every traction is proportional to the
 load (no cohesion enters the system), so the settled states hold at the event's load.
 Cohesion c enters as a strength, like f_t (2.20): a *bonded* pair (c > 0, never slipped
 or opened) sticks whatever its τ, and slips as an event at the load factor
@@ -59,8 +69,13 @@ NO_PAIR, OPEN, STICK, SLIP = -1, 0, 1, 2
 #: Names of the states, by value.
 STATES = ("open", "stick", "slip")
 
-#: Relative tolerance of the state tests (of the largest |g|, |s| over the pairs).
-STATE_TOLERANCE = 1e-9
+#: A pair changes state only when it violates its state's conditions by more than this
+#: fraction of the pairs' typical (median) jump or traction: pairs whose faces carry almost
+#: nothing (a fracture parallel to the load) would otherwise chatter between states on
+#: round-off and the slightest change of the field.
+STATE_TOLERANCE = 1e-3
+#: The floor of the tolerances: round-off, relative to the largest jump or traction.
+ROUNDOFF = 1e-9
 
 
 def edge_frames(mesh: EdgeMesh) -> tuple[np.ndarray, np.ndarray]:
@@ -118,25 +133,61 @@ def shear_factors(
 
 @dataclass(frozen=True)
 class PairOperator:
-    """The jump [u] of one face pair as a combination of nodal displacements.
+    """The jump [u] and the faces' tractions of one pair as maps of nodal displacements.
 
     Attributes:
         nodes: satellite nodes of the two fits, shape=(q,).
         weights: [u] = Σ weights_q u(nodes_q), shape=(q,).
+        traction: (p, τ) of the faces' mean stress = traction @ (u_x, u_y of nodes,
+            interleaved), shape=(2, 2q).
     """
 
     nodes: np.ndarray
     weights: np.ndarray
+    traction: np.ndarray
 
 
-def pair_operator(plus: LinearFit, minus: LinearFit, point: np.ndarray) -> PairOperator:
-    """[u] = u₊(point) − u₋(point) of two linear fits."""
+def pair_operator(
+    plus: LinearFit,
+    minus: LinearFit,
+    point: np.ndarray,
+    tangent: np.ndarray,
+    normal: np.ndarray,
+    D: np.ndarray,
+) -> PairOperator:
+    """[u] = u₊(point) − u₋(point) of two linear fits, and (p, τ) of their mean stress.
+
+    Args:
+        plus: the fit of the cell on the +n side.
+        minus: the fit of the cell on the −n side.
+        point: the edge midpoint, shape=(2,).
+        tangent: the edge's unit t, shape=(2,).
+        normal: the edge's unit n, shape=(2,).
+        D: plane stress-strain matrix (Voigt, engineering shear), shape=(3, 3).
+    """
     nodes = np.concatenate([plus.nodes, minus.nodes]).astype(np.int64)
     w = np.concatenate(
         [plus.shape_functions(point[None])[0], -minus.shape_functions(point[None])[0]]
     )
     unique, inverse = np.unique(nodes, return_inverse=True)
-    return PairOperator(unique, np.bincount(inverse, weights=w, minlength=len(unique)))
+    q = len(unique)
+    # mean strain ½ (B₊ u₊ + B₋ u₋) on the union's interleaved DOFs, shape=(3, 2q)
+    B = np.zeros((3, 2 * q))
+    for fit, at in ((plus, inverse[: len(plus.nodes)]), (minus, inverse[len(plus.nodes) :])):
+        gx, gy = 0.5 * fit.gradients()
+        np.add.at(B[0], 2 * at, gx)
+        np.add.at(B[1], 2 * at + 1, gy)
+        np.add.at(B[2], 2 * at, gy)
+        np.add.at(B[2], 2 * at + 1, gx)
+    n, t = normal, tangent
+    # Voigt rows resolving (σ_xx, σ_yy, σ_xy) on the edge: −n·σn and t·σn
+    resolve = np.array(
+        [
+            [-(n[0] ** 2), -(n[1] ** 2), -2.0 * n[0] * n[1]],
+            [t[0] * n[0], t[1] * n[1], t[0] * n[1] + t[1] * n[0]],
+        ]
+    )
+    return PairOperator(unique, np.bincount(inverse, weights=w, minlength=q), resolve @ D @ B)
 
 
 class FacePairs:
@@ -148,12 +199,15 @@ class FacePairs:
         cohesion: c per edge, shape=(num_edges,).
         modulus: E of the penalty k = penalty · E / L.
         penalty: see the module docstring.
+        D: plane stress-strain matrix of the faces' stress, shape=(3, 3).
 
     Attributes:
         state: per edge, :data:`NO_PAIR` or a state, shape=(num_edges,) int8.
         sign: slip direction of slipping pairs (±1), shape=(num_edges,).
         bonded: pairs whose cohesion still holds, shape=(num_edges,) bool.
         gap, slip: g and s of the last :meth:`update`, shape=(num_edges,).
+        pressure, shear: p and τ of the faces' stress at the last :meth:`update`,
+            shape=(num_edges,).
     """
 
     def __init__(
@@ -163,8 +217,10 @@ class FacePairs:
         cohesion: np.ndarray,
         modulus: float,
         penalty: float,
+        D: np.ndarray,
     ) -> None:
         self.mesh = mesh
+        self.D = np.asarray(D, dtype=float)
         self.friction = np.asarray(friction, dtype=float)
         self.cohesion = np.asarray(cohesion, dtype=float)
         ne = len(mesh.edges)
@@ -187,13 +243,19 @@ class FacePairs:
         self.bonded = np.zeros(ne, dtype=bool)
         self.gap = np.zeros(ne)
         self.slip = np.zeros(ne)
-        #: pairs whose state the active set may not change (after a cycle).
+        self.pressure = np.zeros(ne)
+        self.shear = np.zeros(ne)
+        #: pairs held in their state after a cycle (:meth:`update` leaves them), and the
+        #: violation they were held at.
         self.frozen = np.zeros(ne, dtype=bool)
+        self.held_at = np.zeros(ne)
         #: how far the last :meth:`update` found each pair outside its state's
         #: conditions, in units of the largest |g|, |s| (0: consistent).
         self.violation = np.zeros(ne)
         #: the jump operator of each pair with fits on both sides (absent: inactive).
         self.ops: dict[int, PairOperator] = {}
+        #: padded arrays of the operators for :meth:`measure` (None: rebuild).
+        self._table: tuple[np.ndarray, ...] | None = None
 
     # -- topology --------------------------------------------------------------------
     def add(self, edges: np.ndarray) -> np.ndarray:
@@ -228,78 +290,123 @@ class FacePairs:
                     del self.ops[e]
                     changed.append(e)
                 continue
-            op = pair_operator(fp, fm, self.midpoint[e])
+            op = pair_operator(fp, fm, self.midpoint[e], self.tangent[e], self.normal[e], self.D)
             if old is None or not (
                 np.array_equal(old.nodes, op.nodes) and np.array_equal(old.weights, op.weights)
             ):
                 self.ops[e] = op
                 changed.append(e)
+        if changed:
+            self._table = None
         return np.array(changed, dtype=np.int64)
 
     # -- mechanics -------------------------------------------------------------------
-    def jumps(self, u_nodes: np.ndarray, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(g, s) of active pairs ``edges`` for nodal displacements, shape=(num_nodes, 2)."""
-        g = np.zeros(len(edges))
-        s = np.zeros(len(edges))
-        for i, e in enumerate(edges.tolist()):
-            op = self.ops[e]
-            j = op.weights @ u_nodes[op.nodes]
-            g[i] = j @ self.normal[e]
-            s[i] = j @ self.tangent[e]
-        return g, s
+    def _padded(self) -> tuple[np.ndarray, ...]:
+        """(edges, nodes, weights, traction) of the active pairs, padded with zeros.
+
+        Shapes (k,), (k, q), (k, q), (k, 2, 2q) with q the largest operator.
+        """
+        if self._table is None:
+            edges = self.active()
+            q = max((len(op.nodes) for op in self.ops.values()), default=1)
+            nodes = np.zeros((len(edges), q), dtype=np.int64)
+            weights = np.zeros((len(edges), q))
+            traction = np.zeros((len(edges), 2, 2 * q))
+            for i, e in enumerate(edges.tolist()):
+                op = self.ops[e]
+                m = len(op.nodes)
+                nodes[i, :m], weights[i, :m], traction[i, :, : 2 * m] = (
+                    op.nodes,
+                    op.weights,
+                    op.traction,
+                )
+            self._table = (edges, nodes, weights, traction)
+        return self._table
+
+    def measure(self, u_nodes: np.ndarray) -> tuple[np.ndarray, ...]:
+        """(edges, g, s, p, τ) of the active pairs for nodal displacements.
+
+        Args:
+            u_nodes: shape=(num_nodes, 2).
+
+        Returns:
+            the active pairs and their gap, slip, and the pressure and shear traction of
+            the faces' stress, each shape=(k,).
+        """
+        edges, nodes, weights, traction = self._padded()
+        u = u_nodes[nodes]  # shape=(k, q, 2)
+        jump = np.einsum("kq,kqi->ki", weights, u)
+        g = np.einsum("ki,ki->k", jump, self.normal[edges])
+        s = np.einsum("ki,ki->k", jump, self.tangent[edges])
+        pt = np.einsum("kjd,kd->kj", traction, u.reshape(len(edges), -1))
+        return edges, g, s, pt[:, 0], pt[:, 1]
 
     def active(self) -> np.ndarray:
         """Pairs with an operator, sorted, shape=(k,)."""
         return np.array(sorted(self.ops), dtype=np.int64)
 
     def tractions(self, edges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(p, τ) of pairs ``edges`` at the last :meth:`update` (p > 0 in compression)."""
+        """(p, τ) of pairs ``edges`` at the last :meth:`update` (p > 0 in compression).
+
+        The faces' stress on closed pairs; zero on open ones.
+        """
         st = self.state[edges]
         closed = (st == STICK) | (st == SLIP)
-        p = np.where(closed, -self.k[edges] * self.gap[edges], 0.0)
-        tau = np.where(st == STICK, self.k[edges] * self.slip[edges], 0.0)
-        slip = st == SLIP
-        tau[slip] = self.friction[edges][slip] * p[slip] * self.sign[edges][slip]
-        return p, tau
+        return (
+            np.where(closed, self.pressure[edges], 0.0),
+            np.where(closed, self.shear[edges], 0.0),
+        )
 
     def update(self, u_nodes: np.ndarray) -> list[tuple[int, int, int]]:
         """One active-set step from the solution; returns (edge, old, new) per change.
 
-        Pairs in :attr:`frozen` keep their state.
+        Pairs in :attr:`frozen` keep their state, unless the solution violates it by more
+        than twice the violation they were held at (then they are released).
 
         Args:
             u_nodes: nodal displacements, shape=(num_nodes, 2).
         """
-        edges = self.active()
-        if not len(edges):
+        if not self.ops:
             return []
-        g, s = self.jumps(u_nodes, edges)
+        edges, g, s, p, tau = self.measure(u_nodes)
         self.gap[edges], self.slip[edges] = g, s
-        scale = max(float(np.abs(g).max()), float(np.abs(s).max()), 1e-300)
-        tol = STATE_TOLERANCE * scale
+        self.pressure[edges], self.shear[edges] = p, tau
+        # violations in units of the largest jump and traction; the springs' traction of
+        # the largest jump keeps the traction scale meaningful when the faces carry
+        # nothing (a block sliding off: p, τ are round-off)
+        jump = np.maximum(np.abs(g), np.abs(s))
+        traction = np.maximum(np.abs(p), np.abs(tau))
+        u_scale = max(float(jump.max()), 1e-300)
+        t_scale = max(float(traction.max()), float(self.k[edges].max()) * u_scale)
+        tol_u = max(STATE_TOLERANCE * float(np.median(jump)), ROUNDOFF * u_scale)
+        tol_t = max(STATE_TOLERANCE * float(np.median(traction)), ROUNDOFF * t_scale)
         st = self.state[edges].copy()
         new = st.copy()
-        k, mu = self.k[edges], self.friction[edges]
-        p = -k * g
+        mu = self.friction[edges]
         closed = (st == STICK) | (st == SLIP)
         violation = np.zeros(len(edges))
-        close = (st == OPEN) & (g < -tol)
-        new[close], violation[close] = STICK, -g[close]
-        opens = closed & (g > tol)
-        new[opens], violation[opens] = OPEN, g[opens]
-        excess = np.abs(s) - mu * p / k
-        slips = (st == STICK) & ~self.bonded[edges] & (g <= tol) & (excess > tol)
-        new[slips], violation[slips] = SLIP, excess[slips]
-        back = (st == SLIP) & (g <= tol) & (self.sign[edges] * s < -tol)
-        new[back], violation[back] = STICK, -self.sign[edges][back] * s[back]
-        self.violation[edges] = violation / scale
-        new[self.frozen[edges]] = st[self.frozen[edges]]
+        close = (st == OPEN) & (g < -tol_u)
+        new[close], violation[close] = STICK, -g[close] / u_scale
+        opens = closed & (p < -tol_t)
+        new[opens], violation[opens] = OPEN, -p[opens] / t_scale
+        excess = np.abs(tau) - mu * p
+        slips = (st == STICK) & ~self.bonded[edges] & ~opens & (excess > tol_t)
+        new[slips], violation[slips] = SLIP, excess[slips] / t_scale
+        back = (st == SLIP) & ~opens & (self.sign[edges] * s < -tol_u)
+        new[back], violation[back] = STICK, -self.sign[edges][back] * s[back] / u_scale
+        self.violation[edges] = violation
+        # a held pair is released when the field has moved it well past its held state
+        frozen = self.frozen[edges]
+        release = frozen & (violation > 2.0 * self.held_at[edges] + STATE_TOLERANCE)
+        self.frozen[edges[release]] = False
+        frozen &= ~release
+        new[frozen] = st[frozen]
         change = np.flatnonzero(new != st)
         for i in change.tolist():
             e = edges[i]
             self.state[e] = new[i]
             if new[i] == SLIP:
-                self.sign[e] = np.sign(s[i])
+                self.sign[e] = np.sign(tau[i]) if tau[i] != 0.0 else np.sign(s[i])
             if new[i] == OPEN:
                 self.bonded[e] = False
         return [(int(edges[i]), int(st[i]), int(new[i])) for i in change]

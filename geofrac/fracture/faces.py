@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from geofrac.fracture.contact import SLIP, STATES, STICK, FacePairs
+from geofrac.fracture.contact import SLIP, STATES, FacePairs
 from geofrac.fracture.context import CrackContext, Sites, facet_nodes
 from geofrac.fracture.units import Block, EdgeUnits
 
@@ -73,7 +73,7 @@ class Faces:
         self.ctx, self.units = ctx, units
         mu, c = joint_properties(ctx, units, sites)
         E = float(ctx.scene.material.E)
-        self.pairs = FacePairs(units.state.mesh, mu, c, E, ctx.config.contact_penalty)
+        self.pairs = FacePairs(units.state.mesh, mu, c, E, ctx.config.contact_penalty, ctx.D)
         n_nodes = len(ctx.gm.coords)
         self._node_dofs = ctx.node_dofs(np.arange(n_nodes), 2).reshape(n_nodes, 2)
         #: the block of each pair as it is in the system now (absent: nothing).
@@ -129,6 +129,7 @@ class Faces:
         """New pairs for ``edges`` and new operators where cells changed; the block changes."""
         new = self.pairs.add(edges)
         touched = np.union1d(new, self.pairs.pairs_of_cells(changed_cells))
+        self.release(touched)
         self.pairs.refresh(touched, self.units.state.fits)
         return self._diff(touched)
 
@@ -158,6 +159,7 @@ class Faces:
             pairs.state[e] = state
             pairs.sign[e] = seen[state][1]
             pairs.frozen[e] = True
+            pairs.held_at[e] = seen[state][0]
             held.append(e)
         self.frozen_pairs += len(held)
         self.worst_violation = max(
@@ -169,25 +171,20 @@ class Faces:
         """The block changes that bring the system to the pairs' states on ``edges``."""
         return self._diff(np.array(edges, dtype=np.int64))
 
-    def thaw(self) -> list[Block]:
-        """Release the frozen pairs (a new event); the block changes of frozen states."""
-        pairs = self.pairs
-        frozen = np.flatnonzero(pairs.frozen)
-        pairs.frozen[:] = False
-        return self._diff(frozen)
-
-    def signature(self) -> bytes:
-        """The states and slip directions of the active pairs (to detect cycles)."""
-        act = self.pairs.active()
-        return self.pairs.state[act].tobytes() + np.signbit(self.pairs.sign[act]).tobytes()
+    def release(self, edges: np.ndarray) -> None:
+        """Let the active set change held pairs ``edges`` again (a cell beside them changed)."""
+        self.pairs.frozen[np.asarray(edges, dtype=np.int64)] = False
 
     def record(self, r: float) -> dict[str, int | float]:
-        """Counts and the worst gap of the settled state scaled by r (event log columns)."""
+        """Counts and the worst gap of the settled state scaled by r (event log columns).
+
+        The gap is the least over every pair, open ones included: a pair held open after
+        a cycle may interpenetrate.
+        """
         pairs = self.pairs
         act = pairs.active()
         st = pairs.state[act]
-        closed = (st == STICK) | (st == SLIP)
-        gap = float(r * pairs.gap[act][closed].min()) if np.any(closed) else 0.0
+        gap = min(float(r * pairs.gap[act].min()), 0.0) if len(act) else 0.0
         self.worst_gap = min(self.worst_gap, gap)
         out: dict[str, int | float] = {name: int((st == i).sum()) for i, name in enumerate(STATES)}
         out["min_gap"] = gap

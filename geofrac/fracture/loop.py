@@ -337,12 +337,14 @@ class EventLoop:
     ) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
         """Active-set iteration on the crack faces from the solution u (collective).
 
-        Every pair whose state the solution violates changes at once. When that returns
-        to a set of states seen before (a cycle: no set of states satisfies every
-        pair's conditions, which penalty friction without load steps allows), each
-        pair that changed since is held in the state it violated least for the rest of
-        the event (counted, with the largest violation, in the results). Returns the
-        settled solution and every state change (edge, old, new) made.
+        Every pair whose state the solution violates changes at once. A pair that would
+        return to a state it left earlier in the event cycles (no set of states
+        satisfies every pair's conditions, which penalty friction without load steps
+        allows): it is held in the state it violated least (counted, with the largest
+        violation, in the results), also in later events until a cell beside it changes
+        or the field violates its held state by more than twice as much. So each pair
+        changes at most three times per event. Returns the settled solution and every state change
+        (edge, old, new) made.
 
         Raises:
             ContactUnsettled: states still change after ``contact_iterations`` solves.
@@ -351,27 +353,30 @@ class EventLoop:
         contact, cfg = self.contact, self.ctx.config
         assert contact is not None
         made: list[tuple[int, int, int]] = []
-        seen = {contact.signature()}
         history: dict[int, dict[int, tuple[float, float]]] = {}
         pairs = contact.pairs
         for it in range(cfg.contact_iterations + 1):
             changes, blocks = contact.update(u)
             if not changes:
-                if pairs.frozen.any():
-                    self.strategy.contact_changed(contact.thaw())
                 return u, made
-            for e, old, _ in changes:
-                history.setdefault(e, {})[old] = (float(pairs.violation[e]), float(pairs.sign[e]))
+            cycling = []
+            for e, old, new in changes:
+                left = history.setdefault(e, {})
+                left[old] = (float(pairs.violation[e]), float(pairs.sign[e]))
+                if new in left:
+                    cycling.append(e)
             made += changes
             if it == cfg.contact_iterations:
                 break
-            key = contact.signature()
-            if key in seen:  # a cycle: hold the cycling pairs in their least violated state
-                contact.freeze_least_violated(history)
-                blocks = contact.resync(list(history))
-                history = {}
-                seen = set()
-            seen.add(key)
+            if cycling:
+                entered = {e: new for e, _, new in changes}
+                contact.freeze_least_violated({e: history[e] for e in cycling})
+                blocks += contact.resync(cycling)
+                made += [
+                    (e, entered[e], int(pairs.state[e]))
+                    for e in cycling
+                    if pairs.state[e] != entered[e]
+                ]
             self.strategy.contact_changed(blocks)
             u, _ = self.strategy.solve(u, x, self.gather or gather)
             contact.iterations += 1
