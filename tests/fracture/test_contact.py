@@ -59,7 +59,7 @@ def test_pair_operator_gives_the_jump_and_cauchy_tractions_of_linear_fields():
 
 
 def test_shear_factor_reaches_the_mohr_coulomb_envelope():
-    """r (|τ| + σn tan φ) = c; compression (σn < 0) raises r, no drive gives inf."""
+    """The factor r solves r (|τ| + σn tan φ) = c; compression raises r; no drive: inf."""
     sn = np.array([-1.0, 0.5, -10.0])
     tau = np.array([2.0, -1.0, 1.0])
     r = shear_factors(sn, tau, 3.0, 30.0)
