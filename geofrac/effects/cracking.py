@@ -83,6 +83,7 @@ if TYPE_CHECKING:
     from geofrac.model.scene import Scene
 
 __all__ = [
+    "CONTACT_KEYS",
     "KEYS",
     "LIMITS",
     "STRAIGHT_CELLS",
@@ -96,6 +97,8 @@ __all__ = [
 #: MLS-cracked cells and the crack geometry assume straight cell edges: the loader refuses
 #: this effect on curved (second-order) geometry.
 STRAIGHT_CELLS = True
+#: Keys of ``[cracking]`` that apply with ``contact = true`` only.
+CONTACT_KEYS = ("friction", "cohesion", "joints", "contact_penalty", "contact_iterations")
 #: Keys of the ``[cracking]`` table.
 KEYS = (
     "method",
@@ -119,11 +122,7 @@ KEYS = (
     "precrack_seed",
     "switch",
     "contact",
-    "friction",
-    "cohesion",
-    "joints",
-    "contact_penalty",
-    "contact_iterations",
+    *CONTACT_KEYS,
 )
 
 #: Keys of a ``[cracking.joints.NAME]`` table.
@@ -218,11 +217,7 @@ def _contact(table: dict[str, Any], ctx: ConfigureContext, precracked: list[str]
                     "unknown key" + did_you_mean(key, JOINT_KEYS),
                 )
         joints.append((name, _joint(file, f"joints.{name}.", entry, faces)))
-    used = [
-        k
-        for k in ("friction", "cohesion", "joints", "contact_penalty", "contact_iterations")
-        if k in table
-    ]
+    used = [k for k in CONTACT_KEYS if k in table]
     if used and not contact:
         raise SceneError(file, f"cracking.{used[0]}", "applies with cracking.contact = true only")
     return {

@@ -61,15 +61,13 @@ class Assembler:
         is_mls = state.is_mls()
         r0, c0, v0 = units.intact_coo(~is_mls[units.own])
         rows, cols, vals = [r0], [c0], [v0]
-        for c, fit in state.fits.items():
-            block = units.fit_block(c, fit) if units.owned[c] else None
+        blocks = [units.fit_block(c, fit) for c, fit in state.fits.items() if units.owned[c]]
+        if self.contact is not None:
+            blocks += self.contact.owned_blocks()
+        for block in blocks:
             if block is None:
                 continue
             d, k = block
-            rows.append(np.repeat(d, len(d)))
-            cols.append(np.tile(d, len(d)))
-            vals.append(k.ravel())
-        for d, k in self.contact.owned_blocks() if self.contact is not None else []:
             rows.append(np.repeat(d, len(d)))
             cols.append(np.tile(d, len(d)))
             vals.append(k.ravel())

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from geofrac.fracture.contact import SLIP, STATES, FacePairs
+from geofrac.fracture.contact import SLIP, FacePairs
 from geofrac.fracture.context import CrackContext, Sites, facet_nodes
 from geofrac.fracture.units import Block, EdgeUnits
 
@@ -183,10 +183,9 @@ class Faces:
         """
         pairs = self.pairs
         act = pairs.active()
-        st = pairs.state[act]
         gap = min(float(r * pairs.gap[act].min()), 0.0) if len(act) else 0.0
         self.worst_gap = min(self.worst_gap, gap)
-        out: dict[str, int | float] = {name: int((st == i).sum()) for i, name in enumerate(STATES)}
+        out: dict[str, int | float] = dict(pairs.counts())
         out["min_gap"] = gap
         return out
 

@@ -179,26 +179,21 @@ class EventLoop:
             for event in range(first, cfg.max_events + 1):
                 replay = event <= done
                 start = self._event_start(event, u_unit, face_hit)
+                changes: list[tuple[int, int, int]] = []
                 try:
                     u_unit, its = strategy.solve(u_unit, x, gather)
+                    if contact is not None:
+                        u_unit, changes = self._settle(u_unit, x, gather)
+                except ContactUnsettled as exc:
+                    end = "contact"
+                    say(f"cracking: event {event}: {exc}")
+                    break
                 except RunError as exc:
                     if replay:
                         raise RunError(f"--resume: event {event} failed on replay: {exc}") from None
                     end = "singular"
                     say(f"cracking: event {event}: the system is singular ({exc})")
                     break
-                changes: list[tuple[int, int, int]] = []
-                if contact is not None:
-                    try:
-                        u_unit, changes = self._settle(u_unit, x, gather)
-                    except ContactUnsettled as exc:
-                        end = "contact"
-                        say(f"cracking: event {event}: {exc}")
-                        break
-                    except RunError as exc:
-                        end = "singular"
-                        say(f"cracking: event {event}: the system is singular ({exc})")
-                        break
                 if timing.factorizations > start.timing["factorizations"] or ref is None:  # type: ignore[operator]
                     ref = start
                     # a resumed run factorises this event without a stale reference to
@@ -343,8 +338,8 @@ class EventLoop:
         allows): it is held in the state it violated least (counted, with the largest
         violation, in the results), also in later events until a cell beside it changes
         or the field violates its held state by more than twice as much. So each pair
-        changes at most three times per event. Returns the settled solution and every state change
-        (edge, old, new) made.
+        changes at most three times per event. Returns the settled solution and every
+        state change (edge, old, new) made.
 
         Raises:
             ContactUnsettled: states still change after ``contact_iterations`` solves.

@@ -22,6 +22,7 @@ from typing import IO, TYPE_CHECKING, Protocol
 import numpy as np
 
 from geofrac.errors import RunError
+from geofrac.fracture.contact import STATES
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
 from geofrac.fracture.units import SiteState
 from geofrac.io.checkpoint import Checkpoint, RunControl
@@ -292,8 +293,6 @@ class EventOutput:
         """
         if self._changes is None or not changes:
             return
-        from geofrac.fracture.contact import STATES
-
         log, writer = self._changes
         m = self.state.mesh
         for e, old, new, g, sl in changes:

@@ -380,14 +380,19 @@ def _value(
     out: list[float | str] = []
     for i, c in enumerate(value):
         if isinstance(c, str):
-            try:
-                expr.parse(c, names)
-            except expr.ExpressionError as exc:
-                raise t.error("value", f"entry {i} {short(c)} {exc}") from None
-            out.append(c)
+            out.append(_expression(t, c, names, f"entry {i} "))
         else:
             out.append(t.vector("value", 1, [c])[0])
     return tuple(out)
+
+
+def _expression(t: _Table, text: str, names: Sequence[str], where: str = "") -> str:
+    """``text`` if it is an expression of the coordinate ``names``; else the ``value`` error."""
+    try:
+        expr.parse(text, names)
+    except expr.ExpressionError as exc:
+        raise t.error("value", f"{where}{short(text)} {exc}") from None
+    return text
 
 
 def _pressure(t: _Table, names: Sequence[str]) -> tuple[float | str]:
@@ -398,11 +403,7 @@ def _pressure(t: _Table, names: Sequence[str]) -> tuple[float | str]:
     if isinstance(value, list) and len(value) == 1:
         value = value[0]
     if isinstance(value, str):
-        try:
-            expr.parse(value, names)
-        except expr.ExpressionError as exc:
-            raise t.error("value", f"{short(value)} {exc}") from None
-        return (value,)
+        return (_expression(t, value, names),)
     if not is_number(value):
         axes = ", ".join(names)
         raise t.error(
