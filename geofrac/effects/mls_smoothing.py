@@ -10,7 +10,7 @@ scene declares this effect.
 Scene table ``[mls_smoothing]``: ``radius`` = influence radius in cells (default 2.0);
 ``kind`` = ``"standard"`` (default: the fitted increments change the stresses, eqs. 4.66-4.67)
 or ``"consistent"`` (the same, with the grid forces from the fit's adjoint applied to the
-stresses, so the smoothing does no net work; one rank only; docs/mpm_energy.md).
+stresses, so the smoothing does no net work; docs/mpm_energy.md).
 """
 
 from __future__ import annotations

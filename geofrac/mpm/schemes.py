@@ -184,8 +184,6 @@ class StepSettings:
             raise ValueError(
                 f"smoothing kind {self.smoothing_kind!r} is not one of {', '.join(SMOOTHINGS)}"
             )
-        if self.smoothing_kind == "consistent" and self.domain is not None:
-            raise ValueError("consistent smoothing runs on one process only")
         if self.backend not in BACKENDS:
             raise ValueError(f"backend {self.backend!r} is not one of {', '.join(BACKENDS)}")
 
@@ -458,7 +456,7 @@ def step(
         if s.smoothing_kind == "consistent":
             from geofrac.mpm.consistent import mls_operator
 
-            smooth_at += (mls_operator(p.x, s.smoothing * g.spacing, p.ids),)
+            smooth_at += (mls_operator(p.x, s.smoothing * g.spacing, p.ids, dom),)
 
     def force_stress() -> np.ndarray:
         """The stresses the grid forces are made of (the adjoint fit: consistent kind)."""

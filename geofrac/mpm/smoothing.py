@@ -123,6 +123,8 @@ def neighbour_pairs(
         p and I, each shape=(pairs,).
     """
     n, dim = x.shape
+    if n == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
     key = np.floor((x - x.min(axis=0)) / h).astype(np.int64)
     dims = key.max(axis=0) + 3
     flat = np.ravel_multi_index(tuple((key + 1).T), dims)

@@ -199,3 +199,17 @@ def test_the_budget_closes_on_two_ranks_and_matches_one():
     two = simulate(load_scene(TRANSLATING_SCENE, overrides), MPI.COMM_WORLD, verbose=False)
     assert two["energy_budget_closure"] < 1e-12
     assert two["energy_drift_work_max"] == pytest.approx(one["energy_drift_work_max"], rel=1e-6)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_consistent_smoothing_on_two_ranks_gives_the_serial_energies():
+    """The scene with the consistent kind: 1 and 2 ranks report the same drift of K + U.
+
+    The bar starts on one rank (the other holds no particle until it crosses x = 25),
+    then flies across.
+    """
+    overrides = translating_overrides("ugimp", "musl", 2.0, 16.0, "consistent")
+    one = simulate(load_scene(TRANSLATING_SCENE, overrides), MPI.COMM_SELF, verbose=False)
+    two = simulate(load_scene(TRANSLATING_SCENE, overrides), MPI.COMM_WORLD, verbose=False)
+    assert two["energy_budget_closure"] < 1e-12
+    assert two["energy_drift_max"] == one["energy_drift_max"]

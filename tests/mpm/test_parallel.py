@@ -31,7 +31,7 @@ from geofrac.mpm.schemes import (
 from geofrac.mpm.shapes import SHAPES
 
 
-def _settings(g, scheme, shape, smoothing, dt, backend="numba", domain=None):
+def _settings(g, scheme, shape, smoothing, dt, backend="numba", domain=None, kind="standard"):
     """Gravity, the ground below y = 0.5 held, a wall at x < 0.5, friction on the floor."""
     X = g.nodes()
     fixed = np.zeros((g.num_nodes, 2), dtype=bool)
@@ -39,7 +39,9 @@ def _settings(g, scheme, shape, smoothing, dt, backend="numba", domain=None):
     floor = np.flatnonzero(np.isclose(X[:, 1], 0.5))
     fr = friction(floor, np.tile([0.0, -1.0], (len(floor), 1)), 0.3)
     gravity = np.array([0.0, -9.81])
-    return StepSettings(scheme, shape, dt, gravity, fixed, smoothing, fr, backend, domain)
+    return StepSettings(
+        scheme, shape, dt, gravity, fixed, smoothing, fr, backend, domain, smoothing_kind=kind
+    )
 
 
 def _scene(material):
@@ -71,15 +73,15 @@ def _material(name):
     return DruckerPrager(1e5, 0.3, friction_angle=20.0, cohesion=5000.0)
 
 
-def _run(comm, scheme, shape, smoothing, material_name, steps, backend="numba"):
+def _run(comm, scheme, shape, smoothing, material_name, steps, backend="numba", kind="standard"):
     """The scene serially (on this rank) and decomposed over comm: (serial, gathered, totals)."""
     mat = _material(material_name)
     g, whole, dt = _scene(mat)
     serial = copy.deepcopy(whole)
-    s = _settings(g, scheme, shape, smoothing, dt, backend)
+    s = _settings(g, scheme, shape, smoothing, dt, backend, kind=kind)
     dom = decompose(g, comm)
     mine = dom.distribute(whole)
-    sd = _settings(dom.local, scheme, shape, smoothing, dt, backend, dom)
+    sd = _settings(dom.local, scheme, shape, smoothing, dt, backend, dom, kind)
     crossed = set()
     start_owner = dom.owner(whole.x)
     for _ in range(steps):
@@ -138,6 +140,28 @@ def test_decomposed_run_without_smoothing_is_bitwise_the_serial_one(scheme, shap
     assert crossed > 10
     if comm.rank == 0:
         assert serial.x[:, 0].max() > (3.9 if shape == "bspline2" else 4.0)
+        _compare(serial, gathered, rtol=0.0)
+
+
+@pytest.mark.mpi(min_size=2)
+@pytest.mark.parametrize(
+    ("scheme", "shape", "material"),
+    [("musl", "cpgimp", "elastic"), ("usavg", "mpm", "drucker-prager")],
+)
+def test_consistent_smoothing_on_two_ranks_is_bitwise_the_serial_one(scheme, shape, material):
+    """The consistent kind's rows with ghosts and its adjoint's terms sent to their owners.
+
+    Every sum runs in global-id order, so 150 steps of the block sliding across the
+    slabs give the serial particles to the last bit.
+    """
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    serial, gathered, _, crossed = _run(
+        comm, scheme, shape, 2.0, material, steps=150, kind="consistent"
+    )
+    assert crossed > 0
+    if comm.rank == 0:
         _compare(serial, gathered, rtol=0.0)
 
 
