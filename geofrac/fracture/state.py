@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from geofrac.fracture.topology import EdgeMesh
+from geofrac.fracture.topology import EdgeMesh, components
 from geofrac.fracture.visibility import Bins, blocked, visible_nodes
 from geofrac.mls.shape import LinearFit, linear_fit
 
@@ -71,7 +71,8 @@ class CrackState:
         mapper: runs the neighbourhood searches of a refit (:data:`Mapper`).
         cut: cells touching a *cut* node (one where two cracked edges meet, or a
             boundary node of a cracked edge) use MLS too, so that no element cell ties
-            the two faces of a crack together at its nodes (crack-face contact).
+            the two faces of a crack together at its nodes (crack-face contact); and so
+            do element cells left hanging on one node (:meth:`hinged_cells`).
     """
 
     mesh: EdgeMesh
@@ -133,7 +134,49 @@ class CrackState:
         for e in np.flatnonzero(self.cracked):
             cells.update(c for c in self.mesh.edge_cells[e] if c >= 0)
         cells.update(self._cut_cells(np.flatnonzero(self.node_cracks)))
-        return self.refit(np.array(sorted(cells), dtype=np.int64))
+        return self._refit_hinged(self.refit(np.array(sorted(cells), dtype=np.int64)))
+
+    def hinged_cells(self) -> np.ndarray:
+        """Element cells that hang on at most one node: they would turn about it freely.
+
+        Element cells joined by uncracked edges form pieces. A piece's node *holds* it
+        when an MLS fit uses the node or an element cell of another piece has it. A piece
+        of no frozen cell (none touches a Dirichlet node) held by one node or none moves
+        rigidly without strain energy, since MLS cells tie a node only through their
+        fits' satellites (not their own vertices). Only with ``cut``, where the MLS
+        cells around cut nodes can leave such pieces behind. Returns their cells,
+        sorted, shape=(k,).
+        """
+        m = self.mesh
+        elem = ~self.is_mls()
+        if not self.cut or not elem.any():
+            return np.zeros(0, dtype=np.int64)
+        ec = m.edge_cells
+        joined = (ec >= 0).all(axis=1) & ~self.cracked
+        joined[joined] = elem[ec[joined, 0]] & elem[ec[joined, 1]]
+        labels = components(m.num_cells, ec[joined, 0], ec[joined, 1])
+        cells = np.flatnonzero(elem)
+        # the distinct (node, piece) pairs of the element cells' vertices
+        pairs = np.unique(np.stack([m.cells[cells].ravel(), np.repeat(labels[cells], 3)]), axis=1)
+        node, piece = pairs
+        used = np.zeros(len(m.coords), dtype=bool)
+        for fit in self.fits.values():
+            if fit is not None:
+                used[fit.nodes] = True
+        holds = used[node] | (np.bincount(node, minlength=len(m.coords))[node] > 1)
+        held_by = np.bincount(piece, weights=holds, minlength=m.num_cells)
+        anchored = np.zeros(m.num_cells, dtype=bool)
+        anchored[labels[cells[self.frozen[cells]]]] = True
+        hanging = (held_by <= 1) & ~anchored
+        return cells[hanging[labels[cells]]]
+
+    def _refit_hinged(self, changed: np.ndarray) -> np.ndarray:
+        """Give MLS fits to :meth:`hinged_cells` until none is left; all changed cells."""
+        hinged = self.hinged_cells()
+        while len(hinged):
+            changed = np.union1d(changed, self.refit(hinged))
+            hinged = self.hinged_cells()
+        return changed
 
     def is_cut(self, nodes: np.ndarray) -> np.ndarray:
         """Whether each node is cut (two cracked edges, or one on the boundary), same shape."""
@@ -186,7 +229,7 @@ class CrackState:
                 or blocked(self.centroids[c], coords[fit.nodes], seg[:, 0], seg[:, 1]).any()
             ):
                 own.add(c)
-        return self.refit(np.array(sorted(own), dtype=np.int64))
+        return self._refit_hinged(self.refit(np.array(sorted(own), dtype=np.int64)))
 
     def _mark(self, e: int) -> None:
         self.cracked[e] = True

@@ -179,3 +179,21 @@ def test_crack_pulled_open_carries_nothing_and_pressed_shut_carries_the_load():
     rows, res = run("geometry.parameters.beta=0", *FRICTIONAL, "cracking.max_events=1")
     assert rows and rows[0]["open"] == 0
     assert stiffness(rows[0]) == pytest.approx(1.0, rel=STIFFNESS_RTOL)
+
+
+def test_dcn_plate_with_contact_runs_past_an_element_cell_left_on_a_hinge():
+    """jobs/dcn_plate.toml, coarse, with contact, to event 80.
+
+    An element cell hanging on one node (no MLS fit used its other vertices) made the
+    system singular at event 76.
+    """
+    rows, res = run(
+        "cracking.contact=true",
+        "geometry.parameters.h=4",
+        "cracking.max_events=80",
+        "cracking.contact_iterations=100",
+        job=JOBS / "dcn_plate.toml",
+    )
+    assert res["end_reason"] == "max_events"
+    assert len(rows) == 80
+    assert res["contact"]["worst_gap_relative"] > -0.01

@@ -131,3 +131,35 @@ def test_kept_fits_equal_a_full_refit():
         else:
             np.testing.assert_array_equal(step.fits[c].nodes, fit.nodes)
             assert step.fits[c].h == fit.h
+
+
+def _hinge_state(cut=True):
+    """All cells but cell 0 use MLS; no fit uses cell 0's vertices but the first."""
+    from types import SimpleNamespace
+
+    coords, cells = grid_mesh(4)
+    m = edge_mesh(coords, cells)
+    n = len(cells)
+    state = CrackState(m, np.zeros(n, bool), np.zeros(n, bool), MlsSettings(), cut=cut)
+    a, b, c = cells[0]
+    others = np.setdiff1d(np.arange(len(coords)), [b, c])
+    state.fits = {k: SimpleNamespace(nodes=others) for k in range(1, n)}
+    return state, (a, b, c)
+
+
+def test_an_element_cell_hanging_on_one_node_is_hinged():
+    """It would turn about that node without strain energy, so it takes an MLS field."""
+    state, _ = _hinge_state()
+    np.testing.assert_array_equal(state.hinged_cells(), [0])
+    assert not len(_hinge_state(cut=False)[0].hinged_cells())  # the rule is contact's
+
+
+def test_an_element_cell_held_by_two_nodes_or_a_support_is_not_hinged():
+    from types import SimpleNamespace
+
+    state, (a, b, _) = _hinge_state()
+    state.fits[1] = SimpleNamespace(nodes=np.array([a, b]))
+    assert not len(state.hinged_cells())
+    state, _ = _hinge_state()
+    state.frozen[0] = True  # touches a Dirichlet node
+    assert not len(state.hinged_cells())
