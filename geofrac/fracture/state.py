@@ -157,8 +157,8 @@ class CrackState:
         labels = components(m.num_cells, ec[joined, 0], ec[joined, 1])
         cells = np.flatnonzero(elem)
         # the distinct (node, piece) pairs of the element cells' vertices
-        pairs = np.unique(np.stack([m.cells[cells].ravel(), np.repeat(labels[cells], 3)]), axis=1)
-        node, piece = pairs
+        key = np.unique(m.cells[cells].ravel() * m.num_cells + np.repeat(labels[cells], 3))
+        node, piece = np.divmod(key, m.num_cells)
         used = np.zeros(len(m.coords), dtype=bool)
         for fit in self.fits.values():
             if fit is not None:

@@ -103,7 +103,7 @@ class MlsOperator:
             ghost = cols >= self.n
             owner = self.source[cols[ghost] - self.n]
             out = np.flatnonzero(ghost)
-            send = [out[owner == q] for q in range(self.domain.comm.size)]
+            send = [out[owner == q] for q in range(len(self.domain.planes))]
             gcol, gby, gterms = self.domain.send_rows(send, self.ids[cols], by, terms)
             own = self.ids[: self.n]
             order = np.argsort(own)
