@@ -17,11 +17,27 @@ from __future__ import annotations
 
 import numpy as np
 
-from geofrac.fracture.contact import SLIP, FacePairs
-from geofrac.fracture.context import CrackContext, Sites, facet_nodes
+from geofrac.errors import RunError
+from geofrac.fracture.contact import NO_PAIR, SLIP, FacePairs
+from geofrac.fracture.context import CrackContext, JsonValue, Sites, facet_nodes
 from geofrac.fracture.units import Block, EdgeUnits
 
-__all__ = ["Faces", "joint_properties"]
+__all__ = ["PAIR_FIELDS", "Faces", "joint_properties"]
+
+#: Per-pair arrays of :class:`~geofrac.fracture.contact.FacePairs` that a checkpoint keeps
+#: (the operators and blocks follow from them and the fits).
+PAIR_FIELDS = (
+    "state",
+    "sign",
+    "bonded",
+    "gap",
+    "slip",
+    "pressure",
+    "shear",
+    "frozen",
+    "held_at",
+    "violation",
+)
 
 
 def joint_properties(
@@ -204,6 +220,64 @@ class Faces:
         out["iterations"] = self.iterations
         out["iterations_per_event"] = self.iterations / events if events else 0.0
         return out
+
+    # -- checkpoints -----------------------------------------------------------------
+    def snapshot(self) -> tuple[dict[str, JsonValue], dict[str, np.ndarray]]:
+        """The contact state now, for a checkpoint: (counters, arrays).
+
+        The arrays are :data:`PAIR_FIELDS` on the pairs (``contact_edges``, sorted) and the
+        pairs whose block is in the system, in the order they entered it
+        (``contact_applied``: the assembly sums in that order), alike on every rank.
+        """
+        p = self.pairs
+        edges = np.flatnonzero(p.state != NO_PAIR)
+        arrays = {f"contact_{name}": getattr(p, name)[edges].copy() for name in PAIR_FIELDS}
+        arrays["contact_edges"] = edges
+        arrays["contact_applied"] = np.fromiter(self.applied, dtype=np.int64)
+        counters: dict[str, JsonValue] = {
+            "iterations": self.iterations,
+            "frozen_pairs": self.frozen_pairs,
+            "worst_violation": self.worst_violation,
+        }
+        return counters, arrays
+
+    def restore(
+        self, counters: dict[str, JsonValue], arrays: dict[str, np.ndarray], min_gaps: list[float]
+    ) -> None:
+        """Bring the pairs to a :meth:`snapshot` (the fits already rebuilt to match it).
+
+        ``min_gaps``: the ``min_gap`` of every event in the restored log (the worst gap
+        of the run so far).
+
+        Raises:
+            RunError: the snapshot does not fit this mesh or crack state.
+        """
+        p = self.pairs
+        try:
+            edges = arrays["contact_edges"].astype(np.int64)
+            values = {name: arrays[f"contact_{name}"] for name in PAIR_FIELDS}
+            applied = arrays["contact_applied"].astype(np.int64)
+        except KeyError as exc:
+            raise RunError(f"--resume: the checkpoint has no crack-face contact ({exc})") from None
+        ne = len(p.state)
+        lengths = {len(v) for v in values.values()} | {len(edges)}
+        if np.any((edges < 0) | (edges >= ne)) or len(lengths) > 1:
+            raise RunError("--resume: the checkpoint's face pairs do not match this mesh")
+        p.state[:] = NO_PAIR
+        for name, v in values.items():
+            getattr(p, name)[edges] = v
+        p.ops.clear()
+        p.refresh(edges, self.units.state.fits)
+        self.applied = {}
+        for e in applied.tolist():
+            block = self._block(e)
+            if block is None:
+                raise RunError(f"--resume: face pair {e} of the checkpoint carries nothing here")
+            self.applied[e] = block
+        self.iterations = int(counters["iterations"])  # type: ignore[arg-type]
+        self.frozen_pairs = int(counters["frozen_pairs"])  # type: ignore[arg-type]
+        self.worst_violation = float(counters["worst_violation"])  # type: ignore[arg-type]
+        self.worst_gap = min([0.0, *min_gaps])
 
     def frame(self, r: float) -> dict[str, np.ndarray]:
         """Per-edge fields of the crack series at load factor r (−1 state: no pair)."""

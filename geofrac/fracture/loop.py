@@ -82,6 +82,8 @@ class _Start:
     face_hit: tuple[int, float] | None
     extra: dict[str, JsonValue]
     timing: dict[str, JsonValue]
+    #: crack-face contact (:meth:`~geofrac.fracture.faces.Faces.snapshot`), or None.
+    contact: tuple[dict[str, JsonValue], dict[str, np.ndarray]] | None = None
 
 
 class EventLoop:
@@ -144,8 +146,6 @@ class EventLoop:
         first = 1  # the first event to compute
         done = 0  # events already in the log (a resumed run recomputes those after first)
         resume = control.resume if control is not None else None
-        if resume is not None and contact is not None:
-            raise RunError("--resume: runs with cracking.contact write no checkpoints yet")
         if resume is not None:
             assert control is not None
             control.check_resume()  # the same scene and number of ranks
@@ -266,7 +266,7 @@ class EventLoop:
                 if cfg.energy_drop is not None and energy < (1.0 - cfg.energy_drop) * peak:
                     end = "energy_drop"
                     break
-                if control is not None and event < cfg.max_events and contact is None:
+                if control is not None and event < cfg.max_events:
                     save, stop = control.poll(event)
                     if save:
                         assert ref is not None
@@ -447,6 +447,7 @@ class EventLoop:
             pinned_nodes=held.pinned_nodes,
             face_hit=face_hit,
             extra=self.units.checkpoint_extra(),
+            contact=None if self.contact is None else self.contact.snapshot(),
             timing={
                 "factorizations": t.factorizations,
                 "iterations": t.iterations,
@@ -468,9 +469,10 @@ class EventLoop:
 
         It holds the event log and each event's cracked sites up to ``event`` (JSON),
         and the state at the start of event ``ref.event``, whose solve factorised last:
-        the unit solution before it and the held and pinned DOFs (arrays alike on every
-        rank, written once). A resumed run recomputes the events from there with the
-        same factorisation, so it repeats the interrupted run's arithmetic.
+        the unit solution before it, the held and pinned DOFs and, with contact, the face
+        pairs' states (arrays alike on every rank, written once). A resumed run recomputes
+        the events from there with the same factorisation, so it repeats the interrupted
+        run's arithmetic.
         """
         data: dict[str, JsonValue] = {
             "rows": rows,  # type: ignore[dict-item]
@@ -487,6 +489,9 @@ class EventLoop:
             "pinned_dofs": ref.pinned_dofs,
             "pinned_nodes": ref.pinned_nodes,
         }
+        if ref.contact is not None:
+            data["contact"] = ref.contact[0]
+            arrays |= ref.contact[1]
         save_checkpoint(control, event, data, arrays)
 
     def _restore(
@@ -517,6 +522,15 @@ class EventLoop:
         self.timing.refinements = int(t["refinements"])  # type: ignore[arg-type]
         self.timing.stale = {k: int(v) for k, v in t["stale"].items()}  # type: ignore[union-attr, arg-type]
         self.units.restore_extra(data.get("extra", {}))  # type: ignore[arg-type]
+        if self.contact is not None:
+            if "contact" not in data:
+                raise RunError(f"--resume: {ck.path} was written without crack-face contact")
+            rows: list[Row] = data["rows"]  # type: ignore[assignment]
+            self.contact.restore(
+                data["contact"],  # type: ignore[arg-type]
+                arrays,
+                [float(r["min_gap"]) for r in rows],
+            )
         hit = data["face_hit"]
         face_hit = None if hit is None else (int(hit[0]), float(hit[1]))  # type: ignore[index, arg-type]
         return (

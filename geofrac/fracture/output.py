@@ -279,9 +279,13 @@ class EventOutput:
         handle.flush()
         self._log = EventLog(handle, writer)
         if self._contact:
-            log = open(self.out_dir / "contact.csv", "w", newline="")  # noqa: SIM115
+            path = self.out_dir / "contact.csv"
+            kept = _changes_until(path, keep_until) if keep_until is not None else []
+            log = open(path, "w", newline="")  # noqa: SIM115
             changes = csv.writer(log)
             changes.writerow(CHANGE_COLUMNS)
+            changes.writerows(kept)
+            log.flush()
             self._changes = (log, changes)
 
     def contact_changes(
@@ -334,9 +338,12 @@ class EventOutput:
         damage.write(float(event), point_data=point_data, cell_data=cell_data)
 
     def sync(self) -> None:
-        """``fsync`` the event log."""
+        """``fsync`` the event log (and ``contact.csv``)."""
         if self._log is not None:
             self._log.sync()
+        if self._changes is not None:
+            self._changes[0].flush()
+            os.fsync(self._changes[0].fileno())
 
     def close(self) -> None:
         """Close the event log (and ``contact.csv``)."""
@@ -418,6 +425,24 @@ class EventOutput:
         fig.tight_layout()
         fig.savefig(self.out_dir / "cracks.png", dpi=110)
         plt.close(fig)
+
+
+def _changes_until(path: Path, event: float) -> list[list[str]]:
+    """The rows of an earlier ``contact.csv`` up to ``event`` (a resumed run keeps them)."""
+    if not path.is_file():
+        return []
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows or tuple(rows[0]) != CHANGE_COLUMNS:
+        return []
+    out = []
+    for row in rows[1:]:
+        try:
+            if int(row[0]) <= event:
+                out.append(row)
+        except (ValueError, IndexError):
+            break  # a line cut by the interruption: nothing after it was written whole
+    return out
 
 
 def save_checkpoint(

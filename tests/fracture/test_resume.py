@@ -32,8 +32,13 @@ from tests.conftest import JOBS
 BEAM = ("notched_beam", ("geometry.parameters.h_fine=8", "geometry.parameters.h=30"))
 #: The grain beam on a coarse uniform mesh (about 330 nodes), as test_grains.py.
 GRAINS = ("grain_notched_beam", ("geometry.parameters.h=16", "geometry.parameters.h_fine=16"))
+#: The DCN plate, coarse, with crack-face contact (its flaws close, stick and slip).
+CONTACT = (
+    "dcn_plate",
+    ("geometry.parameters.h=4", "cracking.contact=true", "cracking.contact_iterations=100"),
+)
 #: The checkpoint kind of each case's driver class.
-KINDS = {BEAM: EDGES.kind, GRAINS: GRAIN_VARIANT.kind}
+KINDS = {BEAM: EDGES.kind, GRAINS: GRAIN_VARIANT.kind, CONTACT: EDGES.kind}
 #: Fields of an event row that are the answer (``iterations`` is the solver's work).
 FIELDS = ("r", "load_factor", "control_displacement", "reaction", "strain_energy", "x", "y")
 RTOL = 1e-10
@@ -277,6 +282,44 @@ def test_edge_cracking_resumes_exactly(tmp_path, solver):
     )
     got = stop_and_resume(tmp_path, BEAM, overrides + solver[1:], k=17, comm=MPI.COMM_SELF)
     print(f"edge cracking {solver}: {got}")
+
+
+def contact_stop_and_resume(tmp_path: Path, comm: MPI.Comm) -> dict[str, Any]:
+    """:func:`stop_and_resume` of :data:`CONTACT`, and the contact columns and changes."""
+    overrides = ("cracking.max_events=30", "cracking.output_every=4", "cracking.update_dofs=300")
+    got = stop_and_resume(tmp_path, CONTACT, overrides, k=17, comm=comm)
+    base = shared_dir(tmp_path, comm)
+
+    def logs() -> None:
+        whole, out = base / "whole", base / "stopped"
+        a, b = read_log(whole / "events.csv"), read_log(out / "events.csv")
+        for key in ("open", "stick", "slip", "contact_changes"):
+            assert [r[key] for r in b] == [r[key] for r in a], key
+        gaps_a, gaps_b = ([float(r["min_gap"]) for r in log] for log in (a, b))
+        np.testing.assert_allclose(gaps_b, gaps_a, rtol=RTOL, atol=0)
+        changes_a, changes_b = read_log(whole / "contact.csv"), read_log(out / "contact.csv")
+        assert any(r["to"] == "slip" for r in changes_a)
+        # state changes in the replayed events and after the stop
+        assert {int(r["event"]) for r in changes_a} & set(range(got["replay_from"], 18))
+        assert {int(r["event"]) for r in changes_a} & set(range(18, 31))
+        key = ("event", "edge", "from", "to")
+        assert [tuple(r[k] for k in key) for r in changes_b] == [
+            tuple(r[k] for k in key) for r in changes_a
+        ]
+
+    on_rank0(comm, logs)
+    assert got["replay_from"] < 17  # events were recomputed from the checkpoint's states
+    return got
+
+
+def test_cracking_with_contact_resumes_exactly(tmp_path):
+    """The face pairs' states come back with the crack state.
+
+    Stick, slip, open, bonds and held pairs: the resumed run's events, contact columns
+    and state changes are the whole run's.
+    """
+    got = contact_stop_and_resume(tmp_path, MPI.COMM_SELF)
+    print(f"cracking with contact: {got}")
 
 
 @pytest.mark.parametrize("solver", ["update", "refactor"])

@@ -2,7 +2,12 @@
 
 import numpy as np
 
-from geofrac.fracture.topology import constraint_rank, free_motion_pins, zero_energy_rows
+from geofrac.fracture.topology import (
+    components,
+    constraint_rank,
+    free_motion_pins,
+    zero_energy_rows,
+)
 
 NO_EXTRA = np.zeros(0)
 RGNT = np.array([0.5])  # θ = ½ ω under a rigid rotation ω
@@ -74,3 +79,13 @@ def test_zero_energy_rows_are_those_of_the_null_modes():
     K[0, 0] += 1e-3 * k  # a weak spring is still stiffness
     assert not zero_energy_rows(K, 1e-10 * k).any()
     assert zero_energy_rows(np.zeros((0, 0)), 1.0).shape == (0,)
+
+
+def test_components_label_each_node_with_its_pieces_smallest_node():
+    # pieces {0, 3, 5}, {1, 4}, {2} (alone), {6, 7}; pairs in no particular order,
+    # one repeated, one a self-loop
+    a = np.array([5, 4, 3, 7, 5, 6])
+    b = np.array([3, 1, 0, 6, 3, 6])
+    labels = components(8, a, b)
+    np.testing.assert_array_equal(labels, [0, 1, 2, 0, 1, 0, 6, 6])
+    np.testing.assert_array_equal(components(3, np.zeros(0, int), np.zeros(0, int)), [0, 1, 2])
