@@ -20,12 +20,14 @@ residual check fails (a fragment cut free: the fresh factorisation finds and hol
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import numpy as np
 from petsc4py import PETSc
 
+from geofrac.errors import RunError
 from geofrac.fracture.woodbury import LocalUpdate
 from geofrac.solvers import LinearSolver, mumps_inverse_entries, mumps_sparse_solve
 
@@ -101,8 +103,10 @@ class IncrementalSolver:
         x: a vector of A's layout to solve into (ghosted DOLFINx vector).
         gather: copies vectors of x's layout to every rank (the caller's; not owned).
         capacity: the largest |T|.
-        solver_t: a factorisation of Aᵀ when A is unsymmetric (friction on slipping
-            crack faces): the new rows of A⁻¹ on T are its columns. Owned from now on.
+        transposed: when A is unsymmetric (friction on slipping crack faces), makes a
+            factorisation of Aᵀ: the new rows of A⁻¹ on T are its columns. Called when
+            first needed (collective), so a reference that is replaced before it grows T
+            twice never factorises Aᵀ; the factorisation is owned from then on.
 
     Raises:
         geofrac.errors.RunError: the reference solve failed (singular system).
@@ -119,9 +123,11 @@ class IncrementalSolver:
         x: PETSc.Vec,
         gather: Gather,
         capacity: int,
-        solver_t: LinearSolver | None = None,
+        transposed: Callable[[], LinearSolver] | None = None,
     ) -> None:
-        self.A, self.b, self.solver, self.solver_t = A, b, solver, solver_t
+        self.A, self.b, self.solver = A, b, solver
+        self._transposed = transposed
+        self.solver_t: LinearSolver | None = None
         self.fixed, self.bc_mask, self.bc_values = fixed, bc_mask, bc_values
         self.comm = A.getComm().tompi4py()
         self.row0, self.row1 = A.getOwnershipRange()
@@ -134,7 +140,7 @@ class IncrementalSolver:
         self.b_full = self.gather(b)
         self._b_norm2 = float(self.b_full @ self.b_full)
         self.factor = solver.ksp.getPC().getFactorMatrix()
-        self.factor_t = None if solver_t is None else solver_t.ksp.getPC().getFactorMatrix()
+        self.factor_t: PETSc.Mat | None = None
         #: refinement steps with solves by A₀ taken so far (after the refinement on T)
         self.refinements = 0
         e = b.duplicate()
@@ -170,7 +176,13 @@ class IncrementalSolver:
         if len(new):
             rows = np.concatenate([lu.dofs, new])
             transposed = None
-            if self.factor_t is not None and lu.m:
+            if self._transposed is not None and lu.m:
+                if self.factor_t is None:
+                    try:
+                        self.solver_t = self._transposed()
+                    except RunError as exc:
+                        raise Stale("singular", f"the transposed system: {exc}") from None
+                    self.factor_t = self.solver_t.ksp.getPC().getFactorMatrix()
                 transposed = mumps_inverse_entries(self.factor_t, lu.dofs, new).T
             lu.grow(new, mumps_inverse_entries(self.factor, rows, new), transposed)
         for dofs, k in blocks:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Protocol
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -301,12 +302,10 @@ class UpdateSolver(RefactorSolver):
             t = self.timing.add("assemble", t)
             fixed = bc.copy()
             fixed[held] = True
-            solver_t = None
             try:
                 solver = self._refactor(A)
                 contact = assembler.contact
-                if contact is not None and contact.has_slip():
-                    solver_t = self._transposed(A)
+                unsymmetric = contact is not None and contact.has_slip()
                 self.inc = IncrementalSolver(
                     A,
                     b,
@@ -317,14 +316,12 @@ class UpdateSolver(RefactorSolver):
                     x,
                     gather,
                     ctx.config.update_dofs,
-                    solver_t,
+                    partial(self._transposed, A) if unsymmetric else None,
                 )
                 self.solver = None  # the reference owns it now
                 break
             except RunError:
                 self._drop_reference()
-                if solver_t is not None and self.inc is None:
-                    solver_t.destroy()
                 A.destroy()
                 b.destroy()
                 if attempt or not assembler.find_fragments():
