@@ -225,12 +225,12 @@ def components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Connected-component label (smallest node id) of n nodes joined by pairs a–b.
 
     ``a`` and ``b`` shape=(k,); returns shape=(n,). scipy's ``connected_components``
-    (a breadth-first search, 3-10x faster than the vectorised label propagation it
-    replaced on crack meshes); its labels number the components in order of their
-    smallest node, which becomes the label.
+    (2-3x faster than the vectorised label propagation it replaced, on graphs of 10⁵
+    nodes); its labels number the components in order of their smallest node, which
+    becomes the label. Boolean weights: repeated pairs cannot sum to zero.
     """
     graph = coo_matrix(
-        (np.ones(len(a), dtype=np.int8), (np.asarray(a), np.asarray(b))), shape=(n, n)
+        (np.ones(len(a), dtype=bool), (np.asarray(a), np.asarray(b))), shape=(n, n)
     ).tocsr()
     _, labels = connected_components(graph, directed=False)
     _, first = np.unique(labels, return_index=True)
