@@ -50,6 +50,46 @@ def test_corrected_solution_equals_the_direct_solve_over_many_events():
     np.testing.assert_allclose(lu.Ninv @ N, np.eye(lu.m), atol=1e-9)
 
 
+def _unsymmetric_events(rows_given: bool) -> float:
+    """Largest relative error of the corrected solutions of an unsymmetric A₀.
+
+    Friction on slipping crack faces makes A₀ and its changes unsymmetric (a block
+    −μ sgn BₜᵀBₙ); the new rows of S are then (A₀⁻¹)[new, T], which the ``update`` solver
+    takes from its factorisation of A₀ᵀ, or not (``rows_given``).
+    """
+    rng = np.random.default_rng(5)
+    n = 50
+    A0, b0, _ = _system(n, rng)
+    A0 = A0 + 0.4 * np.outer(rng.normal(size=n), rng.normal(size=n)) / n
+    inv = np.linalg.inv(A0)
+    y = inv @ b0
+    lu = LocalUpdate(n, capacity=n)
+    A, b = A0.copy(), b0.copy()
+    worst = 0.0
+    for _event in range(6):
+        dofs = np.sort(rng.choice(n, size=4, replace=False))
+        new = lu.missing(dofs)
+        if len(new):
+            old = lu.dofs.copy()
+            rows = inv[np.ix_(new, old)] if rows_given else None
+            lu.grow(new, inv[np.ix_(np.concatenate([old, new]), new)], rows)
+        Bn, Bt = rng.normal(size=len(dofs)), rng.normal(size=len(dofs))
+        k = 0.5 * (np.outer(Bn, Bn) - 0.6 * np.outer(Bt, Bn))
+        lu.add(dofs, k)
+        A[np.ix_(dofs, dofs)] += k
+        e = np.zeros(n)
+        e[lu.dofs] = lu.correction(y[lu.dofs])
+        x, exact = y + inv @ e, np.linalg.solve(A, b)
+        worst = max(worst, float(np.max(np.abs(x - exact)) / np.max(np.abs(exact))))
+    return worst
+
+
+def test_unsymmetric_system_needs_the_rows_of_the_inverse():
+    assert _unsymmetric_events(rows_given=True) < 1e-10
+    # the columns transposed in their place (a symmetric A₀ assumed) are wrong here
+    assert _unsymmetric_events(rows_given=False) > 1e-6
+
+
 def test_refinement_on_t_recovers_digits_lost_by_n_inverse():
     """A perturbed N⁻¹ (as after many ill-conditioned updates) is corrected on T alone."""
     rng = np.random.default_rng(11)
