@@ -17,7 +17,7 @@ import numpy as np
 from petsc4py import PETSc
 
 from geofrac.fracture.context import CrackContext
-from geofrac.fracture.topology import components, free_motion_pins, zero_energy_rows
+from geofrac.fracture.topology import components, motion_pins, motion_rows, zero_energy_rows
 from geofrac.fracture.units import Units
 
 if TYPE_CHECKING:
@@ -104,22 +104,27 @@ class Assembler:
     def find_fragments(self) -> bool:
         """Hold what the supports no longer hold; True if anything new is held (collective).
 
-        Pieces are the nodes joined by units with stiffness. A piece with no Dirichlet
-        DOF is cut free: all its nodes are held at their last displacement. A piece
-        whose Dirichlet and pinned DOFs leave a rigid motion free
-        (:func:`~geofrac.fracture.topology.constraint_rank` < 3; e.g. a column split off
-        between the loading platens, free to slide sideways) gets the fewest u_x/u_y DOFs
-        pinned at their last displacement that remove the free motions
-        (:func:`~geofrac.fracture.topology.free_motion_pins`), so it goes on carrying load.
-        Both choices depend on coordinates only (rank-independent).
+        Pieces are the nodes joined by units with stiffness; closed crack faces join
+        pieces into groups. A group with no Dirichlet DOF is cut free: all its nodes are
+        held at their last displacement. In a supported group, the pieces' rigid motions
+        (3 each) are constrained by the Dirichlet and pinned DOFs and by the contact
+        pairs: a sticking pair ties its faces' jump at one point (a piece held by one
+        pair can still turn about it), a slipping pair its normal jump only (a piece
+        between parallel slipping faces can slide)
+        (:func:`~geofrac.fracture.topology.motion_rows`). A motion they leave free
+        (e.g. a column split off between the loading platens, free to slide sideways)
+        gets the fewest u_x/u_y DOFs pinned at their last displacement that remove it
+        (:func:`~geofrac.fracture.topology.motion_pins`), so the pieces go on carrying
+        load. Both choices depend on coordinates only (rank-independent).
         """
         ctx, units = self.ctx, self.units
         gm, bs = ctx.gm, ctx.bs
         a, b = units.links(units.state.is_mls())
-        if self.contact is not None:  # closed faces join pieces too
+        pieces = components(len(gm.coords), a, b)
+        labels = pieces
+        if self.contact is not None:  # closed faces join pieces into groups
             ca, cb = self.contact.pairs.links()
-            a, b = np.concatenate([a, ca]), np.concatenate([b, cb])
-        labels = components(len(gm.coords), a, b)
+            labels = components(len(gm.coords), np.r_[a, ca], np.r_[b, cb])
         anchored = np.unique(labels[np.unique(ctx.bc_row_nodes)])
         touched = np.zeros(len(gm.coords), dtype=bool)
         touched[a] = True
@@ -129,17 +134,7 @@ class Assembler:
         if len(new):
             self.fragment_nodes = np.union1d(self.fragment_nodes, new)
             ctx.say(f"cracking: {len(new)} nodes of cut-free fragments are held")
-        rows = np.concatenate([ctx.bc_rows, self.pinned_dofs])
-        nodes = np.concatenate([ctx.bc_row_nodes, self.pinned_nodes])
-        xy = gm.coords[:, :2]
-        pinned = []
-        for label in anchored:
-            on = labels[nodes] == label
-            members = np.flatnonzero(touched & (labels == label))
-            if not len(members):
-                continue  # no cell left to move
-            pins = free_motion_pins(xy[nodes[on]], rows[on] % bs, units.rotation, xy[members])
-            pinned += [(int(members[i]), comp) for i, comp in pins]
+        pinned = self._pin_free_motions(labels, pieces, touched, anchored)
         if pinned:
             pn = np.array([p[0] for p in pinned], dtype=np.int64)
             self.pinned_nodes = np.concatenate([self.pinned_nodes, pn])
@@ -148,6 +143,57 @@ class Assembler:
             ctx.say(f"cracking: {len(pinned)} DOFs pinned to stop free rigid motions")
         held = self.hold_zero_energy_modes()
         return len(new) > 0 or len(pinned) > 0 or held
+
+    def _pin_free_motions(
+        self, labels: np.ndarray, pieces: np.ndarray, touched: np.ndarray, anchored: np.ndarray
+    ) -> list[tuple[int, int]]:
+        """(node, component) of the DOFs to pin in each supported group of pieces.
+
+        Args:
+            labels: the group of each node, shape=(num_nodes,).
+            pieces: the piece of each node, shape=(num_nodes,).
+            touched: whether a unit uses each node, shape=(num_nodes,).
+            anchored: the groups with Dirichlet DOFs, shape=(k,).
+        """
+        ctx, units = self.ctx, self.units
+        xy = ctx.gm.coords[:, :2]
+        fixed_rows = np.concatenate([ctx.bc_rows, self.pinned_dofs])
+        fixed_nodes = np.concatenate([ctx.bc_row_nodes, self.pinned_nodes])
+        terms = None if self.contact is None else self.contact.pairs.constraint_terms()
+        pinned: list[tuple[int, int]] = []
+        for label in anchored:
+            members = np.flatnonzero(touched & (labels == label))
+            if not len(members):
+                continue  # no cell left to move
+            ids, local = np.unique(pieces[members], return_inverse=True)
+            piece_of = np.full(len(xy), -1, dtype=np.int64)
+            piece_of[members] = local
+            centres = np.array([xy[members[local == i]].mean(axis=0) for i in range(len(ids))])
+            scale = max(1.0, float(np.abs(xy[members] - centres[local]).max()))
+            on = piece_of[fixed_nodes] >= 0
+            n = fixed_nodes[on]
+            C = motion_rows(
+                xy[n], fixed_rows[on] % ctx.bs, units.rotation, piece_of[n], centres, scale
+            )
+            if terms is not None and len(ids) > 1:
+                rows, nodes, comps, weights = terms
+                keep = piece_of[nodes] >= 0  # held nodes do not move: their terms drop
+                n = nodes[keep]
+                pairs = motion_rows(
+                    xy[n],
+                    comps[keep],
+                    units.rotation,
+                    piece_of[n],
+                    centres,
+                    scale,
+                    rows[keep],
+                    weights[keep],
+                )
+                C = np.vstack([C, pairs])
+            candidates = [xy[members[local == i]] for i in range(len(ids))]
+            for i, node, comp in motion_pins(C, units.rotation, candidates, centres, scale):
+                pinned.append((int(members[local == i][node]), comp))
+        return pinned
 
     def hold_zero_energy_modes(self) -> bool:
         """Pin the DOFs of the units' stiffless nodes that move without strain energy.

@@ -459,6 +459,35 @@ class FacePairs:
                 b += op.nodes[1:].tolist()
         return np.array(a, dtype=np.int64), np.array(b, dtype=np.int64)
 
+    def constraint_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """What the closed pairs hold, as rows of jumps: (rows, nodes, components, weights).
+
+        Row r is Σ weights · u_component(node) over its terms, shape=(k,) each. A
+        sticking pair ties both components of its faces' jump (two rows); a slipping
+        pair the normal one only: its block (B_n − μ s B_t) B_nᵀ has no stiffness for a
+        motion with B_n · u = 0, so the pieces it joins may slide along it.
+        """
+        rows, nodes, comps, weights = [], [], [], []
+        r = 0
+        for e in sorted(self.ops):
+            op, st = self.ops[e], self.state[e]
+            if st not in (STICK, SLIP):
+                continue
+            dirs = [self.normal[e]] if st == SLIP else [self.normal[e], self.tangent[e]]
+            q = len(op.nodes)
+            for d in dirs:
+                rows += [r] * (2 * q)
+                nodes += np.repeat(op.nodes, 2).tolist()
+                comps += [0, 1] * q
+                weights += np.column_stack([op.weights * d[0], op.weights * d[1]]).ravel().tolist()
+                r += 1
+        return (
+            np.array(rows, dtype=np.int64),
+            np.array(nodes, dtype=np.int64),
+            np.array(comps, dtype=np.int64),
+            np.array(weights, dtype=float),
+        )
+
     def counts(self) -> dict[str, int]:
         """Active pairs per state."""
         st = self.state[self.active()]

@@ -19,6 +19,9 @@ __all__ = [
     "constraint_rank",
     "edge_mesh",
     "free_motion_pins",
+    "free_motions",
+    "motion_pins",
+    "motion_rows",
     "random_sites",
     "zero_energy_rows",
 ]
@@ -105,12 +108,86 @@ def edge_mesh(coords: np.ndarray, cells: np.ndarray) -> EdgeMesh:
     return EdgeMesh(coords, cells, edges, cell_edges, edge_cells)
 
 
+def motion_rows(
+    points: np.ndarray,
+    components: np.ndarray,
+    rotation: np.ndarray,
+    pieces: np.ndarray,
+    centres: np.ndarray,
+    scale: float,
+    rows: np.ndarray | None = None,
+    weights: np.ndarray | None = None,
+) -> np.ndarray:
+    """Linear constraints on the rigid motions of pieces, shape=(num_rows, 3 * num_pieces).
+
+    Column 3i + j is piece i's unit rigid motion j: a translation in x (j = 0) or y (1),
+    or a rotation by 1/``scale`` about ``centres[i]`` (2; the scale keeps the column's
+    entries of order one). Term k adds ``weights[k]`` times the value of DOF
+    ``components[k]`` at ``points[k]`` under each motion of its piece ``pieces[k]`` to
+    row ``rows[k]``. By default every term is a row of its own with weight 1: a fixed DOF.
+    A contact pair's row is the jump of its faces, Σ_q w_q n·u(x_q), one term per node
+    and component.
+
+    Args:
+        points: the node of each term, shape=(k, 2).
+        components: the DOF's index in its node's block (0: u_x, 1: u_y, 2...: the
+            element's extra DOFs), shape=(k,).
+        rotation: the extra DOFs' values under a unit rigid rotation (for RGNT θ = ½,
+            for GNT also 0 for the strains), shape=(block_size - 2,).
+        pieces: the piece of each term's node, shape=(k,).
+        centres: each piece's centre of rotation, shape=(num_pieces, 2).
+        scale: a length of the pieces (their extent), > 0.
+        rows: the row of each term, shape=(k,).
+        weights: the factor of each term, shape=(k,).
+    """
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    components = np.asarray(components, dtype=np.int64)
+    pieces = np.asarray(pieces, dtype=np.int64)
+    k = len(points)
+    rows = np.arange(k) if rows is None else np.asarray(rows, dtype=np.int64)
+    weights = np.ones(k) if weights is None else np.asarray(weights, dtype=float)
+    x = points - np.asarray(centres, dtype=float).reshape(-1, 2)[pieces]
+    value = np.zeros((k, 3))  # each term's DOF under its piece's three unit motions
+    ux, uy = components == 0, components == 1
+    value[ux, 0], value[ux, 2] = 1.0, -x[ux, 1]
+    value[uy, 1], value[uy, 2] = 1.0, x[uy, 0]
+    extra = components >= 2
+    value[extra, 2] = rotation[components[extra] - 2]
+    value[:, 2] /= scale
+    num_rows = int(rows.max()) + 1 if k else 0
+    out = np.zeros((num_rows, 3 * len(centres)))
+    cols = 3 * pieces[:, None] + np.arange(3)
+    np.add.at(out, (np.repeat(rows, 3).reshape(k, 3), cols), weights[:, None] * value)
+    return out
+
+
+def free_motions(C: np.ndarray, num_columns: int) -> np.ndarray:
+    """An orthonormal basis of the motions that constraints ``C`` leave free.
+
+    Singular values below 1e-8 of the largest count as zero (the rows of
+    :func:`motion_rows` are of order one).
+
+    Args:
+        C: the constraints, shape=(r, num_columns).
+        num_columns: the number of motions (3 per piece).
+
+    Returns:
+        shape=(num_columns, d); d = 0 when nothing is free.
+    """
+    C = np.asarray(C, dtype=float).reshape(-1, num_columns)
+    if len(C) < num_columns:  # pad so that the SVD returns every right vector
+        C = np.vstack([C, np.zeros((num_columns - len(C), num_columns))])
+    _, s, vt = np.linalg.svd(C, full_matrices=False)
+    rank = int(np.sum(s > 1e-8 * s[0])) if len(s) and s[0] > 0.0 else 0
+    return vt[rank:].T
+
+
 def constraint_rank(points: np.ndarray, components: np.ndarray, rotation: np.ndarray) -> int:
     """How many of a 2D piece's 3 rigid body motions its Dirichlet DOFs prevent.
 
-    Row k of the constraint matrix is the value of the translations x, y and the rotation
-    about the points' centroid at constrained DOF k; the piece is a mechanism (free to
-    move without strain) when the rank is below 3.
+    Row k of the constraint matrix (:func:`motion_rows`) is the value of the
+    translations x, y and the rotation about the points' centroid at constrained DOF k;
+    the piece is a mechanism (free to move without strain) when the rank is below 3.
 
     Args:
         points: node of each constrained DOF, shape=(k, 2).
@@ -121,17 +198,61 @@ def constraint_rank(points: np.ndarray, components: np.ndarray, rotation: np.nda
     """
     if len(points) == 0:
         return 0
-    x = points - points.mean(axis=0)
-    rows = np.zeros((len(points), 3))
-    ux, uy = components == 0, components == 1
-    rows[ux, 0], rows[ux, 2] = 1.0, -x[ux, 1]
-    rows[uy, 1], rows[uy, 2] = 1.0, x[uy, 0]
-    extra = components >= 2
-    rows[extra, 2] = rotation[components[extra] - 2]
-    scale = max(1.0, float(np.abs(x).max()))
-    rows[:, 2] /= scale
-    sv = np.linalg.svd(rows, compute_uv=False)
-    return int(np.sum(sv > 1e-8 * sv[0]))
+    points = np.asarray(points, dtype=float)
+    centre = points.mean(axis=0)
+    scale = max(1.0, float(np.abs(points - centre).max()))
+    C = motion_rows(points, components, rotation, np.zeros(len(points), int), centre, scale)
+    return 3 - free_motions(C, 3).shape[1]
+
+
+def motion_pins(
+    C: np.ndarray,
+    rotation: np.ndarray,
+    candidates: list[np.ndarray],
+    centres: np.ndarray,
+    scale: float,
+) -> list[tuple[int, int, int]]:
+    """The fewest DOFs (u_x or u_y of candidate nodes) that leave the pieces no free motion.
+
+    Pieces are taken in order; a piece that moves in some free motion gets pins on its
+    candidate nearest the candidates' centroid, then on the one farthest from that
+    (ties by x, then y, so the choice depends on coordinates only): their u_x, then u_y,
+    are added while they remove a free motion. Pieces joined by constraints (contact
+    pairs) share their pins: a piece held through its neighbour needs none.
+
+    Args:
+        C: the constraints so far (:func:`motion_rows`), shape=(r, 3 * num_pieces).
+        rotation: the extra DOFs' values under a unit rigid rotation,
+            shape=(block_size - 2,).
+        candidates: nodes of each piece, shape=(m_i, 2), m_i >= 1.
+        centres: the pieces' centres of rotation, shape=(num_pieces, 2).
+        scale: the length of :func:`motion_rows`.
+
+    Returns:
+        (piece, candidate index, component) of each DOF to pin; none when nothing is free.
+    """
+    free = free_motions(C, 3 * len(candidates))
+    pins: list[tuple[int, int, int]] = []
+    for i, cand in enumerate(candidates):
+        if free.shape[1] == 0:
+            break
+        if np.abs(free[3 * i : 3 * i + 3]).max() <= 1e-8:
+            continue  # held, alone or through the pieces it touches
+        c = np.asarray(cand, dtype=float)
+        d0 = np.linalg.norm(c - c.mean(axis=0), axis=1)
+        first = int(np.lexsort((c[:, 1], c[:, 0], d0))[0])
+        d1 = np.linalg.norm(c - c[first], axis=1)
+        second = int(np.lexsort((c[:, 1], c[:, 0], -d1))[0])
+        for node in dict.fromkeys((first, second)):
+            for comp in (0, 1):
+                if free.shape[1] == 0:
+                    return pins
+                row = motion_rows(c[node], [comp], rotation, [i], centres, scale)
+                v = row @ free  # shape=(1, d): how the free motions move this DOF
+                if np.linalg.norm(v) > 1e-8:
+                    free = free @ np.linalg.svd(v)[2][1:].T  # the motions it leaves free
+                    pins.append((i, node, comp))
+    return pins
 
 
 def free_motion_pins(
@@ -139,9 +260,7 @@ def free_motion_pins(
 ) -> list[tuple[int, int]]:
     """The fewest DOFs (u_x or u_y of candidate nodes) that complete a piece's supports.
 
-    The first candidate is the one nearest the candidates' centroid, the second the one
-    farthest from the first (ties by x, then y, so the choice depends on coordinates
-    only); their u_x, then u_y, are added while they raise :func:`constraint_rank`.
+    :func:`motion_pins` for one piece held by its Dirichlet DOFs alone.
 
     Args:
         points: node of each constrained DOF, shape=(k, 2).
@@ -155,23 +274,11 @@ def free_motion_pins(
         the supports already hold all 3 rigid motions.
     """
     c = np.asarray(candidates, dtype=float)
-    d0 = np.linalg.norm(c - c.mean(axis=0), axis=1)
-    first = int(np.lexsort((c[:, 1], c[:, 0], d0))[0])
-    d1 = np.linalg.norm(c - c[first], axis=1)
-    second = int(np.lexsort((c[:, 1], c[:, 0], -d1))[0])
-    pts, comps = np.asarray(points, dtype=float).reshape(-1, 2), np.asarray(components)
-    rank = constraint_rank(pts, comps, rotation)
-    pins: list[tuple[int, int]] = []
-    for node in dict.fromkeys((first, second)):
-        for comp in (0, 1):
-            if rank == 3:
-                return pins
-            p2, c2 = np.vstack([pts, c[node]]), np.append(comps, comp)
-            r2 = constraint_rank(p2, c2, rotation)
-            if r2 > rank:
-                pts, comps, rank = p2, c2, r2
-                pins.append((node, comp))
-    return pins
+    centre = c.mean(axis=0, keepdims=True)
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    scale = max(1.0, float(np.abs(np.vstack([pts, c]) - centre).max()))
+    C = motion_rows(pts, components, rotation, np.zeros(len(pts), int), centre, scale)
+    return [(node, comp) for _, node, comp in motion_pins(C, rotation, [c], centre, scale)]
 
 
 def zero_energy_rows(K: np.ndarray, tol: float) -> np.ndarray:

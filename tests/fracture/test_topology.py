@@ -1,13 +1,22 @@
 """Pure geometry of crack pieces: rigid motions left free by the supports."""
 
-import numpy as np
+from types import SimpleNamespace
 
+import numpy as np
+import pytest
+
+from geofrac.fracture.contact import SLIP, STICK, FacePairs, pair_operator
 from geofrac.fracture.topology import (
     components,
     constraint_rank,
     free_motion_pins,
+    free_motions,
+    motion_pins,
+    motion_rows,
     zero_energy_rows,
 )
+from geofrac.materials import d_matrix
+from geofrac.mls.shape import linear_fit
 
 NO_EXTRA = np.zeros(0)
 RGNT = np.array([0.5])  # θ = ½ ω under a rigid rotation ω
@@ -89,3 +98,87 @@ def test_components_label_each_node_with_its_pieces_smallest_node():
     labels = components(8, a, b)
     np.testing.assert_array_equal(labels, [0, 1, 2, 0, 1, 0, 6, 6])
     np.testing.assert_array_equal(components(3, np.zeros(0, int), np.zeros(0, int)), [0, 1, 2])
+
+
+# -- pieces joined by crack-face contact ---------------------------------------------
+#: A crack along the x axis: piece 1 above it (nodes 0-11), piece 0 below (12-23).
+T, N = np.array([1.0, 0.0]), np.array([0.0, 1.0])
+_RNG = np.random.default_rng(3)
+_ABOVE = np.c_[_RNG.uniform(-3.0, 3.0, 12), _RNG.uniform(0.1, 1.5, 12)]
+XY = np.vstack([_ABOVE, _ABOVE * [1.0, -1.0] + [0.05, 0.0]])
+PIECE = np.repeat([1, 0], 12)
+CENTRES = np.array([XY[12:].mean(axis=0), XY[:12].mean(axis=0)])
+SCALE = 3.0
+
+
+def _pairs(at: list[float], states: list[int]) -> SimpleNamespace:
+    """Face pairs at x = ``at`` on the crack: MLS fits of each side's nodes.
+
+    Carries what :meth:`FacePairs.constraint_terms` reads (the pairs' operators,
+    states and frames).
+    """
+    ops = {}
+    for e, x in enumerate(at):
+        p = np.array([x, 0.0])
+        plus = linear_fit(p + 0.3 * N, 3.0, np.arange(12), XY[:12])
+        minus = linear_fit(p - 0.3 * N, 3.0, np.arange(12, 24), XY[12:])
+        ops[e] = pair_operator(plus, minus, p, T, N, d_matrix(1.0, 0.25, 2, "strain"))
+    k = len(at)
+    return SimpleNamespace(
+        ops=ops, state=np.array(states), normal=np.tile(N, (k, 1)), tangent=np.tile(T, (k, 1))
+    )
+
+
+def _constraints(pairs: SimpleNamespace) -> np.ndarray:
+    """Piece 0 held by three Dirichlet DOFs; the pairs' rows on both pieces' motions."""
+    fixed = [12, 12, 13]
+    C = motion_rows(XY[fixed], [0, 1, 1], NO_EXTRA, PIECE[fixed], CENTRES, SCALE)
+    rows, nodes, comps, weights = FacePairs.constraint_terms(pairs)
+    if not len(rows):
+        return C
+    jumps = motion_rows(XY[nodes], comps, NO_EXTRA, PIECE[nodes], CENTRES, SCALE, rows, weights)
+    return np.vstack([C, jumps])
+
+
+def _velocity(motion: np.ndarray, piece: int, x: np.ndarray) -> np.ndarray:
+    """The velocity at x of a piece under a motion of :func:`motion_rows`'s columns."""
+    tx, ty, w = motion[3 * piece : 3 * piece + 3] / [1.0, 1.0, SCALE]
+    r = x - CENTRES[piece]
+    return np.array([tx - w * r[1], ty + w * r[0]])
+
+
+def test_a_piece_stuck_at_one_point_turns_about_it():
+    """One sticking pair ties the faces' jump at one point: the piece can only turn there."""
+    free = free_motions(_constraints(_pairs([0.4], [STICK])), 6)
+    assert free.shape[1] == 1
+    motion = free[:, 0]
+    np.testing.assert_allclose(motion[:3], 0.0, atol=1e-9)  # the supported piece stays
+    np.testing.assert_allclose(_velocity(motion, 1, np.array([0.4, 0.0])), 0.0, atol=1e-9)
+    assert np.linalg.norm(_velocity(motion, 1, np.array([2.4, 0.0]))) > 0.1
+    assert free_motions(_constraints(_pairs([-1.0, 1.0], [STICK, STICK])), 6).shape[1] == 0
+
+
+def test_a_piece_on_parallel_slipping_faces_slides_along_them():
+    """Slipping pairs tie the normal jump only: the piece slides along the crack."""
+    free = free_motions(_constraints(_pairs([-1.0, 0.0, 1.5], [SLIP] * 3)), 6)
+    assert free.shape[1] == 1
+    motion = free[:, 0]
+    np.testing.assert_allclose(motion[:3], 0.0, atol=1e-9)
+    for x in (np.array([-2.0, 1.0]), np.array([2.5, 0.3])):
+        v = _velocity(motion, 1, x)
+        assert abs(v @ N) < 1e-9 and abs(v @ T) > 0.1
+
+
+@pytest.mark.parametrize(
+    "states, num_pins", [([STICK], 1), ([SLIP, SLIP], 1), ([STICK, STICK], 0), ([], 3)]
+)
+def test_motion_pins_hold_what_the_pairs_leave_free(states, num_pins):
+    """Pins go on the piece that moves, and leave nothing free."""
+    at = [-1.0, 1.0][: len(states)]
+    C = _constraints(_pairs(at, states))
+    candidates = [XY[12:], XY[:12]]
+    pins = motion_pins(C, NO_EXTRA, candidates, CENTRES, SCALE)
+    assert len(pins) == num_pins
+    assert all(piece == 1 for piece, _, _ in pins)
+    extra = [motion_rows(candidates[i][n], [k], NO_EXTRA, [i], CENTRES, SCALE) for i, n, k in pins]
+    assert free_motions(np.vstack([C, *extra]), 6).shape[1] == 0
