@@ -18,7 +18,6 @@ __all__ = [
     "components",
     "constraint_rank",
     "edge_mesh",
-    "free_motion_pins",
     "free_motions",
     "motion_pins",
     "motion_rows",
@@ -191,10 +190,9 @@ def constraint_rank(points: np.ndarray, components: np.ndarray, rotation: np.nda
 
     Args:
         points: node of each constrained DOF, shape=(k, 2).
-        components: the DOF's index in its node's block (0: u_x, 1: u_y, 2...: the
-            element's extra DOFs), shape=(k,).
-        rotation: the extra DOFs' values under a unit rigid rotation (for RGNT θ = ½,
-            for GNT also 0 for the strains), shape=(block_size - 2,).
+        components: the DOF's index in its node's block, shape=(k,).
+        rotation: the extra DOFs' values under a unit rigid rotation (as in
+            :func:`motion_rows`), shape=(block_size - 2,).
     """
     if len(points) == 0:
         return 0
@@ -253,32 +251,6 @@ def motion_pins(
                     free = free @ np.linalg.svd(v)[2][1:].T  # the motions it leaves free
                     pins.append((i, node, comp))
     return pins
-
-
-def free_motion_pins(
-    points: np.ndarray, components: np.ndarray, rotation: np.ndarray, candidates: np.ndarray
-) -> list[tuple[int, int]]:
-    """The fewest DOFs (u_x or u_y of candidate nodes) that complete a piece's supports.
-
-    :func:`motion_pins` for one piece held by its Dirichlet DOFs alone.
-
-    Args:
-        points: node of each constrained DOF, shape=(k, 2).
-        components: the DOF's index in its node's block, shape=(k,).
-        rotation: the extra DOFs' values under a unit rigid rotation,
-            shape=(block_size - 2,).
-        candidates: nodes of the piece, shape=(m, 2), m >= 1.
-
-    Returns:
-        (candidate index, component) of each DOF to pin, at most 3 of them; none when
-        the supports already hold all 3 rigid motions.
-    """
-    c = np.asarray(candidates, dtype=float)
-    centre = c.mean(axis=0, keepdims=True)
-    pts = np.asarray(points, dtype=float).reshape(-1, 2)
-    scale = max(1.0, float(np.abs(np.vstack([pts, c]) - centre).max()))
-    C = motion_rows(pts, components, rotation, np.zeros(len(pts), int), centre, scale)
-    return [(node, comp) for _, node, comp in motion_pins(C, rotation, [c], centre, scale)]
 
 
 def zero_energy_rows(K: np.ndarray, tol: float) -> np.ndarray:

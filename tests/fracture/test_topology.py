@@ -9,7 +9,6 @@ from geofrac.fracture.contact import SLIP, STICK, FacePairs, pair_operator
 from geofrac.fracture.topology import (
     components,
     constraint_rank,
-    free_motion_pins,
     free_motions,
     motion_pins,
     motion_rows,
@@ -20,6 +19,18 @@ from geofrac.mls.shape import linear_fit
 
 NO_EXTRA = np.zeros(0)
 RGNT = np.array([0.5])  # θ = ½ ω under a rigid rotation ω
+
+
+def free_motion_pins(
+    points: np.ndarray, components: np.ndarray, rotation: np.ndarray, candidates: np.ndarray
+) -> list[tuple[int, int]]:
+    """(candidate, component) pins of one piece held by the fixed DOFs (points, components)."""
+    c = np.asarray(candidates, dtype=float)
+    centre = c.mean(axis=0, keepdims=True)
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    scale = max(1.0, float(np.abs(np.vstack([pts, c]) - centre).max()))
+    C = motion_rows(pts, components, rotation, np.zeros(len(pts), int), centre, scale)
+    return [(node, comp) for _, node, comp in motion_pins(C, rotation, [c], centre, scale)]
 
 
 def column() -> tuple[np.ndarray, np.ndarray]:
