@@ -1,4 +1,4 @@
-"""Render docs/img/efmm_grains.png: EFMM integration domains (grains) of the seed cantilever.
+"""Render docs/img/efmm_grains.png: EFMM integration domains (grains) of the Edo (2016) cantilever.
 
 Run from the repository root after
 ``geofrac run jobs/cantilever_efmm.toml --set geometry.parameters.nx=16 --set

@@ -40,7 +40,9 @@ class ExactSolution:
 
 @dataclass(frozen=True)
 class TimoshenkoCantilever(ExactSolution):
-    """Cantilever under a parabolic end shear (Timoshenko & Goodier; seed eq. 2.24-2.25, 3.31).
+    """Cantilever under a parabolic end shear (Timoshenko & Goodier).
+
+    Edo (2016), eqs. 2.24-2.25 and 3.31.
 
     The beam occupies ``0 <= x <= L``, ``-D/2 <= y <= D/2``; the end ``x = 0`` is held by
     the exact displacement and the end ``x = L`` carries the shear traction
@@ -64,12 +66,12 @@ class TimoshenkoCantilever(ExactSolution):
     dim: int = 2
 
     @property
-    def I(self) -> float:  # noqa: E743 - the symbol of the seed and of Timoshenko
+    def I(self) -> float:  # noqa: E743 - the symbol of Edo (2016) and of Timoshenko
         """Second moment of area per unit thickness, D³/12."""
         return self.D**3 / 12.0
 
     def displacement(self, x: Any, y: Any, z: Any = None) -> tuple[Any, Any]:
-        """Seed eq. (2.24)-(2.25): (u, v) at (x, y)."""
+        """Edo (2016), eqs. (2.24)-(2.25): (u, v) at (x, y)."""
         P, L, D, E, nu, I = self.P, self.L, self.D, self.E, self.nu, self.I
         u = -P * y / (6.0 * E * I) * ((6.0 * L - 3.0 * x) * x + (2.0 + nu) * (y * y - D * D / 4.0))
         v = (
@@ -84,7 +86,7 @@ class TimoshenkoCantilever(ExactSolution):
         return (u, v)
 
     def stress(self, x: Any, y: Any, z: Any = None) -> tuple[tuple[Any, Any], tuple[Any, Any]]:
-        """Seed eq. (3.31c)-(3.31e): ((σx, τxy), (τxy, σy)) at (x, y)."""
+        """Edo (2016), eqs. (3.31c)-(3.31e): ((σx, τxy), (τxy, σy)) at (x, y)."""
         P, L, D, I = self.P, self.L, self.D, self.I
         sxx = -P * (L - x) * y / I
         sxy = P / (2.0 * I) * (D * D / 4.0 - y * y)
@@ -98,10 +100,10 @@ class TimoshenkoCantilever(ExactSolution):
 
 @dataclass(frozen=True)
 class UniformStrain(ExactSolution):
-    """Linear displacement with constant strain: the patch test (seed eq. 2.26-2.27).
+    """Linear displacement with constant strain: the patch test (Edo (2016), eqs. 2.26-2.27).
 
     u = exx·x + ½gxy·y, v = eyy·y + ½gxy·x; every conforming element must reproduce it
-    exactly on any mesh. The seed's patch test is exx = 0.002, eyy = -0.0006, gxy = 0.
+    exactly on any mesh. The patch test of Edo (2016) is exx = 0.002, eyy = -0.0006, gxy = 0.
 
     Attributes:
         exx, eyy, gxy: strain components (engineering shear gxy).

@@ -109,7 +109,7 @@ def _describe(scene: Scene) -> str:
         )
     if scene.blocks is not None:
         b = scene.blocks
-        source = "the terrain of seed 5.4" if b.source == "terrain" else "its geometry"
+        source = "the terrain of Edo (2016), §5.4" if b.source == "terrain" else "its geometry"
         return f"{b.dim}D blocks from {source}"
     groups = ", ".join(f"{n} ({d}D)" for n, d in scene.geometry.groups.items())  # type: ignore[union-attr]
     return (

@@ -17,28 +17,33 @@ __all__ = ["BENCHES", "load_bench"]
 BENCHES: dict[str, tuple[str, str]] = {
     "blocks": (
         "geofrac.bench.blocks",
-        "3D block models (seed chapter 5): meshing and block wall times, blocks/s, against Voronoi",
+        "3D block models (Edo (2016), chapter 5): meshing and block wall times, blocks/s, "
+        "against Voronoi",
     ),
     "cantilever": (
         "geofrac.bench.cantilever",
-        "Timoshenko cantilever (seed 2.4.1, 3.4.1): displacement/energy error against DOFs "
-        "and wall time",
+        "Timoshenko cantilever (Edo (2016), §2.4.1, §3.4.1): displacement/energy error "
+        "against DOFs and wall time",
     ),
     "cracking": (
         "geofrac.bench.cracking",
-        "crack events (seed Fig. 2.6): events/s and seconds per phase, notched beam, DFN Model 2",
+        "crack events (Edo (2016), Fig. 2.6): events/s and seconds per phase, notched beam, "
+        "DFN Model 2",
     ),
     "dfn": (
         "geofrac.bench.dfn",
-        "DFN Models 1 and 2 (seed 2.5.1): generation and meshing wall times, mesh statistics",
+        "DFN Models 1 and 2 (Edo (2016), §2.5.1): generation and meshing wall times, "
+        "mesh statistics",
     ),
     "efmm-qrand": (
         "geofrac.bench.efmm_qrand",
-        "EFMM integration domains (seed Table 3.1): error mean and spread over q_rand and seeds",
+        "EFMM integration domains (Edo (2016), Table 3.1): error mean and spread over q_rand "
+        "and seeds",
     ),
     "granular": (
         "geofrac.bench.granular",
-        "crack events along EFMM grain interfaces (seed 3.5-3.6): events/s, phases, patterns",
+        "crack events along EFMM grain interfaces (Edo (2016), §3.5-3.6): events/s, phases, "
+        "patterns",
     ),
     "mms3d": (
         "geofrac.bench.mms3d",
@@ -46,7 +51,8 @@ BENCHES: dict[str, tuple[str, str]] = {
     ),
     "mpm": (
         "geofrac.bench.mpm",
-        "MPM quasi-static bar (seed 4.5.1): stress error against particle-steps/s per variant",
+        "MPM quasi-static bar (Edo (2016), §4.5.1): stress error against particle-steps/s "
+        "per variant",
     ),
     "stability": (
         "geofrac.bench.stability",

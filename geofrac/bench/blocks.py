@@ -1,4 +1,4 @@
-"""``geofrac bench blocks``: what 3D block models cost (seed chapter 5), against Voronoi.
+"""``geofrac bench blocks``: what 3D block models cost (Edo (2016), chapter 5), against Voronoi.
 
 For each target count in ``--blocks`` (default 10k, 100k, 1M) a cube is meshed with gmsh
 (HXT, tetrahedra of one size, on rank 0) to about that many vertices, distributed over

@@ -1,17 +1,17 @@
 """``geofrac bench cantilever``: accuracy against cost on the Timoshenko cantilever.
 
-Two seed set-ups (``--setup``):
+Two set-ups of Edo (2016) (``--setup``):
 
 - ``2.4.1`` (Fig. 2.7-2.8): ``jobs/cantilever.toml``, L = 10, D = 1, E = 100; meshes
-  ny × nx = 4×40 … 11×110 (``--meshes`` are the depths ny, nx = 10 ny). Seed rates:
+  ny × nx = 4×40 … 11×110 (``--meshes`` are the depths ny, nx = 10 ny). Edo (2016):
   R = 2.0 for CST, 2.1 for RGNT.
 - ``3.4.1`` (Fig. 3.9-3.11): ``jobs/cantilever_efmm.toml``, L = 8, d = 2, E = 1000;
-  meshes nx × ny = 8×2 … 96×24 (``--meshes`` are the depths ny, nx = 4 ny). Seed: EFMM
+  meshes nx × ny = 8×2 … 96×24 (``--meshes`` are the depths ny, nx = 4 ny). Edo (2016): EFMM
   6.20e-2 → 9.41e-5 (R = 2.9) in displacement, R = 1.9 in energy; CST R = 2.0 and 0.9.
 
 The default is ``3.4.1`` when ``efmm`` is among ``--elements`` (the chapter that
 introduces it) and ``2.4.1`` otherwise. The bench reports nodes, DOFs, the displacement
-L2 error (seed eq. 2.22/3.30a), the energy error (seed eq. 3.30b; for EFMM with its patch
+L2 error (Edo (2016), eq. 2.22/3.30a), the energy error (eq. 3.30b; for EFMM with its patch
 stresses) and the assemble/solve wall times, fits the rate R against √nodes, states the
 cost of a target relative error and the error reached in equal time per element, and
 writes ``cantilever.json`` and ``cantilever.png`` (see :mod:`geofrac.bench.study`).
@@ -29,7 +29,7 @@ __all__ = ["SEED_MESHES", "SETUPS", "add_arguments", "int_list", "run"]
 
 _JOBS = Path(__file__).resolve().parents[2] / "jobs"
 
-#: Seed set-ups: section -> (scene, default depths ny, nx / ny, seed reference text).
+#: Set-ups of Edo (2016): section -> (scene, default depths ny, nx / ny, its results).
 SETUPS: dict[str, tuple[Path, tuple[int, ...], int, str]] = {
     "2.4.1": (
         _JOBS / "cantilever.toml",
@@ -47,7 +47,7 @@ SETUPS: dict[str, tuple[Path, tuple[int, ...], int, str]] = {
     ),
 }
 
-#: Seed meshes of section 2.4.1: ny (depth) values; nx = 10 ny.
+#: Meshes of Edo (2016), §2.4.1: ny (depth) values; nx = 10 ny.
 SEED_MESHES = SETUPS["2.4.1"][1]
 
 
@@ -63,13 +63,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--setup",
         choices=tuple(SETUPS),
-        help="seed section whose beam and meshes to use (default: 3.4.1 when efmm is "
-        "among --elements, else 2.4.1)",
+        help="section of Edo (2016) whose beam and meshes to use (default: 3.4.1 when efmm "
+        "is among --elements, else 2.4.1)",
     )
     p.add_argument(
         "--meshes",
         type=int_list,
-        help="comma-separated depths ny (default: the set-up's seed meshes, "
+        help="comma-separated depths ny (default: the set-up's meshes in Edo (2016); "
         "2.4.1: 4,...,11 with nx = 10 ny; 3.4.1: 2,4,...,24 with nx = 4 ny)",
     )
 
@@ -85,7 +85,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     if args.scene is None:
         args.scene = scene
     depths = args.meshes or list(meshes)
-    echo(comm, f"bench cantilever: seed {setup} set-up, scene {args.scene}")
+    echo(comm, f"bench cantilever: set-up of Edo (2016), §{setup}, scene {args.scene}")
     cases = [
         Case(
             element,
@@ -103,8 +103,8 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         args,
         comm,
         "cantilever",
-        f"Timoshenko cantilever (seed {setup}): accuracy vs cost",
+        f"Timoshenko cantilever (Edo (2016), §{setup}): accuracy vs cost",
         cases,
         dim=2,
-        extra={"setup": setup, "seed_reference": reference},
+        extra={"setup": setup, "thesis_reference": reference},
     )

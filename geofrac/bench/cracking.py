@@ -1,8 +1,8 @@
 """``geofrac bench cracking``: events per second and time per phase of the crack driver.
 
-Cases (``--cases``): ``beam`` (jobs/notched_beam.toml at seed size, RGNT), ``model2``
-(jobs/crack_model2.toml: DFN Model 2 at seed size, RGNT), ``plate`` (jobs/plate_hole.toml)
-and ``patch`` (the patch test over the seed's node counts, error (2.22) per mesh). Each
+Cases (``--cases``): ``beam`` (jobs/notched_beam.toml at the size of Edo (2016), RGNT), ``model2``
+(jobs/crack_model2.toml: DFN Model 2 at the thesis's size, RGNT), ``plate`` (jobs/plate_hole.toml)
+and ``patch`` (the patch test over the thesis's node counts, error (2.22) per mesh). Each
 event case runs ``--events`` events on the ranks it is started with and reports events/s
 and the seconds of each phase (assemble, solve, criterion/stress, update) as the maximum
 over ranks. Run it under ``mpiexec -n 2`` for the 2-rank figures.
@@ -27,7 +27,7 @@ CASES: dict[str, tuple[str, tuple[str, ...]]] = {
     "plate": ("plate_hole", ()),
 }
 
-#: Mesh sizes of meshes/patch_core.geo for the seed's node counts 218 ... 9857.
+#: Mesh sizes of meshes/patch_core.geo for the node counts 218 ... 9857 of Edo (2016).
 PATCH_H = (0.475, 0.26, 0.182, 0.128, 0.0904, 0.056)
 
 

@@ -1,12 +1,12 @@
-"""``geofrac bench dfn``: DFN generation and meshing cost for the seed's Models 1 and 2.
+"""``geofrac bench dfn``: DFN generation and meshing cost for Models 1 and 2 of Edo (2016).
 
-For each model scene (``jobs/dfn_model1.toml``, ``jobs/dfn_model2.toml``, seed §2.5.1) and
-each scale s (default 1 and 4: the seed's mesh and one with 4× the elements, mesh sizes
+For each model scene (``jobs/dfn_model1.toml``, ``jobs/dfn_model2.toml``, Edo (2016), §2.5.1) and
+each scale s (default 1 and 4: the thesis's mesh and one with 4× the elements, mesh sizes
 divided by √s) the network is generated, cleaned and meshed by gmsh on rank 0 and
 distributed by DOLFINx, and the cover check (every fracture is a chain of tagged
 facets) runs. Each record has the wall times of the four phases, mesh counts and
 quality, the network's intensity P21 and, per fracture set, a Kolmogorov–Smirnov test of
-the lengths against the truncated power law (seed eq. 2.28) and the orientation mean and
+the lengths against the truncated power law (Edo (2016), eq. 2.28) and the orientation mean and
 standard deviation against Table 2.1. Writes ``dfn.json`` and one picture per model
 (``dfn_<model>.png``: the network coloured by set, and a close-up of the mesh).
 """

@@ -1,9 +1,9 @@
-"""``geofrac bench granular``: crack events along grain interfaces (seed 3.5-3.6).
+"""``geofrac bench granular``: crack events along grain interfaces (Edo (2016), §3.5-3.6).
 
-Cases (``--cases``, default all): ``beam`` (jobs/grain_notched_beam.toml, seed 3.5.1),
-``holes1``, ``holes3``, ``holes5`` (jobs/grain_holes{1,3,5}.toml, seed 3.5.2), ``dcn0``,
-``dcn4a``, ``dcn4b`` (jobs/grain_dcn_0pct.toml and the two 4 % layouts, seed 3.6), all at
-seed size (``--set KEY=VALUE`` applies to every case). Each runs ``--events`` events
+Cases (``--cases``, default all): ``beam`` (jobs/grain_notched_beam.toml, §3.5.1),
+``holes1``, ``holes3``, ``holes5`` (jobs/grain_holes{1,3,5}.toml, §3.5.2), ``dcn0``,
+``dcn4a``, ``dcn4b`` (jobs/grain_dcn_0pct.toml and the two 4 % layouts, §3.6), all at
+the thesis's size (``--set KEY=VALUE`` applies to every case). Each runs ``--events`` events
 (default: the scene's ``max_events``) with the ranks it is started with and reports
 events/s, the seconds per phase (assemble, solve, criterion, update; maximum over
 ranks), the end reason, the cracked and pre-cracked

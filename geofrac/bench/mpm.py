@@ -1,23 +1,23 @@
-"""``geofrac bench mpm``: accuracy against cost of the MPM variants (seed chapter 4).
+"""``geofrac bench mpm``: accuracy against cost of the MPM variants (Edo (2016), chapter 4).
 
 Cases (``--cases``):
 
-- ``bar``: the quasi-static bar of seed 4.5.1 (:func:`geofrac.mpm.bar.quasi_static_bar`)
-  at W = ρ₀|b|L₀ in ``--W`` (the seed's 1000, 12500, 100000) for every shape and scheme:
+- ``bar``: the quasi-static bar of §4.5.1 (:func:`geofrac.mpm.bar.quasi_static_bar`)
+  at W = ρ₀|b|L₀ in ``--W`` (the thesis's 1000, 12500, 100000) for every shape and scheme:
   the RMS stress error against eq. 4.73 (normalised by ρ₀|b|L₀); plot ``mpm_bar.png``
   (after Fig. 4.13-4.15);
-- ``translating``: the translating bar of seed 4.5.3 (:func:`geofrac.mpm.bar.
+- ``translating``: the translating bar of §4.5.3 (:func:`geofrac.mpm.bar.
   translating_bar`: the scene ``jobs/mpm_translating_bar.toml`` run through the driver's
   step, so ``geofrac run`` of the same variant reports the same numbers) to ``--t-end``
   (100, Fig. 4.20-4.21) for every shape and scheme, without and with MLS smoothing
-  (radius ``--smoothing`` cells) of each kind of ``--smoothing-kinds`` (the seed's, and
-  ``consistent``): the largest drift of the total energy over every step, max |E(t) −
-  E₀|/E₀, with the stored energy as ½ V σ : D⁻¹ : σ (``energy_drift_max``) and as stress
-  work (``energy_drift_work_max``, :mod:`geofrac.mpm.energy`); plot
+  (radius ``--smoothing`` cells) of each kind of ``--smoothing-kinds`` (``standard``, the
+  thesis's, and ``consistent``): the largest drift of the total energy over every step,
+  max |E(t) − E₀|/E₀, with the stored energy as ½ V σ : D⁻¹ : σ (``energy_drift_max``) and
+  as stress work (``energy_drift_work_max``, :mod:`geofrac.mpm.energy`); plot
   ``mpm_translating.png``.
 
-- ``impact``: the bar with an initial velocity v₀ = c/50 towards its fixed base (seed
-  4.5.2, :func:`geofrac.mpm.bar.impact_bar`) at t = 0.8 L₀/c, every shape and scheme,
+- ``impact``: the bar with an initial velocity v₀ = c/50 towards its fixed base
+  (§4.5.2, :func:`geofrac.mpm.bar.impact_bar`) at t = 0.8 L₀/c, every shape and scheme,
   without and with MLS smoothing: the RMS of σ/σ₇₅ − 1 behind the wave (eq. 4.75) and
   the largest |σ/σ₇₅|; plot ``mpm_impact.png`` (after Fig. 4.17-4.18);
 - ``block``: throughput of a 2D elastic block of ``--particles`` particles (default

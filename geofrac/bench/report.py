@@ -17,7 +17,7 @@ __all__ = ["fit_rate", "format_table", "plot_accuracy_cost", "save_figure", "sav
 def fit_rate(nodes: Sequence[float], errors: Sequence[float], dim: int = 2) -> float:
     """Convergence rate R: minus the least-squares slope of log(error) against log(nodes^(1/dim)).
 
-    In 2D this is the rate of seed Fig. 2.8 and 3.10 (R = 2 for CST in the L2 norm), i.e.
+    In 2D this is the rate of Edo (2016), Figs. 2.8 and 3.10 (R = 2 for CST in the L2 norm), i.e.
     the order in the mesh size h ∝ 1/√nodes; in 3D h ∝ nodes^(-1/3).
 
     Args:

@@ -1,11 +1,11 @@
-"""Polygonal and polyhedral block models (seed chapter 5): one block per mesh vertex.
+"""Polygonal and polyhedral block models (Edo (2016), chapter 5): one block per mesh vertex.
 
 - :mod:`~geofrac.blocks.model`: the :class:`~geofrac.blocks.model.Blocks` container,
   joining and welding block sets;
 - :mod:`~geofrac.blocks.table`: block points named by the mesh entities they stand on;
-- :mod:`~geofrac.blocks.dual2d`: polygons from triangles (seed 5.2.2(a), Fig. 5.6-5.8);
-- :mod:`~geofrac.blocks.dual3d`: polyhedra from tetrahedra (seed 5.2.2(b), Fig. 5.9);
-- :mod:`~geofrac.blocks.immobile`: the immobile part as one block (seed 5.3.2);
+- :mod:`~geofrac.blocks.dual2d`: polygons from triangles (§5.2.2(a), Fig. 5.6-5.8);
+- :mod:`~geofrac.blocks.dual3d`: polyhedra from tetrahedra (§5.2.2(b), Fig. 5.9);
+- :mod:`~geofrac.blocks.immobile`: the immobile part as one block (§5.3.2);
 - :mod:`~geofrac.blocks.quality`: the checks (volumes, closure, Euler characteristic,
   planarity, face pairing, overlap sampling, pyvista's cell validator);
 - :mod:`~geofrac.blocks.kernels`: the compiled (numba) sweep and prune of the exact

@@ -1,7 +1,7 @@
 """Run a ``method = "blocks"`` scene: mesh, blocks, checks, output (collective).
 
-Data flow: scene -> gmsh on rank 0 (the scene's geometry, or the terrain builder of seed
-5.4) -> distributed DOLFINx mesh -> each rank builds the blocks of its vertices
+Data flow: scene -> gmsh on rank 0 (the scene's geometry, or the terrain builder of Edo
+(2016), §5.4) -> distributed DOLFINx mesh -> each rank builds the blocks of its vertices
 (:func:`~geofrac.blocks.distributed.build_blocks`) -> rank 0 adds the immobile block ->
 quality checks -> VTU, block file, histogram, ``summary.json``.
 

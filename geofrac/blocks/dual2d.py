@@ -1,4 +1,4 @@
-"""2D polygonal blocks from a triangle mesh, one per vertex (seed 5.2.2(a), Fig. 5.6-5.8).
+"""2D polygonal blocks from a triangle mesh, one per vertex (Edo (2016), §5.2.2(a), Fig. 5.6-5.8).
 
 In each triangle ijk a point p is chosen inside the incircle: the incentre (Fig. 5.6),
 or a seeded random point of the disc of radius ``radius`` x r around it (Fig. 5.7(b):

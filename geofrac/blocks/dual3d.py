@@ -1,4 +1,4 @@
-"""3D polyhedral blocks from a tetrahedral mesh, one per vertex (seed 5.2.2(b), Fig. 5.9).
+"""3D polyhedral blocks from a tetrahedral mesh, one per vertex (Edo (2016), §5.2.2(b), Fig. 5.9).
 
 Each tetrahedron abcd is cut into four hexahedral sub-cells, one per corner: the
 sub-cell of a has the corners a, the edge midpoints m_ab, m_ac, m_ad, the face centroids
@@ -6,13 +6,13 @@ f_abc, f_abd, f_acd and the tetrahedron's centroid c. It is the set of points wh
 largest barycentric coordinate is a's, so it is convex, its faces are planar and its
 volume is a quarter of the tetrahedron's. The block of a vertex is the union of its
 sub-cells: the faces that sub-cells of the same vertex share are dropped ("the faces
-that neighbouring blocks share are removed", seed 5.2.2(b)), which leaves
+that neighbouring blocks share are removed", Edo (2016), §5.2.2(b)), which leaves
 
 - per tetrahedron and edge ij, the quadrilateral (m_ij, f_ijk, c, f_ijl) between the
   sub-cells of i and j (a face of both blocks, in opposite orders), and
 - per boundary triangle ijl and corner i, the quadrilateral (i, m_ij, f_ijl, m_il).
 
-Every face has four points, as in the seed, and is planar: f_ijk - m_ij and f_ijl - m_ij
+Every face has four points, as in Edo (2016), and is planar: f_ijk - m_ij and f_ijl - m_ij
 span it and c - m_ij = 3/4 (f_ijk - m_ij) + 3/4 (f_ijl - m_ij). A vertex inside the
 domain is not a point of its block; a vertex on the boundary is.
 

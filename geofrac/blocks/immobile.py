@@ -1,9 +1,11 @@
-"""The immobile part as one block, from its closed surface patch (seed 5.3.2, Fig. 5.19-5.21).
+"""The immobile part as one block, from its closed surface patch.
 
-A block face always has four points (seed 5.2.2(b)), so each triangle ijk of the surface
+Edo (2016), §5.3.2, Fig. 5.19-5.21.
+
+A block face always has four points (§5.2.2(b)), so each triangle ijk of the surface
 patch gives three faces, one per corner: (i, m_ij, p, m_ik), with m the edge midpoints and
 p a point inside the triangle (its centroid here). The block has three times as many
-faces as the patch has triangles (seed 5.5). It has no convex pieces: DEM and DDA codes
+faces as the patch has triangles (§5.5). It has no convex pieces: DEM and DDA codes
 hold the immobile part fixed and need only its surface.
 """
 

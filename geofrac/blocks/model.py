@@ -2,7 +2,7 @@
 
 A block set is a list of polygons (2D) or closed polyhedra (3D) that share one point
 array. Every block also carries its decomposition into convex pieces, one per sub-cell
-of the mesh it was built from (seed 5.2.2: a quadrilateral per triangle corner in 2D,
+of the mesh it was built from (Edo (2016), §5.2.2: a quadrilateral per triangle corner in 2D,
 a hexahedron per tetrahedron corner in 3D), for the DEM/DDA codes that need convex
 blocks.
 """
@@ -24,7 +24,7 @@ class Blocks:
     (its points in counter-clockwise order); ``faces`` has shape=(num_ring_points, 1).
 
     3D: block ``b``'s faces are the rows ``faces[face_offsets[b]:face_offsets[b + 1]]``,
-    each a planar quadrilateral (seed 5.2.2(b): every block face has 4 points) whose points
+    each a planar quadrilateral (Edo (2016), §5.2.2(b): every block face has 4 points) whose points
     run counter-clockwise seen from outside the block; ``faces`` has shape=(num_faces, 4).
     A face two blocks share is stored once in each, in opposite orders.
 

@@ -37,7 +37,7 @@ Block file (``write_block_file``, ``read_block_file``)
     significant digits (exact round trip).
 
 Histogram (``write_histogram``)
-    PNG of frequency against block volume (as the seed's Fig. 5.25) and CSV
+    PNG of frequency against block volume (as in Edo (2016), Fig. 5.25) and CSV
     ``bin_lo,bin_hi,count``.
 """
 

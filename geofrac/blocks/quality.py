@@ -1,6 +1,6 @@
 """Geometry and validity checks of block sets (pure numpy; pyvista only for the validator).
 
-Everything works on whole arrays: a block set of the seed's size (10^5 polyhedra of ~70
+Everything works on whole arrays: a block set as large as Edo (2016)'s (10^5 polyhedra of ~70
 quadrilateral faces, ~7·10^6 faces) is processed in chunks of faces, never with a Python
 loop over blocks or faces.
 

@@ -1,7 +1,7 @@
 """Random fracture networks: fracture sets, samplers and the :class:`Network` they make.
 
-A fracture set (seed §2.4, Table 2.1) has a mean orientation with a normal or von Mises
-spread, lengths from the power law F_N = 1/L^n (seed eq. 2.28) truncated to
+A fracture set (Edo (2016), §2.4, Table 2.1) has a mean orientation with a normal or von Mises
+spread, lengths from the power law F_N = 1/L^n (eq. 2.28) truncated to
 [lmin, lmax], and centres uniform in a region. :func:`generate_network` draws the sets,
 each from its own random stream, either a fixed number of fractures or until a target
 density P21 (trace length per unit area) is reached in a domain.
@@ -105,7 +105,7 @@ class FractureSet:
             halved, the correct way to put a von Mises law on axial data.
         lmin: shortest length, > 0.
         lmax: longest length, >= lmin (lmin == lmax: all fractures that long).
-        exponent: power-law exponent n of F_N = 1/L^n (seed eq. 2.28), > 0.
+        exponent: power-law exponent n of F_N = 1/L^n (Edo (2016), eq. 2.28), > 0.
         distribution: ``"normal"`` or ``"von_mises"``.
         count: number of fractures to draw; exactly one of ``count`` and ``p21``.
         p21: target density: trace length clipped to the domain per unit domain area.
@@ -155,7 +155,7 @@ class FractureSet:
 
 
 def power_law_ccdf(l: ArrayLike, lmin: float, lmax: float, exponent: float) -> np.ndarray:  # noqa: E741
-    """P(L > l) of the power law F_N = 1/L^n (seed eq. (2.28)) truncated to [lmin, lmax].
+    """P(L > l) of the power law F_N = 1/L^n (Edo (2016), eq. (2.28)) truncated to [lmin, lmax].
 
     ``(l^-n − lmax^-n) / (lmin^-n − lmax^-n)`` on [lmin, lmax], 1 below and 0 above; for
     ``lmin == lmax`` a step from 1 to 0 at lmin.

@@ -1,18 +1,18 @@
-"""Effect ``cracking``: sequentially linear crack propagation (seed ch. 2 and 3.3).
+"""Effect ``cracking``: sequentially linear crack propagation (Edo (2016), ch. 2 and §3.3).
 
 Crack sites are the element edges (elements whose :class:`~geofrac.elements.spec.ElementSpec`
-has ``cracking == "edges"``; seed chapter 2) or, for ``cracking == "grains"`` (``efmm``), the
+has ``cracking == "edges"``; chapter 2) or, for ``cracking == "grains"`` (``efmm``), the
 grain interfaces: each mesh edge ij owns the interface between the
-integration domains (grains) of nodes i and j (seed 3.3, docs/granular.md).
+integration domains (grains) of nodes i and j (§3.3, docs/granular.md).
 
 Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference):
 
-- ``method``: ``"sequentially-linear"`` (the only one): seed Fig. 2.6.
+- ``method``: ``"sequentially-linear"`` (the only one): Edo (2016), Fig. 2.6.
 - ``max_events`` (100): the run ends after this many crack events; 0 solves once with
   the initial crack state (the patch test) and reports the displacement error (2.22)
   when the scene has an ``[exact]`` solution.
 - ``energy_drop``: end when the strain energy falls below (1 - energy_drop) times its
-  peak so far (seed: "until the strain energy of the whole body decreases"); off if absent.
+  peak so far (Edo (2016): "until the strain energy of the whole body decreases"); off if absent.
 - ``neighbours`` (10), ``margin`` (1.1), ``max_radius_factor`` (8): MLS neighbourhood
   (docs/cracking.md).
 - ``precracked`` ([]): facet groups cracked before loading (a notch, DFN ``fractures``).
@@ -20,11 +20,11 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
   between its nodes and the nodes on its left side crack, so the grains on the two sides
   separate along it.
 - ``precracked_fraction`` (0): a random fraction of the interior crack sites that do not
-  touch a Dirichlet node, cracked before loading (seed 3.6: 0.04 of the interfaces),
+  touch a Dirichlet node, cracked before loading (Edo (2016), §3.6: 0.04 of the interfaces),
   drawn with ``precrack_seed`` (0).
 - ``switch`` (``"patch"``; ``efmm`` only): which nodes a cracked interface switches to
   C-MultiMLSM: ``"patch"`` the vertices of the triangles it crosses, ``"grain"`` only
-  the two nodes whose grains it separates (the seed's literal rule, docs/granular.md).
+  the two nodes whose grains it separates (the thesis's literal rule, docs/granular.md).
 - ``mls_region``: ``[x0, y0, x1, y1]``: cells whose centroid is inside use MLS from the
   start (the patch test's core).
 - ``control``: the Dirichlet group whose prescribed displacement is the load (default:

@@ -4,7 +4,7 @@ The effect builds the scene's geometry (a scene with ``dfn`` has no ``[geometry]
 table): a rectangle or polygon, fracture sets generated from seeded statistical laws (or
 a network read from a CSV/JSON file), cleaned by the tolerance rules of
 :mod:`geofrac.dfn.clean` and meshed by gmsh so that every fracture is a chain of element
-edges (:mod:`geofrac.meshing.dfn`). Seed §2.5, eq. (2.28), Table 2.1. The full table
+edges (:mod:`geofrac.meshing.dfn`). Edo (2016), §2.5, eq. (2.28), Table 2.1. The full table
 reference is in docs/dfn.md and docs/scenes.md.
 
 Validation (:func:`configure`) is cheap and imports no gmsh; a network file is read and

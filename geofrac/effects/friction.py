@@ -1,4 +1,4 @@
-"""Effect ``friction``: Coulomb friction where MPM material meets a boundary (seed 4.3.3).
+"""Effect ``friction``: Coulomb friction where MPM material meets a boundary (Edo (2016), §4.3.3).
 
 On the grid nodes of the named boundaries, motion into the boundary is removed and the
 tangential motion is slowed by μ times the normal change (eqs. 4.44-4.47; see
@@ -8,7 +8,7 @@ only when a scene declares this effect.
 
 Scene table ``[friction]``:
 
-- ``mu``: Coulomb coefficient μ >= 0 (the seed: 0.1), required unless every boundary
+- ``mu``: Coulomb coefficient μ >= 0 (Edo (2016): 0.1), required unless every boundary
   has its own;
 - ``boundaries``: walled grid sides (``x_min`` ... ``z_max``, as set in ``mpm.walls``)
   and/or ``"bed"`` (the ``mpm.bed`` polyline), default ``["bed"]``; either a list of

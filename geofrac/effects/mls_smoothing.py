@@ -1,4 +1,4 @@
-"""Effect ``mls_smoothing``: MLS smoothing of the MPM strain increments (seed 4.4).
+"""Effect ``mls_smoothing``: MLS smoothing of the MPM strain increments (Edo (2016), §4.4).
 
 Each particle's strain increment is replaced by the moving-least-squares fit of its
 neighbours' increments (eqs. 4.50-4.58: cubic basis, cubic spline weight 4.51); a

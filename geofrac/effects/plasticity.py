@@ -1,4 +1,4 @@
-"""Effect ``plasticity``: Drucker-Prager perfect plasticity of the MPM particles (seed 4.3.2).
+"""Effect ``plasticity``: Drucker-Prager perfect plasticity of MPM particles (Edo (2016), §4.3.2).
 
 Yield function f = β I₁ + √J₂ − k (eqs. 4.39-4.43) with return mapping, the Jaumann rate
 (D.30-D.31) applied before each increment: the model :mod:`geofrac.mpm.plasticity` (registry
@@ -8,9 +8,9 @@ declares this effect.
 
 Scene table ``[plasticity]``:
 
-- ``friction_angle``: internal friction angle φ in degrees, required (the seed's
-  landslide sweeps 8 ... 25);
-- ``cohesion``: c >= 0 (default 0, the seed's rain-softened landslide);
+- ``friction_angle``: internal friction angle φ in degrees, required (the landslide of
+  Edo (2016) sweeps 8 ... 25);
+- ``cohesion``: c >= 0 (default 0, the rain-softened landslide of Edo (2016));
 - ``dilatancy_angle``: ψ in degrees, 0 <= ψ <= φ (default 0: no plastic volume change).
 """
 

@@ -1,7 +1,7 @@
 """EFMM on DOLFINx: C cell kernels through the custom-integral hook, PETSc condensation.
 
 The displacement is the CST field (P1, block size 2). Node i's stress field is
-σ = P_i(x) e_i with 9 coefficients e_i (seed eq. 3.2b), so the stress coefficients form
+σ = P_i(x) e_i with 9 coefficients e_i (Edo (2016), eq. 3.2b), so the stress coefficients form
 a vertex field E (P1, block size 9). The compiled kernels of :mod:`geofrac.kernels`
 (``efmm.c``) integrate, cell by cell, each of the cell's three nodes' share of
 
@@ -170,7 +170,7 @@ def _form(spaces: list[Any], function: str, coefficient: Any, constant: Any) -> 
 
 @dataclass
 class EfmmElement(Element):
-    """EFMM: CST displacement, one linear stress field per node patch (seed 3.2).
+    """EFMM: CST displacement, one linear stress field per node patch (Edo (2016), §3.2).
 
     Call :meth:`setup` with the material before :meth:`stiffness`.
 

@@ -1,4 +1,4 @@
-"""Enriched Free Mesh Method (seed 3.2, eqs. 3.1-3.7): pure-numpy reference, 2D.
+"""Enriched Free Mesh Method (Edo (2016), §3.2, eqs. 3.1-3.7): pure-numpy reference, 2D.
 
 Each node i has a patch (the triangles around it) with a CST displacement per triangle
 and one complete linear stress field per patch, σ = P(x) e (eq. 3.2b), P = I₃ ⊗ [1, x, y]
@@ -9,15 +9,15 @@ functional (3.1) over the node's integration domain Ω_i gives (3.3)-(3.4)
 
 and condensing e, the node stiffness K_i = C_iᵀ A_i⁻¹ C_i (3.6), assembled over nodes.
 
-Integration domains (seed 3.2.2, Fig. 3.3). In every triangle T a point p_T is taken
+Integration domains (§3.2.2, Fig. 3.3). In every triangle T a point p_T is taken
 inside the incircle: the incentre for q_rand = 0, else a seeded random point of the
 disc of radius q_rand x r around it (the 2D blocks' points,
 :func:`geofrac.geometry.triangles.inner_points`). Neighbouring triangles' points are joined
 directly; the segment p_T p_T' crosses their shared edge ij at X_ij. Node i's domain
 inside T = (i, j, k) is the quadrilateral (i, X_ij, p_T, X_ik), integrated with Gauss
-rules on its two triangles (i, X_ij, p_T) and (i, p_T, X_ik) (the seed's triangles of
+rules on its two triangles (i, X_ij, p_T) and (i, p_T, X_ik) (the thesis's triangles of
 the centre node, an incircle point and an edge crossing). On a boundary edge, which has
-one triangle, X_ij is the edge midpoint (our choice: the seed does not say). The three
+one triangle, X_ij is the edge midpoint (our choice: the thesis does not say). The three
 quadrilaterals of a triangle tile it, so the domains tile the mesh exactly.
 
 When two triangles form a non-convex quadrilateral the segment p_T p_T' can miss their
@@ -342,7 +342,7 @@ def stress_error(
     """∫ ½ (σ_h - σ)ᵀ D⁻¹ (σ_h - σ) and ∫ ½ σᵀ D⁻¹ σ over the cells' node parts.
 
     σ_h is each node's own stress field P_i e_i (eq. 3.2b) on its integration domain:
-    the stress of the seed's energy error norm (eq. 3.30b with ε = D⁻¹ σ, eq. 3.32).
+    the stress of the energy error norm of Edo (2016) (eq. 3.30b with ε = D⁻¹ σ, eq. 3.32).
 
     Args:
         x: cell vertices, shape=(num_cells, 3, 2).

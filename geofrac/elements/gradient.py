@@ -281,15 +281,18 @@ def _make(name: str, mesh: dolfinx.mesh.Mesh) -> GradientDofElement:
 
 
 def rgnt(mesh: dolfinx.mesh.Mesh) -> GradientDofElement:
-    """Triangle with a drilling DOF per vertex (u, v, θ), seed eq. (2.1)-(2.4)."""
+    """Triangle with a drilling DOF per vertex (u, v, θ), Edo (2016), eqs. (2.1)-(2.4)."""
     return _make("rgnt", mesh)
 
 
 def gnt(mesh: dolfinx.mesh.Mesh) -> GradientDofElement:
-    """Triangle with drilling and strain DOFs (u, v, θ, εx, εy, γxy), seed eq. (2.29)."""
+    """Triangle with drilling and strain DOFs (u, v, θ, εx, εy, γxy), Edo (2016), eq. (2.29)."""
     return _make("gnt", mesh)
 
 
 def rgnq(mesh: dolfinx.mesh.Mesh) -> GradientDofElement:
-    """Tetrahedron with three rotations per vertex (u, v, w, θx, θy, θz), seed eq. (2.5)-(2.8)."""
+    """Tetrahedron with three rotations per vertex (u, v, w, θx, θy, θz).
+
+    Edo (2016), eqs. (2.5)-(2.8).
+    """
     return _make("rgnq", mesh)

@@ -1,15 +1,15 @@
 """Vertex-gradient-DOF fields of RGNT, GNT and RGNQ as maps onto P2 (pure numpy, no MPI).
 
-The three elements of the seed share one displacement field,
+The three elements of Edo (2016) share one displacement field,
 
     u(x) = Σ_i N_i(x) (u_i + G_i (x - x_i)),                                   (*)
 
 with N_i the linear (CST / linear tet) shape functions and G_i a gdim × gdim matrix of
 vertex DOFs spanned by fixed basis matrices E_c: G_i = Σ_c g_ic E_c.
 
-- RGNT, seed eq. (2.1): G = θ [[0, -1], [1, 0]] (one drilling DOF θ per vertex).
-- GNT, seed eq. (2.29): G = θ [[0, -1], [1, 0]] + [[εx, γxy/2], [γxy/2, εy]].
-- RGNQ, seed eq. (2.5): G r = θ × r (three rotations θx, θy, θz per vertex).
+- RGNT, eq. (2.1): G = θ [[0, -1], [1, 0]] (one drilling DOF θ per vertex).
+- GNT, eq. (2.29): G = θ [[0, -1], [1, 0]] + [[εx, γxy/2], [γxy/2, εy]].
+- RGNQ, eq. (2.5): G r = θ × r (three rotations θx, θy, θz per vertex).
 
 Every term N_i (x - x_i) is quadratic and vanishes at the vertices, so (*) is a P2
 field. Its value at vertex i is u_i and at the midpoint of edge (a, b)
@@ -165,7 +165,7 @@ def vertex_field(
         displacement, shape=(n, gdim).
     """
     nv, gdim = coords.shape
-    M = np.vstack([coords.T, np.ones(nv)])  # barycentric coordinates, seed eq. (2.9)
+    M = np.vstack([coords.T, np.ones(nv)])  # barycentric coordinates, Edo (2016), eq. (2.9)
     rhs = np.vstack([points.T, np.ones(len(points))])
     N = np.linalg.solve(M, rhs).T  # shape=(n, nv)
     G = np.einsum("ic,crs->irs", dofs[:, gdim:], kind.basis)  # shape=(nv, gdim, gdim)

@@ -18,7 +18,7 @@ def _lagrange(name: str, degree: int, mesh: dolfinx.mesh.Mesh) -> Element:
 
 
 def cst(mesh: dolfinx.mesh.Mesh) -> Element:
-    """Linear Lagrange: the constant strain triangle (seed 'FEM(CST)') or linear tet."""
+    """Linear Lagrange: the constant strain triangle ('FEM(CST)' in Edo (2016)) or linear tet."""
     return _lagrange("cst", 1, mesh)
 
 

@@ -1,11 +1,11 @@
 """The elastic problem with the EFMM element: condensed node stiffness, patch stresses.
 
 The stiffness is t × :meth:`geofrac.elements.efmm.EfmmElement.stiffness` (K = Cᵀ A⁻¹ C,
-seed eq. 3.6, per unit thickness); the load vector is the CST one (eq. 3.4c, N^u the
+Edo (2016), eq. 3.6, per unit thickness); the load vector is the CST one (eq. 3.4c, N^u the
 CST shape functions), assembled from the scene's UFL loads, which carry t; Dirichlet
 conditions are imposed on K by symmetric elimination. The stress of the solution is each
 node's own linear field σ = P_i e_i with e = A⁻¹ C u (eq. 3.3): the energy error of the
-results is measured with it (seed eq. 3.30b), and it is what the grains and the nodal
+results is measured with it (eq. 3.30b), and it is what the grains and the nodal
 stress show.
 """
 
@@ -58,7 +58,7 @@ def _contains(triangle: np.ndarray, x: np.ndarray, tol: float = 1e-10) -> bool:
 
 
 class EfmmProblem(ElasticProblem):
-    """Linear elasticity with EFMM (seed 3.2); see the module text.
+    """Linear elasticity with EFMM (Edo (2016), §3.2); see the module text.
 
     Attributes:
         e: the stress coefficients after :meth:`solve`, P1 with block size 9.

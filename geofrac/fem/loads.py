@@ -17,7 +17,7 @@ the quadrature, exact for a polynomial such as a hydrostatic ``1000*(10 - y)``.
 A ``point`` load F is not a form: it is added to the assembled load vector of the
 element's displacement space at the DOFs of the mesh vertex of its physical point,
 F·v(x_p), which is the consistent load of a Dirac force for every element here: a
-Lagrange basis function (P1, P2, P3; the CST load of EFMM, seed eq. 3.4c) is 1 at its
+Lagrange basis function (P1, P2, P3; the CST load of EFMM, Edo (2016), eq. 3.4c) is 1 at its
 own vertex and 0 at the others; for RGNT, GNT and RGNQ the displacement is the P2 field
 T w, so the force added at the P2 vertex node and then multiplied by Tᵀ
 (:meth:`~geofrac.fem.elastic.GradientDofProblem.load_vector`) is F·(T w)(x_p). Only the

@@ -214,7 +214,7 @@ def point_tensors(
 def error_norms(
     uh: dolfinx.fem.Function, u_exact: Any, lam: Any, mu: Any, extra_degree: int = 4
 ) -> dict[str, float]:
-    """Displacement L2 error (seed eq. 2.22) and energy error (seed eq. 3.30b), plus norms.
+    """Displacement L2 error and energy error (Edo (2016), eqs. 2.22 and 3.30b), plus norms.
 
     The exact field enters as a UFL expression, integrated with a quadrature degree of
     ``2 * max(degree(uh), 3) + extra_degree`` (exact fields here are up to cubic), so the

@@ -2,7 +2,7 @@
 
 Intact cells use their element's field: CST (P1), or the RGNT/GNT vertex-DOF field of
 :mod:`geofrac.elements.kinematics`, whose stiffness is Tᵀ K_P2 T plus the zero-mode
-penalty of :mod:`geofrac_forms.gradient_dofs` (seed eqs. 2.4, 2.29). The integrands are
+penalty of :mod:`geofrac_forms.gradient_dofs` (Edo (2016), eqs. 2.4, 2.29). The integrands are
 quadratic on an affine triangle, so the three-point edge-midpoint rule is exact and these
 matrices equal the UFL-assembled ones to round-off (``tests/fracture/test_cells.py``
 checks this against DOLFINx). Cracked cells use the MLS field (2.19):

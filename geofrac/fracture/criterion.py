@@ -1,8 +1,8 @@
-"""Sequentially linear crack criterion, seed eqs. (2.20)-(2.21) (pure numpy).
+"""Sequentially linear crack criterion, Edo (2016), eqs. (2.20)-(2.21) (pure numpy).
 
 For a solution under the unit load, each edge's maximum principal stress σ1 is the mean
-of the largest principal stresses of its (one or two) cells at the edge midpoint (seed
-2.3.2: "the mean of the two maximum principal stresses at the middle of the edge"). The
+of the largest principal stresses of its (one or two) cells at the edge midpoint
+(§2.3.2: "the mean of the two maximum principal stresses at the middle of the edge"). The
 edge with the least r = f_t / σ1 over the uncracked, crackable edges with σ1 > 0 cracks,
 and the solution is scaled by r.
 

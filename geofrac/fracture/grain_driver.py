@@ -1,4 +1,4 @@
-"""The grain variant of the crack driver: cracks along grain interfaces (seed 3.3, Fig. 3.8).
+"""Grain variant of the crack driver: cracks along grain interfaces (Edo (2016), §3.3, Fig. 3.8).
 
 :data:`GRAINS` composes :class:`~geofrac.fracture.driver.CrackDriver` with nodes (grains)
 as its units instead of cells: the same loop, solvers (``update``/``reuse``/``refactor``),
@@ -419,7 +419,7 @@ class GrainUnits:
 
 
 class GrainCriterion:
-    """Grain interfaces: σ1 of an interface is the larger of its two grains' (seed 3.3.1).
+    """Grain interfaces: σ1 of an interface is the larger of its two grains' (Edo (2016), §3.3.1).
 
     Args:
         units: the grain units.

@@ -1,6 +1,6 @@
 """Crack state of a grain mosaic: cracked grain interfaces and C-MultiMLSM node fields.
 
-Seed 3.3 (Fig. 3.4-3.8). The grains are EFMM's integration domains
+Edo (2016), §3.3 (Fig. 3.4-3.8). The grains are EFMM's integration domains
 (:func:`geofrac.elements.efmm_numpy.integration_domains`): node i's grain is the union of
 its quadrilaterals (i, X_ij, p_T, X_ik) in the triangles T around it. Each mesh edge ij
 owns one *interface*, the boundary between the grains of i and j: the polyline
@@ -9,7 +9,7 @@ p_T – X_ij on a boundary edge, where X_ij is the edge midpoint). Crack sites a
 therefore numbered like the edges (:class:`~geofrac.fracture.topology.EdgeMesh`), so the
 chapter-2 event loop, criterion and tie-break serve both.
 
-A node with a cracked interface (seed 3.3.2) drops its EFMM field and takes the
+A node with a cracked interface (§3.3.2) drops its EFMM field and takes the
 C-MultiMLSM field of :mod:`geofrac.mls.cmulti` through its *visible* satellites: a node j
 is visible from node i when the segment x_i – x_j touches no cracked interface
 (:mod:`geofrac.fracture.visibility`, the same closed-segment test as chapter 2) and runs
@@ -21,7 +21,7 @@ influence radius is set per node and per crack state (3.3.2(d)): the search grow
 ``neighbours``-th satellite; the field's order then follows the number of satellites
 inside h (>= 10 quadratic, 4-9 linear, 1-3 rotation only, none: a fragment).
 
-Which nodes switch (``switch``): the seed switches "the nodes that have a cracked
+Which nodes switch (``switch``): Edo (2016) switches "the nodes that have a cracked
 interface" because EFMM's displacement is continuous over the node's patch and cannot
 represent the crack (3.3.2). An interface also crosses the two triangles of its edge, and
 so the patches of their third vertices: with ``"grain"`` (the literal rule) those nodes
@@ -54,7 +54,7 @@ class Interfaces:
 
     Attributes:
         centre: the interface's centre X_ij (on edge ij), shape=(num_edges, 2).
-        point: where its σ1 is evaluated (seed 3.3.1, "the central part of the grain
+        point: where its σ1 is evaluated (Edo (2016), §3.3.1, "the central part of the grain
             interface"): X_ij for an interior interface p_T1–X–p_T2, the middle of
             p_T–X for a boundary one (X lies on the boundary), shape=(num_edges, 2).
         segments: its two segments p_T1–X and X–p_T2 (a boundary edge repeats p_T–X),
@@ -246,7 +246,7 @@ class GrainState:
         return np.array(sorted(i for i, f in self.fits.items() if f.order <= 0), dtype=np.int64)
 
     def fragments(self) -> np.ndarray:
-        """Nodes whose grain sees no satellite (a fragment, seed Fig. 3.5(b)), sorted."""
+        """Nodes whose grain sees no satellite (a fragment, Edo (2016), Fig. 3.5(b)), sorted."""
         return np.array(sorted(i for i, f in self.fits.items() if f.order < 0), dtype=np.int64)
 
     def orders(self) -> np.ndarray:

@@ -65,7 +65,7 @@ class ContactUnsettled(Exception):
 
 #: The body is *separated* when the unit-load strain energy falls below this fraction of
 #: its value at the first event: no load path is left between the control group and the
-#: supports (the seed's "unstable" end, reached without a singular matrix because both
+#: supports (the "unstable" end of Edo (2016), reached without a singular matrix because both
 #: pieces are held by Dirichlet conditions).
 SEPARATED = 1e-9
 

@@ -2,10 +2,10 @@
 
 Pure numpy and identical on every rank: the driver replicates it, so that the crack
 sequence does not depend on the number of ranks. A cell *uses MLS* when it owns a
-cracked edge (seed 2.3.1) or lies in a forced region (the patch test's core); its field
+cracked edge (Edo (2016), §2.3.1) or lies in a forced region (the patch test's core); its field
 is the linear fit of :mod:`geofrac.mls.shape` through its visible satellite nodes
 (:mod:`geofrac.fracture.visibility`). A cracked cell that sees fewer than 3
-non-collinear nodes is *void*: it carries no stiffness, as the seed does for a fragment
+non-collinear nodes is *void*: it carries no stiffness, as Edo (2016) does for a fragment
 (Fig. 2.4(d)).
 
 :meth:`CrackState.crack` refits the cells of the edge and every MLS cell whose influence
@@ -42,7 +42,7 @@ class MlsSettings:
     """Neighbourhood settings of the MLS fits.
 
     Attributes:
-        neighbours: visible satellite nodes wanted (seed: about 10).
+        neighbours: visible satellite nodes wanted (Edo (2016): about 10).
         margin: h / distance of the ``neighbours``-th node.
         max_radius_factor: largest search radius in units of the cell's longest edge.
     """

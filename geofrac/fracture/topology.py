@@ -279,7 +279,7 @@ def zero_energy_rows(K: np.ndarray, tol: float) -> np.ndarray:
 def random_sites(candidates: np.ndarray, fraction: float, seed: int) -> np.ndarray:
     """A seeded random ``fraction`` of the candidate crack sites (pre-existing cracks).
 
-    The seed's 3.6 cracks 4 % of the grain interfaces inside the model, uniformly
+    Edo (2016), §3.6, cracks 4 % of the grain interfaces inside the model, uniformly
     distributed, before loading. round(fraction x number of candidates) distinct sites are
     drawn with ``numpy.random.default_rng(seed)`` from the candidates in id order, so the
     choice depends on the mesh and the seed only (not on the number of ranks).

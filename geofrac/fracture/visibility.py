@@ -1,4 +1,4 @@
-"""Which nodes a cracked cell sees: the fan-shaped influence domain of seed Fig. 2.3.
+"""Which nodes a cracked cell sees: the fan-shaped influence domain of Edo (2016), Fig. 2.3.
 
 Definition (used everywhere in geofrac): node I is *visible* from cracked cell c when the
 closed segment from the centroid x_c of c to x_I has no point in common with any cracked
@@ -9,11 +9,11 @@ edge (within a tolerance of 1e-9 times the segment length). Consequences:
   the fan bounded by the rays to the end points of the uncracked edges (Fig. 2.3);
 - the end points of a cracked edge lie on the crack and are visible to no cracked cell
   (the open fan); only intact cells use them. A node whose every edge is cracked is
-  therefore used by no cell at all, which is the seed's singular case (held by the
+  therefore used by no cell at all, which is the singular case of Edo (2016) (held by the
   driver at its last displacement);
 - a node hidden behind a crack stays hidden however large the radius grows.
 
-The neighbourhood search grows the radius until ``target`` nodes are visible (seed 2.4:
+The neighbourhood search grows the radius until ``target`` nodes are visible (Edo (2016), §2.4:
 "about 10"); pure numpy with uniform bins for nodes and cracked edges.
 """
 

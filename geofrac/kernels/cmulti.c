@@ -1,4 +1,4 @@
-/* C-MultiMLSM node field and node stiffness (seed App. C, eqs. 3.12-3.28); the numpy
+/* C-MultiMLSM node field and node stiffness (Edo (2016), App. C, eqs. 3.12-3.28); the numpy
  * reference with the full derivation is geofrac/mls/cmulti.py. A plain function, not a
  * ufcx kernel.
  *

@@ -1,4 +1,4 @@
-/* EFMM cell kernels (seed 3.2, eqs. 3.2b, 3.4a, 3.4b, 3.7; Fig. 3.3), ufcx signature.
+/* EFMM cell kernels (Edo (2016), §3.2, eqs. 3.2b, 3.4a, 3.4b, 3.7; Fig. 3.3), ufcx signature.
  *
  * Node j of a triangle owns the part (x_j, X_a, p, X_b) of the cell, integrated as the two
  * sub-triangles (x_j, X_a, p) and (x_j, p, X_b): p is the cell's inner point, X_a the

@@ -1,7 +1,7 @@
-"""Landslide terrain of seed section 5.4: a moving layer of tets over an immobile part.
+"""Landslide terrain of Edo (2016), §5.4: a moving layer of tets over an immobile part.
 
 One process, no MPI, no DOLFINx (:mod:`geofrac.meshing.distribute` hands the mesh on).
-The ground surface is seed eq. 5.1, ``z = b exp((x² + y²) / a) + c`` (a hill for
+The ground surface is eq. 5.1, ``z = b exp((x² + y²) / a) + c`` (a hill for
 ``a < 0``). The moving layer occupies an elliptic footprint in x-y; its top is the ground
 and its bottom the slip surface, the ground lowered by a depth that is largest inside the
 footprint (a deep-seated slide) and ``rim_depth > 0`` on its boundary, so side walls join
@@ -10,13 +10,13 @@ top and bottom along the footprint boundary. The immobile part is the box
 the slip surface inside it (a pit with side walls); it is one block, returned as its
 closed triangulated surface patch.
 
-The procedure follows seed Fig. 5.23, with gmsh in place of Triangle and TetGen:
+The procedure follows Fig. 5.23, with gmsh in place of Triangle and TetGen:
 
 1. mesh the footprint in 2D (gmsh, with the size of :func:`mesh_size` evaluated on the
    ground and on the slip surface above each point), Fig. 5.23(a);
 2. lift its triangles to the ground (top) and to the slip surface (bottom), join their
    boundary loops by side walls subdivided vertically so their triangles stay well
-   shaped, and hand this closed surface to gmsh as three discrete surfaces (the seed's
+   shaped, and hand this closed surface to gmsh as three discrete surfaces (the thesis's
    TetGen "poly" surface patch, Fig. 5.12(b));
 3. mesh the volume with linear tets following the same size field, Fig. 5.23(f);
 4. build the immobile part's surface patch: the pit is the layer's slip surface and side
@@ -52,7 +52,7 @@ ALGORITHMS_3D = {"hxt": 10, "delaunay": 1}
 #: A size zone: (centre (x, y, z), radius, size inside).
 Zone = tuple[tuple[float, float, float], float, float]
 
-#: Two fine and two coarse balls at mid-depth of the default layer (seed Fig. 5.5(b),
+#: Two fine and two coarse balls at mid-depth of the default layer (Edo (2016), Fig. 5.5(b),
 #: 5.25(b)): near the head scarp, near the toe, and two coarse patches between.
 HETEROGENEOUS_ZONES: tuple[Zone, ...] = (
     ((119.5, 59.7, 153.1), 25.0, 1.2),
@@ -64,12 +64,12 @@ HETEROGENEOUS_ZONES: tuple[Zone, ...] = (
 
 @dataclass(frozen=True)
 class TerrainSpec:
-    """Geometry and mesh sizes of the landslide terrain (seed section 5.4, Fig. 5.23).
+    """Geometry and mesh sizes of the landslide terrain (Edo (2016), §5.4, Fig. 5.23).
 
     Lengths in metres. The defaults are a hill 200 m high on a 1 km square (eq. 5.1 with
     ``a = -1e5``, ``b = 200``, ``c = 0``) with a slide 300 m long, 180 m wide and 8 to 40 m
     deep on its flank; ``h = 1.95`` gives a homogeneous layer of 100,643 vertices (the
-    seed's Fig. 5.25(a) had 100,824 blocks) and ``h = 1.98`` with
+    thesis's Fig. 5.25(a) had 100,824 blocks) and ``h = 1.98`` with
     :data:`HETEROGENEOUS_ZONES` a heterogeneous one of 100,298 (Fig. 5.25(b): 100,996).
 
     Attributes:
@@ -85,7 +85,7 @@ class TerrainSpec:
         rim_depth: depth on the footprint boundary (> 0: the height of the side walls).
         h: target edge length of the moving layer's tets.
         zones: balls ``((x, y, z), radius, size)`` where the target size is ``size``
-            instead of ``h`` (finer or coarser; empty: a homogeneous layer, seed Fig.
+            instead of ``h`` (finer or coarser; empty: a homogeneous layer, Edo (2016), Fig.
             5.25(a)); the size blends linearly to ``h`` over ``zone_transition * radius``
             outside each ball. Where fine and coarse zones overlap the sizes add up
             relative to ``h`` (see :func:`mesh_size`).
@@ -153,7 +153,7 @@ class TerrainSpec:
 
 
 def ground(x: np.ndarray, y: np.ndarray, spec: TerrainSpec) -> np.ndarray:
-    """Ground height, seed eq. 5.1: ``z = b exp((x² + y²) / a) + c``.
+    """Ground height, Edo (2016), eq. 5.1: ``z = b exp((x² + y²) / a) + c``.
 
     Args:
         x: x coordinates, any shape broadcastable with ``y``.
@@ -594,7 +594,7 @@ def _size_field(gmsh: Any, spec: TerrainSpec) -> int:
 
 
 class TerrainBuilder:
-    """Geometry builder of the landslide terrain (seed section 5.4, Fig. 5.23).
+    """Geometry builder of the landslide terrain (Edo (2016), §5.4, Fig. 5.23).
 
     Used as ``Geometry(builder=TerrainBuilder(spec), dim=3, groups={"layer": 3, "top": 2,
     "slip": 2, "side": 2})``; :func:`geofrac.meshing.distribute.build_mesh` calls

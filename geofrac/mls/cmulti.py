@@ -1,4 +1,4 @@
-"""C-MultiMLSM node field, seed App. C and eqs. (3.12)-(3.28); numpy reference and C wrapper.
+"""C-MultiMLSM node field (Edo (2016), App. C, eqs. 3.12-3.28): numpy reference, C wrapper.
 
 Node i at x_i with n satellite nodes j (0 < r_ij = |x_j - x_i| < h) carries the field
 
@@ -15,7 +15,7 @@ defines the offsets x̃_ji = x_j - x_i from the node, independent of the evaluat
 so A and C are constant per node and the ∂A/∂x and ∂C/∂x terms of (3.25)-(3.26) vanish:
 the strain is ε(x) = B(x) u_nodes with B from the derivatives of F only.
 
-The order of F drops with the satellite count n (seed 3.3.2(d)), for d = (dx, dy) = x - x_i:
+The order of F drops with the satellite count n (Edo (2016), §3.3.2(d)), for d = (dx, dy) = x - x_i:
 
 - order 2 (n ≥ 10), 10 parameters D = (θ, εx, εy, γxy, εx,x, εx,y, εy,x, εy,y, γxy,x,
   γxy,y) (3.17b), F from (C.8) (3.17a has a sign/term typo in row v, column 7)::
@@ -35,7 +35,7 @@ unchanged and keeps A of order one; the scaled parameters are h D for the first-
 ones (θ, εx, εy, γ) and h² D for the second-order ones, and ∂/∂x = (1/h) ∂/∂ξ.
 ``NodeFit.coefficients`` holds A⁻¹ C in the scaled parameters.
 
-Robustness rule (ours; the seed only ties the order to the satellite count): the scaled
+Robustness rule (ours; Edo (2016) only ties the order to the satellite count): the scaled
 A (m × m) is Cholesky-factorised, A = L Lᵀ, and the order is accepted when the
 factorisation succeeds and min(diag L)² / max(diag L)² ≥ ``MIN_PIVOT_RATIO``; otherwise
 the next lower order is tried (2 → 1 → 0 → -1), e.g. for collinear satellites. Order -1
@@ -90,7 +90,9 @@ def _check_order(order: int) -> None:
 
 
 def order_for(n: int) -> int:
-    """Starting order for n satellites (seed 3.3.2(d)): 2 (n ≥ 10), 1 (4-9), 0 (1-3), -1 (0).
+    """Starting order for n satellites: 2 (n ≥ 10), 1 (4-9), 0 (1-3), -1 (0).
+
+    Edo (2016), §3.3.2(d).
 
     Raises:
         ValueError: n < 0.

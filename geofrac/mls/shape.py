@@ -1,9 +1,9 @@
-"""MLS displacement field of a cracked triangle, seed eqs. (2.10)-(2.19) and App. B.
+"""MLS displacement field of a cracked triangle, Edo (2016), eqs. (2.10)-(2.19) and App. B.
 
 The field of a cracked cell is the weighted least-squares fit of a complete linear
 polynomial p(x) = {1, x - x_c, y - y_c} to the displacements of its visible satellite
 nodes (eq. 2.10), with the quartic spline weight (2.11) of the node's distance r_I to the
-cell's centroid x_c. The centre is fixed at the centroid (seed: "r_I is the distance
+cell's centroid x_c. The centre is fixed at the centroid (Edo (2016): "r_I is the distance
 between the centroid and node I"), so A and B of (2.14)-(2.15) are constant over the cell,
 the terms with ∂A/∂x and ∂B/∂x in (B.9) vanish, and the field is linear: the cell has a
 constant strain and its stiffness (2.19) is t · area · Bᵀ D B. Shifting the basis to the

@@ -115,7 +115,7 @@ class Discretization:
             ``"free"``: only the translations are fixed; boundary edges may bulge between
             vertices (fails the patch test; kept for comparison, docs/elements.md).
         q_rand: ``efmm`` only: randomness of the integration domains' inner points in
-            [0, 1] (seed Fig. 3.13); 0 takes the incentres.
+            [0, 1] (Edo (2016), Fig. 3.13); 0 takes the incentres.
         domain_seed: ``efmm`` only: seed of those random points.
     """
 
@@ -299,7 +299,7 @@ BED_REPRESENTATIONS = ("plane", "staircase")
 
 @dataclass(frozen=True)
 class MpmSpec:
-    """The ``[mpm]`` table of a ``method = "mpm"`` scene (seed chapter 4).
+    """The ``[mpm]`` table of a ``method = "mpm"`` scene (Edo (2016), chapter 4).
 
     Attributes:
         dim: spatial dimension (1, 2 or 3).
@@ -375,10 +375,10 @@ class EffectSpec:
 
 @dataclass(frozen=True)
 class BlocksSpec:
-    """``[blocks]`` of a ``method = "blocks"`` scene (seed chapter 5).
+    """``[blocks]`` of a ``method = "blocks"`` scene (Edo (2016), chapter 5).
 
     Attributes:
-        source: ``"geometry"`` (the scene's ``[geometry]``) or ``"terrain"`` (seed 5.4).
+        source: ``"geometry"`` (the scene's ``[geometry]``) or ``"terrain"`` (Edo (2016), §5.4).
         dim: 2 or 3.
         inner_point: 2D, each triangle's inner point: ``"incentre"`` or ``"random"``.
         radius: 2D random points: the movable region's radius relative to the inradius.

@@ -1,4 +1,4 @@
-"""Material Point Method (seed chapter 4, App. D): the engine.
+"""Material Point Method (Edo (2016), chapter 4, App. D): the engine.
 
 - :mod:`~geofrac.mpm.grid`: the regular background (Euler) grid;
 - :mod:`~geofrac.mpm.shapes`: particle–node weights φ_ip and gradients, linear hat

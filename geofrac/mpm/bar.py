@@ -1,11 +1,11 @@
-"""The seed's 1D bar benchmarks: quasi-static (4.5.1), impact (4.5.2), translating (4.5.3).
+"""The 1D bar benchmarks of Edo (2016), §4.5.1-4.5.3: quasi-static, impact, translating.
 
-After Bardenhagen and Kober (GIMP, 2004), as the seed sets it up: E = 1e6, ρ₀ = 1,
+After Bardenhagen and Kober (GIMP, 2004), as Edo (2016) sets it up: E = 1e6, ρ₀ = 1,
 L₀ = 50, A = 1, 100 particles (two per cell), cell 1.0, Courant number 0.1 (Δt = 1e-4),
 the base x = 0 fixed, gravity b with W = ρ₀|b|L₀. Gravity acts from t = 0; at
 t = L₀/c the compression wave from the base has crossed the bar once and, for a linear
 bar, leaves exactly the static stress behind it with the bar at rest, which is why the
-seed compares at that time. The reference is eq. 4.73,
+thesis compares at that time. The reference is eq. 4.73,
 
     σ(x) = E (√(1 − 2ρ₀|b|(Δ − x)/E) − 1),   Δ = L₀ − ρ₀|b|L₀²/(2E)   (4.74),
 
@@ -15,14 +15,14 @@ strains are 1e-3 and the hypoelastic update differs from that law by ~1e-6 relat
 The bar with an initial velocity (4.5.2, Fig. 4.16-4.18): the same bar without gravity,
 moving towards its fixed base at v₀ = c/50. A compression wave runs up from the base;
 behind it the bar is at rest with the stress of eq. 4.75, σ = E((ct − v₀t)/(ct) − 1) =
-−E v₀/c (the stretch 1 − v₀/c). The seed compares when the wave has run through 80 % of
+−E v₀/c (the stretch 1 − v₀/c). The thesis compares when the wave has run through 80 % of
 the bar, t = 0.8 L₀/c.
 
 The translating bar (4.5.3, Fig. 4.19-4.21): length 5, E = 500, ρ = 1, centred at
 x = 25 in a box 0 … 50 with walls (fixed nodes) at both ends, initial velocity 2.0, cell
 0.5, Courant number 0.1; it flies, hits a wall, bounces, and so on. The energies
 (kinetic, strain, total) are normalised by the initial (kinetic) energy; without
-dissipation the total should stay 1. The seed does not give the particle count; we use
+dissipation the total should stay 1. The thesis does not give the particle count; we use
 two per cell (20), as in the quasi-static bar.
 """
 
@@ -186,7 +186,7 @@ def translating_bar(
     samples: int = 2000,
     smoothing_kind: str = "standard",
 ) -> EnergyHistory:
-    """Run the translating bar of seed 4.5.3 to ``t_end`` (or for ``steps`` steps).
+    """Run the translating bar of Edo (2016), §4.5.3 to ``t_end`` (or for ``steps`` steps).
 
     The scene ``jobs/mpm_translating_bar.toml`` with :func:`translating_overrides`, on one
     process, stepped by :func:`geofrac.mpm.driver.advance`: the same grid, walls, time
@@ -196,10 +196,11 @@ def translating_bar(
         shape: shape functions.
         scheme: update scheme.
         smoothing: MLS radius factor (None: no smoothing).
-        t_end: end time (the seed's Fig. 4.21 runs about 100).
+        t_end: end time (Edo (2016), Fig. 4.21, runs to about 100).
         steps: run exactly this many steps of the Courant time step instead.
         samples: about this many energy samples are kept (the drifts use every step).
-        smoothing_kind: ``seed`` or ``consistent`` (:data:`~geofrac.mpm.schemes.SMOOTHINGS`).
+        smoothing_kind: ``standard`` (Edo (2016)'s) or ``consistent``
+            (:data:`~geofrac.mpm.schemes.SMOOTHINGS`).
     """
     from mpi4py import MPI
 
@@ -277,7 +278,7 @@ class ImpactResult:
 def impact_bar(
     shape: str, scheme: str = "musl", smoothing: float | None = None, n: int = 100
 ) -> ImpactResult:
-    """Run the bar of seed 4.5.2 to t = 0.8 L₀/c; compare with eq. 4.75."""
+    """Run the bar of Edo (2016), §4.5.2 to t = 0.8 L₀/c; compare with eq. 4.75."""
     E, rho0, L0, cell = 1e6, 1.0, 50.0, 1.0
     h = L0 / n
     p = lattice([0.0], [n], h, rho0)

@@ -3,7 +3,7 @@
 A square block of particles (two by two per cell, plane strain, E = 1e7, ν = 0.3,
 ρ = 2000) stands on grid nodes held fixed at its base and is loaded by gravity; the
 step is Courant number 0.1. It measures particle-steps per second of a scheme and
-shape at a realistic particle count (the issue's 100k), not an accuracy. With a
+shape at a realistic particle count (``bench mpm`` defaults to 100k), not an accuracy. With a
 communicator of more than one rank the grid is decomposed into slabs
 (:mod:`~geofrac.mpm.parallel`) and every rank steps its own particles.
 """

@@ -28,7 +28,7 @@ the active nodes (not zeroed on held ones):
 - ``friction`` = Δt Σ R_i·v*_i over the other nodes (R_i ≠ 0 only on frictional ones),
   negative when friction dissipates;
 - ``smoothing`` = Σ V_p σ_p : (Δε̃_p − Δε_p) over the stress updates: the stress work of
-  the MLS fit Δε̃ of the raw increments Δε (seed eq. 4.66) beyond theirs;
+  the MLS fit Δε̃ of the raw increments Δε (Edo (2016), eq. 4.66) beyond theirs;
 - ``plastic`` = U(elastic trial) − U(after the return mapping) ≥ 0 (with the Jaumann
   rotation's change of the trial), the dissipation of the Drucker-Prager return (zero
   for an elastic material);

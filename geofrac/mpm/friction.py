@@ -1,4 +1,4 @@
-"""Contact and Coulomb friction on grid nodes of a boundary (seed eqs. 4.44-4.47).
+"""Contact and Coulomb friction on grid nodes of a boundary (Edo (2016), eqs. 4.44-4.47).
 
 A frictional boundary is a set of rows (node, unit normal n out of the body into the
 boundary, μ, and the boundary's plane x·n = d at that node). A node on a corner has
@@ -18,7 +18,7 @@ ratcheted up to the 0.1 cell (2-3 mm in 0.3 s for a block launched on a level fl
 Impulse form. (4.44-4.47) multiplied by Δt: the excess approach Δv_n = v*·n − g/Δt is
 removed (4.47) and the tangential velocity is slowed by μ Δv_n against its direction,
 at most to rest
-(4.45-4.46: the seed's μ' = μ while the node slides, μ' = |a_t| / (a·n) while it sticks,
+(4.45-4.46: the thesis's μ' = μ while the node slides, μ' = |a_t| / (a·n) while it sticks,
 i.e. stick when the tangential impulse needed to stop it is within μ times the normal
 impulse, Coulomb slip otherwise). A node moving away from the boundary is free: the
 boundary never pulls.
@@ -65,7 +65,7 @@ class Friction:
         nodes: flat grid node ids, shape=(k,) (a node on a corner appears once per
             boundary).
         normals: unit normals out of the body into the boundary, shape=(k, dim).
-        mu: Coulomb friction coefficients μ >= 0, shape=(k,) (the seed: 0.1).
+        mu: Coulomb friction coefficients μ >= 0, shape=(k,) (Edo (2016): 0.1).
         offsets: the boundary's plane at the node, x·n = d, shape=(k,); None: the
             material always touches (no touch check).
     """

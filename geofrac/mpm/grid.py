@@ -1,4 +1,4 @@
-"""The regular background grid of the MPM (the Euler grid of seed Fig. 4.1)."""
+"""The regular background grid of the MPM (the Euler grid of Edo (2016), Fig. 4.1)."""
 
 from __future__ import annotations
 

@@ -668,7 +668,7 @@ def elastic_update(
         if dim == 1:
             stress[i, 0, 0] += E * deps[i, 0, 0]
         else:
-            for a in range(dim):  # the seed's Δω (D.31)
+            for a in range(dim):  # Δω of Edo (2016), eq. D.31
                 for b in range(dim):
                     spin[a, b] = -0.5 * dt * (L[i, a, b] - L[i, b, a])
             for a in range(dim):  # σ + σ Δω − Δω σ (D.30)

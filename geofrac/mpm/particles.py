@@ -1,4 +1,4 @@
-"""Particle state of the MPM (seed eqs. 4.7-4.11)."""
+"""Particle state of the MPM (Edo (2016), eqs. 4.7-4.11)."""
 
 from __future__ import annotations
 

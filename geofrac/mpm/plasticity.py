@@ -20,9 +20,9 @@ plastic, is :func:`geofrac.mpm.rotation.rotate_stress`. The energy the return ta
 (``budget.plastic``, :mod:`~geofrac.mpm.energy`) is the stored energy of the rotated
 elastic trial minus that after the return.
 
-The seed gives the yield function only; the flow rule and the apex treatment are the
+Edo (2016) gives the yield function only; the flow rule and the apex treatment are the
 standard ones (e.g. de Souza Neto, Perić and Owen, ch. 8) and are documented here
-because the seed is silent on them.
+because the thesis is silent on them.
 """
 
 from __future__ import annotations

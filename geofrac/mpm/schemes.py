@@ -1,4 +1,4 @@
-"""One explicit MPM step: MUSL, USF or USAVG (seed App. D), pure numpy.
+"""One explicit MPM step: MUSL, USF or USAVG (Edo (2016), App. D), pure numpy.
 
 Transfers (eqs. 4.20-4.25, D.1-D.2): nodal mass m_i = Σ m_p φ_ip, momentum Σ m_p v_p φ_ip,
 internal force f_i = −Σ V_p σ_p ∇φ_ip, external force Σ m_p b φ_ip. Nodes whose mass is
@@ -13,9 +13,9 @@ Schemes (``scheme``):
   rebuilt from the new particle momentum (D.6), stress from it (D.7-D.8);
 - ``usf`` (D.10-D.17): stress first, from the nodal velocity of the particle momentum,
   then forces from σ^{k+1} and the motion;
-- ``usavg`` (D.18-D.29): USF's stress update, then MUSL's. The seed writes both with the
+- ``usavg`` (D.18-D.29): USF's stress update, then MUSL's. Edo (2016) writes both with the
   full strain increment, which would count each step's strain twice; we follow Nairn's
-  USAVG, which the seed cites, and apply half of the step to each (Δt/2 in D.19 and
+  USAVG, which the thesis cites, and apply half of the step to each (Δt/2 in D.19 and
   D.27), so the stress over a step averages the two velocity fields.
 
 The stress update is the material's (:class:`~geofrac.mpm.constitutive.
@@ -75,9 +75,9 @@ SCHEMES = ("musl", "usf", "usavg")
 #: Step implementations: compiled loops, or the numpy reference.
 BACKENDS = ("numba", "numpy")
 
-#: MLS smoothing kinds: the seed's (4.66-4.67: the fitted increments change the stress),
-#: or ``consistent`` (the same, with the grid forces from the operator's adjoint applied
-#: to the stresses, :mod:`~geofrac.mpm.consistent`).
+#: MLS smoothing kinds: ``standard``, as in Edo (2016) (4.66-4.67: the fitted increments
+#: change the stress), or ``consistent`` (the same, with the grid forces from the operator's
+#: adjoint applied to the stresses, :mod:`~geofrac.mpm.consistent`).
 SMOOTHINGS = ("standard", "consistent")
 
 #: Nodes lighter than this fraction of the heaviest node are inactive.

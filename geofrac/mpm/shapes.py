@@ -1,4 +1,4 @@
-"""Particle–node weights φ_ip and their gradients (seed eqs. 4.24-4.32, 4.69-4.71).
+"""Particle–node weights φ_ip and their gradients (Edo (2016), eqs. 4.24-4.32, 4.69-4.71).
 
 Three kinds, as the scene's ``shape``:
 
@@ -11,7 +11,7 @@ Three kinds, as the scene's ``shape``:
 - ``cpgimp``: the same, with l_p following the deformation gradient, l_p = F_p l_p⁰
   (eqs. 4.69-4.70; per direction, the diagonal of F_p).
 
-- ``bspline2``: not in the seed; the quadratic B-spline of the node distance,
+- ``bspline2``: not in Edo (2016); the quadratic B-spline of the node distance,
   N(r) = 3/4 − (r/L)² for |r| < L/2 and (3/2 − |r|/L)²/2 for L/2 ≤ |r| < 3L/2 (support
   1.5 cells each side, three nodes per direction). Its gradient is continuous, so a
   particle crossing a cell boundary changes no force abruptly (the cell-crossing error

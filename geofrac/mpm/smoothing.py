@@ -1,4 +1,4 @@
-"""MLS smoothing of particle strain increments (seed 4.4.1, eqs. 4.50-4.58).
+"""MLS smoothing of particle strain increments (Edo (2016), §4.4.1, eqs. 4.50-4.58).
 
 Each particle's strain increment is replaced by the moving-least-squares fit of its
 neighbours' increments evaluated at the particle (4.57): with the complete cubic basis
@@ -8,10 +8,10 @@ and scaled by the radius h,
     Δε_p ← F(0)ᵀ A⁻¹ B Δε_I,   A = Σ_I W(r_I, h) F(x_I) F(x_I)ᵀ,   B = [W(r_I, h) F(x_I)]
 
 (4.53-4.56), over the neighbours I with r_I = |x_I − x_p| < h, the particle itself
-included. W is the cubic spline (4.51): the seed prints its first branch as
+included. W is the cubic spline (4.51): the thesis prints its first branch as
 2/3 − 4s + 4s³, which is negative at s = 1/2 and does not meet the second branch; we use
 the standard cubic spline 2/3 − 4s² + 4s³ that the second branch continues. A particle
-keeps its own increment when it has fewer neighbours than basis terms (the seed's
+keeps its own increment when it has fewer neighbours than basis terms (the thesis's
 "fewer than 4" for the 1D cubic) or when its moment matrix A is singular or
 ill-conditioned (neighbours on a line in 2D, say): the fit is made when
 κ_T(A) = tr(A) tr(A⁻¹) is below :data:`COND_MAX`. For the symmetric positive definite

@@ -1,7 +1,7 @@
 """Validation of ``method = "blocks"`` scenes: ``[blocks]``, ``[blocks.terrain]``, output.
 
-A block scene builds a block model (seed chapter 5) from a mesh: either a ``[geometry]``
-(any 2D triangle or 3D tetrahedral gmsh geometry) or the landslide terrain of seed 5.4
+A block scene builds a block model (Edo (2016), chapter 5) from a mesh: either a ``[geometry]``
+(any 2D triangle or 3D tetrahedral gmsh geometry) or the landslide terrain of Edo (2016), §5.4
 (``source = "terrain"``, a moving layer of blocks over an immobile part that is one
 block). Pure Python: nothing here imports gmsh, DOLFINx or MPI.
 """
@@ -128,7 +128,7 @@ def blocks_spec(file: Path, raw: Any, geometry: Geometry | None, warnings: list[
         for key in ("inner_point", "radius", "convex"):
             if t.has(key):
                 raise t.error(
-                    key, "applies to 2D blocks only (3D faces use centroids, seed 5.2.2(b))"
+                    key, "applies to 2D blocks only (3D faces use centroids, Edo (2016), §5.2.2(b))"
                 )
     elif inner == "incentre":
         for key in ("radius", "convex"):

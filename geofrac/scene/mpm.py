@@ -98,7 +98,7 @@ MPM_EFFECTS = ("gravity", "mls_smoothing", *model_effects(), "friction")
 FEM_ONLY_TABLES = ("discretization", "exact", "bc", "load", "solver")
 #: Kinds of ``mpm.damping``: Cundall's local (non-viscous) damping of the nodal forces.
 DAMPING_KINDS = ("local",)
-#: Default Courant number (the seed's benchmarks use 0.1, eq. 4.72).
+#: Default Courant number (the benchmarks of Edo (2016) use 0.1, eq. 4.72).
 DEFAULT_COURANT = 0.1
 #: Default number of output frames.
 DEFAULT_FRAMES = 50

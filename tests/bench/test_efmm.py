@@ -62,7 +62,7 @@ def test_qrand_study_reports_mean_and_spread_per_mesh(tmp_path):
         assert row["u_mean"] == pytest.approx(mean)
         std = (sum((m - mean) ** 2 for m in mine) / len(mine)) ** 0.5
         assert row["u_std"] == pytest.approx(std)
-        assert row["seed_u_mean"] in (5.96e-2, 1.03e-2)
+        assert row["thesis_u_mean"] in (5.96e-2, 1.03e-2)
 
 
 def test_qrand_out_of_range_is_refused(capsys):
