@@ -371,14 +371,15 @@ class EventOutput:
         fig.tight_layout()
         fig.savefig(self.out_dir / "load_displacement.png", dpi=90)
         plt.close(fig)
-        self._plot_cracks(modes, slipping)
+        self._plot_cracks(modes, slipping, len(rows))
         self.drawing.write_extra(self.out_dir)
 
-    def _plot_cracks(self, modes: np.ndarray, slipping: np.ndarray) -> None:
+    def _plot_cracks(self, modes: np.ndarray, slipping: np.ndarray, events: int) -> None:
         """``cracks.png``: the outline, pre-existing (grey) and new cracks by mode.
 
         New cracks are red (tension) or blue (shear); faces slipping in the final state
-        are drawn over them in orange, thicker.
+        are drawn over them in orange, thicker. The axes keep a margin around the
+        specimen so that its outline is drawn whole; the legend sits below them.
         """
         import matplotlib.pyplot as plt
         from matplotlib.collections import LineCollection
@@ -390,39 +391,41 @@ class EventOutput:
         new = state.cracked & ~pre
         x0, y0 = m.coords.min(axis=0)
         x1, y1 = m.coords.max(axis=0)
-        width = 7.0
-        fig, ax = plt.subplots(figsize=(width, max(2.0, width * (y1 - y0) / (x1 - x0))))
+        pad = 0.02 * max(x1 - x0, y1 - y0)
+        aspect = (y1 - y0 + 2 * pad) / (x1 - x0 + 2 * pad)
+        size = 7.0  # inches of the longer side of the specimen's box
+        box = (size, size * aspect) if aspect <= 1.0 else (size / aspect, size)
+        fig, ax = plt.subplots(figsize=(max(box[0], 3.5) + 0.8, max(box[1], 2.0) + 1.2))
         outline = m.coords[m.edges[m.boundary_edges]]
         ax.add_collection(LineCollection(outline, colors="k", linewidths=0.6))
         self.drawing.draw_extra(ax)
-        ax.add_collection(LineCollection(self.drawing.segments(pre), colors="0.6", linewidths=0.5))
         shear = new & (modes == 2) if len(modes) == len(new) else np.zeros_like(new)
-        for mask, colour, label in (
-            (new & ~shear, MODE_COLOURS[0], "new crack, tension"),
-            (shear, MODE_COLOURS[1], "new crack, shear"),
+        slip = np.zeros_like(new)
+        slip[slipping] = True
+        for mask, colour, width_, label in (
+            (pre, "0.6", 0.5, "pre-existing crack"),
+            (new & ~shear, MODE_COLOURS[0], 1.0, "new crack, tension"),
+            (shear, MODE_COLOURS[1], 1.0, "new crack, shear"),
+            (slip, SLIP_COLOUR, 1.8, "faces slipping"),
         ):
             if mask.any():
+                segments = self.drawing.segments(mask)
                 ax.add_collection(
-                    LineCollection(
-                        self.drawing.segments(mask), colors=colour, linewidths=1.0, label=label
-                    )
+                    LineCollection(segments, colors=colour, linewidths=width_, label=label)
                 )
-        if len(slipping):
-            ax.add_collection(
-                LineCollection(
-                    self.drawing.segments(slipping),
-                    colors=SLIP_COLOUR,
-                    linewidths=1.8,
-                    label="faces slipping",
-                )
-            )
-        if shear.any() or len(slipping):
-            ax.legend(loc="upper right", fontsize=7, framealpha=0.8)
-        ax.set_xlim(x0, x1)
-        ax.set_ylim(y0, y1)
+        ax.set_xlim(x0 - pad, x1 + pad)
+        ax.set_ylim(y0 - pad, y1 + pad)
         ax.set_aspect("equal")
-        ax.set_axis_off()
-        fig.tight_layout()
+        ax.set_xlabel("x")
+        ax.set_ylabel("y")
+        ax.set_title(
+            f"{self.ctx.scene.name}: {int(new.sum())} new cracked edges after {events} events",
+            fontsize=10,
+        )
+        handles, labels = ax.get_legend_handles_labels()
+        if handles:  # below the axes: it hides nothing
+            fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
+        fig.tight_layout(rect=(0.0, 0.08 if handles else 0.0, 1.0, 1.0))
         fig.savefig(self.out_dir / "cracks.png", dpi=110)
         plt.close(fig)
 
