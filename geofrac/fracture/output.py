@@ -362,12 +362,15 @@ class EventOutput:
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
+        from matplotlib.ticker import MaxNLocator
 
-        fig, ax = plt.subplots(figsize=(5, 3.6))
-        ax.plot([r["control_displacement"] for r in rows], [r["reaction"] for r in rows], lw=0.8)
+        fig, ax = plt.subplots(figsize=(6, 4))
+        d = [0.0] + [r["control_displacement"] for r in rows]  # from the unloaded state
+        ax.plot(d, [0.0] + [r["reaction"] for r in rows], lw=0.8, marker=".", ms=2)
+        ax.xaxis.set_major_locator(MaxNLocator(6))
         ax.set_xlabel(f"control displacement ({self.ctx.config.control})")
-        ax.set_ylabel("reaction")
-        ax.set_title(f"{self.ctx.scene.name}: {len(rows)} events")
+        ax.set_ylabel("reaction on the control DOFs")
+        ax.set_title(f"{self.ctx.scene.name}: load against displacement, {len(rows)} events")
         fig.tight_layout()
         fig.savefig(self.out_dir / "load_displacement.png", dpi=90)
         plt.close(fig)
