@@ -1,11 +1,12 @@
 """Turn a fracture network into a meshable planar graph, by documented tolerance rules.
 
-Pure numpy. The input is a :class:`~geofrac.dfn.sampling.Network` and the domain
-polygon; the output is a :class:`CleanNetwork`: vertices and straight edges that meet
-only at shared vertices, each edge belonging to one fracture, no two vertices closer than
-the tolerance ``tol`` and no vertex closer than ``tol`` to an edge it does not end on. A
-gmsh builder can embed such a graph as it is (``geofrac.meshing.dfn``), and every
-fracture is then a chain of mesh edges.
+Numpy, and scipy's connected components for ``vertex_merge``. The input is a
+:class:`~geofrac.dfn.sampling.Network` and the domain polygon; the output is a
+:class:`CleanNetwork`: vertices and straight edges that meet only at shared vertices,
+each edge belonging to one fracture, no two vertices closer than the tolerance ``tol``
+and no vertex closer than ``tol`` to an edge it does not end on. A gmsh builder can
+embed such a graph as it is (``geofrac.meshing.dfn``), and every fracture is then a
+chain of mesh edges.
 
 Rules, applied in this order (each event is recorded in :class:`CleanReport`):
 
@@ -376,25 +377,19 @@ def _parallel_close(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
 def _cluster(points: np.ndarray, kinds: np.ndarray, tol: float) -> np.ndarray:
     """Representative of each point after merging points closer than ``tol``.
 
-    Union-find over close pairs; the representative is the cluster member of lowest
+    Clusters are the connected components of the close pairs
+    (``scipy.sparse.csgraph.connected_components``; boolean weights, so a repeated pair
+    cannot sum to zero); the representative is the cluster member of lowest
     (kind, index). Returns shape=(n,) indices into ``points``.
     """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     n = len(points)
     i, j = box_pairs(np.hstack([points, points]), pad=tol)
     close = np.hypot(*(points[i] - points[j]).T) < tol
-    root = np.arange(n)
-
-    def find(x: int) -> int:
-        while root[x] != x:
-            root[x] = root[root[x]]
-            x = root[x]
-        return int(x)
-
-    for a, b in zip(i[close], j[close], strict=True):
-        ra, rb = find(int(a)), find(int(b))
-        if ra != rb:
-            root[max(ra, rb)] = min(ra, rb)
-    groups = np.array([find(k) for k in range(n)], dtype=np.int64)
+    graph = coo_matrix((np.ones(int(close.sum()), dtype=bool), (i[close], j[close])), (n, n))
+    groups = connected_components(graph.tocsr(), directed=False)[1]  # labels in [0, n)
     order = np.lexsort((np.arange(n), kinds, groups))
     first = np.ones(n, dtype=bool)
     first[1:] = groups[order][1:] != groups[order][:-1]
