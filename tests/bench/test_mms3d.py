@@ -1,4 +1,4 @@
-"""The manufactured 3D study (issue 3): RGNQ converges; JSON contract."""
+"""The manufactured 3D study: RGNQ converges; JSON contract."""
 
 import json
 

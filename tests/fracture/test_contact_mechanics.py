@@ -89,7 +89,7 @@ def slip_stress(beta: float, comm: MPI.Comm = MPI.COMM_SELF) -> float:
     return rows[0]["reaction"] / (W * THICKNESS)
 
 
-#: Known failure, issue open: the slip criterion judges each pair on its faces' stress (the
+#: Known failure, not fixed: the slip criterion judges each pair on its faces' stress (the
 #: mean of the two cells' MLS stresses), which along the joint runs 2-5 % above the uniform
 #: field and up to 19 % at the specimen's sides: the MLS cells and the elements next to them
 #: are not conforming (a bonded horizontal joint already moves the element stresses beside

@@ -1,4 +1,4 @@
-"""Geometry files are data (issue 25).
+"""Geometry files are data from possibly untrusted users.
 
 The .geo scanner, time limits, parameter bounds, overlapping groups and never-empty
 meshing errors.
