@@ -160,9 +160,11 @@ class Assembler:
         fixed_rows = np.concatenate([ctx.bc_rows, self.pinned_dofs])
         fixed_nodes = np.concatenate([ctx.bc_row_nodes, self.pinned_nodes])
         terms = None if self.contact is None else self.contact.pairs.constraint_terms()
+        moving = touched.copy()
+        moving[self.fragment_nodes] = False  # held: they support what they touch
         pinned: list[tuple[int, int]] = []
         for label in anchored:
-            members = np.flatnonzero(touched & (labels == label))
+            members = np.flatnonzero(moving & (labels == label))
             if not len(members):
                 continue  # no cell left to move
             ids, local = np.unique(pieces[members], return_inverse=True)
@@ -177,7 +179,7 @@ class Assembler:
             )
             if terms is not None and len(ids) > 1:
                 rows, nodes, comps, weights = terms
-                keep = piece_of[nodes] >= 0  # held nodes do not move: their terms drop
+                keep = piece_of[nodes] >= 0  # nodes that do not move: their terms drop
                 n = nodes[keep]
                 pairs = motion_rows(
                     xy[n],
