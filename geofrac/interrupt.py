@@ -21,7 +21,7 @@ from types import FrameType
 
 from geofrac.errors import RunError
 
-__all__ = ["REPEAT_S", "Interrupted", "install", "received", "reset", "uninstall"]
+__all__ = ["REPEAT_S", "Interrupted", "install", "reassert", "received", "reset", "uninstall"]
 
 _SIGNALS = (signal.SIGTERM, signal.SIGINT)
 #: Seconds after a signal during which the same signal again is taken as a duplicate.
@@ -65,6 +65,17 @@ def install() -> None:
     for s in _SIGNALS:
         if s not in _previous:
             _previous[s] = signal.signal(s, _handler)
+
+
+def reassert() -> None:
+    """Install the handlers again at the OS level, if :func:`install` installed them.
+
+    ``gmsh.initialize`` resets SIGTERM and SIGINT to their default actions in C, while
+    Python still reports its own handlers: a signal after meshing would kill the run
+    without a checkpoint. Call this after gmsh starts and after it stops.
+    """
+    for s in _previous:
+        signal.signal(s, _handler)
 
 
 def uninstall() -> None:

@@ -51,3 +51,30 @@ def test_a_repeated_signal_takes_the_default_action():
     )
     assert proc.returncode == -signal.SIGTERM, proc.stderr
     assert "survived" not in proc.stdout
+
+
+GMSH_CHILD = """
+import os, signal
+from geofrac import interrupt
+from geofrac.meshing.geo import gmsh_session
+interrupt.install()
+with gmsh_session(None, {}) as gmsh:
+    os.kill(os.getpid(), signal.SIGTERM)  # while gmsh runs (a DFN scene meshes in-process)
+os.kill(os.getpid(), signal.SIGINT)  # after it
+assert interrupt._received == [signal.SIGTERM, signal.SIGINT], interrupt._received
+print("survived")
+"""
+
+
+def test_signals_still_stop_cleanly_during_and_after_gmsh():
+    """gmsh.initialize resets SIGTERM and SIGINT to kill in C: the handlers come back."""
+    proc = subprocess.run(
+        [sys.executable, "-c", GMSH_CHILD],
+        capture_output=True,
+        text=True,
+        env=subprocess_env(),
+        timeout=120,
+        check=False,
+    )
+    assert proc.returncode == 0, (proc.returncode, proc.stderr)
+    assert "survived" in proc.stdout

@@ -22,6 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
+from geofrac import interrupt
+
 __all__ = [
     "GROUPS",
     "DistortedMesh",
@@ -233,6 +235,7 @@ def build_distorted_cantilever(
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     gmsh.initialize(["geofrac", "-nopopup"], readConfigFiles=False)
+    interrupt.reassert()  # gmsh reset SIGTERM/SIGINT to their defaults
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("distorted_cantilever")
@@ -272,6 +275,7 @@ def build_distorted_cantilever(
         gmsh.write(str(path))
     finally:
         gmsh.finalize()
+        interrupt.reassert()
     angles = triangle_angles(written, triangles)
     return DistortedMesh(
         path=path,

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from geofrac import interrupt
 from geofrac.meshing.geo_guard import scan_geo
 
 __all__ = [
@@ -132,6 +133,7 @@ def gmsh_session(
     import gmsh
 
     gmsh.initialize(["geofrac", "-nopopup"], readConfigFiles=False)
+    interrupt.reassert()  # gmsh reset SIGTERM/SIGINT to their defaults
     try:
         gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
         gmsh.logger.start()
@@ -147,6 +149,7 @@ def gmsh_session(
         yield gmsh
     finally:
         gmsh.finalize()
+        interrupt.reassert()
 
 
 def failure_message(exc: BaseException, gmsh: Any = None) -> str:
