@@ -16,6 +16,7 @@ No MPI and no DOLFINx here.
 from __future__ import annotations
 
 import signal
+import threading
 import time
 from types import FrameType
 
@@ -72,8 +73,11 @@ def reassert() -> None:
 
     ``gmsh.initialize`` resets SIGTERM and SIGINT to their default actions in C, while
     Python still reports its own handlers: a signal after meshing would kill the run
-    without a checkpoint. Call this after gmsh starts and after it stops.
+    without a checkpoint. Call this after gmsh starts and after it stops (a no-op outside
+    the main thread, where Python cannot set handlers).
     """
+    if threading.current_thread() is not threading.main_thread():
+        return
     for s in _previous:
         signal.signal(s, _handler)
 
