@@ -40,15 +40,20 @@ print("survived")
 """
 
 
-def test_a_repeated_signal_takes_the_default_action():
-    proc = subprocess.run(
-        [sys.executable, "-c", CHILD],
+def _child(code: str) -> subprocess.CompletedProcess:
+    """Run ``code`` in a fresh Python (its signals do not reach pytest)."""
+    return subprocess.run(
+        [sys.executable, "-c", code],
         capture_output=True,
         text=True,
         env=subprocess_env(),
-        timeout=60,
+        timeout=120,
         check=False,
     )
+
+
+def test_a_repeated_signal_takes_the_default_action():
+    proc = _child(CHILD)
     assert proc.returncode == -signal.SIGTERM, proc.stderr
     assert "survived" not in proc.stdout
 
@@ -68,13 +73,6 @@ print("survived")
 
 def test_signals_still_stop_cleanly_during_and_after_gmsh():
     """gmsh.initialize resets SIGTERM and SIGINT to kill in C: the handlers come back."""
-    proc = subprocess.run(
-        [sys.executable, "-c", GMSH_CHILD],
-        capture_output=True,
-        text=True,
-        env=subprocess_env(),
-        timeout=120,
-        check=False,
-    )
+    proc = _child(GMSH_CHILD)
     assert proc.returncode == 0, (proc.returncode, proc.stderr)
     assert "survived" in proc.stdout
