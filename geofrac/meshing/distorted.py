@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geofrac import interrupt
+from geofrac.meshing.geo import gmsh_session
 
 __all__ = [
     "GROUPS",
@@ -228,16 +228,11 @@ def build_distorted_cantilever(
     Raises:
         ValueError: the target cannot be met (see :func:`distort_to_angle`).
     """
-    import gmsh
-
     nx = round(length / depth * ny)
     h = depth / ny
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    gmsh.initialize(["geofrac", "-nopopup"], readConfigFiles=False)
-    interrupt.reassert()  # gmsh reset SIGTERM/SIGINT to their defaults
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
+    with gmsh_session(None, {}) as gmsh:
         gmsh.model.add("distorted_cantilever")
         geo = gmsh.model.geo
         corners = [
@@ -273,9 +268,6 @@ def build_distorted_cantilever(
         written[index[tags_w]] = coords.reshape(-1, 3)[:, :2]
         gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
         gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
-        interrupt.reassert()
     angles = triangle_angles(written, triangles)
     return DistortedMesh(
         path=path,
