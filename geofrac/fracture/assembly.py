@@ -168,9 +168,10 @@ class Assembler:
             if not len(members):
                 continue  # no cell left to move
             ids, local = np.unique(pieces[members], return_inverse=True)
+            nodes_of = [members[local == i] for i in range(len(ids))]
             piece_of = np.full(len(xy), -1, dtype=np.int64)
             piece_of[members] = local
-            centres = np.array([xy[members[local == i]].mean(axis=0) for i in range(len(ids))])
+            centres = np.array([xy[m].mean(axis=0) for m in nodes_of])
             scale = max(1.0, float(np.abs(xy[members] - centres[local]).max()))
             on = piece_of[fixed_nodes] >= 0
             n = fixed_nodes[on]
@@ -192,9 +193,9 @@ class Assembler:
                     weights[keep],
                 )
                 C = np.vstack([C, pairs])
-            candidates = [xy[members[local == i]] for i in range(len(ids))]
+            candidates = [xy[m] for m in nodes_of]
             for i, node, comp in motion_pins(C, units.rotation, candidates, centres, scale):
-                pinned.append((int(members[local == i][node]), comp))
+                pinned.append((int(nodes_of[i][node]), comp))
         return pinned
 
     def hold_zero_energy_modes(self) -> bool:

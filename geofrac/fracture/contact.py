@@ -190,6 +190,13 @@ def pair_operator(
     return PairOperator(unique, np.bincount(inverse, weights=w, minlength=q), resolve @ D @ B)
 
 
+def _jump_row(op: PairOperator, direction: np.ndarray) -> np.ndarray:
+    """The faces' jump along ``direction`` as a row on (u_x, u_y) of ``op.nodes``, shape=(2q,)."""
+    row = np.empty(2 * len(op.nodes))
+    row[0::2], row[1::2] = op.weights * direction[0], op.weights * direction[1]
+    return row
+
+
 class FacePairs:
     """Face pairs of the cracked interior edges: operators, states, tractions (replicated).
 
@@ -438,12 +445,7 @@ class FacePairs:
         st = int(self.state[edge])
         if op is None or st not in (STICK, SLIP):
             return None
-        q = len(op.nodes)
-        Bn = np.zeros(2 * q)
-        Bt = np.zeros(2 * q)
-        n, t = self.normal[edge], self.tangent[edge]
-        Bn[0::2], Bn[1::2] = op.weights * n[0], op.weights * n[1]
-        Bt[0::2], Bt[1::2] = op.weights * t[0], op.weights * t[1]
+        Bn, Bt = _jump_row(op, self.normal[edge]), _jump_row(op, self.tangent[edge])
         if st == STICK:
             K = np.outer(Bn, Bn) + np.outer(Bt, Bt)
         else:
@@ -479,7 +481,7 @@ class FacePairs:
                 rows += [r] * (2 * q)
                 nodes += np.repeat(op.nodes, 2).tolist()
                 comps += [0, 1] * q
-                weights += np.column_stack([op.weights * d[0], op.weights * d[1]]).ravel().tolist()
+                weights += _jump_row(op, d).tolist()
                 r += 1
         return (
             np.array(rows, dtype=np.int64),
