@@ -9,7 +9,8 @@ y = A₀⁻¹ b₀, and the changed block on the touched DOFs T. Each event cost
 - the dense m×m correction solve (m = |T|, replicated);
 - one solve with the factor, x = y + A₀⁻¹ E g (E g handed to MUMPS as a sparse right-hand
   side, :func:`geofrac.solvers.mumps_sparse_solve`), and a residual check against the current
-  system ‖b − A x‖ ≤ :data:`MAX_RESIDUAL` ‖b‖ (with iterative refinement when needed).
+  system ‖b − A x‖ ≤ max(:data:`MAX_RESIDUAL`, 2 ρ₀) ‖b‖, ρ₀ the reference solution's own
+  relative residual (with iterative refinement when needed).
 
 The solver is *stale* (the driver then assembles and factorises afresh) when T would
 exceed its capacity, when a change touches a DOF held at the reference (held DOFs may
@@ -40,7 +41,11 @@ __all__ = [
     "Stale",
 ]
 
-#: Largest relative residual of a corrected solution; above it the solver is stale.
+#: Largest relative residual of a corrected solution; above it the solver is stale. On an
+#: ill-conditioned reference whose own solution misses it (relative residual ρ₀ > 1e-10:
+#: near-null modes of small element islands), a corrected solution within 2 ρ₀ passes:
+#: a fresh factorisation of a system so close to the reference reaches no better, and
+#: refusing it would refactorise at every event for nothing.
 MAX_RESIDUAL = 1e-10
 
 #: A corrected solution with a larger relative residual is refined (or above twice the
@@ -208,7 +213,8 @@ class IncrementalSolver:
         refinement stops early at twice the reference solution's own relative residual
         (on an ill-conditioned system MUMPS's solves have a floor above
         :data:`REFINE_ABOVE`, and steps below it only repeat two solves) and when a step
-        does not reduce the residual. The acceptance test stays :data:`MAX_RESIDUAL`.
+        does not reduce the residual. The solution is accepted within :data:`MAX_RESIDUAL`,
+        or within twice the reference solution's own residual when that is larger.
 
         Raises:
             Stale: the corrected system is singular or misses the residual check.
@@ -224,6 +230,7 @@ class IncrementalSolver:
         except np.linalg.LinAlgError as exc:
             raise Stale("singular", f"the changed system is singular ({exc})") from None
         target2 = max(REFINE_ABOVE**2, 4.0 * self.floor2) * b2
+        accept2 = max(MAX_RESIDUAL**2, 4.0 * self.floor2) * b2
         e, w, last = self.b.duplicate(), self.b.duplicate(), self.b.duplicate()
         try:
             self._solve_with(g, x)
@@ -254,7 +261,7 @@ class IncrementalSolver:
         finally:
             for vec in (e, w, last):
                 vec.destroy()
-        if not r2 <= MAX_RESIDUAL**2 * b2:
+        if not r2 <= accept2:
             raise Stale("residual", f"relative residual {np.sqrt(r2 / b2):.1e}")
         return u
 

@@ -7,7 +7,7 @@ import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from geofrac.fracture.incremental import MAX_RESIDUAL, Gather, IncrementalSolver
+from geofrac.fracture.incremental import MAX_RESIDUAL, Gather, IncrementalSolver, Stale
 from geofrac.solvers import LinearSolver
 from tests.petsc_matrices import aij_from_dense
 
@@ -96,6 +96,72 @@ def test_refinement_step_that_does_not_help_is_undone(monkeypatch):
         r = b - A1 @ u
         assert np.linalg.norm(r) == pytest.approx(spoil, rel=1e-3)
         assert np.linalg.norm(r) <= MAX_RESIDUAL * np.linalg.norm(b)
+    finally:
+        inc.destroy()
+        x.destroy()
+
+
+def _weakly_held_chain(ground: float = 1e-6) -> np.ndarray:
+    """A chain held by one weak spring at its end: condition number ~1.6e8 for 1e-6."""
+    A = 2.0 * np.eye(N) - np.eye(N, k=1) - np.eye(N, k=-1)
+    A[0, 0], A[-1, -1] = 1.0 + ground, 1.0
+    return A
+
+
+def test_ill_conditioned_reference_accepts_corrections_as_accurate_as_a_fresh_solve():
+    """A corrected solution as accurate as a fresh factorisation passes.
+
+    On an ill-conditioned reference the factorisation's own residual ρ₀ exceeds
+    MAX_RESIDUAL; refusing such corrections refactorised at every event, to no better
+    residual. One spoiled to ten times ρ₀ is still refused (the next test).
+    """
+    A, b = _weakly_held_chain(), np.linspace(-1.0, 2.0, N)
+    dofs, k = _change()
+    A1 = A.copy()
+    A1[np.ix_(dofs, dofs)] += k
+    fresh, xf = _solver(MPI.COMM_SELF, A1, b)
+    fresh_residual = np.linalg.norm(b - A1 @ fresh.y) / np.linalg.norm(b)
+    fresh.destroy()
+    xf.destroy()
+    assert fresh_residual > MAX_RESIDUAL  # the case this is about
+    inc, x = _solver(MPI.COMM_SELF, A, b)
+    try:
+        floor = np.sqrt(inc.floor2)
+        assert floor > MAX_RESIDUAL
+        inc.apply([(dofs, k)], np.zeros(0, dtype=np.int64), np.zeros(0))
+        u = inc.solve(x)
+        residual = np.linalg.norm(b - A1 @ u) / np.linalg.norm(b)
+        assert residual <= 2.0 * floor
+        assert residual <= 4.0 * fresh_residual
+        # the solution itself: as close to the exact one as the fresh solve is
+        exact = np.linalg.solve(A1, b)
+        err = np.linalg.norm(u - exact) / np.linalg.norm(exact)
+        assert err < 1e-6
+    finally:
+        inc.destroy()
+        x.destroy()
+
+
+def test_ill_conditioned_reference_still_refuses_a_spoiled_correction(monkeypatch):
+    A, b = _weakly_held_chain(), np.linspace(-1.0, 2.0, N)
+    inc, x = _solver(MPI.COMM_SELF, A, b)
+    try:
+        dofs, k = _change()
+        inc.apply([(dofs, k)], np.zeros(0, dtype=np.int64), np.zeros(0))
+        lu = inc.update
+        exact_correction = lu.correction
+        spoil = 10.0 * np.sqrt(inc.floor2) * np.linalg.norm(b)
+
+        def correction(y_t, atol=0.0, steps=3):
+            g = exact_correction(y_t, atol, steps)
+            g[0] += spoil / np.linalg.norm((np.eye(lu.m) + lu.dC @ lu.S)[:, 0])
+            return g
+
+        monkeypatch.setattr(lu, "correction", correction)
+        monkeypatch.setattr(lu, "homogeneous_correction", lambda w_t: np.zeros(len(w_t)))
+        with pytest.raises(Stale) as info:
+            inc.solve(x)
+        assert info.value.kind == "residual"
     finally:
         inc.destroy()
         x.destroy()
