@@ -797,8 +797,9 @@ def validate_cells(
         ``blocks`` (total), ``checked``, ``large_exact`` (blocks of more than
         :data:`LARGE_BLOCK_FACES` faces, checked by :func:`self_intersections` instead of
         VTK; with :func:`check_closed`, :func:`face_planarity` and a positive volume in
-        :func:`summarize`), ``valid`` (state 0), ``failed`` (any failure bit),
-        ``non_convex`` (informational), ``states`` (name -> count of checked cells with that
+        :func:`summarize`), ``passed`` and ``failed`` (any failure bit; ``checked`` =
+        ``passed`` + ``failed``), ``no_flags`` (VTK set no bit at all, not even the
+        informational NON_CONVEX: most blocks pass with NON_CONVEX set), ``non_convex``, ``states`` (name -> count of checked cells with that
         bit, for every ``pyvista.CellStatus`` but VALID), ``failed_blocks`` (indices of up
         to 20 failed blocks), ``seconds``.
     """
@@ -867,8 +868,9 @@ def _validate(
         "blocks": n,
         "checked": len(which) + len(large),
         "large_exact": len(large),
-        "valid": int(np.count_nonzero(state == 0)),
+        "passed": len(which) + len(large) - int(np.count_nonzero(failed)) - len(large_failed),
         "failed": int(np.count_nonzero(failed)) + len(large_failed),
+        "no_flags": int(np.count_nonzero(state == 0)),
         "non_convex": states["NON_CONVEX"],
         "inverted_faces_non_convex": int(np.count_nonzero(((state & inverted) != 0) & ~convex)),
         "intersecting_faces_cleared": cleared,

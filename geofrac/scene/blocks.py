@@ -177,5 +177,7 @@ def blocks_output(
     """
     t = Table(file, "output", raw, BLOCKS_OUTPUT_KEYS)
     directory = output_directory(t, name, out, trusted)
-    fields = tuple(k for k in ("vtu", "block_file", "histogram") if t.boolean(k, True))
+    # the plain block file is for DEM/DDA codes and large (555 MB for 100k blocks): asked for
+    defaults = {"vtu": True, "block_file": False, "histogram": True}
+    fields = tuple(k for k, default in defaults.items() if t.boolean(k, default))
     return Output(directory, fields, "vtu" in fields, {})

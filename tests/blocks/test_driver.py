@@ -25,7 +25,9 @@ def _run(tmp_path, job, overrides, comm=MPI.COMM_SELF):
 
 
 def test_square_blocks_scene_writes_what_it_says(tmp_path):
-    summary, out = _run(tmp_path, "blocks_square.toml", ["geometry.parameters.h=0.2"])
+    summary, out = _run(
+        tmp_path, "blocks_square.toml", ["geometry.parameters.h=0.2", "output.block_file=true"]
+    )
     q = summary["results"]["quality"]
     assert summary["status"] == "ok"
     assert abs(q["volume_rel_error"]) < 1e-12 and q["invalid_blocks"] == 0

@@ -39,9 +39,30 @@ def test_vtu_header_is_raw_appended_uint64(tmp_path, dual3d):
     assert b'<AppendedData encoding="raw">' in path.read_bytes()
 
 
-def test_vtu_polyhedra_read_back(tmp_path, dual3d):
+def test_vtu_compressed_by_default_and_plain_on_request(tmp_path, dual3d):
+    """zlib by default (VTK reads it back: the next test); plain data is larger."""
+    packed = io.write_vtu(tmp_path / "z.vtu", dual3d)
+    plain = io.write_vtu(tmp_path / "p.vtu", dual3d, compress=False)
+    assert b'compressor="vtkZLibDataCompressor"' in packed.read_bytes()[:400]
+    assert b"compressor" not in plain.read_bytes()[:400]
+    assert packed.stat().st_size < 0.7 * plain.stat().st_size
+    a, b = pv.read(packed), pv.read(plain)
+    np.testing.assert_array_equal(a.points, b.points)
+    np.testing.assert_array_equal(a.cell_connectivity, b.cell_connectivity)
+    np.testing.assert_array_equal(a.cell_data["id"], b.cell_data["id"])
+
+
+@pytest.mark.parametrize("compress", [True, False, "small_blocks"], ids=["zlib", "plain", "z64"])
+def test_vtu_polyhedra_read_back(tmp_path, dual3d, compress, monkeypatch):
+    if compress == "small_blocks":  # many zlib blocks per array, a short last one
+        monkeypatch.setattr(io, "ZLIB_BLOCK", 72)
     vol = q.block_volumes(dual3d)
-    path = io.write_vtu(tmp_path / "b.vtu", dual3d, {"volume": vol, "big": vol > vol.mean()})
+    path = io.write_vtu(
+        tmp_path / "b.vtu",
+        dual3d,
+        {"volume": vol, "big": vol > vol.mean()},
+        compress=bool(compress),
+    )
     grid = pv.read(path)
     assert grid.n_cells == dual3d.num_blocks
     assert set(np.unique(grid.celltypes)) == {pv.CellType.POLYHEDRON}
