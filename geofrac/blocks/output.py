@@ -12,12 +12,13 @@ VTU (``write_vtu``, ``write_pvtu``)
     (type 42) in the legacy face layout: the ``<Cells>`` section holds ``connectivity``
     (each block's own distinct points), ``offsets``, ``types``, ``faces`` (per block:
     number of faces, then per face its number of points and point ids) and
-    ``faceoffsets`` (end of each block's entry in ``faces``). ParaView 5.11-5.13 (VTK 9.2-9.3) read only this layout; VTK >= 9.4 (and
-    ParaView 6) still read it and write the newer ``face_connectivity`` /
-    ``face_offsets`` / ``polyhedron_to_faces`` / ``polyhedron_offsets`` arrays with
-    version 2.3, which older readers reject. 2D blocks are ``VTK_POLYGON`` cells (type
-    7), points padded with z = 0. Cell data: ``id`` and ``kind`` of every block, plus the
-    caller's arrays. Only the points the blocks' faces use are written.
+    ``faceoffsets`` (end of each block's entry in ``faces``). ParaView 5.11-5.13 (VTK
+    9.2-9.3) read only this layout; VTK >= 9.4 (and ParaView 6) still read it and write
+    the newer ``face_connectivity`` / ``face_offsets`` / ``polyhedron_to_faces`` /
+    ``polyhedron_offsets`` arrays with version 2.3, which older readers reject. 2D
+    blocks are ``VTK_POLYGON`` cells (type 7), points padded with z = 0. Cell data:
+    ``id`` and ``kind`` of every block, plus the caller's arrays. Only the points the
+    blocks' faces use are written.
 
 Block file (``write_block_file``, ``read_block_file``)
     ASCII, whitespace-separated, one record per line, indices 0-based::

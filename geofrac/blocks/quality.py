@@ -799,9 +799,10 @@ def validate_cells(
         VTK; with :func:`check_closed`, :func:`face_planarity` and a positive volume in
         :func:`summarize`), ``passed`` and ``failed`` (any failure bit; ``checked`` =
         ``passed`` + ``failed``), ``no_flags`` (VTK set no bit at all, not even the
-        informational NON_CONVEX: most blocks pass with NON_CONVEX set), ``non_convex``, ``states`` (name -> count of checked cells with that
-        bit, for every ``pyvista.CellStatus`` but VALID), ``failed_blocks`` (indices of up
-        to 20 failed blocks), ``seconds``.
+        informational NON_CONVEX: most blocks pass with NON_CONVEX set), ``non_convex``,
+        ``states`` (name -> count of checked cells with that bit, for every
+        ``pyvista.CellStatus`` but VALID), ``failed_blocks`` (indices of up to 20 failed
+        blocks), ``seconds``.
     """
     report, failed = _validate(blocks, sample, seed, planarity_tolerance, progress)
     report["failed_blocks"] = [int(b) for b in failed[:20]]

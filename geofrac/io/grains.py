@@ -45,7 +45,7 @@ import h5py
 import numpy as np
 import pyvista as pv
 
-from geofrac.io.series import hdf_item, write_xml
+from geofrac.io.series import hdf_item, hdf_put, write_xml
 
 __all__ = ["XDMF_POLYGON", "Grains", "grain_polygons", "write_grains"]
 
@@ -251,10 +251,10 @@ def _write_xdmf(xdmf: Path, h5: Path, xyz: np.ndarray, grains: Grains, arrays: d
     body[head] = body[head + 1] = False
     stream[body] = grains.connectivity
     with h5py.File(h5, "w") as f:
-        f["geometry"] = xyz
-        f["topology"] = stream
+        hdf_put(f, "geometry", xyz)
+        hdf_put(f, "topology", stream)
         for name, values in arrays.items():
-            f[f"cell_data/{name}"] = values
+            hdf_put(f, f"cell_data/{name}", values)
     root = ET.Element("Xdmf", Version="3.0")
     grid = ET.SubElement(ET.SubElement(root, "Domain"), "Grid", Name=xdmf.stem, GridType="Uniform")
     top = ET.SubElement(

@@ -16,7 +16,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from geofrac.io.series import hdf_item, kept_steps, temporal_collection, write_xml
+from geofrac.io.series import hdf_item, hdf_put, kept_steps, temporal_collection, write_xml
 
 __all__ = ["PointSeries"]
 
@@ -36,7 +36,7 @@ class PointSeries:
         self.h5 = self.path.with_suffix(".h5")
         self.count = int(count)
         with h5py.File(self.h5, "w") as f:
-            f["topology"] = np.arange(self.count, dtype=np.int64)
+            hdf_put(f, "topology", np.arange(self.count, dtype=np.int64))
         self.frames: list[tuple[float, list[tuple[str, int]]]] = []
 
     def write(self, t: float, x: np.ndarray, fields: dict[str, np.ndarray]) -> None:
@@ -53,14 +53,14 @@ class PointSeries:
         with h5py.File(self.h5, "a") as f:
             xyz = np.zeros((self.count, 3))
             xyz[:, : x.shape[1]] = x
-            f[f"frame_{i}/geometry"] = xyz
+            hdf_put(f, f"frame_{i}/geometry", xyz)
             for name, given in fields.items():
                 values = np.asarray(given, dtype=float).reshape(self.count, -1)
                 if values.shape[1] in (1, 2):
                     values = values if given.ndim == 1 else _pad(values)
                 if values.shape[1] not in _KIND:
                     raise ValueError(f"field {name!r}: {values.shape[1]} components")
-                f[f"frame_{i}/{name}"] = values if values.shape[1] > 1 else values[:, 0]
+                hdf_put(f, f"frame_{i}/{name}", values if values.shape[1] > 1 else values[:, 0])
                 kinds.append((name, values.shape[1]))
             # the time last: a frame with a time is complete (reopen drops any other)
             f[f"frame_{i}"].attrs["fields"] = ",".join(name for name, _ in kinds)

@@ -40,7 +40,7 @@ def test_vtu_header_is_raw_appended_uint64(tmp_path, dual3d):
 
 
 def test_vtu_compressed_by_default_and_plain_on_request(tmp_path, dual3d):
-    """zlib by default (VTK reads it back: the next test); plain data is larger."""
+    """Compressed by default (VTK reads it back: the next test); plain data is larger."""
     packed = io.write_vtu(tmp_path / "z.vtu", dual3d)
     plain = io.write_vtu(tmp_path / "p.vtu", dual3d, compress=False)
     assert b'compressor="vtkZLibDataCompressor"' in packed.read_bytes()[:400]

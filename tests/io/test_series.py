@@ -97,3 +97,13 @@ def test_xml_temporary_files_are_unique_and_removed_on_error(tmp_path, monkeypat
         series_module.write_xml(ET.Element("Xdmf"), path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.h5", "a.xdmf"]
     assert times(path) == [1.0, 2.0]  # the old file is intact
+
+
+def test_series_data_are_gzip_compressed_and_read_back(tmp_path):
+    """The steps are stored compressed (large crack series) and VTK still reads them."""
+    write_steps(tmp_path / "s.xdmf", [1.0])
+    with h5py.File(tmp_path / "s.h5") as f:
+        assert f["step_0/u"].compression == "gzip" and f["mesh/topology"].compression == "gzip"
+    grid = read(tmp_path / "s.xdmf", 1.0)
+    np.testing.assert_array_equal(grid.point_data["u"][:, :2], np.full((4, 2), 1.0))
+    np.testing.assert_array_equal(grid.cell_data["crack"], [1.0, -1.0])
