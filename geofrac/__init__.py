@@ -8,6 +8,10 @@ Under a multi-rank ``mpiexec`` every rank already has a core, so importing geofr
 before numpy sets ``OPENBLAS_NUM_THREADS`` and ``OMP_NUM_THREADS`` to 1 unless the user
 set them: threaded BLAS in each rank oversubscribes the cores (the crack driver's dense
 updates ran 2-3 times slower with 2 ranks × 2 threads on 2 cores).
+
+It also imports ``h5py`` before any DOLFINx or PETSc library loads: the PETSc wheel
+brings an HDF5 of its own, and an h5py imported after it finds no deflate filter, so
+the compressed output series could not be written (checked by tests/io/test_series.py).
 """
 
 import os
@@ -27,6 +31,8 @@ def _single_threaded_blas_under_mpi() -> None:
 
 
 _single_threaded_blas_under_mpi()
+
+import h5py  # noqa: E402, F401  (before the PETSc wheel's HDF5: see the module docstring)
 
 try:
     __version__ = version("geofrac")

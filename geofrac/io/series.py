@@ -40,10 +40,12 @@ def hdf_put(group: h5py.Group, name: str, values: np.ndarray) -> None:
     """Store ``values`` as dataset ``name``, gzip-compressed with byte shuffling.
 
     HDF5's deflate filter is built into every HDF5 library, so ParaView's XDMF reader,
-    h5py and meshio read the data unchanged; empty arrays are stored plain.
+    h5py and meshio read the data unchanged; empty arrays are stored plain, and so is
+    everything if this h5py has no deflate filter (see :mod:`geofrac`: h5py must be
+    imported before the PETSc wheel's HDF5).
     """
     values = np.asarray(values)
-    if values.size == 0:
+    if values.size == 0 or not h5py.h5z.filter_avail(h5py.h5z.FILTER_DEFLATE):
         group[name] = values
         return
     group.create_dataset(

@@ -107,3 +107,22 @@ def test_series_data_are_gzip_compressed_and_read_back(tmp_path):
     grid = read(tmp_path / "s.xdmf", 1.0)
     np.testing.assert_array_equal(grid.point_data["u"][:, :2], np.full((4, 2), 1.0))
     np.testing.assert_array_equal(grid.cell_data["crack"], [1.0, -1.0])
+
+
+def test_compression_survives_the_fem_stack_import_order():
+    """h5py keeps its deflate filter in a process that imports as the CLI does.
+
+    geofrac, then DOLFINx/PETSc, then the writers: imported after the PETSc wheel's
+    HDF5, h5py had no deflate filter, and every crack run failed to write its series.
+    """
+    import subprocess
+    import sys
+
+    code = (
+        "import geofrac\n"
+        "from geofrac.pipeline import get\n"
+        "get('fem')\n"
+        "import h5py\n"
+        "assert h5py.h5z.filter_avail(h5py.h5z.FILTER_DEFLATE)\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120)
