@@ -52,12 +52,14 @@ class Progress:
         comm: communicator whose rank 0 prints (``None`` prints always).
         total: number of steps.
         label: prefix of every line.
+        unit: what a step is, for the rate (``cases`` gives "cases/s").
     """
 
-    def __init__(self, comm: _Comm | None, total: int, label: str) -> None:
+    def __init__(self, comm: _Comm | None, total: int, label: str, unit: str = "steps") -> None:
         self.comm = comm
         self.total = total
         self.label = label
+        self.unit = unit
         self.done = 0
         self.start = time.perf_counter()
 
@@ -70,6 +72,6 @@ class Progress:
         echo(
             self.comm,
             f"{self.label} [{self.done}/{self.total}] {what}  "
-            f"({rate:.2f} steps/s, elapsed {format_seconds(elapsed)}, "
+            f"({rate:.2f} {self.unit}/s, elapsed {format_seconds(elapsed)}, "
             f"left ~{format_seconds(left)})",
         )

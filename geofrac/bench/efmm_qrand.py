@@ -114,7 +114,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         for q in args.q_rand
         for seed in (range(1) if q == 0 else range(args.seeds))
     ]
-    progress = Progress(comm, len(cases), "bench efmm-qrand")
+    progress = Progress(comm, len(cases), "bench efmm-qrand", unit="solves")
     records = []
     for ny, q, seed in cases:
         overrides = [

@@ -304,7 +304,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     cases = [(e, "angle", t, ANGLE_SWEEP_NU, "stress") for e in elements for t in targets]
     cases += [(e, "nu", t, nu, "strain") for e in elements for t in nu_meshes for nu in nus]
     cases.sort(key=lambda c: elements.index(c[0]))
-    progress = Progress(comm, len(cases), "bench stability")
+    progress = Progress(comm, len(cases), "bench stability", unit="cases")
     records = []
     for element, sweep, target, nu, plane in cases:
         mesh = meshes[target]

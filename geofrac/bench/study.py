@@ -224,7 +224,7 @@ def run_study(
         raise SceneError("--repeat", "", f"must be >= 1, got {args.repeat}")
     if not 0 < args.target < 1:
         raise SceneError("--target", "", f"must be in (0, 1), got {args.target}")
-    progress = Progress(comm, len(cases), f"bench {name}")
+    progress = Progress(comm, len(cases), f"bench {name}", unit="cases")
     records = []
     for case in cases:
         overrides = [*case.overrides, "output.probes={}", *args.overrides]

@@ -178,7 +178,7 @@ def _validate(scene: Scene, blocks: Blocks, comm: MPI.Comm) -> dict[str, Any] | 
 
     def progress(done: int, chunks: int) -> None:  # rank 0's share, printed by rank 0
         nonlocal ticker
-        ticker = ticker or Progress(comm, chunks, "validator (rank 0)")
+        ticker = ticker or Progress(comm, chunks, "validator (rank 0)", unit="chunks")
         ticker.step(f"{min(done * 2000, blocks.num_blocks)} blocks")
 
     mine = quality.validate_cells(blocks, sample=sample, seed=spec.seed, progress=progress)
