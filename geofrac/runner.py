@@ -305,7 +305,15 @@ def _write_lines(solution: Solution, comm: MPI.Comm) -> dict[str, Any]:
     scene = solution.scene
     return {
         name: write_line(
-            scene.output.dir, scene.name, name, scene.output.lines[name], s, xyz, values, comm
+            scene.output.dir,
+            scene.name,
+            name,
+            scene.output.lines[name],
+            s,
+            xyz,
+            values,
+            comm,
+            scene.units,
         )
         for name, (s, xyz, values) in solution.lines.items()
     }

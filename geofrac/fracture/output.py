@@ -368,8 +368,9 @@ class EventOutput:
         d = [0.0] + [r["control_displacement"] for r in rows]  # from the unloaded state
         ax.plot(d, [0.0] + [r["reaction"] for r in rows], lw=0.8, marker=".", ms=2)
         ax.xaxis.set_major_locator(MaxNLocator(6))
-        ax.set_xlabel(f"control displacement ({self.ctx.config.control})")
-        ax.set_ylabel("reaction on the control DOFs")
+        units = self.ctx.scene.units
+        ax.set_xlabel(f"control displacement, {self.ctx.config.control} ({units.length})")
+        ax.set_ylabel(f"reaction on the control DOFs ({units.force})")
         ax.set_title(f"{self.ctx.scene.name}: load against displacement, {len(rows)} events")
         fig.tight_layout()
         fig.savefig(self.out_dir / "load_displacement.png", dpi=90)
@@ -419,8 +420,8 @@ class EventOutput:
         ax.set_xlim(x0 - pad, x1 + pad)
         ax.set_ylim(y0 - pad, y1 + pad)
         ax.set_aspect("equal")
-        ax.set_xlabel("x")
-        ax.set_ylabel("y")
+        ax.set_xlabel(f"x ({self.ctx.scene.units.length})")
+        ax.set_ylabel(f"y ({self.ctx.scene.units.length})")
         ax.set_title(
             f"{self.ctx.scene.name}: {int(new.sum())} new cracked edges after {events} events",
             fontsize=10,

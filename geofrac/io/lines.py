@@ -18,7 +18,7 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.model.fields import field_columns
-from geofrac.model.scene import Line
+from geofrac.model.scene import Line, Units
 
 __all__ = ["DIRECTORY", "columns", "sample_points", "write_line"]
 
@@ -54,6 +54,7 @@ def write_line(
     xyz: np.ndarray,
     values: dict[str, np.ndarray],
     comm: MPI.Comm,
+    units: Units | None = None,
 ) -> dict[str, object]:
     """Write ``directory/lines/<name>.csv`` and ``.png`` (rank 0; collective errors).
 
@@ -66,6 +67,7 @@ def write_line(
         xyz: sample coordinates, shape=(points, 3).
         values: field -> values, shape=(points, components) (every field of the line).
         comm: the communicator.
+        units: the scene's units, for the plot's axes (default SI).
 
     Returns:
         the summary entry: ``csv``, ``png`` (paths relative to the output directory),
@@ -85,7 +87,15 @@ def write_line(
                 writer = csv.writer(handle)
                 writer.writerow(columns(line.fields, gdim))
                 writer.writerows([repr(float(v)) for v in row] for row in table)
-            _plot(folder / f"{name}.png", f"{title}: line {name}", line, s, values, gdim)
+            _plot(
+                folder / f"{name}.png",
+                f"{title}: line {name}",
+                line,
+                s,
+                values,
+                gdim,
+                units or Units(),
+            )
         except OSError as exc:
             error = f"output.lines.{name}: cannot write {folder}: {exc}"
     error = comm.bcast(error, root=0)
@@ -102,7 +112,13 @@ def write_line(
 
 
 def _plot(
-    path: Path, title: str, line: Line, s: np.ndarray, values: dict[str, np.ndarray], gdim: int
+    path: Path,
+    title: str,
+    line: Line,
+    s: np.ndarray,
+    values: dict[str, np.ndarray],
+    gdim: int,
+    units: Units,
 ) -> None:
     """One panel per field against s; legends outside the axes, so no curve is hidden."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -115,12 +131,21 @@ def _plot(
     for ax, field in zip(axes, line.fields, strict=True):
         for k, label in enumerate(field_columns(field, gdim)):
             ax.plot(s, values[field][:, k], label=label, marker="." if len(s) <= 30 else None)
-        ax.set_ylabel(field.replace("_", " "))
+        ax.set_ylabel(f"{field.replace('_', ' ')} ({_unit_of(field, units)})")
         ax.grid(True, alpha=0.3)
         ax.ticklabel_format(axis="y", useOffset=False)
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
     start = ", ".join(f"{c:g}" for c in line.start)
     end = ", ".join(f"{c:g}" for c in line.end)
-    axes[-1].set_xlabel(f"s: distance from ({start}) towards ({end})")
+    axes[-1].set_xlabel(f"s ({units.length}): distance from ({start}) towards ({end})")
     fig.suptitle(title)
     fig.savefig(path, dpi=110)
+
+
+def _unit_of(field: str, units: Units) -> str:
+    """The unit of a sampled field: displacement a length, stress a stress, strain none."""
+    if field.startswith("displacement"):
+        return units.length
+    if field.startswith(("stress", "von_mises")):
+        return units.stress
+    return "-"

@@ -27,6 +27,7 @@ __all__ = [
     "ParticleSource",
     "Scene",
     "Solver",
+    "Units",
 ]
 
 #: Scene schema version this code reads.
@@ -208,6 +209,26 @@ class Line:
     end: tuple[float, ...]
     points: int = 101
     fields: tuple[str, ...] = ("displacement",)
+
+
+@dataclass(frozen=True)
+class Units:
+    """The units a scene's numbers are in (``[units]``): labels for pictures only.
+
+    geofrac computes in whatever consistent units a scene uses; these name them on the
+    axes of the PNGs it writes. Default SI.
+
+    Attributes:
+        length: e.g. ``"m"``, ``"mm"``.
+        force: e.g. ``"N"``, ``"kN"``.
+        stress: e.g. ``"Pa"``, ``"MPa"``.
+        time: e.g. ``"s"``.
+    """
+
+    length: str = "m"
+    force: str = "N"
+    stress: str = "Pa"
+    time: str = "s"
 
 
 @dataclass(frozen=True)
@@ -431,6 +452,7 @@ class Scene:
             the size estimate is beyond the caps of :mod:`geofrac.scene.size`.
         size: the :class:`~geofrac.scene.size.SizeEstimate` of the scene's work (None
             only for a scene built by hand).
+        units: the ``[units]`` of the scene's numbers, for the pictures' axes.
     """
 
     path: Path
@@ -454,6 +476,7 @@ class Scene:
     allow_large: bool = False
     size: Any = None
     overrides: tuple[str, ...] = ()
+    units: Units = Units()
 
     @property
     def effect_names(self) -> tuple[str, ...]:

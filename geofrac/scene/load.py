@@ -11,6 +11,7 @@ import dataclasses
 import hashlib
 import json
 import math
+import re
 import tomllib
 from collections.abc import Sequence
 from pathlib import Path
@@ -33,6 +34,7 @@ from geofrac.model.scene import (
     Output,
     Scene,
     Solver,
+    Units,
 )
 from geofrac.model.table import (
     MAX_DEPTH,
@@ -78,11 +80,13 @@ TOP_LEVEL_KEYS = (
     "mpm",
     "blocks",
     "allow_large",
+    "units",
 )
 #: Simulation methods a scene may name (``method``).
 METHODS = ("fem", "mpm", "blocks")
 #: Keys each table accepts (the single source for validation and for docs/scenes.md).
 SECTION_KEYS: dict[str, tuple[str, ...]] = {
+    "units": ("length", "force", "stress", "time"),
     "geometry": ("file", "parameters", "mesh_size", "trusted", "time_limit"),
     "material": (
         "E",
@@ -178,6 +182,28 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str], file: Path) 
 UNMARKED_KEYS = ("description", "output.dir")
 #: Longest override quoted in full in a marked description.
 MAX_OVERRIDE_TEXT = 200
+
+
+#: A unit label: letters, digits and a few signs; no "$" or "\\" (matplotlib would read
+#: them as mathematics), at most 12 characters.
+_UNIT = re.compile(r"[\w ./^·²³µ%()-]{1,12}")
+
+
+def _units(file: Path, raw: Any) -> Units:
+    """``[units]``: the labels of the scene's units on the pictures' axes (default SI)."""
+    t = _Table(file, "units", raw, SECTION_KEYS["units"])
+    default = Units()
+    labels = {}
+    for key in SECTION_KEYS["units"]:
+        value = t.string(key, default=getattr(default, key))
+        if not _UNIT.fullmatch(value):
+            raise t.error(
+                key,
+                f"{short(value)} is not a unit label (letters, digits, . / ^ ² ³ "
+                "µ % ( ) -, at most 12 characters)",
+            )
+        labels[key] = value
+    return Units(**labels)
 
 
 def marked_description(description: str, overrides: Sequence[str]) -> str:
@@ -976,6 +1002,7 @@ def load_scene(
             size=estimate(scene, _extent(scene.geometry)),
             overrides=tuple(overrides),
             description=marked_description(scene.description, overrides),
+            units=_units(file, data.get("units", {})),
         )
         check_size(file, scene.size, ranks, scene.allow_large)
     except SceneError as exc:

@@ -133,3 +133,16 @@ def test_two_driver_owning_effects_are_refused_naming_both(monkeypatch):
     assert "'cracking' and 'twin'" in info.value.message
     scene = load_scene(JOBS / "crack_patch_test.toml")  # one driver: accepted
     assert effects.driven(scene.effects).name == "cracking"
+
+
+def test_units_label_the_pictures_and_refuse_markup():
+    assert load_scene(JOBS / "quickstart.toml").units.length == "m"  # SI by default
+    units = load_scene(JOBS / "notched_beam.toml").units
+    assert (units.length, units.force, units.stress) == ("mm", "N", "MPa")
+    assert load_scene(JOBS / "quickstart.toml", ['units.stress="kN/m²"']).units.stress == "kN/m²"
+    # matplotlib reads $...$ and backslashes as mathematics: not a unit label
+    for bad in ['units.length="$\\\\alpha$"', 'units.length="a_very_long_unit"', "units.force=3"]:
+        with pytest.raises(SceneError, match="units"):
+            load_scene(JOBS / "quickstart.toml", [bad])
+    with pytest.raises(SceneError, match="unknown key"):
+        load_scene(JOBS / "quickstart.toml", ['units.angle="deg"'])
