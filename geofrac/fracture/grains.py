@@ -42,7 +42,7 @@ import numpy as np
 from geofrac.elements.efmm_numpy import Domains
 from geofrac.fracture.state import Mapper, MlsSettings, segment_distance, serial_map
 from geofrac.fracture.topology import EdgeMesh, components
-from geofrac.fracture.visibility import Bins, blocked, orient, visible_nodes
+from geofrac.fracture.visibility import Bins, PointIndex, blocked, orient, visible_nodes
 from geofrac.mls.cmulti import NodeFit, node_fit
 
 __all__ = ["GrainState", "Interfaces", "connected_cracks", "interfaces", "side_sites"]
@@ -212,8 +212,7 @@ class GrainState:
         #: the cracked interfaces' segments: ids 2e and 2e + 1 for edge e.
         self.crack_segments = self.faces.segments.reshape(-1, 2, 2)
         bin_size = 3.0 * float(np.median(lengths))
-        self.node_bins = Bins(bin_size)
-        self.node_bins.add_points(m.coords)
+        self.node_bins = PointIndex(m.coords)
         self.crack_bins = Bins(bin_size)
         self.crackable = ~(self.frozen[m.edges[:, 0]] | self.frozen[m.edges[:, 1]])
         #: incident edges of each node as CSR (offsets, edge ids).

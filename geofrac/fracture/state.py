@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from geofrac.fracture.topology import EdgeMesh, components
-from geofrac.fracture.visibility import Bins, blocked, visible_nodes
+from geofrac.fracture.visibility import Bins, PointIndex, blocked, visible_nodes
 from geofrac.mls.shape import LinearFit, linear_fit
 
 __all__ = ["CrackState", "Mapper", "MlsSettings", "segment_distance", "serial_map"]
@@ -101,8 +101,7 @@ class CrackState:
         lengths = np.hypot(*(seg[:, 1] - seg[:, 0]).T)
         self.cell_size = lengths[m.cell_edges].max(axis=1)  # longest edge per cell
         size = 3.0 * float(np.median(lengths))
-        self.node_bins = Bins(size)
-        self.node_bins.add_points(m.coords)
+        self.node_bins = PointIndex(m.coords)
         self.crack_bins = Bins(size)
         #: edges no cell may crack: those of frozen cells (shape=(num_edges,)).
         self.crackable = np.ones(len(m.edges), dtype=bool)

@@ -4,7 +4,7 @@ import numpy as np
 
 from geofrac.fracture.state import CrackState, MlsSettings
 from geofrac.fracture.topology import edge_mesh
-from geofrac.fracture.visibility import Bins, blocked, visible_nodes
+from geofrac.fracture.visibility import Bins, PointIndex, blocked, visible_nodes
 from tests.fracture.helpers import grid_mesh
 
 
@@ -86,12 +86,10 @@ def test_crack_refits_only_nearby_cells():
 
 def test_visible_nodes_grow_to_target():
     coords, _cells = grid_mesh(10)
-    bins = Bins(2.0)
-    bins.add_points(coords)
     ids, h = visible_nodes(
         np.array([5.2, 5.3]),
         coords,
-        bins,
+        PointIndex(coords),
         Bins(2.0),
         np.zeros((0, 2, 2)),
         start=0.5,
@@ -163,3 +161,14 @@ def test_an_element_cell_held_by_two_nodes_or_a_support_is_not_hinged():
     state, _ = _hinge_state()
     state.frozen[0] = True  # touches a Dirichlet node
     assert not len(state.hinged_cells())
+
+
+def test_point_index_finds_exactly_the_points_in_a_disk():
+    """Against brute force, points on the circle included, nothing beyond the 1e-9 hair."""
+    rng = np.random.default_rng(3)
+    points = np.round(rng.random((2000, 2)) * 10, 1)  # many exact distances
+    index = PointIndex(points)
+    for centre, r in [((5.0, 5.0), 1.0), ((0.0, 0.0), 2.5), ((3.3, 7.1), 0.05)]:
+        d = np.hypot(*(points - centre).T)
+        got = index.query(np.array(centre), r)
+        np.testing.assert_array_equal(got, np.flatnonzero(d <= r * (1 + 1e-9)))
