@@ -67,7 +67,6 @@ def plot_accuracy_cost(
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.ticker import NullFormatter
 
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
     names = list(dict.fromkeys(r[group] for r in records))
@@ -84,19 +83,28 @@ def plot_accuracy_cost(
             )
     axes[0].set_xlabel("wall time, assemble + solve [s]")
     axes[1].set_xlabel("degrees of freedom")
-    for ax in axes:
-        ax.xaxis.set_minor_formatter(NullFormatter())
     save_figure(fig, axes, path, title, "error norm")
 
 
 def save_figure(fig: Any, axes: Sequence[Any], path: Path, title: str, ylabel: str) -> None:
-    """Label, grid and legend every panel, set the title, write ``path`` and close."""
+    """Label, grid and legend every panel, set the title, write ``path`` and close.
+
+    Each legend sits below its panel, so it hides no curve; the figure should use
+    ``constrained_layout`` to make room for it.
+    """
     import matplotlib.pyplot as plt
 
     for ax in axes:
         ax.set_ylabel(ylabel)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+        handles, _ = ax.get_legend_handles_labels()
+        ax.legend(
+            fontsize=8,
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.14),
+            ncol=2 if len(handles) > 3 else 1,
+            frameon=False,
+        )
     fig.suptitle(title)
     fig.savefig(path, dpi=120)
     plt.close(fig)
