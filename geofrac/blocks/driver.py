@@ -312,4 +312,5 @@ def _write(scene: Scene, whole: Blocks, volumes: np.ndarray, verbose: bool = Tru
             volumes[moving],
             bins=scene.blocks.histogram_bins,
             unit=f"{scene.units.length}{'³' if whole.dim == 3 else '²'}",
+            name=scene.name,
         )

@@ -452,6 +452,7 @@ def write_histogram(
     volumes: np.ndarray,
     bins: int | Sequence[float] | str = 30,
     unit: str = "m³",
+    name: str = "",
 ) -> tuple[np.ndarray, np.ndarray]:
     """The block volume histogram as a PNG (frequency against volume) and a CSV.
 
@@ -461,6 +462,7 @@ def write_histogram(
         volumes: block volumes (areas in 2D), shape=(num_blocks,).
         bins: as ``numpy.histogram``.
         unit: volume unit for the axis label.
+        name: the scene's name, for the title.
 
     Returns:
         ``(counts, edges)``: shape=(num_bins,) and shape=(num_bins + 1,).
@@ -485,10 +487,11 @@ def write_histogram(
     ax.stairs(counts, edges, fill=True, alpha=0.8, edgecolor="k", linewidth=0.5)
     ax.set_xlabel(f"block volume [{unit}]")
     ax.set_ylabel("frequency")
+    head = f"{name}: " if name else ""
     ax.set_title(
-        f"{len(volumes)} blocks, mean volume {volumes.mean():.3g} {unit}"
+        f"{head}{len(volumes)} blocks, mean volume {volumes.mean():.3g} {unit}"
         if len(volumes)
-        else "no blocks"
+        else f"{head}no blocks"
     )
     ax.grid(True, alpha=0.3)
     fig.savefig(path_png, dpi=120)
