@@ -63,6 +63,25 @@ def test_corrected_solution_is_the_changed_systems(comm):
         x.destroy()
 
 
+def _spoil_correction(monkeypatch, inc, spoil: float, refinement: float) -> None:
+    """Spoil the correction on T to a residual of norm ``spoil``.
+
+    Every refinement step's correction becomes ``refinement`` on each DOF of T.
+    """
+    lu = inc.update
+    exact_correction = lu.correction
+
+    def correction(y_t, atol=0.0, steps=3):
+        g = exact_correction(y_t, atol, steps)
+        # g + δ gives the residual −E (I + ΔC S) δ: δ on T's first DOF, scaled so that the
+        # residual's norm is `spoil`
+        g[0] += spoil / np.linalg.norm((np.eye(lu.m) + lu.dC @ lu.S)[:, 0])
+        return g
+
+    monkeypatch.setattr(lu, "correction", correction)
+    monkeypatch.setattr(lu, "homogeneous_correction", lambda w_t: refinement * np.ones(len(w_t)))
+
+
 def test_refinement_step_that_does_not_help_is_undone(monkeypatch):
     """A refinement step that raises the residual is dropped; the solution before it stays.
 
@@ -76,19 +95,8 @@ def test_refinement_step_that_does_not_help_is_undone(monkeypatch):
     try:
         dofs, k = _change()
         inc.apply([(dofs, k)], np.zeros(0, dtype=np.int64), np.zeros(0))
-        lu = inc.update
-        exact_correction = lu.correction
         spoil = 4e-11 * np.linalg.norm(b)
-
-        def correction(y_t, atol=0.0, steps=3):
-            g = exact_correction(y_t, atol, steps)
-            # g + δ gives the residual −E (I + ΔC S) δ: δ on T's first DOF, scaled so
-            # that the residual's norm is `spoil`
-            g[0] += spoil / np.linalg.norm((np.eye(lu.m) + lu.dC @ lu.S)[:, 0])
-            return g
-
-        monkeypatch.setattr(lu, "correction", correction)
-        monkeypatch.setattr(lu, "homogeneous_correction", lambda w_t: 1e-3 * np.ones(len(w_t)))
+        _spoil_correction(monkeypatch, inc, spoil, refinement=1e-3)
         u = inc.solve(x)
         assert inc.refinements == 1
         A1 = A.copy()
@@ -148,17 +156,7 @@ def test_ill_conditioned_reference_still_refuses_a_spoiled_correction(monkeypatc
     try:
         dofs, k = _change()
         inc.apply([(dofs, k)], np.zeros(0, dtype=np.int64), np.zeros(0))
-        lu = inc.update
-        exact_correction = lu.correction
-        spoil = 10.0 * np.sqrt(inc.floor2) * np.linalg.norm(b)
-
-        def correction(y_t, atol=0.0, steps=3):
-            g = exact_correction(y_t, atol, steps)
-            g[0] += spoil / np.linalg.norm((np.eye(lu.m) + lu.dC @ lu.S)[:, 0])
-            return g
-
-        monkeypatch.setattr(lu, "correction", correction)
-        monkeypatch.setattr(lu, "homogeneous_correction", lambda w_t: np.zeros(len(w_t)))
+        _spoil_correction(monkeypatch, inc, 10.0 * np.sqrt(inc.floor2) * np.linalg.norm(b), 0.0)
         with pytest.raises(Stale) as info:
             inc.solve(x)
         assert info.value.kind == "residual"
