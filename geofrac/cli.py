@@ -1,4 +1,4 @@
-"""Command line: ``geofrac run | check | bench``; works the same under ``mpiexec -n N``.
+"""Command line: ``geofrac run | check | bench | validate``; works the same under ``mpiexec -n N``.
 
 Messages come from rank 0 only. Exit codes: 0 success, 1 the run failed
 (:class:`~geofrac.errors.RunError`), 2 the scene or the command line is wrong
@@ -13,6 +13,7 @@ import sys
 import time
 import traceback
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from geofrac import __version__
@@ -76,6 +77,35 @@ def _parser() -> argparse.ArgumentParser:
         load_bench(name).add_arguments(p)
         _set_option(p, "solver.preset=direct (applied to every case)")
         p.set_defaults(func=_bench)
+
+    validate = sub.add_parser(
+        "validate",
+        help="run the validation suite and write docs/validation.md",
+        description="Run the validation cases (closed forms, the literature, Edo (2016)) "
+        "and rewrite the validation page from what they measure. Exit code 1 when a case "
+        "fails to run or differs from its reference for no known reason.",
+    )
+    validate.add_argument(
+        "--quick",
+        action="store_true",
+        help="only the cases that finish in minutes (under 10 on 2 cores); the page keeps "
+        "the other cases' values from the last full run",
+    )
+    validate.add_argument("--cases", help="comma-separated case names (default: all)")
+    validate.add_argument(
+        "--out",
+        type=Path,
+        default=Path("results/validation"),
+        help="where the runs write (default: results/validation)",
+    )
+    validate.add_argument(
+        "--page",
+        type=Path,
+        help="the page to write (default: docs/validation.md of the repository; its data "
+        "goes beside it as .json, its figures to img/validation/)",
+    )
+    validate.add_argument("--list", action="store_true", help="list the cases and exit")
+    validate.set_defaults(func=_validate)
     return parser
 
 
@@ -166,6 +196,68 @@ def _bench(args: argparse.Namespace, comm: Any) -> int:
     load_bench(args.bench).run(args, comm)
     echo(comm, f"bench {args.bench} done in {format_seconds(time.perf_counter() - start)}")
     return 0
+
+
+def _validate(args: argparse.Namespace, comm: Any) -> int:
+    import datetime
+    import json
+
+    from geofrac.validation import select
+    from geofrac.validation.suite import merge, run_cases, write_page
+
+    root = Path(__file__).resolve().parent.parent
+    if not (root / "jobs").is_dir():
+        raise RunError(
+            f"validate: no jobs/ beside the geofrac package in {root} (a source "
+            "checkout is needed: the cases are its scenes)"
+        )
+    names = [n.strip() for n in args.cases.split(",") if n.strip()] if args.cases else None
+    try:
+        cases = select(names, quick=args.quick)
+    except ValueError as exc:
+        echo(comm, f"error: --cases: {exc}", err=True)
+        return 2
+    if args.list:
+        for c in cases:
+            echo(comm, f"{c.name:22s} {c.chapter}: {c.title}{'' if c.quick else ' (full only)'}")
+        return 0
+    page = args.page or root / "docs" / "validation.md"
+    data_path = page.with_suffix(".json")
+    command = ("" if comm.size == 1 else f"mpiexec -n {comm.size} ") + "geofrac validate"
+    command += " --quick" if args.quick else ""
+    if names:
+        command += f" --cases {','.join(names)}"
+    from geofrac import interrupt
+
+    start = time.perf_counter()
+    interrupt.install()
+    try:
+        results = run_cases(
+            cases,
+            args.out,
+            comm,
+            root,
+            say=lambda text: echo(comm, text),
+            figures=page.parent / "img" / "validation",
+        )
+    except interrupt.Interrupted as exc:
+        echo(comm, f"validate: {exc}; {page} was not rewritten", err=True)
+        return 128 + exc.signum if exc.signum else 1
+    finally:
+        interrupt.uninstall()
+    seconds = time.perf_counter() - start
+    if comm.rank == 0:
+        stored = json.loads(data_path.read_text()) if data_path.exists() else None
+        stamp = datetime.date.today().isoformat()
+        full = not args.quick and not names
+        data = merge(stored, results, command, seconds, full, stamp)
+        data_path.write_text(json.dumps(data, indent=1) + "\n")
+        write_page(data, page)
+    bad = [r for r in results if r.status.startswith(("failed", "differs: not explained"))]
+    echo(comm, f"validate: {len(results)} cases in {format_seconds(seconds)}; wrote {page}")
+    for r in bad:
+        echo(comm, f"  {r.case.name}: {r.status}", err=True)
+    return 1 if bad else 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:

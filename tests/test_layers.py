@@ -66,7 +66,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("output", ("geofrac.io.summary", "geofrac.io.outdir")),
     # orchestration: loading a scene file (geofrac.scene: it calls effects, elements and
     # meshers to validate),
-    # the run pipeline and its methods, the command line, the benchmarks
+    # the run pipeline and its methods, the command line, the benchmarks, the validation
     (
         "orchestration",
         (
@@ -76,6 +76,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "geofrac.cli",
             "geofrac.__main__",
             "geofrac.bench",
+            # the validation suite runs scenes and benches
+            "geofrac.validation",
             # the bar cases of the MPM benchmarks and tests load scene files: they sit with
             # the benchmarks, though the module lives with the engine
             "geofrac.mpm.bar",

@@ -1,0 +1,151 @@
+"""The validation suite: its references, statuses, page, and the page against a fresh run.
+
+The page ``docs/validation.md`` is written by ``geofrac validate`` from its data
+``docs/validation.json``. A reduced set of its cases (``ci=True``, seconds each) is run
+afresh here and must give the page's numbers and statuses, so the page cannot go stale.
+"""
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+from mpi4py import MPI
+
+from geofrac.validation import CASES, CHAPTERS, Case, Reference, select
+from geofrac.validation.cases import jaeger_slip_stress, lame_inner_displacement, timoshenko_tip
+from geofrac.validation.suite import merge, run_cases, status_of, write_page
+from tests.conftest import REPO
+
+PAGE = REPO / "docs" / "validation.md"
+DATA = REPO / "docs" / "validation.json"
+
+#: Relative tolerance of a fresh run's value against the page's: the cases are
+#: deterministic (direct solvers, explicit MPM, seeded generators); this leaves room for
+#: another BLAS or CPU rounding differently, nothing more.
+FRESH_RTOL = 1e-6
+
+
+def _case(reference: Reference, known: str | None = None) -> Case:
+    return Case(
+        "x", "Elements", "t", "q", reference, lambda s, o: 0.0, scene="jobs/x.toml", known=known
+    )
+
+
+def test_reference_kinds():
+    value = Reference(2.0, "s", rtol=0.05)
+    assert value.holds(2.09) and not value.holds(2.11) and not value.holds(math.nan)
+    assert value.difference(2.1) == pytest.approx(0.05)
+    band = Reference(30.0, "s", kind="range", high=40.0)
+    assert band.holds(35.0) and not band.holds(29.85)
+    assert band.difference(35.0) == 0.0
+    assert band.difference(29.85) == pytest.approx(-0.005)
+    assert band.difference(44.0) == pytest.approx(0.1)
+    bound = Reference(1e-10, "s", kind="at_most")
+    assert bound.holds(1e-16) and not bound.holds(1e-9)
+    assert math.isnan(bound.difference(1e-16))
+
+
+def test_status_says_why_a_case_differs_and_flags_unexplained_ones():
+    ref = Reference(1.0, "s", rtol=0.01)
+    assert status_of(_case(ref), 1.005) == "reproduced"
+    assert status_of(_case(ref, "the mesh"), 1.5) == "differs: the mesh"
+    assert "not explained" in status_of(_case(ref), 1.5)
+    assert status_of(_case(ref), math.nan, "RunError: x").startswith("failed")
+
+
+def test_closed_forms_against_hand_values():
+    # Edo (2016), eq. 2.24-2.25 for jobs/quickstart.toml: 1000/25 + 5*10/200
+    assert timoshenko_tip(1.0, 10.0, 1.0, 100.0, 0.2) == pytest.approx(40.25, rel=1e-14)
+    # 1.3*10/3000 * (0.4 + 4)
+    assert lame_inner_displacement(10.0, 1.0, 2.0, 1000.0, 0.3) == pytest.approx(
+        1.3 * 10 / 3000 * 4.4, rel=1e-14
+    )
+    # β = 45°, μ = 0.5: 2c / (0.5 * 1); never below atan μ
+    assert jaeger_slip_stress(45.0, 1.0, 0.5) == pytest.approx(4.0, rel=1e-12)
+    assert jaeger_slip_stress(25.0, 1.0, 0.5) == math.inf
+
+
+def test_every_case_is_well_formed():
+    names = [c.name for c in CASES]
+    assert len(set(names)) == len(names)
+    for case in CASES:
+        assert case.chapter in CHAPTERS
+        assert (case.scene is None) != (case.bench is None), case.name
+        if case.scene is not None:
+            assert (REPO / case.scene).is_file(), case.name
+        assert case.reference.source
+        if case.ci:
+            assert case.quick, case.name
+    # every chapter has a case, and one against an independent source where the
+    # chapter has one
+    assert {c.chapter for c in CASES} == set(CHAPTERS)
+    independent = {c.chapter for c in CASES if c.reference.independent}
+    assert {
+        "Elements",
+        "Cracking",
+        "MPM dynamics",
+        "MPM under gravity and friction",
+        "Blocks",
+    } <= independent
+
+
+def test_select_by_name_and_subset():
+    assert [c.name for c in select(["mpm_bar", "hole_scf"])] == ["hole_scf", "mpm_bar"]
+    with pytest.raises(ValueError, match="unknown validation case"):
+        select(["nope"])
+    assert all(c.quick for c in select(quick=True))
+    assert {c.name for c in select(ci=True)} < {c.name for c in select(quick=True)}
+
+
+def test_page_is_written_from_its_data():
+    """docs/validation.md is exactly what its data renders to: not edited by hand."""
+    data = json.loads(DATA.read_text())
+    assert set(data["cases"]) == {c.name for c in CASES}
+    assert data["full_run"] is not None  # the page states the full suite's time
+    text = PAGE.read_text()
+    assert f"{data['full_run']['seconds']:.0f}" in text or "min" in text
+    rendered = Path(PAGE.parent / ".validation_check.md")
+    try:
+        write_page(data, rendered)
+        assert rendered.read_text() == text
+    finally:
+        rendered.unlink(missing_ok=True)
+
+
+def test_merge_keeps_the_full_runs_values_and_time():
+    case = select(["mpm_bar"])[0]
+    from geofrac.validation.suite import Result
+
+    full = merge(None, [Result(case, 0.0065, 1.0)], "geofrac validate", 100.0, True, "d1")
+    quick = merge(full, [], "geofrac validate --quick", 5.0, False, "d2")
+    assert quick["full_run"]["seconds"] == 100.0 and quick["last_run"]["date"] == "d2"
+    assert quick["cases"]["mpm_bar"]["value"] == 0.0065
+
+
+def test_a_fresh_run_of_the_ci_cases_gives_the_pages_numbers(tmp_path):
+    data = json.loads(DATA.read_text())["cases"]
+    cases = select(ci=True)
+    results = run_cases(cases, tmp_path, MPI.COMM_SELF, REPO, say=lambda text: None)
+    for r in results:
+        page = data[r.case.name]
+        assert r.error is None, (r.case.name, r.error)
+        assert r.value == pytest.approx(page["value"], rel=FRESH_RTOL), r.case.name
+        stored = status_of(r.case, page["value"], page.get("error"))
+        assert r.status == stored, r.case.name
+
+
+def test_cli_lists_cases_refuses_unknown_ones_and_writes_a_page(cli, tmp_path):
+    code, out, _ = cli("validate", "--list")
+    assert code == 0 and "cantilever_tip" in out and "(full only)" in out
+    code, _, err = cli("validate", "--cases", "nope")
+    assert code == 2 and "unknown validation case" in err
+    page = tmp_path / "validation.md"
+    code, out, _ = cli(
+        "validate", "--cases", "patch_test", "--page", page, "--out", tmp_path / "runs"
+    )
+    assert code == 0, out
+    data = json.loads(page.with_suffix(".json").read_text())
+    assert data["cases"]["patch_test"]["value"] < 1e-10
+    assert data["full_run"] is None  # a selection is not the full suite
+    assert "patch_test" in page.read_text() or "patch test" in page.read_text()
