@@ -92,3 +92,46 @@ def test_every_blocks_key_has_a_row():
     terrain = [f.name for f in dataclasses.fields(TerrainSpec)]
     for key in (*BLOCKS_KEYS, *BLOCKS_OUTPUT_KEYS, *terrain):
         assert re.search(rf"^\| `{key}` \|", body, re.MULTILINE), key
+
+
+def _product_texts() -> list:
+    """README, docs pages, and the package's Python and C sources."""
+    files = [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]
+    files += sorted((REPO / "geofrac").rglob("*.py")) + sorted((REPO / "geofrac").rglob("*.c"))
+    return files
+
+
+def test_the_thesis_is_never_called_the_seed():
+    """Seed means a random-number seed (or a seed point); the thesis is Edo (2016)."""
+    thesis = re.compile(
+        r"\bseed'?s?\s+(eq|fig|table|§|thesis|chapter|model|value|number)"
+        r"|\b(the|of the|in the)\s+seed\b(?!\s+(point|of|and|only|must|\d))"
+        r"|\bseed\s+§",
+        re.IGNORECASE,
+    )
+    random_words = ("random", "rng", "generator", "seeded", "draw")
+    hits = []
+    for path in _product_texts():
+        for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+            if thesis.search(line) and not any(w in line.lower() for w in random_words):
+                hits.append(f"{path.relative_to(REPO)}:{n}: {line.strip()}")
+    assert not hits, "\n".join(hits)
+
+
+def test_docs_link_only_inside_the_repository_and_cite_no_issue_numbers():
+    link = re.compile(r"\]\(([^)\s]+)\)")
+    hits = []
+    for path in [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]:
+        text = path.read_text()
+        for target in link.findall(text):
+            if re.match(r"[a-z]+:", target):
+                hits.append(f"{path.name}: external link {target}")
+                continue
+            resolved = (path.parent / target.split("#")[0]).resolve()
+            if REPO.resolve() not in resolved.parents or not resolved.exists():
+                hits.append(f"{path.name}: link {target} leaves the repository or is broken")
+        for m in re.finditer(r"\bissues?\s+#?\d+", text, re.IGNORECASE):
+            hits.append(f"{path.name}: cites {m.group(0)!r}")
+        if "shared/" in text:
+            hits.append(f"{path.name}: names a path outside the repository")
+    assert not hits, "\n".join(hits)
