@@ -52,6 +52,8 @@ def status_of(case: Case, value: float, error: str | None = None) -> str:
     """The status a case's value earns (see :class:`Result`)."""
     if error is not None:
         return f"failed: {error}"
+    if not math.isfinite(value):
+        return "failed: the run gave no finite value"
     if case.reference.holds(value):
         return "reproduced"
     return f"differs: {case.known}" if case.known else "differs: not explained (a regression?)"
@@ -71,8 +73,13 @@ def _run_scene(case: Case, root: Path, out: Path, comm: Any) -> dict[str, Any]:
 
 
 def _run_bench(case: Case, out: Path, comm: Any) -> dict[str, Any]:
+    from geofrac import interrupt
     from geofrac.bench import load_bench
+    from geofrac.pipeline import get
 
+    get("fem")  # the imports: PETSc's initialisation installs its own SIGTERM handler
+    interrupt.install()
+    interrupt.reassert()
     assert case.bench is not None
     name, *argv = case.bench
     module = load_bench(name)

@@ -52,6 +52,7 @@ def test_status_says_why_a_case_differs_and_flags_unexplained_ones():
     assert status_of(_case(ref, "the mesh"), 1.5) == "differs: the mesh"
     assert "not explained" in status_of(_case(ref), 1.5)
     assert status_of(_case(ref), math.nan, "RunError: x").startswith("failed")
+    assert status_of(_case(Reference(1.0, "s", kind="at_most")), math.nan).startswith("failed")
 
 
 def test_closed_forms_against_hand_values():
