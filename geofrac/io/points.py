@@ -18,7 +18,7 @@ import numpy as np
 
 from geofrac.io.series import hdf_item, hdf_put, kept_steps, temporal_collection, write_xml
 
-__all__ = ["PointSeries"]
+__all__ = ["PointSeries", "last_frame"]
 
 _KIND = {1: "Scalar", 3: "Vector", 9: "Tensor"}
 
@@ -122,3 +122,17 @@ def _pad(values: np.ndarray) -> np.ndarray:
     out = np.zeros((len(values), 3))
     out[:, : values.shape[1]] = values
     return out
+
+
+def last_frame(h5: Path) -> dict[str, np.ndarray]:
+    """The datasets of the last frame of a series' ``.h5`` (``geometry`` and the fields).
+
+    Raises:
+        ValueError: the file holds no frame.
+    """
+    with h5py.File(h5) as f:
+        frames = [int(k.split("_")[1]) for k in f if k.startswith("frame_")]
+        if not frames:
+            raise ValueError(f"{Path(h5).name}: no frame")
+        group = f[f"frame_{max(frames)}"]
+        return {k: group[k][()] for k in group}

@@ -142,11 +142,9 @@ def _results(summary: dict[str, Any]) -> dict[str, Any]:
 
 def _last_frame(out: Path) -> dict[str, np.ndarray]:
     """Datasets of the last frame of ``particles.h5``."""
-    import h5py
+    from geofrac.io.points import last_frame
 
-    with h5py.File(out / "particles.h5") as f:
-        last = max(int(k.split("_")[1]) for k in f if k.startswith("frame_"))
-        return {k: v[()] for k, v in f[f"frame_{last}"].items()}
+    return last_frame(out / "particles.h5")
 
 
 def _events(out: Path) -> list[dict[str, str]]:
@@ -229,13 +227,12 @@ def _set_orientation(name: str) -> Callable[[dict[str, Any], Path], float]:
     """Mean orientation (degrees) of a fracture set's generated fractures, network.csv."""
 
     def measure(summary: dict[str, Any], out: Path) -> float:
-        with open(out / "network.csv", newline="") as f:
-            rows = [r for r in csv.DictReader(f) if r["set"] == name]
-        d = np.array(
-            [[float(r["x1"]) - float(r["x0"]), float(r["y1"]) - float(r["y0"])] for r in rows]
-        )
-        # traces are axes: fold to [0, 180); the sets lie well inside it
-        return float(np.mean(np.mod(np.degrees(np.arctan2(d[:, 1], d[:, 0])), 180.0)))
+        from geofrac.dfn.io import load_network
+
+        network = load_network(out / "network.csv")
+        mine = network.set_index == network.set_names.index(name)
+        # traces are axes, folded to [0, 180); the sets lie well inside it
+        return float(np.mean(network.angles_deg[mine]))
 
     return measure
 

@@ -282,9 +282,9 @@ def test_the_settling_column_scene_reaches_its_weight(tmp_path):
     The last frame is the settled column, within the tolerance argued in
     test_damped_column_settles_to_its_weight.
     """
-    import h5py
     from mpi4py import MPI
 
+    from geofrac.io.points import last_frame
     from geofrac.pipeline import run_scene
     from geofrac.scene import load_scene
     from tests.conftest import JOBS
@@ -292,9 +292,8 @@ def test_the_settling_column_scene_reaches_its_weight(tmp_path):
     scene = load_scene(JOBS / "mpm_settling_column.toml", out=tmp_path)
     assert scene.mpm.damping == 0.2
     assert run_scene(scene, MPI.COMM_SELF, verbose=False)["status"] == "ok"
-    with h5py.File(tmp_path / "particles.h5") as f:
-        last = f[f"frame_{max(int(k.split('_')[1]) for k in f if k.startswith('frame_'))}"]
-        x, u, stress = last["geometry"][()], last["displacement"][()], last["stress"][()]
+    last = last_frame(tmp_path / "particles.h5")
+    x, u, stress = last["geometry"], last["displacement"], last["stress"]
     y0, H = x[:, 1] - u[:, 1], 1.0
     sxx, syy = stress[:, 0], stress[:, 4]
     err = np.abs(syy + RHO * G_ACC * (H - y0))

@@ -10,6 +10,7 @@ import pytest
 from mpi4py import MPI
 
 from geofrac.errors import RunError
+from geofrac.io.points import last_frame
 from geofrac.mpm.bar import impact_bar, self_weight_stress
 from geofrac.mpm.driver import simulate
 from geofrac.pipeline import run_scene
@@ -18,10 +19,7 @@ from tests.conftest import JOBS, run_and_list_modules
 
 
 def _last_frame(out):
-    with h5py.File(out / "particles.h5") as f:
-        last = max(int(k.split("_")[1]) for k in f if k.startswith("frame_"))
-        frame = f[f"frame_{last}"]
-        return {k: frame[k][()] for k in frame}
+    return last_frame(out / "particles.h5")
 
 
 def test_the_quasi_static_bar_scene_matches_eq_4_73(tmp_path):
