@@ -112,6 +112,8 @@ def run_cases(
         say: progress output (rank 0).
         figures: where case figures go (None: none drawn).
     """
+    from mpi4py import MPI
+
     from geofrac import interrupt
 
     done: dict[tuple[Any, ...], tuple[dict[str, Any] | None, Path, str | None]] = {}
@@ -146,7 +148,7 @@ def run_cases(
             except Exception as exc:  # a failed case is reported, not fatal
                 error = f"{type(exc).__name__}: {exc}".splitlines()[0][:200]
             seconds = time.perf_counter() - t0
-            stop = comm.allreduce(interrupt.received(), op=_max_op())
+            stop = comm.allreduce(interrupt.received(), op=MPI.MAX)
             if stop:  # a signal during a case without a loop to stop: stop after it
                 raise interrupt.Interrupted(stop, f"case {case.name}")
             done[key] = (data, where, error)
@@ -172,12 +174,6 @@ def run_cases(
         )
         results.append(result)
     return results
-
-
-def _max_op() -> Any:
-    from mpi4py import MPI
-
-    return MPI.MAX
 
 
 def _left(seconds: float) -> str:
