@@ -12,6 +12,7 @@ outputs need the whole set, which is gathered to rank 0.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -132,18 +133,31 @@ class BlocksMethod:
     ) -> dict[str, Any]:
         """Mesh, blocks, checks, files; the summary entries."""
         blocks, record = build(scene, comm, timings, verbose)
+        with timings.phase("warm-up"):  # compiled checks: numba's compilation or cache load
+            from geofrac.blocks.kernels import warm_up
+
+            start = time.perf_counter()
+            if comm.rank == 0:  # compiles into the disk cache once, the others load it
+                warm_up()
+            comm.Barrier()
+            if comm.rank != 0:
+                warm_up()
+            seconds = _wall(comm, start)
+            if verbose:
+                echo(comm, f"checks: compiled kernels ready in {seconds:.1f} s (warm-up)")
         with timings.phase("checks"):
             validator = _validate(scene, blocks, comm)
+            progress = _check_progress(blocks, comm, verbose)
+            checked = _block_checks(blocks, comm, progress)
             whole = gather_blocks(blocks, comm)
             del blocks
-            per_block: dict[str, np.ndarray] = {}
             record["quality"] = _checks(
-                scene, whole, record["domain_volume"], validator, comm, verbose, per_block
+                whole, record["domain_volume"], validator, checked, comm, progress
             )
         with timings.phase("output"):
             if comm.rank == 0:
-                assert whole is not None
-                _write(scene, whole, per_block["volume"], verbose)
+                assert whole is not None and checked is not None
+                _write(scene, whole, checked["volume"], verbose)
         return {"results": record}
 
     def report(self, summary: dict[str, Any]) -> list[str]:
@@ -183,6 +197,8 @@ def _validate(scene: Scene, blocks: Blocks, comm: MPI.Comm) -> dict[str, Any] | 
     def progress(done: int, chunks: int) -> None:  # rank 0's share, printed by rank 0
         nonlocal ticker
         ticker = ticker or Progress(comm, chunks, "validator (rank 0)", unit="chunks")
+        if done == 0:  # the clock starts
+            return
         checking = blocks.num_blocks if sample is None else sample
         ticker.step(f"{min(done * quality.VALIDATOR_CHUNK, checking)} of {checking} blocks")
 
@@ -191,39 +207,61 @@ def _validate(scene: Scene, blocks: Blocks, comm: MPI.Comm) -> dict[str, Any] | 
     return None if reports is None else _merge_validator(reports)
 
 
+def _check_progress(blocks: Blocks, comm: MPI.Comm, verbose: bool) -> Callable[[str], None] | None:
+    """Rank 0's progress through the quality checks, from 10^4 blocks (collective)."""
+    from geofrac.blocks.quality import SUMMARY_PHASES
+    from geofrac.log import Progress
+
+    # each check takes up to a second or two on 10^5 blocks
+    if not verbose or comm.allreduce(blocks.num_blocks) < 10_000:
+        return None
+    return Progress(comm, len(SUMMARY_PHASES), "checks (rank 0)", unit="checks").step
+
+
+def _block_checks(
+    blocks: Blocks, comm: MPI.Comm, progress: Callable[[str], None] | None = None
+) -> dict[str, np.ndarray] | None:
+    """Each rank checks its own blocks; the results of all, in rank order, on rank 0.
+
+    Rank order is the order in which ``gather_blocks`` joins the blocks.
+    """
+    from geofrac.blocks import quality
+
+    mine = quality.block_checks(blocks, progress)
+    parts = comm.gather(mine, root=0)
+    if parts is None:
+        return None
+    return {key: np.concatenate([p[key] for p in parts]) for key in mine}
+
+
 def _checks(
-    scene: Scene,
     whole: Blocks | None,
     domain: float,
     validator: dict[str, Any] | None,
+    checked: dict[str, np.ndarray] | None,
     comm: MPI.Comm,
-    verbose: bool = True,
-    per_block: dict[str, np.ndarray] | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """The quality report of the whole set (computed on rank 0, returned on every rank).
+
+    ``checked``: the ``block_checks`` of the whole set on rank 0 (None elsewhere).
 
     Raises:
         RunError: on every rank, when a check fails (the report is in the message).
     """
     from geofrac.blocks import quality
 
-    spec = scene.blocks
-    assert spec is not None
-    from geofrac.log import Progress
-
     report = None
     if comm.rank == 0:
         assert whole is not None
-        ticker = Progress(None, len(quality.SUMMARY_PHASES), "checks (rank 0)", unit="checks")
         report = quality.summarize(
             whole,
             domain,
             validate=False,
             on_boundary=_everywhere,
             stats_of=whole.kind == 0,  # statistics of the moving blocks
-            # the checks take seconds each from about 10,000 blocks (5-15 s at 100k)
-            progress=ticker.step if verbose and whole.num_blocks >= 10_000 else None,
-            per_block=per_block,
+            progress=progress,
+            checked=checked,
         )
         report["validator"] = validator
         if validator is not None:

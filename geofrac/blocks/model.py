@@ -109,7 +109,7 @@ def weld(blocks: Blocks) -> Blocks:
     be recognised by its point indices.
     """
     p = blocks.points
-    order = np.lexsort(p.T[::-1])
+    order = _lexicographic_order(p)
     ordered = p[order]
     starts = np.ones(len(p), dtype=bool)
     starts[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
@@ -127,3 +127,24 @@ def weld(blocks: Blocks) -> Blocks:
         seeds=blocks.seeds,
         kind=blocks.kind,
     )
+
+
+def _lexicographic_order(points: np.ndarray) -> np.ndarray:
+    """The permutation sorting the rows of ``points`` shape=(n, dim) lexicographically.
+
+    As ``np.lexsort(points.T[::-1])``, but the full sort runs on the first coordinate
+    alone; the other coordinates only order the rows whose first coordinates tie.
+    """
+    order = np.argsort(points[:, 0], kind="stable")
+    first = points[order, 0]
+    same = first[1:] == first[:-1]
+    if not same.any():
+        return order
+    tied = np.zeros(len(order), dtype=bool)
+    tied[1:] |= same
+    tied[:-1] |= same
+    run = np.cumsum(np.concatenate([[True], ~same]))[tied]
+    sub = order[tied]
+    rest = [points[sub, c] for c in range(points.shape[1] - 1, 0, -1)]
+    order[tied] = sub[np.lexsort([*rest, run])]
+    return order

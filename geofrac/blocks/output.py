@@ -53,11 +53,12 @@ import os
 import xml.etree.ElementTree as ET
 import zlib
 from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
-from geofrac.blocks.model import Blocks, block_ranges
+from geofrac.blocks.model import Blocks
 from geofrac.blocks.quality import block_points, block_volumes
 
 __all__ = [
@@ -131,10 +132,7 @@ class _Appended:
         if not self.compress:
             chunks: list[bytes | np.ndarray] = [np.array([raw.nbytes], dtype="<u8").tobytes(), raw]
         else:
-            blocks = [
-                zlib.compress(raw[i : i + ZLIB_BLOCK].data, ZLIB_LEVEL)
-                for i in range(0, raw.nbytes, ZLIB_BLOCK)
-            ]
+            blocks = _compress_blocks(raw)
             last = raw.nbytes - (len(blocks) - 1) * ZLIB_BLOCK if blocks else 0
             sizes = [len(blocks), ZLIB_BLOCK, last] + [len(b) for b in blocks]
             chunks = [np.array(sizes, dtype="<u8").tobytes(), *blocks]
@@ -142,9 +140,26 @@ class _Appended:
         self.offset += sum(len(c) if isinstance(c, bytes) else c.nbytes for c in chunks)
 
 
+def _compress_blocks(raw: np.ndarray) -> list[bytes]:
+    """The zlib blocks of :data:`ZLIB_BLOCK` bytes of ``raw`` shape=(nbytes,) uint8.
+
+    Compressed on as many threads as the process may use (zlib releases the GIL).
+    """
+    starts = range(0, raw.nbytes, ZLIB_BLOCK)
+    if len(starts) < 2:
+        return [zlib.compress(raw[i : i + ZLIB_BLOCK].data, ZLIB_LEVEL) for i in starts]
+    workers = min(len(starts), len(os.sched_getaffinity(0)))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        return list(
+            pool.map(lambda i: zlib.compress(raw[i : i + ZLIB_BLOCK].data, ZLIB_LEVEL), starts)
+        )
+
+
 def _index_type(values: np.ndarray) -> np.ndarray:
     """Point ids, counts or offsets as int32 when they fit (half the bytes), else int64."""
-    v = np.asarray(values, dtype=np.int64)
+    v = np.asarray(values)
+    if v.dtype == np.int32:
+        return v
     if not len(v) or (v.min() >= 0 and v.max() <= np.iinfo(np.int32).max):
         return v.astype(np.int32)
     return v
@@ -152,9 +167,12 @@ def _index_type(values: np.ndarray) -> np.ndarray:
 
 def _cell_streams(blocks: Blocks) -> dict[str, np.ndarray]:
     """Points used by the faces (padded to 3D) and the VTK cell arrays, renumbered."""
-    faces = np.asarray(blocks.faces, dtype=np.int64)
-    used, local = np.unique(faces, return_inverse=True)
-    local = local.reshape(faces.shape)
+    faces = np.asarray(blocks.faces)
+    # the points the faces use, renumbered in increasing order (as np.unique, without a sort)
+    used = np.flatnonzero(np.bincount(faces.ravel(), minlength=len(blocks.points)))
+    renumber = np.zeros(len(blocks.points), dtype=faces.dtype)
+    renumber[used] = np.arange(len(used), dtype=faces.dtype)
+    local = renumber[faces]
     x = np.zeros((len(used), 3))
     x[:, : blocks.dim] = np.asarray(blocks.points, dtype=float)[used]
     off = np.asarray(blocks.face_offsets, dtype=np.int64)
@@ -167,25 +185,16 @@ def _cell_streams(blocks: Blocks) -> dict[str, np.ndarray]:
             "types": np.full(n, VTK_POLYGON, dtype=np.uint8),
         }
     pt_off, pt_ids = block_points(dataclasses.replace(blocks, points=x, faces=local))
-    k = faces.shape[1]
-    nf = np.diff(off)
-    # faces stream: per block [nf, k, p1..pk, k, ...]; the count slots then the face rows
-    stream_len = 1 + nf * (k + 1)
-    ends = np.cumsum(stream_len)
-    stream = np.empty(ends[-1] if n else 0, dtype=np.int64)
-    starts = ends - stream_len
-    stream[starts] = nf
-    owner = block_ranges(off)
-    row_start = starts[owner] + 1 + (np.arange(len(faces)) - off[owner]) * (k + 1)
-    stream[row_start] = k
-    stream[row_start[:, None] + 1 + np.arange(k)] = local
+    from geofrac.blocks.kernels import face_stream
+
+    stream, ends = face_stream(local, off)
     return {
         "points": x,
         "connectivity": pt_ids,
         "offsets": pt_off[1:],
         "types": np.full(n, VTK_POLYHEDRON, dtype=np.uint8),
         "faces": stream,
-        "faceoffsets": ends.astype(np.int64),
+        "faceoffsets": ends,
     }
 
 

@@ -316,3 +316,22 @@ def test_a_block_of_many_faces_gets_the_exact_test_instead_of_vtk():
     points[centre, 2] = -0.5  # pushed from the top through the bottom
     report = q.validate_cells(surface_block(points, tris))
     assert report["failed"] == 1 and report["failed_blocks"] == [0]
+
+
+@pytest.mark.parametrize("dual", ["dual2d", "dual3d"])
+def test_block_checks_of_parts_concatenate_to_the_whole(dual, request):
+    # what the ranks rely on: each checks its own blocks, rank 0 concatenates in join order
+    from geofrac.blocks.model import join
+
+    blocks = request.getfixturevalue(dual)
+    n = blocks.num_blocks
+    first = take_blocks(blocks, np.arange(n // 3))
+    second = take_blocks(blocks, np.arange(n // 3, n))
+    whole = q.block_checks(join(first, second))
+    parts = [q.block_checks(first), q.block_checks(second)]
+    for key, values in whole.items():
+        np.testing.assert_allclose(np.concatenate([p[key] for p in parts]), values, rtol=1e-12)
+    report = q.summarize(blocks, 1.0, validate=False, checked=whole)
+    assert report == q.summarize(blocks, 1.0, validate=False)
+    with pytest.raises(ValueError, match="one value per block"):
+        q.summarize(blocks, 1.0, validate=False, checked=parts[0])
