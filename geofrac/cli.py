@@ -254,7 +254,8 @@ def _validate(args: argparse.Namespace, comm: Any) -> int:
         data_path.write_text(json.dumps(data, indent=1) + "\n")
         write_page(data, page)
     bad = [r for r in results if r.status.startswith(("failed", "differs: not explained"))]
-    echo(comm, f"validate: {len(results)} cases in {format_seconds(seconds)}; wrote {page}")
+    cases = f"{len(results)} case{'' if len(results) == 1 else 's'}"
+    echo(comm, f"validate: {cases} in {format_seconds(seconds)}; wrote {page}")
     for r in bad:
         echo(comm, f"  {r.case.name}: {r.status}", err=True)
     return 1 if bad else 0

@@ -618,9 +618,7 @@ CASES: tuple[Case, ...] = (
         Reference(100_824, "Edo (2016), §5.4", rtol=0.01, independent=False),
         _block_count,
         scene="jobs/terrain_100k.toml",
-        overrides=("blocks.validate=2000",),
-        quick=False,
-        estimate_s=330.0,
+        estimate_s=25.0,
     ),
 )
 

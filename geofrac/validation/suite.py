@@ -227,6 +227,10 @@ def merge(
     return data
 
 
+def _cases(n: int) -> str:
+    return f"{n} case" if n == 1 else f"{n} cases"
+
+
 def write_page(data: dict[str, Any], page: Path) -> list[Result]:
     """Write the validation page from its data (:func:`merge`); return the results shown."""
     from geofrac.validation.cases import CASES
@@ -254,11 +258,11 @@ def write_page(data: dict[str, Any], page: Path) -> list[Result]:
     ]
     if full is not None:
         lines.append(
-            f"- full suite (`{full['command']}`): {full['cases']} cases in "
+            f"- full suite (`{full['command']}`): {_cases(full['cases'])} in "
             f"{_duration(full['seconds'])} wall time, {full['date']}"
         )
     lines += [
-        f"- last run (`{last['command']}`): {last['cases']} cases in "
+        f"- last run (`{last['command']}`): {_cases(last['cases'])} in "
         f"{_duration(last['seconds'])}, {last['date']}; each row gives the date of its value",
         "",
     ]
