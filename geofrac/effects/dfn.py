@@ -354,7 +354,7 @@ def _configure(table: dict[str, Any], file: str) -> DfnConfig:
             raise _error(file, "file", "give either 'file' (a saved network) or 'sets', not both")
         if not isinstance(t["file"], str):
             raise _error(file, "file", f"must be a path string, got {t['file']!r}")
-        path = (Path(file).parent / t["file"]).resolve()
+        path = (Path(file).resolve().parent / t["file"]).resolve()
         try:
             network = load_network(path)
         except DfnError as exc:

@@ -234,7 +234,7 @@ def _geometry(file: Path, raw: Any) -> Geometry:
 
     t = _Table(file, "geometry", raw, SECTION_KEYS["geometry"])
     name = t.string("file")
-    path = (file.parent / name).resolve()
+    path = (file.resolve().parent / name).resolve()  # beside the scene (a link's target)
     if not path.is_file():
         raise t.error("file", f"cannot read mesh file '{name}' (looked for {path})")
     if path.suffix not in (".geo", ".msh"):

@@ -1,7 +1,7 @@
 """The validation cases: what each capability is checked against, and how well.
 
-Pure Python and numpy: a case names a scene under ``jobs/`` (or a bench), the quantity
-geofrac's run gives, the reference value and its source, and the tolerance within which
+Pure Python and numpy: a case names a scene under ``jobs/validation/`` (or a bench), the
+quantity geofrac's run gives, the reference value and its source, and the tolerance within which
 the case counts as reproduced. Reference values are closed forms written out here (not
 taken from geofrac's own exact-solution code), numbers from the literature, or numbers of
 Edo (2016). A case known to differ says why (``known``); a case that differs without a
@@ -100,7 +100,9 @@ class Case:
         quantity: the compared quantity, with its unit.
         reference: the reference and its source.
         measure: geofrac's value from (summary or bench report, output directory).
-        scene: the scene under ``jobs/`` (relative to the repository), or None for a bench.
+        scene: the scene under ``jobs/validation/`` (relative to the repository; there, a
+            link to the scene under ``jobs/`` that the docs and tests use), or None for a
+            bench.
         bench: ``geofrac bench`` arguments (the first is the bench's name), or None.
         overrides: ``--set`` overrides of the scene.
         quick: part of ``geofrac validate --quick``.
@@ -375,7 +377,7 @@ CASES: tuple[Case, ...] = (
             rtol=0.01,
         ),
         _tip_deflection,
-        scene="jobs/quickstart.toml",
+        scene="jobs/validation/quickstart.toml",
         ci=True,
     ),
     Case(
@@ -409,7 +411,7 @@ CASES: tuple[Case, ...] = (
             kind="at_most",
         ),
         _patch_error,
-        scene="jobs/patch_test.toml",
+        scene="jobs/validation/patch_test.toml",
         ci=True,
     ),
     Case(
@@ -421,7 +423,7 @@ CASES: tuple[Case, ...] = (
             3.03, "Howland (1930), Phil. Trans. R. Soc. A 229; Peterson's chart 4.1", rtol=0.01
         ),
         _scf,
-        scene="jobs/plate_hole_elastic.toml",
+        scene="jobs/validation/plate_hole_elastic.toml",
         ci=True,
     ),
     Case(
@@ -435,7 +437,7 @@ CASES: tuple[Case, ...] = (
             rtol=0.005,
         ),
         _bore_displacement,
-        scene="jobs/thick_cylinder.toml",
+        scene="jobs/validation/thick_cylinder.toml",
         ci=True,
     ),
     Case(
@@ -473,7 +475,7 @@ CASES: tuple[Case, ...] = (
         # 149 traces of standard deviation 7.8°: the sample mean's 99 % band is ±1.6° (3.5 %)
         Reference(47.473, "Edo (2016), Table 2.1 (set 1)", rtol=0.035, independent=False),
         _set_orientation("set1"),
-        scene="jobs/dfn_model1.toml",
+        scene="jobs/validation/dfn_model1.toml",
         estimate_s=10.0,
     ),
     Case(
@@ -483,7 +485,7 @@ CASES: tuple[Case, ...] = (
         "P21 (1/m)",
         Reference(0.1, "the scene's target P21, Edo (2016), §2.5.1", rtol=0.05, independent=False),
         _p21,
-        scene="jobs/dfn_model1.toml",
+        scene="jobs/validation/dfn_model1.toml",
     ),
     Case(
         "notched_beam",
@@ -497,7 +499,7 @@ CASES: tuple[Case, ...] = (
             high=40.0,
         ),
         _crack_top,
-        scene="jobs/notched_beam.toml",
+        scene="jobs/validation/notched_beam.toml",
         estimate_s=12.0,
         known="29.85 mm: 0.15 mm short of the experimental band on the default mesh "
         "(docs/cracking.md)",
@@ -513,7 +515,7 @@ CASES: tuple[Case, ...] = (
             rtol=0.03,
         ),
         _first_slip_stress(40.0, 1.0),
-        scene="jobs/jaeger_joint.toml",
+        scene="jobs/validation/jaeger_joint.toml",
         overrides=("geometry.parameters.beta=60", "cracking.max_events=1"),
         known="the faces' MLS stress along the joint runs 2-5 % above the uniform field, so "
         "the joint slips early (docs/cracking.md, crack faces in contact)",
@@ -530,7 +532,7 @@ CASES: tuple[Case, ...] = (
             independent=False,
         ),
         _bar_stress_error,
-        scene="jobs/mpm_bar_w1000.toml",
+        scene="jobs/validation/mpm_bar_w1000.toml",
         ci=True,
         plot=_plot_bar,
     ),
@@ -546,7 +548,7 @@ CASES: tuple[Case, ...] = (
             rtol=0.03,
         ),
         _impact_stress_ratio,
-        scene="jobs/mpm_impact_bar.toml",
+        scene="jobs/validation/mpm_impact_bar.toml",
         ci=True,
     ),
     Case(
@@ -560,7 +562,7 @@ CASES: tuple[Case, ...] = (
             rtol=0.01,
         ),
         _incline_mean_slide,
-        scene="jobs/mpm_incline_block.toml",
+        scene="jobs/validation/mpm_incline_block.toml",
         overrides=("mpm.t_end=0.5",),
     ),
     Case(
@@ -570,7 +572,7 @@ CASES: tuple[Case, ...] = (
         "σyy(base) / (ρ g H)",
         Reference(1.0, "closed form: the column's weight", rtol=0.05),
         _column_base_stress,
-        scene="jobs/mpm_settling_column.toml",
+        scene="jobs/validation/mpm_settling_column.toml",
     ),
     Case(
         "mpm_column_k0",
@@ -579,7 +581,7 @@ CASES: tuple[Case, ...] = (
         "σxx / σyy",
         Reference(0.3 / 0.7, "closed form: K₀ = ν / (1 − ν) under lateral confinement", rtol=0.01),
         _column_k0,
-        scene="jobs/mpm_settling_column.toml",
+        scene="jobs/validation/mpm_settling_column.toml",
     ),
     Case(
         "landslide_8deg",
@@ -588,7 +590,7 @@ CASES: tuple[Case, ...] = (
         "runout (m)",
         Reference(205.9, "Edo (2016), Fig. 4.6", rtol=0.1, independent=False),
         _runout,
-        scene="jobs/landslide_kita_uebaru.toml",
+        scene="jobs/validation/landslide_kita_uebaru.toml",
         overrides=("plasticity.friction_angle=8",),
         quick=False,
         known="the thesis gives the slope's length and depth, not the shape of the ground "
@@ -607,7 +609,7 @@ CASES: tuple[Case, ...] = (
             rtol=0.02,
         ),
         _block_volume,
-        scene="jobs/blocks_cylinder.toml",
+        scene="jobs/validation/blocks_cylinder.toml",
         ci=True,
     ),
     Case(
@@ -617,7 +619,7 @@ CASES: tuple[Case, ...] = (
         "blocks",
         Reference(100_824, "Edo (2016), §5.4", rtol=0.01, independent=False),
         _block_count,
-        scene="jobs/terrain_100k.toml",
+        scene="jobs/validation/terrain_100k.toml",
         estimate_s=25.0,
     ),
 )

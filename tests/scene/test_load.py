@@ -146,3 +146,16 @@ def test_units_label_the_pictures_and_refuse_markup():
             load_scene(JOBS / "quickstart.toml", [bad])
     with pytest.raises(SceneError, match="unknown key"):
         load_scene(JOBS / "quickstart.toml", ['units.angle="deg"'])
+
+
+def test_a_linked_scene_reads_its_files_beside_the_link_target(tmp_path):
+    # jobs/validation/ links the suite's scenes; their "../meshes/..." is the target's
+    link = tmp_path / "elsewhere" / "quickstart.toml"
+    link.parent.mkdir()
+    link.symlink_to(JOBS / "quickstart.toml")
+    scene = load_scene(link)
+    assert scene.geometry.file == (JOBS.parent / "meshes" / "cantilever.geo").resolve()
+    copy = tmp_path / "elsewhere" / "copy.toml"
+    copy.write_text((JOBS / "quickstart.toml").read_text())
+    with pytest.raises(SceneError, match="cannot read mesh file"):
+        load_scene(copy)  # a copy is not a link: its ../meshes is not there

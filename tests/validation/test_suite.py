@@ -75,6 +75,7 @@ def test_every_case_is_well_formed():
         assert (case.scene is None) != (case.bench is None), case.name
         if case.scene is not None:
             assert (REPO / case.scene).is_file(), case.name
+            assert case.scene.startswith("jobs/validation/"), case.name
         assert case.reference.source
         if case.ci:
             assert case.quick, case.name
@@ -89,6 +90,17 @@ def test_every_case_is_well_formed():
         "MPM under gravity and friction",
         "Blocks",
     } <= independent
+
+
+def test_jobs_validation_holds_the_cases_scenes_and_nothing_else():
+    # users open jobs/validation/ to rerun the suite's cases: each is a link to the scene
+    # of jobs/ that the docs and tests use (no copy to drift), and none is stray
+    folder = REPO / "jobs" / "validation"
+    assert {f"jobs/validation/{p.name}" for p in folder.iterdir()} == {
+        c.scene for c in CASES if c.scene is not None
+    }
+    for link in folder.iterdir():
+        assert link.is_symlink() and link.resolve() == (REPO / "jobs" / link.name).resolve()
 
 
 def test_select_by_name_and_subset():
