@@ -13,6 +13,8 @@ import time
 import numba
 import numpy as np
 
+from geofrac.blocks.model import HEX_FACES
+
 __all__ = [
     "block_integrals",
     "edge_groups",
@@ -494,8 +496,6 @@ def warm_up() -> float:
         The seconds it took.
     """
     t0 = time.perf_counter()
-    from geofrac.blocks.quality import HEX_FACES
-
     x = np.array(  # the unit cube, in VTK's hexahedron order
         [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
         dtype=float,

@@ -13,7 +13,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Blocks", "block_ranges", "join", "weld"]
+__all__ = ["HEX_FACES", "Blocks", "block_ranges", "join", "weld"]
+
+HEX_FACES = np.array(
+    [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
+)
+"""The faces of a VTK hexahedron, counter-clockwise seen from outside, shape=(6, 4)."""
 
 
 @dataclass

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from geofrac.blocks.model import Blocks, block_ranges
+from geofrac.blocks.model import HEX_FACES, Blocks, block_ranges
 
 __all__ = [
     "BLOCK_CHECKS",
@@ -52,11 +52,6 @@ __all__ = [
     "summarize",
     "validate_cells",
 ]
-
-HEX_FACES = np.array(
-    [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
-)
-"""The faces of a VTK hexahedron, counter-clockwise seen from outside, shape=(6, 4)."""
 
 #: Blocks per validator chunk: about 7 s of VTK's checks on terrain blocks (progress).
 VALIDATOR_CHUNK = 1000

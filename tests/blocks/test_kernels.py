@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from geofrac.blocks import kernels
-from geofrac.blocks.quality import HEX_FACES
+from geofrac.blocks.model import HEX_FACES
 
 CUBE = np.array(
     [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
