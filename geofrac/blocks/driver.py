@@ -136,9 +136,16 @@ class BlocksMethod:
         with timings.phase("warm-up"):  # compiled checks: numba's compilation or cache load
             from geofrac.blocks.kernels import warm_up
 
+            def compiled(kernel: str, seconds: float) -> None:  # only what takes a while
+                if verbose and seconds > 0.5:
+                    echo(
+                        None,
+                        f"checks: compiled {kernel} in {seconds:.1f} s (cached for later runs)",
+                    )
+
             start = time.perf_counter()
             if comm.rank == 0:  # compiles into the disk cache once, the others load it
-                warm_up()
+                warm_up(compiled)
             comm.Barrier()
             if comm.rank != 0:
                 warm_up()

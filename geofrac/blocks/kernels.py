@@ -9,6 +9,8 @@ caller can time that apart from the work.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numba
 import numpy as np
@@ -489,8 +491,12 @@ def face_stream(faces: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.
     return _face_stream(_index_array(faces), np.asarray(offsets, dtype=np.int64))
 
 
-def warm_up() -> float:
+def warm_up(progress: Callable[[str, float], None] | None = None) -> float:
     """Compile (or load from the disk cache) the kernels for the builders' int32 indices.
+
+    Args:
+        progress: called as ``progress(kernel, seconds)`` after each kernel is ready (the
+            first compilation takes 1-2 s per kernel, a cache load milliseconds), or None.
 
     Returns:
         The seconds it took.
@@ -502,11 +508,19 @@ def warm_up() -> float:
     )
     faces = HEX_FACES.astype(np.int32)
     off = np.array([0, 6], dtype=np.int64)
-    unique_segments(faces.ravel(), off * 4)
-    edge_groups(faces, off, len(x))
-    _, centre = block_integrals(x, faces, off)
-    reach(x, faces, off, centre)
-    face_planarity(x, faces)
-    face_status(faces, np.zeros(6, dtype=np.int64), len(x))
-    face_stream(faces, off)
+    centre = x.mean(axis=0, keepdims=True)
+    calls: list[tuple[Callable[..., Any], tuple[Any, ...]]] = [
+        (unique_segments, (faces.ravel(), off * 4)),
+        (edge_groups, (faces, off, len(x))),
+        (block_integrals, (x, faces, off)),
+        (reach, (x, faces, off, centre)),
+        (face_planarity, (x, faces)),
+        (face_status, (faces, np.zeros(6, dtype=np.int64), len(x))),
+        (face_stream, (faces, off)),
+    ]
+    for kernel, args in calls:
+        start = time.perf_counter()
+        kernel(*args)
+        if progress is not None:
+            progress(kernel.__name__, time.perf_counter() - start)
     return time.perf_counter() - t0
