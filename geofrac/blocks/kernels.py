@@ -41,6 +41,12 @@ def _index_array(values: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(v)
 
 
+def _require_quads(faces: np.ndarray) -> None:
+    shape = np.shape(faces)
+    if len(shape) != 2 or shape[1] != 4:
+        raise ValueError(f"faces must be quadrilaterals, shape=(n, 4), not {shape}")
+
+
 #: Faces sharing a smallest point are sorted by insertion up to this many, else merge sort.
 _SMALL_BUCKET = 32
 
@@ -272,6 +278,7 @@ def block_integrals(
         ``volume`` shape=(num_blocks,) and ``centroid`` shape=(num_blocks, 3) (NaN for a
         block of zero volume).
     """
+    _require_quads(faces)
     return _block_integrals(
         np.ascontiguousarray(points, dtype=float),
         _index_array(faces),
@@ -358,6 +365,7 @@ def face_planarity(points: np.ndarray, faces: np.ndarray) -> np.ndarray:
     Returns:
         shape=(num_faces,); 0 for a planar face.
     """
+    _require_quads(faces)
     return _face_planarity(np.ascontiguousarray(points, dtype=float), _index_array(faces))
 
 

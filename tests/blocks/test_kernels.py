@@ -110,6 +110,13 @@ def test_face_planarity_of_a_square_with_a_lifted_corner(h):
     assert value == pytest.approx(expected, rel=1e-9, abs=1e-15)
 
 
+def test_quadrilateral_kernels_refuse_other_faces():
+    with pytest.raises(ValueError, match="quadrilaterals"):
+        kernels.block_integrals(CUBE, HEX_FACES[:, :3], np.array([0, 6]))
+    with pytest.raises(ValueError, match="quadrilaterals"):
+        kernels.face_planarity(CUBE, HEX_FACES[:, :3])
+
+
 def test_face_stream_layout():
     faces = np.array([[0, 1, 2, 3], [3, 2, 1, 0], [4, 5, 6, 7]], dtype=np.int32)
     stream, ends = kernels.face_stream(faces, np.array([0, 2, 2, 3]))
