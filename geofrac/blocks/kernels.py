@@ -389,7 +389,10 @@ def _face_status(faces: np.ndarray, owner: np.ndarray, num_points: int) -> np.nd
         for j in range(1, k):
             if faces[i, j] < faces[i, first]:
                 first = j
-        forward = faces[i, (first + 1) % k] < faces[i, (first + k - 1) % k]
+        if k > 2:
+            forward = faces[i, (first + 1) % k] < faces[i, (first + k - 1) % k]
+        else:  # an edge: its own direction runs towards the higher index
+            forward = faces[i, 0] < faces[i, 1]
         sign[i] = forward
         for j in range(k):
             keys[i, j] = faces[i, (first + j) % k] if forward else faces[i, (first - j + k) % k]
@@ -447,10 +450,11 @@ def _face_status(faces: np.ndarray, owner: np.ndarray, num_points: int) -> np.nd
 def face_status(faces: np.ndarray, owner: np.ndarray, num_points: int) -> np.ndarray:
     """How each face of a block set pairs with the others (faces as point-index rows).
 
-    Faces with the same point cycle (either direction) form a group.
+    Faces with the same point cycle (either direction) form a group; 2D faces are ring
+    edges (start, end).
 
     Args:
-        faces: shape=(num_faces, k), k >= 3.
+        faces: shape=(num_faces, k), k >= 2.
         owner: the block of each face, shape=(num_faces,).
         num_points: more than the largest point index.
 

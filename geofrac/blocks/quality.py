@@ -92,19 +92,12 @@ def _ring_next(blocks: Blocks) -> np.ndarray:
 
 
 def _edges(blocks: Blocks) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Directed boundary edges (start, end) and their block, each shape=(num_edges,).
+    """2D: the directed ring edges (start, end) and their block, each shape=(num_edges,).
 
-    2D: one per ring entry (ring point to the next); 3D: four per quadrilateral face.
+    One per ring entry, from the ring point to the next.
     """
-    faces = np.asarray(blocks.faces, dtype=np.int64)
-    owner = block_ranges(blocks.face_offsets)
-    if blocks.dim == 2:
-        ring = faces[:, 0]
-        return ring, ring[_ring_next(blocks)], owner
-    k = faces.shape[1]
-    start = faces.ravel()
-    end = faces[:, np.r_[1:k, 0]].ravel()
-    return start, end, np.repeat(owner, k)
+    ring = np.asarray(blocks.faces, dtype=np.int64)[:, 0]
+    return ring, ring[_ring_next(blocks)], block_ranges(blocks.face_offsets)
 
 
 def _group_starts(*keys: np.ndarray) -> np.ndarray:
@@ -408,66 +401,42 @@ def _box_boundary(points: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
     return on_boundary
 
 
-def _pair_codes(blocks: Blocks) -> tuple[np.ndarray, np.ndarray]:
-    """Per face: a pairing code 0, 1, 3, 4 or 5 (see ``check_pairing``) and the owner.
-
-    3D faces are grouped by their point cycle in either direction
-    (:func:`geofrac.blocks.kernels.face_status`); 2D faces are the ring edges (start, end).
-    """
+def _faces_and_owner(blocks: Blocks) -> tuple[np.ndarray, np.ndarray]:
+    """The faces as point rows (2D: ring edges, shape=(n, 2)) and their blocks."""
     if blocks.dim == 3:
-        from geofrac.blocks.kernels import face_status
-
-        owner = block_ranges(blocks.face_offsets)
-        num_points = max(int(np.asarray(blocks.points).shape[0]), 1)
-        return face_status(blocks.faces, owner, num_points), owner
-    start, end, owner = _edges(blocks)
-    keys = np.column_stack([np.minimum(start, end), np.maximum(start, end)])
-    sign = start < end
-    n = len(keys)
-    order = np.lexsort(keys.T[::-1])
-    new = _group_starts(*(keys[order, c] for c in range(keys.shape[1])))
-    first = np.flatnonzero(new)
-    group = np.cumsum(new) - 1  # group of each sorted face
-    size = np.diff(np.append(first, n))
-    n_pos = np.add.reduceat(sign[order].astype(np.int64), first) if n else first
-    o = owner[order]
-    two_blocks = np.ones(len(first), dtype=bool)
-    pair = size == 2
-    two_blocks[pair] = o[first[pair]] != o[first[pair] + 1]
-    code = np.full(len(first), 5, dtype=np.int8)  # more than two
-    code[size == 1] = 1
-    code[pair & (n_pos == 1) & two_blocks] = 0
-    code[pair & (n_pos != 1) & two_blocks] = 3
-    code[pair & ~two_blocks] = 4
-    status = np.empty(n, dtype=np.int8)
-    status[order] = code[group]
-    return status, owner
+        return np.asarray(blocks.faces), block_ranges(blocks.face_offsets)
+    start, end, owner = _edges(blocks)  # in the faces' integer type, as the kernels' warm-up
+    return np.column_stack([start, end]).astype(np.asarray(blocks.faces).dtype), owner
 
 
 def _pairing_status(
     blocks: Blocks, on_boundary: Callable[[np.ndarray], np.ndarray] | None
 ) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Per face: a status code (see ``check_pairing``), the owner, and boundary closure."""
-    status, owner = _pair_codes(blocks)
+    """Per face: a status code (see ``check_pairing``), the owner, and boundary closure.
+
+    Faces are grouped by their point cycle in either direction
+    (:func:`geofrac.blocks.kernels.face_status`): 3D faces as stored, 2D faces as the
+    ring edges (start, end).
+    """
+    from geofrac.blocks.kernels import face_status
+
+    faces, owner = _faces_and_owner(blocks)
+    num_points = max(int(np.asarray(blocks.points).shape[0]), 1)
+    status = face_status(faces, owner, num_points)
     single = np.flatnonzero(status == 1)
     if len(single):
         if on_boundary is None:
             on_boundary = _box_boundary(np.asarray(blocks.points, dtype=float))
-        if blocks.dim == 2:
-            start, end, _ = _edges(blocks)
-            pts = np.asarray(blocks.points, dtype=float)[np.column_stack([start, end])[single]]
-        else:
-            pts = np.asarray(blocks.points, dtype=float)[np.asarray(blocks.faces)[single]]
+        pts = np.asarray(blocks.points, dtype=float)[faces[single]]
         status[single[~np.asarray(on_boundary(pts), dtype=bool)]] = 2
-    return status, owner, _singles_closed(blocks, (status == 1) | (status == 2))
+    return status, owner, _singles_closed(blocks, faces[(status == 1) | (status == 2)])
 
 
-def _singles_closed(blocks: Blocks, single: np.ndarray) -> bool:
-    """Whether the faces ``single`` shape=(num_faces,) bool form a closed, oriented chain."""
+def _singles_closed(blocks: Blocks, faces: np.ndarray) -> bool:
+    """Whether the unpaired ``faces`` shape=(n, k) form a closed, oriented chain."""
     if blocks.dim == 2:
-        start, end, _ = _edges(blocks)
-        return _chain_closed(blocks, start[single], end[single])
-    faces = np.asarray(blocks.faces, dtype=np.int64)[single]
+        return _chain_closed(blocks, faces[:, 0], faces[:, 1])
+    faces = faces.astype(np.int64)
     k = faces.shape[1]
     return _chain_closed(blocks, faces.ravel(), faces[:, np.r_[1:k, 0]].ravel())
 

@@ -55,6 +55,15 @@ def test_face_status_matches_brute_force(pool):
     assert set(np.unique(status)) >= ({0, 1, 3, 4} if pool == 40 else {5})
 
 
+def test_face_status_of_edges():
+    # 2D faces are ring edges: a reversed partner in another block pairs, the same way
+    # or the same block does not; an edge alone is a single, three copies are too many
+    faces = [[1, 2], [2, 1], [3, 4], [3, 4], [5, 6], [6, 5], [7, 8], [9, 10], [10, 9], [9, 10]]
+    owner = np.array([0, 1, 0, 1, 0, 0, 2, 0, 1, 2])
+    status = kernels.face_status(np.array(faces, dtype=np.int32), owner, 11)
+    assert status.tolist() == [0, 0, 3, 3, 4, 4, 1, 5, 5, 5]
+
+
 def cube_blocks(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return faces, np.array([0, len(faces)])
 
