@@ -283,19 +283,16 @@ def _plot_bar(summary: dict[str, Any], out: Path, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from geofrac.bench.report import save_figure
+
     frame = _last_frame(out)
     x, stress = frame["geometry"][:, 0], frame["stress"][:, 0]
     order = np.argsort(x)
-    fig, ax = plt.subplots(figsize=(6.0, 3.6))
+    fig, ax = plt.subplots(figsize=(6.0, 4.0), constrained_layout=True)
     ax.plot(x[order], _self_weight(x[order]), "k-", label="Edo (2016), eq. 4.73")
     ax.plot(x[order], stress[order], "o", ms=3, mfc="none", label="geofrac (MPM, MUSL)")
     ax.set_xlabel("x (m)")
-    ax.set_ylabel("σxx (Pa)")
-    ax.set_title("mpm_bar_w1000: stress under self-weight at rest")
-    ax.legend(loc="lower right")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, [ax], path, "mpm_bar_w1000: stress under self-weight at rest", "σxx (Pa)")
 
 
 def _plot_rates(report: dict[str, Any], out: Path, path: Path) -> None:
@@ -304,7 +301,9 @@ def _plot_rates(report: dict[str, Any], out: Path, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.0, 3.8))
+    from geofrac.bench.report import save_figure
+
+    fig, ax = plt.subplots(figsize=(6.0, 4.2), constrained_layout=True)
     for element in sorted({r["element"] for r in report["records"]}):
         rows = [r for r in report["records"] if r["element"] == element]
         rate = report["rates"][element]["u"]
@@ -315,12 +314,8 @@ def _plot_rates(report: dict[str, Any], out: Path, path: Path) -> None:
             label=f"{element.upper()}: R = {rate:.2f}",
         )
     ax.set_xlabel("nodes")
-    ax.set_ylabel("relative displacement error (L2)")
-    ax.set_title("cantilever (Edo (2016), §2.4.1): error against nodes")
-    ax.legend(loc="lower left")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    title = "cantilever (Edo (2016), §2.4.1): error against nodes"
+    save_figure(fig, [ax], path, title, "relative displacement error (L2)")
 
 
 def _impact_stress_ratio(summary: dict[str, Any], out: Path) -> float:
