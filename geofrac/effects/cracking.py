@@ -333,6 +333,15 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "cracking.control",
             "must name a [[bc]] group" + did_you_mean(str(control), bc_groups),
         )
+    exact = [bc.group for bc in ctx.bcs if bc.value == "exact"]
+    if control not in nonzero and control not in exact:
+        raise SceneError(
+            file,
+            "cracking.control",
+            f"the [[bc]] group '{control}' prescribes no non-zero displacement: the unit load "
+            "that each event scales must move the control group"
+            + (f" (groups that do: {', '.join(nonzero)})" if nonzero else ""),
+        )
     face = table.get("face")
     if face is not None and (not isinstance(face, str) or face not in ctx.groups):
         raise SceneError(

@@ -74,7 +74,11 @@ STATES = ("open", "stick", "slip")
 #: nothing (a fracture parallel to the load) would otherwise chatter between states on
 #: round-off and the slightest change of the field.
 STATE_TOLERANCE = 1e-3
-#: The floor of the tolerances: round-off, relative to the largest jump or traction.
+#: The floor of the tolerances: round-off, relative to the largest jump or traction of
+#: the solution, and at least relative to the unit load's a-priori scales (the control
+#: displacement δ for jumps, E δ / L for tractions; :class:`FacePairs` ``jump_floor``,
+#: ``traction_floor``), so that faces that carry nothing (jumps and tractions all
+#: round-off) keep their states instead of following the round-off's signs.
 ROUNDOFF = 1e-9
 
 
@@ -109,7 +113,12 @@ def edge_tractions(
 
 
 def shear_factors(
-    sigma_n: np.ndarray, tau: np.ndarray, cohesion: float, friction_angle: float
+    sigma_n: np.ndarray,
+    tau: np.ndarray,
+    cohesion: float,
+    friction_angle: float,
+    *,
+    floor: float = 0.0,
 ) -> np.ndarray:
     """Load factor r at which Mohr-Coulomb shear failure |τ| = c − σn tan φ is reached.
 
@@ -120,13 +129,15 @@ def shear_factors(
         tau: shear tractions, shape=(k,).
         cohesion: c > 0.
         friction_angle: φ in degrees.
+        floor: the drive |τ| + σn tan φ must exceed it (≥ 0): a drive at round-off is
+            no drive (:data:`~geofrac.fracture.scales.TENSION_FLOOR`).
 
     Returns:
         r per plane (inf where the tractions never reach the envelope), shape=(k,).
     """
     drive = np.abs(tau) + sigma_n * np.tan(np.radians(friction_angle))
     out = np.full(len(tau), np.inf)
-    ok = drive > 0.0
+    ok = drive > max(floor, 0.0)
     out[ok] = cohesion / drive[ok]
     return out
 
@@ -207,6 +218,10 @@ class FacePairs:
         modulus: E of the penalty k = penalty · E / L.
         penalty: see the module docstring.
         D: plane stress-strain matrix of the faces' stress, shape=(3, 3).
+        jump_floor: jumps within it are zero whatever the solution's own scale
+            (:data:`ROUNDOFF` times the unit load's displacement in the loop).
+        traction_floor: tractions within it are zero likewise (:data:`ROUNDOFF` times
+            the unit load's stress E δ / L in the loop).
 
     Attributes:
         state: per edge, :data:`NO_PAIR` or a state, shape=(num_edges,) int8.
@@ -225,8 +240,12 @@ class FacePairs:
         modulus: float,
         penalty: float,
         D: np.ndarray,
+        *,
+        jump_floor: float = 0.0,
+        traction_floor: float = 0.0,
     ) -> None:
         self.mesh = mesh
+        self.jump_floor, self.traction_floor = jump_floor, traction_floor
         self.D = np.asarray(D, dtype=float)
         self.friction = np.asarray(friction, dtype=float)
         self.cohesion = np.asarray(cohesion, dtype=float)
@@ -385,8 +404,12 @@ class FacePairs:
         traction = np.maximum(np.abs(p), np.abs(tau))
         u_scale = max(float(jump.max()), 1e-300)
         t_scale = max(float(traction.max()), float(self.k[edges].max()) * u_scale)
-        tol_u = max(STATE_TOLERANCE * float(np.median(jump)), ROUNDOFF * u_scale)
-        tol_t = max(STATE_TOLERANCE * float(np.median(traction)), ROUNDOFF * t_scale)
+        tol_u = max(STATE_TOLERANCE * float(np.median(jump)), ROUNDOFF * u_scale, self.jump_floor)
+        tol_t = max(
+            STATE_TOLERANCE * float(np.median(traction)),
+            ROUNDOFF * t_scale,
+            self.traction_floor,
+        )
         st = self.state[edges].copy()
         new = st.copy()
         mu = self.friction[edges]
@@ -418,8 +441,12 @@ class FacePairs:
                 self.bonded[e] = False
         return [(int(edges[i]), int(st[i]), int(new[i])) for i in change]
 
-    def slip_factors(self) -> tuple[np.ndarray, np.ndarray]:
+    def slip_factors(self, *, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Bonded sticking pairs and the load factor r = c / (|τ| − μ p) of their slip.
+
+        Args:
+            floor: the drive |τ| − μ p must exceed it (≥ 0): a drive at round-off is no
+                drive (:data:`~geofrac.fracture.scales.TENSION_FLOOR`).
 
         Returns:
             (pairs, r), shape=(k,) each; pairs whose τ never reaches c + μ p are left out.
@@ -428,7 +455,7 @@ class FacePairs:
         edges = edges[np.isin(edges, self.active())]
         p, tau = self.tractions(edges)
         drive = np.abs(tau) - self.friction[edges] * p
-        ok = drive > 0.0
+        ok = drive > max(floor, 0.0)
         return edges[ok], self.cohesion[edges[ok]] / drive[ok]
 
     def unbond(self, edge: int) -> None:

@@ -26,6 +26,7 @@ from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem
 from geofrac.fem.solution import Solution
 from geofrac.fracture.config import CrackingConfig
+from geofrac.fracture.scales import Scales
 from geofrac.materials import d_matrix, lame
 from geofrac.meshing.distribute import TaggedMesh
 from geofrac.model.scene import Scene
@@ -172,6 +173,8 @@ class CrackContext:
             padding index of the MLS table), shape=(n_global + 1,).
         control_unit: mean |prescribed control displacement|.
         face_nodes: nodes of the ``face`` group, or None.
+        scales: the unit load's a-priori scales (size, δ, E, volume) that the loop's
+            decisions are judged against.
     """
 
     config: CrackingConfig
@@ -200,6 +203,7 @@ class CrackContext:
     control_sign: np.ndarray
     control_unit: float
     face_nodes: np.ndarray | None
+    scales: Scales
 
     def node_dofs(self, nodes: np.ndarray, per_node: int | None = None) -> np.ndarray:
         """Global DOFs of nodes, node by node, shape=(len(nodes) * per_node,).
@@ -275,6 +279,12 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
     face_nodes = None
     if config.face is not None:
         face_nodes = np.unique(facet_nodes(tagged, gm, config.face))
+    control_unit = float(np.mean(np.abs(bc_vals[on]))) if np.any(on) else 0.0
+    if not control_unit > 0.0:
+        raise RunError(
+            f"cracking.control: the group '{config.control}' prescribes no non-zero "
+            "displacement, so there is no unit load to scale"
+        )
     return CrackContext(
         config=config,
         scene=scene,
@@ -300,6 +310,9 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
         control_rows=bc_rows[on],
         control_vals=bc_vals[on],
         control_sign=control_sign,
-        control_unit=float(np.mean(np.abs(bc_vals[on]))),
+        control_unit=control_unit,
         face_nodes=face_nodes,
+        scales=Scales.of_mesh(
+            gm.coords, gm.cells, displacement=control_unit, modulus=mat.E, thickness=mat.thickness
+        ),
     )

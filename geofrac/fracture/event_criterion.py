@@ -18,30 +18,43 @@ import numpy as np
 
 from geofrac.fracture.config import CrackingConfig
 from geofrac.fracture.criterion import edge_principal, select_edges
+from geofrac.fracture.topology import EdgeMesh
 from geofrac.fracture.units import SiteState
 
 __all__ = ["EdgeCriterion", "EventCriterion", "next_sites"]
 
 
 class EventCriterion(Protocol):
-    """Which sites crack in an event, and r."""
+    """Which sites crack in an event, and r.
+
+    Attributes:
+        points: where each site lies (ties go by position), shape=(num_sites, 2).
+    """
+
+    points: np.ndarray
 
     def site_stress(self, unit_s1: np.ndarray) -> np.ndarray:
         """σ1 per crack site from the units' values, shape=(num_sites,)."""
         ...
 
-    def select(self, sigma1: np.ndarray) -> tuple[np.ndarray, float]:
-        """(sites that crack, shape=(k,), k ≥ 1 unless none is in tension; r)."""
+    def select(self, sigma1: np.ndarray, *, floor: float) -> tuple[np.ndarray, float]:
+        """(sites that crack, shape=(k,), k ≥ 1 unless none has σ1 > ``floor``; r)."""
         ...
 
 
 def next_sites(
-    state: SiteState, config: CrackingConfig, sigma1: np.ndarray
+    state: SiteState,
+    config: CrackingConfig,
+    sigma1: np.ndarray,
+    *,
+    floor: float,
+    points: np.ndarray,
 ) -> tuple[np.ndarray, float]:
     """The uncracked, crackable sites of least r = f_t / σ1, with the batch settings.
 
     ``edges_per_event`` sites with r ≤ (1 + ``batch_tolerance``) r_min at most
-    (:func:`~geofrac.fracture.criterion.select_edges`); none when no site is in tension.
+    (:func:`~geofrac.fracture.criterion.select_edges`); none when no site has
+    σ1 > ``floor``. Ties go by ``points``, shape=(num_sites, 2).
     """
     candidates = ~state.cracked & state.crackable
     return select_edges(
@@ -50,6 +63,8 @@ def next_sites(
         config.tensile_strength,
         config.batch_tolerance,
         config.edges_per_event,
+        floor=floor,
+        points=points,
     )
 
 
@@ -63,11 +78,14 @@ class EdgeCriterion:
 
     def __init__(self, state: SiteState, config: CrackingConfig) -> None:
         self.state, self.config = state, config
+        assert isinstance(state.mesh, EdgeMesh)
+        #: the edge midpoints, shape=(num_edges, 2).
+        self.points = state.mesh.midpoints()
 
     def site_stress(self, unit_s1: np.ndarray) -> np.ndarray:
         """σ1 per edge from σ1 per cell at its local edges, shape=(num_cells, 3)."""
         return edge_principal(self.state.mesh, unit_s1)
 
-    def select(self, sigma1: np.ndarray) -> tuple[np.ndarray, float]:
+    def select(self, sigma1: np.ndarray, *, floor: float) -> tuple[np.ndarray, float]:
         """The edges of least r (:func:`next_sites`)."""
-        return next_sites(self.state, self.config, sigma1)
+        return next_sites(self.state, self.config, sigma1, floor=floor, points=self.points)

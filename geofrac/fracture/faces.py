@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from geofrac.errors import RunError
-from geofrac.fracture.contact import NO_PAIR, SLIP, FacePairs
+from geofrac.fracture.contact import NO_PAIR, ROUNDOFF, SLIP, FacePairs
 from geofrac.fracture.context import CrackContext, JsonValue, Sites, facet_nodes
 from geofrac.fracture.units import Block, EdgeUnits
 
@@ -89,7 +89,16 @@ class Faces:
         self.ctx, self.units = ctx, units
         mu, c = joint_properties(ctx, units, sites)
         E = float(ctx.scene.material.E)
-        self.pairs = FacePairs(units.state.mesh, mu, c, E, ctx.config.contact_penalty, ctx.D)
+        self.pairs = FacePairs(
+            units.state.mesh,
+            mu,
+            c,
+            E,
+            ctx.config.contact_penalty,
+            ctx.D,
+            jump_floor=ROUNDOFF * ctx.scales.displacement,
+            traction_floor=ROUNDOFF * ctx.scales.stress,
+        )
         n_nodes = len(ctx.gm.coords)
         self._node_dofs = ctx.node_dofs(np.arange(n_nodes), 2).reshape(n_nodes, 2)
         #: the block of each pair as it is in the system now (absent: nothing).

@@ -427,14 +427,17 @@ class GrainCriterion:
 
     def __init__(self, units: GrainUnits) -> None:
         self.units = units
+        #: the interface centres X_ij, shape=(num_interfaces, 2).
+        self.points = units.faces.centre
 
     def site_stress(self, unit_s1: np.ndarray) -> np.ndarray:
         """σ1 per interface from its grains' values, shape=(num_interfaces, 2)."""
         return unit_s1.max(axis=1)
 
-    def select(self, sigma1: np.ndarray) -> tuple[np.ndarray, float]:
+    def select(self, sigma1: np.ndarray, *, floor: float) -> tuple[np.ndarray, float]:
         """The interfaces of least r (:func:`~geofrac.fracture.event_criterion.next_sites`)."""
-        return next_sites(self.units.state, self.units.ctx.config, sigma1)
+        units = self.units
+        return next_sites(units.state, units.ctx.config, sigma1, floor=floor, points=self.points)
 
 
 class GrainDrawing:

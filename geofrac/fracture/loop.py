@@ -33,6 +33,7 @@ from geofrac.fracture.event_criterion import EventCriterion
 from geofrac.fracture.incremental import Gather
 from geofrac.fracture.linear import SolverStrategy, Timing
 from geofrac.fracture.output import OutputWriter, Row, read_checkpoint, save_checkpoint
+from geofrac.fracture.scales import TENSION_FLOOR
 from geofrac.fracture.units import Units
 from geofrac.io.checkpoint import Checkpoint, RunControl
 from geofrac.log import format_seconds
@@ -42,7 +43,7 @@ if TYPE_CHECKING:
 
     from geofrac.fracture.faces import Faces
 
-__all__ = ["END_REASONS", "MODES", "SEPARATED", "ContactUnsettled", "EventLoop"]
+__all__ = ["END_REASONS", "MODES", "ContactUnsettled", "EventLoop"]
 
 #: Why an event loop ends ("contact": the crack faces' states did not settle).
 END_REASONS = (
@@ -61,13 +62,6 @@ MODES = ("tension", "shear", "slip")
 
 class ContactUnsettled(Exception):
     """The crack faces' states still changed after ``contact_iterations`` iterations."""
-
-
-#: The body is *separated* when the unit-load strain energy falls below this fraction of
-#: its value at the first event: no load path is left between the control group and the
-#: supports (the "unstable" end of Edo (2016), reached without a singular matrix because both
-#: pieces are held by Dirichlet conditions).
-SEPARATED = 1e-9
 
 
 @dataclass
@@ -127,6 +121,7 @@ class EventLoop:
         """Run; put the last state into ``unknown``; return the JSON results (collective)."""
         ctx, cfg, units, control = self.ctx, self.ctx.config, self.units, self.control
         state, timing, strategy, output = units.state, self.timing, self.strategy, self.output
+        scales = ctx.scales
         say = ctx.say
         t0 = time.perf_counter()
         state.start(self.sites.precracked)
@@ -142,6 +137,8 @@ class EventLoop:
         #: the sites cracked by each event, in order (what a checkpoint replays).
         batches: list[list[int]] = []
         end, peak, first_energy = "max_events", 0.0, 0.0
+        #: why the run ended as it did, in words (``end_detail`` of the results).
+        detail: str | None = None
         face_hit: tuple[int, float] | None = None
         first = 1  # the first event to compute
         done = 0  # events already in the log (a resumed run recomputes those after first)
@@ -166,8 +163,11 @@ class EventLoop:
         output.open(rows, None if resume is None else float(done))
         started = time.perf_counter()
         error = None
+        #: the last solved unit-load state: (strain energy, control reaction).
+        unit: tuple[float, float] | None = None
         if cfg.max_events == 0:
             u_unit, _ = strategy.solve(u_unit, x, gather)
+            unit = units.measures(u_unit)[1:]
             if ctx.problem.exact is not None:
                 error = units.l2_error(u_unit)
                 say(f"cracking: displacement error (2.22) {error:.4e}")
@@ -203,16 +203,24 @@ class EventLoop:
                 timing.iterations += its
                 t = time.perf_counter()
                 unit_s1, energy_unit, reaction_unit = units.measures(u_unit)
+                unit = (energy_unit, reaction_unit)
                 sigma1 = self.criterion.site_stress(unit_s1)
+                first_r = rows[0]["load_factor"] if event > 1 and rows else None
+                detail = scales.separated(energy_unit, first_energy if event > 1 else None)
                 first_energy = energy_unit if event == 1 else first_energy
-                if energy_unit <= SEPARATED * first_energy:
+                if detail is not None:
                     end = "separated"
                     break
-                edges, r = self.criterion.select(sigma1)
-                edges, r, mode = self._other_modes(edges, r)
+                floor = TENSION_FLOOR * scales.rms_stress(energy_unit)
+                edges, r = self.criterion.select(sigma1, floor=floor)
+                edges, r, mode = self._other_modes(edges, r, floor)
                 t = timing.add("criterion", t)
                 if len(edges) == 0:
                     end = "no_tensile_edge"
+                    break
+                detail = scales.beyond(r, first_r)
+                if detail is not None:
+                    end = "separated"
                     break
                 energy = r * r * energy_unit
                 cracked = [int(e) for e in edges]
@@ -288,6 +296,10 @@ class EventLoop:
         output.finish(rows, self.modes, self._slipping())
         self.destroy()
         results = self._results(rows, end, elapsed, face_hit, len(rows) - first + 1)
+        if detail is not None:
+            results["end_detail"] = detail
+        if unit is not None:
+            results["unit_load"] = self._unit_load(*unit)
         if resume is not None:
             results["resumed_after_event"] = done
         if error is not None:
@@ -295,6 +307,7 @@ class EventLoop:
         say(
             f"cracking: {len(rows)} events in {format_seconds(elapsed)} "
             f"({results['events_per_s']:.2f} events/s), end: {end}"
+            + ("" if detail is None else f" ({detail})")
         )
         return results
 
@@ -381,11 +394,15 @@ class EventLoop:
             f"{changes[0][0]}); raise cracking.contact_iterations or contact_penalty"
         )
 
-    def _other_modes(self, edges: np.ndarray, r: float) -> tuple[np.ndarray, float, str]:
+    def _other_modes(
+        self, edges: np.ndarray, r: float, floor: float
+    ) -> tuple[np.ndarray, float, str]:
         """The event of least r over tension (given), shear and joint slip.
 
-        Ties within :data:`~geofrac.fracture.criterion.TIE_TOLERANCE` keep the earlier
-        mode of :data:`MODES`, then the lowest edge id.
+        A shear or slip drive counts only above ``floor`` (the stress floor of the
+        tension criterion). Ties within :data:`~geofrac.fracture.criterion.TIE_TOLERANCE`
+        keep the earlier mode of :data:`MODES`, then the edge that comes first by
+        position (:func:`~geofrac.fracture.criterion.tie_order`).
         """
         cfg, state = self.ctx.config, self.units.state
         mode = "tension"
@@ -396,13 +413,13 @@ class EventLoop:
                 self._frames = edge_frames(state.mesh)
             t, n = self._frames
             sn, tau = edge_tractions(sigma[cand], t[cand], n[cand])
-            r_s = shear_factors(sn, tau, cfg.shear_cohesion, cfg.shear_friction_angle)
-            e, rs = least(cand, r_s)
+            r_s = shear_factors(sn, tau, cfg.shear_cohesion, cfg.shear_friction_angle, floor=floor)
+            e, rs = least(cand, r_s, self.criterion.points)
             if rs < r * (1.0 - TIE_TOLERANCE):
                 edges, r, mode = np.array([e]), rs, "shear"
         if self.contact is not None:
-            pairs, r_j = self.contact.pairs.slip_factors()
-            e, rj = least(pairs, r_j)
+            pairs, r_j = self.contact.pairs.slip_factors(floor=floor)
+            e, rj = least(pairs, r_j, self.criterion.points)
             if rj < r * (1.0 - TIE_TOLERANCE):
                 edges, r, mode = np.array([e]), rj, "slip"
         return edges, r, mode
@@ -596,6 +613,26 @@ class EventLoop:
         if self.contact is not None:
             control = max((abs(r["control_displacement"]) for r in rows), default=0.0)
             out["contact"] = self.contact.summary(len(rows), control)  # type: ignore[assignment]
+        return out
+
+    def _unit_load(self, energy: float, reaction: float) -> dict[str, JsonValue]:
+        """The last solved unit-load state (the results' ``unit_load``).
+
+        What the body carries at the end under the scene's prescribed displacements as
+        given (before any scaling by r): also when the run ends before its first event
+        (a crack pulled open, a specimen in which no edge reaches tension).
+        """
+        delta = self.ctx.scales.displacement
+        out: dict[str, JsonValue] = {
+            "control_displacement": delta,
+            "reaction": reaction,
+            "strain_energy": energy,
+            "stiffness": reaction / delta,
+        }
+        if self.contact is not None:
+            pairs = self.contact.pairs
+            act = pairs.active()
+            out["min_gap"] = min(float(pairs.gap[act].min()), 0.0) if len(act) else 0.0
         return out
 
     def destroy(self) -> None:
