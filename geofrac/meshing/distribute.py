@@ -16,7 +16,7 @@ from geofrac.errors import RunError
 from geofrac.meshing.geo import failure_message, gmsh_session, meshed_model
 from geofrac.model.scene import Geometry
 
-__all__ = ["TaggedMesh", "build_mesh", "check_fracture_cover"]
+__all__ = ["TaggedMesh", "build_mesh", "check_fracture_cover", "renumber_model"]
 
 
 class TaggedMesh:
@@ -222,6 +222,34 @@ def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: Any) -> 
     )
 
 
+def renumber_model(gmsh: Any, seed: int) -> None:
+    """Number the meshed model's nodes and order each entity's elements at random (seeded).
+
+    The same mesh, numbered otherwise: DOLFINx takes the nodes in tag order and the
+    cells in the order gmsh stores them, so the distributed mesh's input numbering, the
+    crack driver's node, edge and cell ids and the solver's DOF order all change, while
+    every node and cell stays where it was. A result that changes with ``seed`` depends
+    on the numbering (a tie broken by id, a sum in another order): the scenes' key
+    ``discretization.renumber`` (docs/scenes.md).
+
+    Args:
+        gmsh: the gmsh module with the meshed model current.
+        seed: seed of ``numpy.random.default_rng``.
+    """
+    rng = np.random.default_rng(seed)
+    dim = gmsh.model.getDimension()
+    # the cells' nodes trade tags among themselves; a node of no cell (the centre point of
+    # a hole's arcs) keeps its tag, as DOLFINx needs such nodes where gmsh put them
+    used = np.unique(np.concatenate([*gmsh.model.mesh.getElements(dim)[2], np.zeros(0)]))
+    used = used.astype(np.uint64)
+    gmsh.model.mesh.renumberNodes(used, used[rng.permutation(len(used))])
+    for dim, tag in gmsh.model.getEntities():
+        types, elements, _ = gmsh.model.mesh.getElements(dim, tag)
+        for kind, ids in zip(types, elements, strict=True):
+            if len(ids) > 1:
+                gmsh.model.mesh.reorderElements(kind, tag, rng.permutation(len(ids)))
+
+
 def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> TaggedMesh:
     """Mesh ``geometry`` with gmsh on rank 0 and distribute the mesh over ``comm``.
 
@@ -230,6 +258,7 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
     meshes the model itself in-process; its report and payload reach every rank
     (:attr:`TaggedMesh.report`, :attr:`TaggedMesh.fractures`). Physical groups of a
     lower dimension may overlap (each keeps all its entities); cell groups may not.
+    With ``geometry.renumber`` the mesh is renumbered first (:func:`renumber_model`).
 
     Raises:
         RunError: gmsh (or the builder) failed or timed out, or cell groups overlap
@@ -267,6 +296,8 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
                 )
             if len(gmsh.model.mesh.getNodes()[0]) == 0:
                 raise RuntimeError("gmsh produced no nodes")
+            if geometry.renumber is not None:
+                renumber_model(gmsh, geometry.renumber)
             _check_groups_on_cells(gmsh.model, geometry.dim)
             overlap, dims = _overlaps(gmsh.model, geometry.dim)
             if overlap is not None:

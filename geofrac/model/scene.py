@@ -57,6 +57,9 @@ class Geometry:
             cells, 2 curved (``Mesh.ElementOrder = 2`` in the ``.geo``, or second-order
             elements in a ``.msh``). Only elements with ``ElementSpec.curved`` and a
             degree of at least ``order`` accept ``order > 1`` (docs/elements.md).
+        renumber: seed of a random renumbering of the mesh's nodes and cells before it
+            is distributed (:func:`geofrac.meshing.distribute.renumber_model`), or None
+            (gmsh's numbering); set from ``discretization.renumber``.
     """
 
     file: Path | None
@@ -68,6 +71,7 @@ class Geometry:
     trusted: bool = False
     time_limit: float | None = None
     order: int = 1
+    renumber: int | None = None
 
 
 @dataclass(frozen=True)
@@ -118,6 +122,9 @@ class Discretization:
         q_rand: ``efmm`` only: randomness of the integration domains' inner points in
             [0, 1] (Edo (2016), Fig. 3.13); 0 takes the incentres.
         domain_seed: ``efmm`` only: seed of those random points.
+        renumber: seed of a random renumbering of the mesh's nodes and cells (the same
+            mesh, numbered otherwise), or None: a check that results do not depend on
+            the numbering (:attr:`Geometry.renumber`).
     """
 
     element: str
@@ -126,6 +133,7 @@ class Discretization:
     gradient_bc: Literal["consistent", "fixed", "free"] = "consistent"
     q_rand: float = 0.0
     domain_seed: int = 0
+    renumber: int | None = None
 
 
 @dataclass(frozen=True)

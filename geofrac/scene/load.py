@@ -82,6 +82,9 @@ TOP_LEVEL_KEYS = (
     "allow_large",
     "units",
 )
+#: ``[discretization]`` keys that every element takes (the others are element options).
+ELEMENT_INDEPENDENT = ("renumber",)
+
 #: Simulation methods a scene may name (``method``).
 METHODS = ("fem", "mpm", "blocks")
 #: Keys each table accepts (the single source for validation and for docs/scenes.md).
@@ -105,6 +108,7 @@ SECTION_KEYS: dict[str, tuple[str, ...]] = {
         "gradient_bc",
         "q_rand",
         "domain_seed",
+        "renumber",
     ),
     "bc": ("group", "value", "components", "symmetry"),
     "load": ("type", "group", "value"),
@@ -333,7 +337,7 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
             "element", f"'{element}' supports dimensions {spec.dims}, the geometry is {dim}D"
         )
     for key in SECTION_KEYS["discretization"][1:]:
-        if t.has(key) and key not in spec.options:
+        if t.has(key) and key not in spec.options and key not in ELEMENT_INDEPENDENT:
             takers = [n for n, s in elements.REGISTRY.items() if key in s.options]
             raise t.error(key, f"applies only to elements {', '.join(takers)}, not '{element}'")
     q = t.number("quadrature_degree", positive=True, integer=True, maximum=MAX_QUADRATURE_DEGREE)
@@ -343,6 +347,9 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
     domain_seed = t.number("domain_seed", default=0, integer=True, maximum=2**32 - 1)
     if domain_seed < 0:  # type: ignore[operator]
         raise t.error("domain_seed", f"must be >= 0, got {domain_seed!r}")
+    renumber = t.number("renumber", integer=True, maximum=2**32 - 1)
+    if renumber is not None and renumber < 0:  # type: ignore[operator]
+        raise t.error("renumber", f"must be >= 0, got {renumber!r}")
     alpha_default = 0.0 if spec.zero_mode_penalty is None else spec.zero_mode_penalty
     alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True, maximum=1e6)
     gradient_bc = t.string(
@@ -355,6 +362,7 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
         gradient_bc,  # type: ignore[arg-type]
         float(q_rand),  # type: ignore[arg-type]
         int(domain_seed),  # type: ignore[arg-type]
+        None if renumber is None else int(renumber),
     )
 
 
@@ -1077,6 +1085,8 @@ def _validate(
     geometry, configured = provided or (_geometry(file, data["geometry"]), {})
     material = _material(file, data["material"], geometry.dim)
     discretization = _discretization(file, data["discretization"], geometry.dim)
+    if discretization.renumber is not None:
+        geometry = dataclasses.replace(geometry, renumber=discretization.renumber)
     _check_curved(file, geometry, discretization.element, declared)
     exact = _exact(file, data["exact"], geometry) if "exact" in data else None
     bcs = _bcs(file, data.get("bc", []), geometry, exact)
