@@ -73,9 +73,11 @@ def _cells(mesh: dolfinx.mesh.Mesh) -> tuple[int, int, np.ndarray]:
 def domain_data(mesh: dolfinx.mesh.Mesh, q_rand: float, seed: int) -> DomainData:
     """Inner points and edge crossings of every local cell (collective).
 
-    Inner points are seeded by the input cell index and see the corners in input-vertex
-    order, and every edge is oriented by its input vertex ids, so the domains are the same
-    on any number of ranks. Each owned cell writes its inner point into the slot of its
+    Inner points are seeded by the cell's corner coordinates
+    (:func:`~geofrac.geometry.triangles.coordinate_keys`) and see the corners in
+    input-vertex order, and every edge is oriented by its input vertex ids, so the domains
+    are the same on any number of ranks and however the mesh numbers its nodes and cells.
+    Each owned cell writes its inner point into the slot of its
     side (left or right of the oriented edge) of a facet vector; one reverse and one
     forward ghost update give every rank both points of every edge it touches.
 
@@ -87,11 +89,10 @@ def domain_data(mesh: dolfinx.mesh.Mesh, q_rand: float, seed: int) -> DomainData
     num_owned, nc, nodes = _cells(mesh)
     x = geometry.x[nodes][:, :, :2]  # shape=(nc, 3, 2)
     gid = np.asarray(geometry.input_global_indices, dtype=np.int64)[nodes]
-    keys = np.asarray(topology.original_cell_index, dtype=np.int64)[:nc]
     order = np.argsort(gid, axis=1)
     inner = inner_points(
         np.take_along_axis(x, order[:, :, None], axis=1),
-        keys,
+        None,
         "random" if q_rand > 0 else "incentre",
         q_rand,
         False,

@@ -131,7 +131,8 @@ def integration_domains(
         q_rand: randomness of the inner points in [0, 1] (Fig. 3.13).
         seed: seed of the random points.
         keys: a global key per triangle that seeds its random point, shape=(num_cells,)
-            (default: the triangle's index).
+            (default: :func:`~geofrac.geometry.triangles.coordinate_keys`, made of its
+            corners' coordinates, as the EFMM element does).
         ids: a global id per node, shape=(num_nodes,) (default: the node's index); the
             inner point sees a triangle's corners in increasing id order and an edge runs
             from its smaller id, so results do not depend on local numbering.
@@ -139,7 +140,7 @@ def integration_domains(
     points = np.asarray(points, dtype=float)[:, :2]
     tri = np.asarray(triangles, dtype=np.int64).copy()
     ids = np.arange(len(points)) if ids is None else np.asarray(ids, dtype=np.int64)
-    keys = np.arange(len(tri)) if keys is None else np.asarray(keys, dtype=np.int64)
+    keys = None if keys is None else np.asarray(keys, dtype=np.int64)
     flip = signed_areas(points, tri) < 0
     tri[flip] = tri[flip][:, [0, 2, 1]]  # counter-clockwise
     by_id = np.take_along_axis(tri, np.argsort(ids[tri], axis=1), axis=1)

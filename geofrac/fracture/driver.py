@@ -106,8 +106,11 @@ class EdgeVariant:
 EDGES = EdgeVariant()
 
 
-def _sites(ctx: CrackContext, units: Units) -> Sites:
-    """The sites of the ``precracked`` groups and of ``precracked_fraction`` (collective)."""
+def _sites(ctx: CrackContext, units: Units, points: np.ndarray) -> Sites:
+    """The sites of the ``precracked`` groups and of ``precracked_fraction`` (collective).
+
+    ``points``: where each site lies (the random draw's order), shape=(num_sites, 2).
+    """
     cfg, state = ctx.config, units.state
     pre = []
     for group in cfg.precracked:
@@ -118,6 +121,7 @@ def _sites(ctx: CrackContext, units: Units) -> Sites:
         state.crackable & ~state.mesh.boundary_edges,
         cfg.precracked_fraction,
         cfg.precrack_seed,
+        points,
     )
     return Sites(np.union1d(group_sites, random), group_sites, random)
 
@@ -153,8 +157,8 @@ class CrackDriver:
         self.ctx = ctx = crack_context(config, solution, say)
         self.unknown: dolfinx.fem.Function = self.problem.unknown()
         self.units: Units = variant.units(ctx)
-        self.sites = _sites(ctx, self.units)
         self.criterion: EventCriterion = variant.criterion(ctx, self.units)
+        self.sites = _sites(ctx, self.units, self.criterion.points)
         self.assembler = Assembler(ctx, self.units)
         #: crack-face contact (``cracking.contact``), or None.
         self.contact: Faces | None = None

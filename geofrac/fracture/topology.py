@@ -276,18 +276,22 @@ def zero_energy_rows(K: np.ndarray, tol: float) -> np.ndarray:
     return np.linalg.norm(null, axis=1) > 1e-8
 
 
-def random_sites(candidates: np.ndarray, fraction: float, seed: int) -> np.ndarray:
+def random_sites(
+    candidates: np.ndarray, fraction: float, seed: int, points: np.ndarray
+) -> np.ndarray:
     """A seeded random ``fraction`` of the candidate crack sites (pre-existing cracks).
 
     Edo (2016), §3.6, cracks 4 % of the grain interfaces inside the model, uniformly
     distributed, before loading. round(fraction x number of candidates) distinct sites are
-    drawn with ``numpy.random.default_rng(seed)`` from the candidates in id order, so the
-    choice depends on the mesh and the seed only (not on the number of ranks).
+    drawn with ``numpy.random.default_rng(seed)`` from the candidates in the order of their
+    positions (x, then y), so the choice depends on the mesh's geometry and the seed only:
+    not on the number of ranks, nor on how the mesh file numbers its nodes and cells.
 
     Args:
         candidates: whether each site may be chosen, shape=(num_sites,).
         fraction: in [0, 1].
         seed: seed of the generator.
+        points: where each site lies, shape=(num_sites, 2).
 
     Returns:
         chosen site ids, sorted, shape=(k,).
@@ -296,6 +300,8 @@ def random_sites(candidates: np.ndarray, fraction: float, seed: int) -> np.ndarr
     k = round(fraction * len(ids))
     if k == 0:
         return np.zeros(0, dtype=np.int64)
+    p = np.asarray(points)[ids]
+    ids = ids[np.lexsort((ids, p[:, 1], p[:, 0]))]
     rng = np.random.default_rng(seed)
     return np.sort(rng.choice(ids, size=k, replace=False)).astype(np.int64)
 

@@ -6,18 +6,31 @@ seeded random point of the disc of radius ``radius`` x r around it (Fig. 5.7(b),
 point; the EFMM element (:mod:`geofrac.elements.efmm`) joins the points of neighbouring
 triangles into its domains. Pure numpy.
 
-The random point of a triangle depends only on the seed and the key of the triangle (its
-global id), so it is the same on any number of ranks.
+The random point of a triangle depends only on the seed and the key of the triangle: a
+key given by the caller (the 2D blocks: the triangle's global id), or by default one made
+of the triangle's corner coordinates (:func:`coordinate_keys`), so that the point is the
+same on any number of ranks and however the mesh numbers its nodes and cells.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["INNER_POINTS", "inner_points"]
+__all__ = ["INNER_POINTS", "coordinate_keys", "inner_points"]
 
 #: Where a triangle's inner point goes (``blocks.inner_point``).
 INNER_POINTS = ("incentre", "random")
+
+
+def _mix(z: np.ndarray) -> np.ndarray:
+    """splitmix64's finaliser of uint64 words, same shape (wraps modulo 2⁶⁴)."""
+    with np.errstate(over="ignore"):
+        z = z ^ (z >> np.uint64(30))
+        z = z * np.uint64(0xBF58476D1CE4E5B9)
+        z ^= z >> np.uint64(27)
+        z *= np.uint64(0x94D049BB133111EB)
+        z ^= z >> np.uint64(31)
+    return z
 
 
 def _uniform(keys: np.ndarray, seed: int, stream: int) -> np.ndarray:
@@ -25,17 +38,33 @@ def _uniform(keys: np.ndarray, seed: int, stream: int) -> np.ndarray:
     with np.errstate(over="ignore"):
         z = keys.astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15)
         z += np.uint64((seed * 2 + stream) & 0xFFFFFFFFFFFFFFFF) * np.uint64(0xBF58476D1CE4E5B9)
-        z ^= z >> np.uint64(30)
-        z *= np.uint64(0xBF58476D1CE4E5B9)
-        z ^= z >> np.uint64(27)
-        z *= np.uint64(0x94D049BB133111EB)
-        z ^= z >> np.uint64(31)
+    z = _mix(z)
     return (z >> np.uint64(11)).astype(np.float64) / float(1 << 53)
+
+
+def coordinate_keys(x: np.ndarray) -> np.ndarray:
+    """A key per triangle made of its corners' coordinates alone, shape=(num_cells,) uint64.
+
+    The corners are taken in (x, y) order and the bits of their six coordinates mixed
+    with splitmix64: the key does not depend on the order of the corners, on the
+    triangle's index, nor on the number of ranks (the coordinates are the mesh file's).
+
+    Args:
+        x: vertex coordinates per triangle, any corner order, shape=(num_cells, 3, 2).
+    """
+    x = np.asarray(x, dtype=np.float64)[:, :, :2] + 0.0  # + 0.0: −0.0 and 0.0 alike
+    order = np.lexsort((x[:, :, 1], x[:, :, 0]), axis=-1)
+    words = np.ascontiguousarray(np.take_along_axis(x, order[:, :, None], axis=1))
+    words = words.reshape(len(x), 6).view(np.uint64)
+    z = np.full(len(x), 0x9E3779B97F4A7C15, dtype=np.uint64)
+    for j in range(6):
+        z = _mix(z ^ words[:, j])
+    return z
 
 
 def inner_points(
     x: np.ndarray,
-    keys: np.ndarray,
+    keys: np.ndarray | None,
     inner: str = "incentre",
     radius: float = 1.0,
     convex: bool = False,
@@ -46,7 +75,8 @@ def inner_points(
     Args:
         x: vertex coordinates per triangle in increasing global-id order,
             shape=(num_cells, 3, 2).
-        keys: a global key per triangle (seeds its random point), shape=(num_cells,).
+        keys: a global key per triangle (seeds its random point), shape=(num_cells,);
+            None: :func:`coordinate_keys` of ``x``.
         inner: ``"incentre"`` or ``"random"`` (a point of the disc of radius
             ``radius`` x r around the incentre, r the inradius).
         radius: the movable region's radius relative to the inradius, in [0, 1].
@@ -65,6 +95,8 @@ def inner_points(
     e1, e2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
     area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
     r = 2.0 * area / perimeter
+    if keys is None:
+        keys = coordinate_keys(x)
     u, v = _uniform(keys, seed, 0), _uniform(keys, seed, 1)
     step = (radius * r * np.sqrt(u))[:, None] * np.column_stack(
         [np.cos(2 * np.pi * v), np.sin(2 * np.pi * v)]

@@ -7,6 +7,13 @@ RGNT) and EFMM grain interfaces (chapter 3). On the same coarse uniform mesh
 each other, and each within one grain size of the experiment's 30-40 mm. Before the
 grain criterion read the traction normal to the interface (docs/granular.md), the grain
 crack ran under the top face and met it at 273 mm (frontal mesher) or 120 mm (Delaunay).
+
+The grains are random (q_rand = 0.1, Edo (2016)'s value): each ``domain_seed`` is one
+realisation, and single realisations scatter by grain sizes. Over seeds 1-8 the grain
+crack met the top at 13-49 mm on both meshers, 13 mm once in eight on each (frontal:
+13, 25, 49, 49, 37, 37, 49, 37; Delaunay: 37, 37, 49, 37, 25, 13, 37, 37), against 43 and
+31 mm for the edge crack. So the grain crack is judged by the median of
+:data:`SEEDS` realisations, as a prediction of a random microstructure is.
 """
 
 import numpy as np
@@ -22,9 +29,11 @@ from tests.conftest import JOBS
 H = 12.0
 #: the experiment's window for where the crack meets the top (mm from the centre).
 WINDOW = (30.0, 40.0)
+#: the grain realisations (``discretization.domain_seed``) whose median is judged.
+SEEDS = (1, 2, 3, 4, 5)
 
 
-def crack_top_x(job: str, algorithm: int) -> float:
+def crack_top_x(job: str, algorithm: int, *overrides: str) -> float:
     """Where the crack from the notch meets the top face of ``job`` on the coarse mesh."""
     comm = MPI.COMM_SELF
     overrides = (
@@ -32,6 +41,7 @@ def crack_top_x(job: str, algorithm: int) -> float:
         f"geometry.parameters.h_fine={H}",
         f"geometry.parameters.algorithm={algorithm}",
         "cracking.max_events=150",
+        *overrides,
     )
     d = scene_driver(load_scene_collective(comm, JOBS / f"{job}.toml", overrides), comm)
     res = d.run()
@@ -42,8 +52,12 @@ def crack_top_x(job: str, algorithm: int) -> float:
 @pytest.mark.parametrize("algorithm", [6, 5], ids=["frontal", "delaunay"])
 def test_grain_and_edge_cracks_meet_the_top_together(algorithm):
     edge = crack_top_x("notched_beam", algorithm)
-    grain = crack_top_x("grain_notched_beam", algorithm)
-    assert abs(grain - edge) <= 2.0 * H
+    grains = [
+        crack_top_x("grain_notched_beam", algorithm, f"discretization.domain_seed={seed}")
+        for seed in SEEDS
+    ]
+    grain = float(np.median(grains))
+    assert abs(grain - edge) <= 2.0 * H, grains
     for x in (edge, grain):
         assert WINDOW[0] - H <= x <= WINDOW[1] + H
 

@@ -139,11 +139,16 @@ def test_side_sites_separate_the_two_faces_of_a_notch_line():
 def test_random_sites_are_seeded_and_a_fraction_of_the_candidates():
     cand = np.zeros(1000, bool)
     cand[::2] = True
-    a = random_sites(cand, 0.04, 7)
+    points = np.random.default_rng(0).uniform(size=(1000, 2))
+    a = random_sites(cand, 0.04, 7, points)
     assert len(a) == 20 and cand[a].all()
-    assert np.array_equal(a, random_sites(cand, 0.04, 7))
-    assert not np.array_equal(a, random_sites(cand, 0.04, 8))
-    assert len(random_sites(cand, 0.0, 7)) == 0
+    assert np.array_equal(a, random_sites(cand, 0.04, 7, points))
+    assert not np.array_equal(a, random_sites(cand, 0.04, 8, points))
+    assert len(random_sites(cand, 0.0, 7, points)) == 0
+    # the same sites numbered otherwise: the same sites are drawn
+    perm = np.random.default_rng(1).permutation(1000)
+    b = random_sites(cand[perm], 0.04, 7, points[perm])
+    assert np.array_equal(np.sort(perm[b]), a)
 
 
 def crossed(mesh, x0: float, y_min: float) -> np.ndarray:
@@ -200,7 +205,10 @@ def test_nodes_across_the_notch_slot_do_not_see_each_other():
 def test_grain_events_are_finite_and_frozen_interfaces_never_crack():
     d = make_driver("cracking.max_events=20")
     res = d.run()
-    assert res["events"] == 20 and res["end_reason"] in END_REASONS
+    # the crack may reach the top and separate the coarse beam before event 20
+    assert res["end_reason"] in END_REASONS
+    assert res["events"] == 20 or res["end_reason"] == "separated", res["end_reason"]
+    assert res["events"] >= 10
     rows = d.rows
     assert all(np.isfinite(r["r"]) and r["r"] > 0 for r in rows)
     assert not (d.state.cracked & ~d.state.crackable).any()
