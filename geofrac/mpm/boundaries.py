@@ -38,7 +38,13 @@ __all__ = [
     "wall_nodes",
 ]
 
-#: Relative tolerance (in cells) for "on a side" and "on the bed".
+#: Tolerance (relative to the cell size L) of the grid's geometry: a node within
+#: TOL × L of a box side is on it, within TOL × L of the bed polyline (above it, or
+#: beyond its x-range) is on the bed, and a box side within TOL × L of a node plane
+#: ends the grid there. The node coordinates (origin + k L) and the polyline carry
+#: round-off of a few ulps of the coordinates, so a node meant to lie on a boundary
+#: (a side at x = 1.5 is the node at 1.5000000000000002) belongs to it on every
+#: machine; a node a cell away is far outside.
 TOL = 1e-9
 
 
@@ -76,11 +82,13 @@ def wall_nodes(
 def _below(x: np.ndarray, y: np.ndarray, bed: np.ndarray, tol: float) -> tuple[np.ndarray, ...]:
     """Which points lie on or below the polyline within its x-range, shape=(N,).
 
+    ``tol``: a point within it above the polyline, or beyond its x-range, is on it.
+
     Returns:
         (below shape=(N,) bool, the segment under each point shape=(N,), its slope
         f' shape=(N,), the bed height f(x) shape=(N,)).
     """
-    inside = (x >= bed[0, 0]) & (x <= bed[-1, 0])
+    inside = (x >= bed[0, 0] - tol) & (x <= bed[-1, 0] + tol)
     seg = np.clip(np.searchsorted(bed[:, 0], x, side="right") - 1, 0, len(bed) - 2)
     x0, y0 = bed[seg, 0], bed[seg, 1]
     slope = (bed[seg + 1, 1] - y0) / (bed[seg + 1, 0] - x0)

@@ -41,6 +41,19 @@ block on a 30° slope with μ = 0.7 creep off (USF, from its equilibrium stress)
 particles take the whole change the contact makes in a step, from the mapped velocity
 to the updated one; otherwise the approach removed from the mapped velocity would stay
 in the particles' velocities step after step and its friction would be lost.
+
+Ties. The motion is a continuous function of the nodal velocity: the impulse
+max(Δv_n, 0) and the slowing min(μ Δv_n, |v_t|) do not jump where a row enters contact or
+a node turns from slip to stick, so a round-off change of the velocity changes the
+motion by round-off and those comparisons need no tolerance (one would let material
+into the boundary). The decisions whose outcome does jump, the normals a corner node
+keeps (its Gram-Schmidt basis) and a row's state (:func:`contact_states`: free,
+sticking, slipping), treat differences within ``tol`` as ties: ``tol`` is a speed, the
+step's ``REST_TOL`` × L/Δt (:func:`geofrac.mpm.schemes.rest_speed`, a billionth of a
+cell per step), far above the round-off of any velocity the step forms (each is
+below L/Δt) and of a gap over Δt, and far below any motion. A body at rest on a
+boundary, whose nodes approach it by 0 ± round-off, is then in contact and sticking
+on every machine, instead of in and out of contact with the sign of the round-off.
 """
 
 from __future__ import annotations
@@ -54,7 +67,35 @@ import numpy as np
 if TYPE_CHECKING:
     from geofrac.mpm.parallel import Domain
 
-__all__ = ["Friction", "apply_friction", "approach_allowed", "free_normals", "friction", "gaps"]
+__all__ = [
+    "FREE",
+    "NORMAL_TOL",
+    "SLIP",
+    "STICK",
+    "Friction",
+    "apply_friction",
+    "approach_allowed",
+    "contact_states",
+    "free_normals",
+    "friction",
+    "gaps",
+]
+
+#: A row's state (:func:`contact_states`): not in contact (moving away from the boundary,
+#: or approaching it by less than its gap).
+FREE = 0
+#: In contact, its tangential velocity stopped: within the Coulomb bound μ Δv_n (4.45).
+STICK = 1
+#: In contact, sliding: the friction μ Δv_n slows it but cannot stop it (4.46).
+SLIP = 2
+
+#: Shortest length of a normal (relative to its unit length: dimensionless) that still
+#: constrains anything: a frictional normal projected onto a node's free components
+#: (:func:`free_normals`), or a corner's normal after the Gram-Schmidt step against the
+#: normals already in contact. Below it the normal is parallel to held components or to
+#: those normals (exactly 0 for the axis-aligned walls; a geometric property of the
+#: boundaries, not of the motion).
+NORMAL_TOL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -125,14 +166,15 @@ def friction(
 
 
 def free_normals(
-    normals: np.ndarray, held: np.ndarray, tol: float = 1e-12
+    normals: np.ndarray, held: np.ndarray, tol: float = NORMAL_TOL
 ) -> tuple[np.ndarray, np.ndarray]:
     """Frictional normals projected onto a node's free (not held) velocity components.
 
     Args:
         normals: unit normals, shape=(k, dim).
         held: the nodes' held components, shape=(k, dim) bool.
-        tol: a projection shorter than this leaves nothing to constrain.
+        tol: a projection shorter than this (relative to the unit normal) leaves nothing
+            to constrain (:data:`NORMAL_TOL`).
 
     Returns:
         (keep shape=(k,) bool: rows with a free normal part, the unit projected normals
@@ -176,6 +218,9 @@ def gaps(
     table = fr.row_table  # node -> its row in each layer, or -1
     inside = nodes < len(table)
     r = np.where(inside[:, :, None], table[np.where(inside, nodes, 0)], -1)  # (n, kk, L)
+    # any weight counts, however small: a particle entering a node's support has the
+    # weight 0 there, so whatever its gap changes reaches the particles through weights
+    # that start at 0, and a node lighter than MASS_FLOOR has no velocity to constrain
     hit = (r >= 0) & (phi > 0)[:, :, None]
     if not np.any(hit):
         return out
@@ -217,11 +262,16 @@ def approach_allowed(
     g = gaps(fr, x, lp, nodes, phi, num_nodes)
     if dom is not None:
         g = dom.min_halo(g)
+    # continuous in g: material reaching past the boundary (g < 0) may not approach more
     return np.maximum(g[fr.nodes, fr.layer], 0.0) / dt
 
 
 def apply_friction(
-    v: np.ndarray, fr: Friction, allow: np.ndarray | None = None, sliding_only: bool = False
+    v: np.ndarray,
+    fr: Friction,
+    allow: np.ndarray | None = None,
+    sliding_only: bool = False,
+    tol: float = 0.0,
 ) -> np.ndarray:
     """Contact and Coulomb friction on nodal velocities (in place and returned).
 
@@ -233,74 +283,157 @@ def apply_friction(
             (:func:`approach_allowed`: its gap over Δt), shape=(k,); None: 0, the
             material touches.
         sliding_only: only remove the normal approach (no friction).
+        tol: the speed within which two velocities tie (the step's
+            :func:`~geofrac.mpm.schemes.rest_speed`); 0: exact comparisons. Only a
+            corner node's normals depend on it (the module's "Ties").
 
     Returns:
         ``v``, changed on the nodes in contact.
     """
+    _contact(v, fr, allow, sliding_only, tol)
+    return v
+
+
+def contact_states(
+    v: np.ndarray,
+    fr: Friction,
+    allow: np.ndarray | None = None,
+    sliding_only: bool = False,
+    tol: float = 0.0,
+) -> np.ndarray:
+    """Each row's state under the nodal velocities ``v``: :data:`FREE`, :data:`STICK`, :data:`SLIP`.
+
+    The decisions :func:`apply_friction` takes with the same arguments (``v`` is not
+    changed). A row is in contact when its excess approach Δv_n = v·n − allow is above
+    −``tol`` (it moves into the boundary beyond its gap, or touches it within ``tol``);
+    then it sticks when the tangential speed left after the friction,
+    |v_t| − μ max(Δv_n, 0) (at a corner: Σ_j μ_j Δv_n,j against the velocity left
+    tangential to all its normals in contact), is at most ``tol``, and slips otherwise.
+
+    Args:
+        v: nodal velocities, shape=(num_nodes, dim).
+        fr: the boundary.
+        allow: per row, the normal speed at which the node may still approach,
+            shape=(k,), or None (0).
+        sliding_only: no friction (a row in contact sticks only when it has no
+            tangential velocity beyond ``tol``).
+        tol: the speed within which two velocities tie; 0: exact comparisons.
+
+    Returns:
+        The rows' states, shape=(k,) int8.
+    """
+    return _contact(v.copy(), fr, allow, sliding_only, tol)
+
+
+def _contact(
+    v: np.ndarray, fr: Friction, allow: np.ndarray | None, no_mu: bool, tol: float
+) -> np.ndarray:
+    """:func:`apply_friction` on ``v`` in place; returns the rows' states, shape=(k,) int8."""
+    states = np.full(len(fr.nodes), FREE, dtype=np.int8)
     if len(fr.nodes) == 0:
-        return v
+        return states
     vn = np.einsum("ka,ka->k", v[fr.nodes], fr.normals)
     excess = vn if allow is None else vn - allow
-    contact = excess > 0.0  # moving into the boundary beyond the gap (4.44)
+    # in contact: moving into the boundary beyond the gap (4.44), or touching it within tol
+    contact = excess > -tol
     if not np.any(contact):
-        return v
+        return states
     single = np.flatnonzero(contact & ~fr.shared)
-    _single(v, fr, single, vn[single], excess[single], sliding_only)
+    states[single] = _single(v, fr, single, vn[single], excess[single], no_mu, tol)
     corner = contact & fr.shared
     if np.any(corner):
         rows = np.flatnonzero(corner)
         for node in np.unique(fr.nodes[rows]):  # corners: a few nodes
             mine = rows[fr.nodes[rows] == node]
-            _corner(v, fr, mine, None if allow is None else allow[mine], sliding_only)
-    return v
+            states[mine] = _corner(v, fr, mine, None if allow is None else allow[mine], no_mu, tol)
+    return states
 
 
 def _single(
-    v: np.ndarray, fr: Friction, rows: np.ndarray, vn: np.ndarray, dvn: np.ndarray, no_mu: bool
-) -> None:
+    v: np.ndarray,
+    fr: Friction,
+    rows: np.ndarray,
+    vn: np.ndarray,
+    excess: np.ndarray,
+    no_mu: bool,
+    tol: float,
+) -> np.ndarray:
     """One boundary per node: (4.45)-(4.47) in impulse form, vectorised over ``rows``.
 
-    ``vn``: the rows' normal velocities, ``dvn`` > 0 the excess approach, both shape=(m,).
+    ``vn``: the rows' normal velocities, ``excess`` > −tol their excess approach, both
+    shape=(m,). Only the rows with ``excess`` > 0 change: the impulse max(Δv_n, 0) and
+    the slowing are continuous there, so a row within ``tol`` of it keeps its velocity
+    to the bit. Returns the rows' states (:data:`STICK` or :data:`SLIP`), shape=(m,).
     """
     ids, n = fr.nodes[rows], fr.normals[rows]
     vt = v[ids] - vn[:, None] * n  # tangential part
+    speed = np.linalg.norm(vt, axis=1)
+    dvn = np.maximum(excess, 0.0)
+    budget = np.zeros_like(dvn) if no_mu else fr.mu[rows] * dvn
+    # stick: the Coulomb bound μ Δv_n (4.45) stops the tangential velocity within tol
+    states = np.where(speed - budget <= tol, STICK, SLIP).astype(np.int8)
+    push = excess > 0.0  # a non-zero impulse (continuous at 0: no tolerance)
+    ids, n, vt, speed = ids[push], n[push], vt[push], speed[push]
     if not no_mu:
-        speed = np.linalg.norm(vt, axis=1)
-        slow = np.minimum(fr.mu[rows] * dvn, speed)  # at most to rest: stick
+        slow = np.minimum(budget[push], speed)  # at most to rest: stick
+        # the division guard: a node with no tangential velocity keeps none (continuous)
         scale = np.where(speed > 0, 1.0 - slow / np.where(speed > 0, speed, 1.0), 0.0)
         vt = vt * scale[:, None]
-    v[ids] = vt + (vn - dvn)[:, None] * n  # (4.47): no approach beyond the gap
+    v[ids] = vt + (vn[push] - dvn[push])[:, None] * n  # (4.47): no approach beyond the gap
+    return states
 
 
 def _corner(
-    v: np.ndarray, fr: Friction, rows: np.ndarray, allow: np.ndarray | None, no_mu: bool
-) -> None:
+    v: np.ndarray,
+    fr: Friction,
+    rows: np.ndarray,
+    allow: np.ndarray | None,
+    no_mu: bool,
+    tol: float,
+) -> np.ndarray:
     """Several boundaries at one node: excess approaches removed, then Σ μ_j Δv_n,j.
 
-    ``allow``: the rows' allowed approach speeds, shape=(m,), or None (0).
+    ``rows``: the node's rows in contact; ``allow``: their allowed approach speeds,
+    shape=(m,), or None (0). A row whose excess approach, when its turn comes, is above
+    −``tol`` joins the Gram-Schmidt basis: a node touching a boundary at rest keeps it
+    as a constraint on every machine, whatever the sign of its round-off (the later
+    rows' normals are orthogonalised against it, which changes their removal by the
+    whole approach, not by round-off). ``v`` changes only when an approach is removed.
+
+    Returns:
+        The rows' states, shape=(m,) int8.
     """
     node = fr.nodes[rows[0]]
     u = v[node].copy()
     basis: list[np.ndarray] = []
     budget = 0.0
+    touching = np.zeros(len(rows), dtype=bool)
+    moved = False
     for k, r in enumerate(rows):
         n = fr.normals[r].copy()
         for b in basis:  # Gram-Schmidt against the normals already in contact
             n -= (n @ b) * b
         length = np.linalg.norm(n)
-        if length < 1e-12:
+        if length < NORMAL_TOL:  # parallel to them: nothing left to constrain
             continue
         n /= length
         un = u @ n - (0.0 if allow is None else allow[k])
-        if un <= 0:
+        if un <= -tol:
             continue
-        u -= un * n
+        touching[k] = True
         basis.append(n)
-        budget += fr.mu[r] * un
-    if not no_mu:
-        normal = sum(((u @ b) * b for b in basis), np.zeros_like(u))  # the allowed approach
-        t = u - normal
-        speed = np.linalg.norm(t)
-        if speed > 0:
-            u = normal + t * (1.0 - min(budget, speed) / speed)
+        if un > 0.0:  # a non-zero impulse (continuous at 0)
+            u -= un * n
+            budget += fr.mu[r] * un
+            moved = True
+    normal = sum(((u @ b) * b for b in basis), np.zeros_like(u))  # the allowed approach
+    t = u - normal
+    speed = float(np.linalg.norm(t))
+    left = speed if no_mu else speed - budget  # the tangential speed left
+    states = np.where(touching, STICK if left <= tol else SLIP, FREE).astype(np.int8)
+    if not moved:
+        return states
+    if not no_mu and speed > 0:  # the division guard: no tangential velocity keeps none
+        u = normal + t * (1.0 - min(budget, speed) / speed)
     v[node] = u
+    return states

@@ -67,6 +67,8 @@ class Domain:
             x: positions, shape=(n, dim).
         """
         g = self.grid
+        # a particle on a slab's face goes to either rank with its round-off: no result
+        # depends on which (the nodal sums are exact integers, the MLS sums ordered by id)
         cell = np.floor((x[:, 0] - g.origin[0]) / g.spacing).astype(np.int64)
         cell = np.clip(cell, 0, g.cells[0] - 1)
         return np.searchsorted(self.cuts, cell, side="right") - 1

@@ -58,12 +58,14 @@ if TYPE_CHECKING:  # imported only by a step that uses them
 __all__ = [
     "BACKENDS",
     "MASS_FLOOR",
+    "REST_TOL",
     "SCHEMES",
     "SMOOTHINGS",
     "ParticlesLeftGrid",
     "StepSettings",
     "local_damping",
     "particle_strain_energy",
+    "rest_speed",
     "step",
     "strain_energy",
     "time_step",
@@ -80,8 +82,20 @@ BACKENDS = ("numba", "numpy")
 #: adjoint applied to the stresses, :mod:`~geofrac.mpm.consistent`).
 SMOOTHINGS = ("standard", "consistent")
 
-#: Nodes lighter than this fraction of the heaviest node are inactive.
+#: Nodes lighter than this fraction of the heaviest node (over all ranks) are inactive:
+#: no velocity, no acceleration, no contact. The mass a node takes from a particle
+#: grows from 0 with the particle's weight on it, so what the node gives the particles
+#: when it turns active is weighted by about this fraction: a knife edge of no
+#: consequence, and the same on every rank (the masses are exact sums).
 MASS_FLOOR = 1e-12
+
+#: A nodal velocity (component, or difference of two) at most this fraction of L/Δt,
+#: the speed of one cell per step, is zero: a billionth of a cell per step. Every
+#: velocity a stable step forms is below L/Δt (the Courant condition), so its round-off,
+#: and what a 1e-12 relative change of the input makes of a body at rest, lie far
+#: below; any motion lies far above. Used where a decision on the sign of a velocity
+#: jumps: the local damping's sign(v) and the contact's ties (:func:`rest_speed`).
+REST_TOL = 1e-9
 
 
 class ParticlesLeftGrid(RunError):
@@ -188,23 +202,36 @@ class StepSettings:
             raise ValueError(f"backend {self.backend!r} is not one of {', '.join(BACKENDS)}")
 
 
-def local_damping(f: np.ndarray, v: np.ndarray, alpha: float) -> np.ndarray:
+def rest_speed(spacing: float, dt: float) -> float:
+    """The speed at or below which a nodal velocity is at rest: :data:`REST_TOL` × L/Δt."""
+    return REST_TOL * spacing / dt
+
+
+def local_damping(f: np.ndarray, v: np.ndarray, alpha: float, rest: float = 0.0) -> np.ndarray:
     """Cundall's local damping force −α |f| sign(v), per node and component.
 
     The force of each component opposes the velocity with a fraction α of the
     unbalanced force (Cundall 1987; the "local damping" of geotechnical MPM codes such
-    as Anura3D). A node at rest (v = 0) is not damped; a body in equilibrium (f = 0)
-    feels none, so the static state is not shifted.
+    as Anura3D). A node at rest is not damped; a body in equilibrium (f = 0) feels
+    none, so the static state is not shifted.
+
+    At rest means |v_a| <= ``rest`` (:func:`rest_speed`). The force jumps by 2α|f| where
+    v_a changes sign, so for a body at rest under a load, whose nodal velocities are
+    0 ± round-off (a block held by friction on a slope), sign(v) would pick the damping
+    force's direction by the round-off; with the friction's Coulomb bound it then
+    decided stick or slip, and a relative change of the load of 1e-12 moved the block
+    by 0.5-0.9 % of its displacement in 0.3 s.
 
     Args:
         f: the nodal force (internal + external), shape=(N, dim).
         v: the nodal velocity at the step's start, shape=(N, dim).
         alpha: α in [0, 1).
+        rest: the speed at or below which a component is at rest (0: exactly 0).
 
     Returns:
         The damping force, shape=(N, dim) (add it to f).
     """
-    return -alpha * np.abs(f) * np.sign(v)
+    return -alpha * np.abs(f) * np.where(np.abs(v) > rest, np.sign(v), 0.0)
 
 
 def _scatter(w: Weights, terms: np.ndarray, bound: np.ndarray, num_nodes: int) -> np.ndarray:
@@ -504,13 +531,14 @@ def step(
     peak = mass.max(initial=0.0)
     if dom is not None:
         peak = dom.allmax(peak)
-    active = mass > MASS_FLOOR * peak
+    active = mass > MASS_FLOOR * peak  # relative to the heaviest node (MASS_FLOOR)
     if fast:
         v = kernels.scratch("v", (N, dim))
         kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
     else:
         v = _velocity(mom, mass, active, s.fixed)
     allow = None
+    rest = rest_speed(g.spacing, dt)  # velocities at or below it are ties (REST_TOL)
     if s.friction is not None:  # the contact holds every nodal velocity (friction.py)
         from geofrac.mpm.friction import apply_friction, approach_allowed
 
@@ -519,7 +547,7 @@ def step(
         lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
         allow = approach_allowed(s.friction, p.x, lp, w.nodes, w.phi, N, dt, dom)
         v_mapped = v.copy()
-        apply_friction(v, s.friction, allow)
+        apply_friction(v, s.friction, allow, tol=rest)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):
         _update_stress(w, p, material, v, half * dt, s, smooth_at, budget)
@@ -541,7 +569,7 @@ def step(
         f = _complete(acc, bound, dom, fast)
     f_damp, f_total = None, f
     if s.damping > 0:  # a branch: no extra work without damping
-        f_damp = local_damping(f, v, s.damping)
+        f_damp = local_damping(f, v, s.damping, rest)
         f_total = f + f_damp
     if fast:
         a, v_new = kernels.scratch("a", (N, dim)), kernels.scratch("v_new", (N, dim))
@@ -552,7 +580,7 @@ def step(
         a[s.fixed] = 0.0
         v_new = v + dt * a
     if s.friction is not None:
-        apply_friction(v_new, s.friction, allow)
+        apply_friction(v_new, s.friction, allow, tol=rest)
         # the particles take every change the contact made, the mapped velocity's too
         # (else the approach it removed stays in their velocity, step after step, and
         # its friction is lost: a launched block slid 8 % too far)
@@ -589,7 +617,7 @@ def step(
         else:
             v = _velocity(mom, mass, active, s.fixed)
         if s.friction is not None:
-            apply_friction(v, s.friction, allow)
+            apply_friction(v, s.friction, allow, tol=rest)
         _update_stress(w, p, material, v, half * dt, s, smooth_at, budget)
     if budget is not None:
         budget.transfer += 0.5 * float(np.sum(p.mass * np.sum((p.v - v_start) ** 2, axis=1)))
@@ -620,6 +648,13 @@ def _check_inside(g: Grid, p: Particles, s: StepSettings) -> None:
 
     With a domain: against the whole grid, on every rank alike; then a RunError when a
     particle's support reaches beyond its rank's sub-grid (the halo is too narrow).
+
+    The comparison is exact, without a tolerance: a support reaching exactly to the
+    grid's last node has the weight 0 beyond it (the shapes' supports are open), so the
+    weights need no node outside; one reaching past it by round-off would need one.
+    Material only gets there through the padding beyond a wall, or, with no padding,
+    pressed onto a boundary at the grid's edge by its elastic compression (a fraction of
+    a millimetre, not round-off): an error on any machine.
     """
     gimp, fast = s.shape in ("ugimp", "cpgimp"), s.backend == "numba"
     margin = support_margin(s.shape, g.spacing)
@@ -645,7 +680,9 @@ def _check(p: Particles, dom: Domain | None = None, fast: bool = False) -> None:
     """Raise RunError when a particle's state turned non-finite or its volume non-positive.
 
     A NaN is never carried into the next step: the error names the first particles.
-    With a domain every rank raises it, naming the particles of all ranks.
+    With a domain every rank raises it, naming the particles of all ranks. ``volume > 0``
+    is exact: a volume that a step shrinks to 0 or less by (1 + tr Δε) <= 0 has been
+    crushed by a strain of −100 % in one step, an unstable step on any machine.
     """
     if fast:
         from geofrac.mpm import kernels

@@ -14,7 +14,15 @@ import numpy as np
 
 from geofrac.mpm.particles import Particles, lattice, particles
 
-__all__ = ["from_cells", "from_lattice", "geostatic", "mesh_cells"]
+__all__ = ["COLUMN_TOL", "from_cells", "from_lattice", "geostatic", "mesh_cells"]
+
+#: Tolerance of :func:`geostatic`'s columns and layers, relative to the column width
+#: (the cell size): particles whose heights differ by at most this are one layer, and a
+#: particle within it below a column's edge belongs to the column above the edge. The
+#: centroids of a mesh's cells carry round-off of a few ulps of the coordinates; without
+#: it, two particles of one row of cells would be two layers (the lower one bearing the
+#: upper one's whole weight instead of half) or change column with the round-off.
+COLUMN_TOL = 1e-9
 
 
 def from_lattice(
@@ -117,7 +125,8 @@ def geostatic(p: Particles, gravity: np.ndarray, nu: float, width: float) -> Non
     column per unit column area, σ_v = −Σ_above m_q |g| / w^(dim−1) (its own weight counts
     half), and the horizontal ones are K₀ σ_v with K₀ = ν / (1 − ν) (in 2D also the
     out-of-plane σ_zz of plane strain). Columns are bins of width ``width`` across the
-    vertical axis, which is the last one and must carry all of gravity.
+    vertical axis, which is the last one and must carry all of gravity; heights within
+    :data:`COLUMN_TOL` × ``width`` are one layer.
 
     Args:
         p: the particles, 2D or 3D.
@@ -129,7 +138,7 @@ def geostatic(p: Particles, gravity: np.ndarray, nu: float, width: float) -> Non
     g = np.asarray(gravity, dtype=float)
     if dim < 2 or np.any(g[:-1] != 0) or not g[-1] < 0:
         raise ValueError("geostatic stress needs 2D/3D particles and gravity along -(last axis)")
-    cols = np.floor(p.x[:, :-1] / width).astype(np.int64)
+    cols = np.floor(p.x[:, :-1] / width + COLUMN_TOL).astype(np.int64)
     _, column = np.unique(cols, axis=0, return_inverse=True)
     height = p.x[:, -1]
     order = np.lexsort((-height, column.ravel()))  # by column, top first
@@ -137,7 +146,8 @@ def geostatic(p: Particles, gravity: np.ndarray, nu: float, width: float) -> Non
     weight = p.mass[order] * -g[-1] / width ** (dim - 1)
     # particles at one height in a column form a layer: each sees the layers above it
     # plus half its own layer
-    layer = np.r_[0, np.cumsum((np.diff(col) != 0) | (np.diff(y) != 0))]
+    # (y falls within a column: a new layer where it falls by more than the tolerance)
+    layer = np.r_[0, np.cumsum((np.diff(col) != 0) | (np.diff(y) < -COLUMN_TOL * width))]
     layer_weight = np.bincount(layer, weights=weight)
     first = np.r_[True, np.diff(col) != 0][np.r_[0, np.flatnonzero(np.diff(layer)) + 1]]
     above = np.cumsum(layer_weight) - layer_weight

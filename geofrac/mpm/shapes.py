@@ -186,6 +186,8 @@ def weights(g: Grid, x: np.ndarray, lp: np.ndarray | None = None, bspline: bool 
     k1 = idx.shape[2]
     upper = np.asarray(g.shape)[None, :, None] - 1
     off = (idx < 0) | (idx > upper)
+    # exactly 0 beyond the open support, so a box reaching exactly to the grid's edge
+    # passes (the same comparison as Grid.outside's, which the step runs first)
     if np.any(off & (phi1 != 0.0)):
         raise ValueError("weights: a particle's support reaches beyond the grid")
     idx = np.clip(idx, 0, upper)

@@ -21,7 +21,7 @@ from geofrac.fem.elastic import ElasticProblem
 from geofrac.fracture.cells import fe_matrices
 from geofrac.materials import d_matrix, lame
 from geofrac.scene import SceneError, load_scene, load_scene_collective
-from geofrac.scene.load import SECTION_KEYS
+from geofrac.scene.load import ELEMENT_INDEPENDENT, SECTION_KEYS
 from tests.conftest import JOBS
 from tests.elements.helpers import E_MOD, NU, distorted_mesh, free_stiffness
 from tests.fem.helpers import solve_job
@@ -35,6 +35,7 @@ OPTION_VALUES = {
     "gradient_bc": "free",
     "q_rand": "0.5",
     "domain_seed": "3",
+    "renumber": "5",
 }
 #: A small closed-form job per dimension: (job, overrides, probe).
 CASES = {
@@ -162,7 +163,7 @@ def test_loader_takes_the_declared_options_and_refuses_the_others(name, dim):
     assert scene.discretization.zero_mode_penalty == default
     for key in SECTION_KEYS["discretization"][1:]:
         override = f"discretization.{key}={OPTION_VALUES[key]}"
-        if key in spec.options:
+        if key in spec.options or key in ELEMENT_INDEPENDENT:
             load_scene(JOBS / f"{job}.toml", [*base, override])
         else:
             with pytest.raises(SceneError, match=f"applies only to elements .*not '{name}'"):
