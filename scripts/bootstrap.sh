@@ -2,6 +2,11 @@
 # Create the virtual environment VENV (default .venv) with a Python >= 3.12 and install
 # geofrac with its test extras into it. Called by the Makefile on first use; safe to rerun.
 #
+# The versions are the lock's, scripts/constraints.txt: what `make test` passed with in CI
+# (pip itself and the build backend included). GEOFRAC_LATEST=1 installs the newest
+# releases instead (`make test-latest`), so that an upgrade is tried on purpose; the
+# stamp file $VENV/.geofrac-installed says which ("locked" or "latest").
+#
 # The interpreter is searched for in this order:
 #   $GEOFRAC_PYTHON, python3.12, python3.13, python3.14, pyenv-installed 3.12+ versions,
 #   `uv python find`, python3, python.
@@ -62,9 +67,21 @@ MSG
     exit 1
 fi
 
+lock="$root/scripts/constraints.txt"
 echo "geofrac: creating $venv with $python ($("$python" -c 'import sys; print(sys.version.split()[0])'))"
 "$python" -m venv "$venv"
-"$venv/bin/python" -m pip install --quiet --upgrade pip
-"$venv/bin/python" -m pip install --quiet -e "$root[test]"
+pip=("$venv/bin/python" -m pip install --quiet --disable-pip-version-check)
+if [ -n "${GEOFRAC_LATEST:-}" ]; then
+    echo "geofrac: GEOFRAC_LATEST is set: installing the newest releases, not the lock"
+    "${pip[@]}" --upgrade pip setuptools
+    "${pip[@]}" --upgrade --upgrade-strategy eager -e "$root[test]"
+    kind=latest
+else
+    echo "geofrac: installing the versions of scripts/constraints.txt"
+    # pip and the build backend from the lock first; the editable build then uses them
+    "${pip[@]}" -c "$lock" pip setuptools
+    "${pip[@]}" -c "$lock" --no-build-isolation -e "$root[test]"
+    kind=locked
+fi
 "$venv/bin/python" -c 'import dolfinx_solver, dolfinx, gmsh; print("geofrac: DOLFINx", dolfinx.__version__, "gmsh", gmsh.__version__)'
-touch "$venv/.geofrac-installed"
+echo "$kind" > "$venv/.geofrac-installed"
