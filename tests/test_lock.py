@@ -8,6 +8,7 @@ and ``make lock`` writes them into the lock.
 from __future__ import annotations
 
 import sys
+import sysconfig
 import tomllib
 from importlib import metadata
 from pathlib import Path
@@ -66,9 +67,12 @@ def test_pip_itself_is_pinned():
 )
 def test_the_venv_holds_exactly_the_locked_versions():
     """The venv's packages are the lock's: each at its version, and nothing else."""
+    # the venv's site-packages only: not the packages setuptools vendors and puts on
+    # sys.path once it is imported (cffi's compiler does), which pip does not install
+    where = sorted({sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]})
     installed = {
         canonicalize_name(d.metadata["Name"]): d.version
-        for d in metadata.distributions()
+        for d in metadata.distributions(path=where)
         if canonicalize_name(d.metadata["Name"]) != "geofrac"
     }
     pins = locked()
