@@ -18,7 +18,6 @@ import numpy as np
 
 from geofrac.fracture.config import CrackingConfig
 from geofrac.fracture.criterion import edge_principal, select_edges
-from geofrac.fracture.topology import EdgeMesh
 from geofrac.fracture.units import SiteState
 
 __all__ = ["EdgeCriterion", "EventCriterion", "next_sites"]
@@ -78,7 +77,6 @@ class EdgeCriterion:
 
     def __init__(self, state: SiteState, config: CrackingConfig) -> None:
         self.state, self.config = state, config
-        assert isinstance(state.mesh, EdgeMesh)
         #: the edge midpoints, shape=(num_edges, 2).
         self.points = state.mesh.midpoints()
 

@@ -162,11 +162,6 @@ def test_tied_edges_crack_in_the_same_place_on_any_machine(name):
 JAEGER_SIZE = float(np.hypot(W, H))
 
 
-def contact_run(overrides: list[str], comm: MPI.Comm = MPI.COMM_SELF) -> tuple[list, dict]:
-    """(event rows, results) of the coarse Jaeger scene with ``overrides`` (collective)."""
-    return run(*overrides, comm=comm)
-
-
 def perturbed(perturb: Perturb, overrides: list[str]) -> list[str]:
     """The Jaeger case's overrides with a perturbation's on the coarse mesh."""
     return overrides + perturb(JAEGER, [*COARSE, *overrides])
@@ -227,7 +222,7 @@ def test_jaeger_specimen_pulled_in_tension_never_records_an_event():
     """
     base = CONTACT_CASES["pulled_open"]
     for name, perturb in PERTURBATIONS.items():
-        rows, res = contact_run(perturbed(perturb, base))
+        rows, res = run(*perturbed(perturb, base))
         assert not rows, (name, rows[0])
         assert res["end_reason"] == "separated", (name, res["end_reason"])
         assert res["contact"]["open"] == res["contact"]["pairs"] > 0, (name, res["contact"])
@@ -237,8 +232,8 @@ def test_jaeger_specimen_pulled_in_tension_never_records_an_event():
 @pytest.mark.parametrize("case", CONTACT_CASES)
 def test_contact_states_survive_perturbation(case, name):
     base = CONTACT_CASES[case]
-    reference = contact_run(base)
-    other = contact_run(perturbed(PERTURBATIONS[name], base))
+    reference = run(*base)
+    other = run(*perturbed(PERTURBATIONS[name], base))
     diff = same_run(reference, other)
     assert not diff, f"{case} with {name}: " + "; ".join(diff)
 
@@ -247,8 +242,8 @@ def test_contact_states_survive_perturbation(case, name):
 @pytest.mark.parametrize("case", CONTACT_CASES)
 def test_contact_states_on_two_ranks_of_a_permuted_mesh(case):
     base = CONTACT_CASES[case]
-    reference = contact_run(base, MPI.COMM_SELF)
-    parallel = contact_run([*base, "discretization.renumber=3"], MPI.COMM_WORLD)
+    reference = run(*base, comm=MPI.COMM_SELF)
+    parallel = run(*base, "discretization.renumber=3", comm=MPI.COMM_WORLD)
     diff = same_run(reference, parallel)
     assert not diff, f"{case} on {MPI.COMM_WORLD.size} ranks: " + "; ".join(diff)
     ends = MPI.COMM_WORLD.allgather((parallel[1]["end_reason"], len(parallel[0])))
