@@ -25,6 +25,13 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
 - ``switch`` (``"patch"``; ``efmm`` only): which nodes a cracked interface switches to
   C-MultiMLSM: ``"patch"`` the vertices of the triangles it crosses, ``"grain"`` only
   the two nodes whose grains it separates (the thesis's literal rule, docs/granular.md).
+- ``criterion`` (``"direction"``; element edges): which edge cracks.
+  ``"direction"``: a crack tip grows, when the largest σ1 of the edges within
+  ``averaging_radius`` of it (default: twice the mean length of its edges) reaches f_t,
+  along the edge that follows the direction of the stress averaged over that radius;
+  new cracks start where the traction across an edge n·σ·n reaches f_t;
+  ``"traction"``: n·σ·n on every edge; ``"principal"``: Edo (2016), §2.3.2, σ1 at the
+  edge's midpoint (docs/cracking.md, "Mesh dependence").
 - ``mls_region``: ``[x0, y0, x1, y1]``: cells whose centroid is inside use MLS from the
   start (the patch test's core).
 - ``control``: the Dirichlet group whose prescribed displacement is the load (default:
@@ -69,7 +76,7 @@ from typing import TYPE_CHECKING, Any
 from geofrac import elements
 from geofrac.effects import ConfigureContext
 from geofrac.elements.kinematics import KINDS
-from geofrac.fracture import SOLVERS
+from geofrac.fracture import CRITERION_NAMES, SOLVERS
 from geofrac.fracture.config import CrackingConfig, JointProperties
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import finite, short
@@ -121,6 +128,8 @@ KEYS = (
     "precracked_fraction",
     "precrack_seed",
     "switch",
+    "criterion",
+    "averaging_radius",
     "contact",
     *CONTACT_KEYS,
 )
@@ -378,6 +387,28 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "'reuse' (CG) needs a symmetric system; friction on slipping faces makes it "
             "unsymmetric: use 'update' or 'refactor' with contact",
         )
+    criterion = table.get("criterion", CRITERION_NAMES[0])
+    if not isinstance(criterion, str) or criterion not in CRITERION_NAMES:
+        raise SceneError(
+            file,
+            "cracking.criterion",
+            f"must be one of {', '.join(CRITERION_NAMES)}, got {short(criterion)}"
+            + did_you_mean(str(criterion), list(CRITERION_NAMES)),
+        )
+    for key in ("criterion", "averaging_radius"):
+        if key in table and spec.cracking != "edges":
+            raise SceneError(
+                file,
+                f"cracking.{key}",
+                f"applies to elements cracked at edges, not '{ctx.element}' (grain "
+                "interfaces crack by their own traction, docs/granular.md)",
+            )
+    if "averaging_radius" in table and criterion != "direction":
+        raise SceneError(
+            file,
+            "cracking.averaging_radius",
+            f"applies to criterion = 'direction' only, not '{criterion}'",
+        )
     shear_c = getattr(ctx.material, "cohesion", None)
     return CrackingConfig(
         method=method,
@@ -401,6 +432,8 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         precracked_fraction=_number(table, file, "precracked_fraction", 0.0, float, 0.0, 1.0),
         precrack_seed=_number(table, file, "precrack_seed", 0, int, 0),
         switch=switch,
+        criterion=criterion,
+        averaging_radius=_number(table, file, "averaging_radius", None, float, 0.0, closed=False),
         shear_cohesion=None if shear_c is None else float(shear_c),
         shear_friction_angle=float(getattr(ctx.material, "friction_angle", 0.0)),
         **contact,

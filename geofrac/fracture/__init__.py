@@ -3,6 +3,7 @@
 Pure numpy modules: :mod:`~geofrac.fracture.topology`, :mod:`~geofrac.fracture.visibility`,
 :mod:`~geofrac.fracture.cells`, :mod:`~geofrac.fracture.state`,
 :mod:`~geofrac.fracture.grains`, :mod:`~geofrac.fracture.criterion`,
+:mod:`~geofrac.fracture.direction`,
 :mod:`~geofrac.fracture.woodbury`. The driver (:mod:`~geofrac.fracture.driver`) composes
 parts behind protocols: :mod:`~geofrac.fracture.units` (the crack state's
 discretisation), :mod:`~geofrac.fracture.event_criterion`,
@@ -12,7 +13,11 @@ discretisation), :mod:`~geofrac.fracture.event_criterion`,
 :mod:`~geofrac.fracture.grain_driver`.
 """
 
-__all__ = ["SOLVERS"]
+__all__ = ["CRITERION_NAMES", "SOLVERS"]
 
 #: Solvers of the event loop (``cracking.solver``), the default first.
 SOLVERS = ("update", "reuse", "refactor")
+
+#: Edge criteria (``cracking.criterion``), the default first
+#: (:data:`~geofrac.fracture.event_criterion.CRITERIA`).
+CRITERION_NAMES = ("direction", "traction", "principal")

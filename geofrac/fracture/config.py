@@ -64,3 +64,8 @@ class CrackingConfig:
     #: ``friction_angle`` in degrees): None for tension-only cracking.
     shear_cohesion: float | None = None
     shear_friction_angle: float = 0.0
+    #: the edge criterion (:data:`~geofrac.fracture.event_criterion.CRITERIA`).
+    criterion: str = "direction"
+    #: the radius R of a crack tip's zone and averaged stress (``"direction"``); None:
+    #: :data:`~geofrac.fracture.direction.RADIUS_FACTOR` mean lengths of the tip's edges.
+    averaging_radius: float | None = None

@@ -49,7 +49,7 @@ from geofrac.fracture.context import (
     crack_context,
     facet_nodes,
 )
-from geofrac.fracture.event_criterion import EdgeCriterion, EventCriterion
+from geofrac.fracture.event_criterion import CRITERIA, EventCriterion
 from geofrac.fracture.faces import Faces
 from geofrac.fracture.linear import SolverStrategy, Timing, make_strategy
 from geofrac.fracture.loop import EventLoop
@@ -94,8 +94,11 @@ class EdgeVariant:
         return EdgeUnits(ctx)
 
     def criterion(self, ctx: CrackContext, units: Units) -> EventCriterion:
-        """:class:`~geofrac.fracture.event_criterion.EdgeCriterion`."""
-        return EdgeCriterion(units.state, ctx.config)
+        """The ``cracking.criterion`` of :data:`~geofrac.fracture.event_criterion.CRITERIA`."""
+        assert isinstance(units, EdgeUnits)
+        kind = CRITERIA[ctx.config.criterion]
+        units.keep_stress |= kind.needs_stress
+        return kind(units, ctx.config)
 
     def drawing(self, ctx: CrackContext, units: Units, sites: Sites) -> SiteDrawing:
         """:class:`~geofrac.fracture.output.EdgeDrawing`."""

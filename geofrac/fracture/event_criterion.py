@@ -1,26 +1,56 @@
 """The event criterion: which crack sites crack next, and the load factor of the event.
 
-An :class:`EventCriterion` turns the units' largest principal stresses
-(:meth:`~geofrac.fracture.units.Units.measures`) into one σ1 per crack site and picks
-the sites with least r = f_t / σ1 (Edo (2016), eq. 2.20; 3.8 for grains). The edge
-variant :class:`EdgeCriterion` averages the two cells of an edge at its midpoint; the
-grain variant (:class:`~geofrac.fracture.grain_driver.GrainCriterion`) takes the larger
-of the two grains at the interface centre. A new criterion is one more class with these
-two methods, passed to :class:`~geofrac.fracture.driver.CrackDriver` in its
-:class:`~geofrac.fracture.driver.Parts`.
+An :class:`EventCriterion` turns the units' stresses under the unit load into one drive
+per crack site and picks the sites with least r = f_t / drive (Edo (2016), eq. 2.20;
+3.8 for grains). The edge criteria, by ``cracking.criterion`` (:data:`CRITERIA`):
+
+- ``"direction"`` (:class:`DirectionCriterion`, the default): a crack tip grows, when
+  the largest σ1 about it reaches f_t, along the edge that follows the direction of
+  the stress averaged about the tip; new cracks start where the traction across an
+  edge reaches f_t (:mod:`~geofrac.fracture.direction`);
+- ``"traction"`` (:class:`TractionCriterion`): the traction across each edge, n·σ·n;
+- ``"principal"`` (:class:`EdgeCriterion`): Edo (2016), §2.3.2: σ1 at the edge's
+  midpoint, the mean of its two cells'.
+
+The grain variant (:class:`~geofrac.fracture.grain_driver.GrainCriterion`) takes the
+larger of the two grains at the interface centre. A new criterion is one more class with
+these methods and one line in :data:`CRITERIA`; the loop calls :meth:`~EventCriterion.cracked`
+after each event and keeps :meth:`~EventCriterion.snapshot` in its checkpoints.
 """
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from geofrac.fracture.config import CrackingConfig
-from geofrac.fracture.criterion import edge_principal, select_edges
+from geofrac.fracture.contact import edge_frames
+from geofrac.fracture.criterion import edge_means, edge_principal, normal_stress, select_edges
+from geofrac.fracture.direction import (
+    Tip,
+    TipTracker,
+    averaged_stress,
+    choose_edge,
+    growth_direction,
+    nucleation_tips,
+    tip_nodes,
+)
 from geofrac.fracture.units import SiteState
 
-__all__ = ["EdgeCriterion", "EventCriterion", "next_sites"]
+if TYPE_CHECKING:
+    from geofrac.fracture.context import JsonValue
+    from geofrac.fracture.units import EdgeUnits
+
+__all__ = [
+    "CRITERIA",
+    "DirectionCriterion",
+    "EdgeCriterion",
+    "EventCriterion",
+    "StatelessCriterion",
+    "TractionCriterion",
+    "next_sites",
+]
 
 
 class EventCriterion(Protocol):
@@ -33,11 +63,23 @@ class EventCriterion(Protocol):
     points: np.ndarray
 
     def site_stress(self, unit_s1: np.ndarray) -> np.ndarray:
-        """σ1 per crack site from the units' values, shape=(num_sites,)."""
+        """The drive per crack site from the units' σ1 values, shape=(num_sites,)."""
         ...
 
     def select(self, sigma1: np.ndarray, *, floor: float) -> tuple[np.ndarray, float]:
-        """(sites that crack, shape=(k,), k ≥ 1 unless none has σ1 > ``floor``; r)."""
+        """(sites that crack, shape=(k,), k ≥ 1 unless none has a drive > ``floor``; r)."""
+        ...
+
+    def cracked(self, sites: np.ndarray) -> None:
+        """``sites`` (shape=(k,)) cracked in the event just recorded."""
+        ...
+
+    def snapshot(self) -> dict[str, JsonValue]:
+        """What a checkpoint must keep of the criterion's own state (JSON)."""
+        ...
+
+    def restore(self, data: dict[str, JsonValue]) -> None:
+        """Set the criterion's own state from :meth:`snapshot`."""
         ...
 
 
@@ -67,18 +109,34 @@ def next_sites(
     )
 
 
-class EdgeCriterion:
-    """Element edges: σ1 of an edge is the mean of its cells' values at its midpoint.
+class StatelessCriterion:
+    """The criterion keeps no state of its own between events."""
+
+    def cracked(self, sites: np.ndarray) -> None:
+        """Nothing to update."""
+
+    def snapshot(self) -> dict[str, JsonValue]:
+        """Nothing to keep."""
+        return {}
+
+    def restore(self, data: dict[str, JsonValue]) -> None:
+        """Nothing to restore."""
+
+
+class EdgeCriterion(StatelessCriterion):
+    """Edo (2016), §2.3.2: σ1 of an edge is the mean of its cells' values at its midpoint.
 
     Args:
-        state: the edge crack state.
+        units: the edge units.
         config: the ``[cracking]`` settings.
     """
 
-    def __init__(self, state: SiteState, config: CrackingConfig) -> None:
-        self.state, self.config = state, config
+    needs_stress = False
+
+    def __init__(self, units: EdgeUnits, config: CrackingConfig) -> None:
+        self.state, self.config = units.state, config
         #: the edge midpoints, shape=(num_edges, 2).
-        self.points = state.mesh.midpoints()
+        self.points = self.state.mesh.midpoints()
 
     def site_stress(self, unit_s1: np.ndarray) -> np.ndarray:
         """σ1 per edge from σ1 per cell at its local edges, shape=(num_cells, 3)."""
@@ -87,3 +145,134 @@ class EdgeCriterion:
     def select(self, sigma1: np.ndarray, *, floor: float) -> tuple[np.ndarray, float]:
         """The edges of least r (:func:`next_sites`)."""
         return next_sites(self.state, self.config, sigma1, floor=floor, points=self.points)
+
+
+class TractionCriterion(EdgeCriterion):
+    """The traction across each edge, n·σ·n, with σ the mean of its cells' at the midpoint.
+
+    Args:
+        units: the edge units (their stress tensors: ``keep_stress``).
+        config: the ``[cracking]`` settings.
+    """
+
+    needs_stress = True
+
+    def __init__(self, units: EdgeUnits, config: CrackingConfig) -> None:
+        super().__init__(units, config)
+        self.units = units
+        #: unit normals of the edges, shape=(num_edges, 2).
+        self.normals = edge_frames(self.state.mesh)[1]
+        #: the edges' mean stress of the last :meth:`site_stress`, shape=(num_edges, 3).
+        self.edge_stress = np.zeros((0, 3))
+
+    def site_stress(self, unit_s1: np.ndarray) -> np.ndarray:
+        """n·σ·n per edge, shape=(num_edges,)."""
+        self.edge_stress = edge_means(self.state.mesh, self.units.midpoint_stress)
+        return normal_stress(self.edge_stress, self.normals)
+
+
+class DirectionCriterion(TractionCriterion):
+    """Tips grow along the averaged stress's direction; new cracks start by the traction.
+
+    See :mod:`geofrac.fracture.direction`. A tip's zone (the open edges at it or within
+    R of it) offers one edge, chosen by :func:`choose_edge` along the direction of the
+    stress averaged about the tip, driven by the largest σ1 of the zone's edges; every
+    other edge is driven by the traction across it, n·σ·n.
+
+    Args:
+        units: the edge units (their stress tensors: ``keep_stress``).
+        config: the ``[cracking]`` settings (``averaging_radius``).
+    """
+
+    def __init__(self, units: EdgeUnits, config: CrackingConfig) -> None:
+        super().__init__(units, config)
+        mesh = self.state.mesh
+        self.on_boundary = np.zeros(len(mesh.coords), dtype=bool)
+        self.on_boundary[mesh.edges[mesh.boundary_edges].ravel()] = True
+        self.tracker = TipTracker(mesh, self.on_boundary, config.averaging_radius)
+        self._s1 = np.zeros(0)
+        #: what each selected edge starts: edge -> [(node, tip)].
+        self._grown: dict[int, list[tuple[int, Tip]]] = {}
+        #: per tip of the last :meth:`select`: (node, zone drive, direction, edge or -1).
+        self.last_tips: list[tuple[int, float, np.ndarray, int]] = []
+
+    def site_stress(self, unit_s1: np.ndarray) -> np.ndarray:
+        """n·σ·n per edge, shape=(num_edges,); tips are judged in :meth:`select`."""
+        self._s1 = edge_principal(self.state.mesh, unit_s1)
+        return super().site_stress(unit_s1)
+
+    def select(self, sigma1: np.ndarray, *, floor: float) -> tuple[np.ndarray, float]:
+        """The edges of least r once the tips' zones have chosen their edges."""
+        state, tracker = self.state, self.tracker
+        mesh = state.mesh
+        cracked = state.cracked
+        open_ = ~cracked & state.crackable
+        cell_stress = self.units.midpoint_stress.mean(axis=1)  # shape=(num_cells, 3)
+        drive = sigma1.copy()
+        blocked = np.zeros(len(drive), dtype=bool)
+        chosen: dict[int, list[tuple[int, Tip]]] = {}
+        tip_drive: dict[int, float] = {}
+        tips = tip_nodes(mesh, cracked, self.on_boundary)
+        tracker.prune(tips)
+        self.last_tips = []
+        for a in tips.tolist():
+            cells, dist, near = tracker.near(a)
+            at = tracker.edges_at(a)
+            zone = np.union1d(near, at)
+            zone = zone[open_[zone]]
+            peak = float(self._s1[zone].max()) if len(zone) else -np.inf
+            tip = tracker.tip(a, cracked)
+            if not peak > floor or not len(cells):
+                self.last_tips.append((a, peak, tip.direction, -1))
+                continue
+            s_bar = averaged_stress(
+                cell_stress[cells], tracker.areas[cells], dist, tracker.tip_radius(a)
+            )
+            _, d = growth_direction(s_bar, tip.direction)
+            cand = at[open_[at]]
+            ends = mesh.edges[cand]
+            others = np.where(ends[:, 0] == a, ends[:, 1], ends[:, 0])
+            pick = choose_edge(mesh.coords, a, tip, d, cand, others)
+            if pick is None:  # no edge leads on: the zone's edges stay sites of their own
+                self.last_tips.append((a, peak, d, -1))
+                continue
+            blocked[zone] = True
+            e, p = pick
+            b = int(others[cand == e][0])
+            chosen.setdefault(e, []).append((b, Tip(p, d.copy())))
+            tip_drive[e] = max(tip_drive.get(e, -np.inf), peak)
+            self.last_tips.append((a, peak, d, e))
+        drive[blocked] = -np.inf
+        for e, s1 in tip_drive.items():
+            drive[e] = s1
+        edges, r = next_sites(state, self.config, drive, floor=floor, points=self.points)
+        self._grown = {}
+        for e in edges.tolist():
+            if e in chosen:
+                self._grown[e] = chosen[e]
+            else:
+                a, b = mesh.edges[e]
+                starts = nucleation_tips(mesh.coords[[a, b]], self.edge_stress[e])
+                self._grown[e] = [(int((a, b)[i]), t) for i, t in starts]
+        return edges, r
+
+    def cracked(self, sites: np.ndarray) -> None:
+        """Track the tips the cracked edges start (shear cracks: their own direction)."""
+        self.tracker.cracked(sites, self._grown)
+        self._grown = {}
+
+    def snapshot(self) -> dict[str, JsonValue]:
+        """The tracked tips (:meth:`~geofrac.fracture.direction.TipTracker.snapshot`)."""
+        return {"tips": self.tracker.snapshot()}  # type: ignore[dict-item]
+
+    def restore(self, data: dict[str, JsonValue]) -> None:
+        """Set the tracked tips."""
+        self.tracker.restore(data.get("tips", {}))  # type: ignore[arg-type]
+
+
+#: Edge criteria by ``cracking.criterion``.
+CRITERIA: dict[str, type[EdgeCriterion]] = {
+    "direction": DirectionCriterion,
+    "traction": TractionCriterion,
+    "principal": EdgeCriterion,
+}

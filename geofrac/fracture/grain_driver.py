@@ -44,7 +44,7 @@ from geofrac.elements.efmm_numpy import NodeOperator, integration_domains, node_
 from geofrac.errors import RunError
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
 from geofrac.fracture.criterion import normal_stress
-from geofrac.fracture.event_criterion import EventCriterion, next_sites
+from geofrac.fracture.event_criterion import EventCriterion, StatelessCriterion, next_sites
 from geofrac.fracture.grains import GrainState, connected_cracks, interfaces, side_sites
 from geofrac.fracture.output import FrameData, SiteDrawing
 from geofrac.fracture.state import MlsSettings, segment_distance
@@ -418,7 +418,7 @@ class GrainUnits:
         }
 
 
-class GrainCriterion:
+class GrainCriterion(StatelessCriterion):
     """Grain interfaces: σ1 of an interface is the larger of its two grains' (Edo (2016), §3.3.1).
 
     Args:

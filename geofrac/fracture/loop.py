@@ -76,6 +76,8 @@ class _Start:
     face_hit: tuple[int, float] | None
     extra: dict[str, JsonValue]
     timing: dict[str, JsonValue]
+    #: the criterion's own state (``EventCriterion.snapshot``).
+    criterion: dict[str, JsonValue]
     #: crack-face contact (:meth:`~geofrac.fracture.faces.Faces.snapshot`), or None.
     contact: tuple[dict[str, JsonValue], dict[str, np.ndarray]] | None = None
 
@@ -250,6 +252,7 @@ class EventLoop:
                 else:
                     self.modes[cracked] = 1 + MODES.index(mode)
                     changed = state.crack_many(cracked)
+                    self.criterion.cracked(np.array(cracked, dtype=np.int64))
                     strategy.changed(changed)
                     units.changed(changed)
                     if contact is not None:
@@ -464,6 +467,7 @@ class EventLoop:
             pinned_nodes=held.pinned_nodes,
             face_hit=face_hit,
             extra=self.units.checkpoint_extra(),
+            criterion=self.criterion.snapshot(),
             contact=None if self.contact is None else self.contact.snapshot(),
             timing={
                 "factorizations": t.factorizations,
@@ -499,6 +503,7 @@ class EventLoop:
             "face_hit": None if ref.face_hit is None else list(ref.face_hit),
             "timing": ref.timing,
             "extra": ref.extra,
+            "criterion": ref.criterion,
         }
         arrays = {
             "u_prev": ref.u_prev,
@@ -539,6 +544,7 @@ class EventLoop:
         self.timing.refinements = int(t["refinements"])  # type: ignore[arg-type]
         self.timing.stale = {k: int(v) for k, v in t["stale"].items()}  # type: ignore[union-attr, arg-type]
         self.units.restore_extra(data.get("extra", {}))  # type: ignore[arg-type]
+        self.criterion.restore(data.get("criterion", {}))  # type: ignore[arg-type]
         if self.contact is not None:
             if "contact" not in data:
                 raise RunError(f"--resume: {ck.path} was written without crack-face contact")

@@ -103,8 +103,14 @@ class CrackState:
         size = 3.0 * float(np.median(lengths))
         self.node_bins = PointIndex(m.coords)
         self.crack_bins = Bins(size)
-        #: edges no cell may crack: those of frozen cells (shape=(num_edges,)).
-        self.crackable = np.ones(len(m.edges), dtype=bool)
+        #: the boundary edges: no satellite is seen out of the body (a notch, a hole).
+        self.boundary_bins = Bins(size)
+        for e in np.flatnonzero(m.boundary_edges).tolist():
+            a, b = seg[e]
+            self.boundary_bins.add(e, np.minimum(a, b), np.maximum(a, b))
+        #: edges that may crack: interior edges (two cells; an edge on the boundary has
+        #: no second face to open) not of frozen cells, shape=(num_edges,).
+        self.crackable = ~m.boundary_edges
         self.crackable[np.unique(m.cell_edges[self.frozen])] = False
         self._h = np.zeros(m.num_cells)
 
@@ -271,4 +277,5 @@ class CrackState:
             target=s.neighbours,
             max_radius=s.max_radius_factor * size,
             margin=s.margin,
+            boundary_bins=self.boundary_bins,
         )

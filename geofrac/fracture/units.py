@@ -426,7 +426,9 @@ class EdgeUnits:
         return (
             f"{len(state.mesh.edges)} edges, {precracked} pre-cracked, "
             f"{len(state.fits)} MLS cells ({len(state.void_cells())} void), "
-            f"{int((~state.crackable).sum())} edges frozen next to Dirichlet nodes"
+            f"{int((~state.crackable & ~state.mesh.boundary_edges).sum())} edges frozen next "
+            f"to Dirichlet nodes, {int(state.mesh.boundary_edges.sum())} on the boundary "
+            "(no crack sites)"
         )
 
     def checkpoint_extra(self) -> dict[str, JsonValue]:

@@ -2,7 +2,10 @@
 
 Definition (used everywhere in geofrac): node I is *visible* from cracked cell c when the
 closed segment from the centroid x_c of c to x_I has no point in common with any cracked
-edge (within a tolerance of 1e-9 times the segment length). Consequences:
+edge (within a tolerance of 1e-9 times the segment length) and does not leave the body:
+it crosses no boundary edge and passes through no boundary node before x_I
+(:func:`leaves`; a node across a notch or a hole is not a satellite, although no crack
+lies between). Consequences:
 
 - the cell's own vertices and nodes across one of its uncracked edges are visible, nodes
   across one of its cracked edges are not: the visible region seen from the centroid is
@@ -24,7 +27,7 @@ from collections import defaultdict
 
 import numpy as np
 
-__all__ = ["Bins", "PointIndex", "blocked", "orient", "visible_nodes"]
+__all__ = ["Bins", "PointIndex", "blocked", "leaves", "orient", "visible_nodes"]
 
 #: Relative tolerance of the segment tests.
 TOLERANCE = 1e-9
@@ -138,6 +141,43 @@ def blocked(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
     return hit.any(axis=1)
 
 
+def leaves(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Whether each segment p–q_k leaves the body through the boundary edges a_j–b_j.
+
+    It does when it crosses an edge at a point inside both (a proper crossing, beyond
+    the tolerance of :func:`blocked`), or passes through an edge's end point before q_k
+    (a boundary node: a corner of a notch). Touching the boundary at q_k itself, where
+    a boundary node ends the segment, is not leaving.
+
+    Args:
+        p: common start point inside the body, shape=(2,).
+        q: end points, shape=(k, 2).
+        a: first end points of the boundary edges, shape=(m, 2).
+        b: second end points of the boundary edges, shape=(m, 2).
+
+    Returns:
+        shape=(k,).
+    """
+    if len(a) == 0 or len(q) == 0:
+        return np.zeros(len(q), dtype=bool)
+    P = np.broadcast_to(p, q.shape)[:, None, :]
+    Q, A, B = q[:, None, :], a[None, :, :], b[None, :, :]
+    scale = np.maximum(np.abs(q - p).max(axis=1), 1e-300)[:, None]
+    obst = np.maximum(np.abs(b - a).max(axis=1), 1e-300)[None, :]
+    tol = TOLERANCE * scale * np.maximum(scale, obst)
+    o1, o2 = orient(P, Q, A), orient(P, Q, B)
+    o3, o4 = orient(A, B, P), orient(A, B, Q)
+    proper = (o1 * o2 < 0) & (np.abs(o1) > tol) & (np.abs(o2) > tol)
+    proper &= (o3 * o4 < 0) & (np.abs(o3) > tol) & (np.abs(o4) > tol)
+    d = q - p
+    dd = np.maximum(np.sum(d * d, axis=1), 1e-300)[:, None]
+    inside = np.zeros(proper.shape, dtype=bool)
+    for end, o in ((A, o1), (B, o2)):
+        t = np.sum((end - P) * d[:, None, :], axis=-1) / dd
+        inside |= (np.abs(o) <= tol) & (t > TOLERANCE) & (t < 1.0 - TOLERANCE)
+    return (proper | inside).any(axis=1)
+
+
 def visible_nodes(
     centre: np.ndarray,
     coords: np.ndarray,
@@ -148,6 +188,7 @@ def visible_nodes(
     target: int,
     max_radius: float,
     margin: float = 1.1,
+    boundary_bins: Bins | None = None,
 ) -> tuple[np.ndarray, float]:
     """Visible nodes of a cracked cell and the influence radius h.
 
@@ -166,6 +207,8 @@ def visible_nodes(
         target: number of visible nodes wanted.
         max_radius: largest search radius.
         margin: h / (distance of the target-th node), > 1.
+        boundary_bins: bins of the boundary edges (ids index ``crack_segments``), or
+            None for a body that nothing can be seen out of (:func:`leaves`).
 
     Returns:
         (visible node ids sorted by distance, shape=(n,); h). n may be < target.
@@ -181,7 +224,7 @@ def visible_nodes(
     while True:
         top = min(i + LOOKAHEAD, len(ladder) - 1)
         ids, dist = _visible_within(
-            centre, coords, node_bins, crack_bins, crack_segments, ladder[top]
+            centre, coords, node_bins, crack_bins, crack_segments, ladder[top], boundary_bins
         )
         counts = np.searchsorted(dist, ladder[i : top + 1], side="right")
         enough = np.flatnonzero((counts >= target) | (np.arange(i, top + 1) == len(ladder) - 1))
@@ -194,7 +237,9 @@ def visible_nodes(
         return ids[:0], radius
     h = margin * float(dist[min(target, n) - 1])
     if h > ladder[top]:  # nodes beyond the evaluated radius: look again
-        ids, dist = _visible_within(centre, coords, node_bins, crack_bins, crack_segments, h)
+        ids, dist = _visible_within(
+            centre, coords, node_bins, crack_bins, crack_segments, h, boundary_bins
+        )
     inside = dist < h
     return ids[inside], h
 
@@ -206,6 +251,7 @@ def _visible_within(
     crack_bins: Bins,
     crack_segments: np.ndarray,
     radius: float,
+    boundary_bins: Bins | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(visible node ids within ``radius``, sorted by distance; their distances)."""
     cand = node_bins.query(centre, radius)
@@ -216,5 +262,14 @@ def _visible_within(
         seg = crack_segments[edges]
         hidden = blocked(centre, coords[cand], seg[:, 0], seg[:, 1])
         cand, d = cand[~hidden], d[~hidden]
+    edges = (
+        np.zeros(0, dtype=np.int64)
+        if boundary_bins is None
+        else boundary_bins.query(centre, radius)
+    )
+    if len(edges):
+        seg = crack_segments[edges]
+        out = leaves(centre, coords[cand], seg[:, 0], seg[:, 1])
+        cand, d = cand[~out], d[~out]
     order = np.lexsort((cand, d))
     return cand[order], d[order]

@@ -90,13 +90,15 @@ def ends_without_an_absurd_event(rows: list, res: dict) -> bool:
     In uniaxial compression between smooth platens σ_xx = 0: the only tension is the
     MLS cells' few per cent of |σ_yy| next to the crack, which would reach f_t = 1000 c
     at a shortening three times the specimen's height. The run ends ``separated`` with
-    that reason instead of recording such an event.
+    that reason instead of recording such an event, or, when the criterion judges the
+    averaged stress (``"direction"``, the default) in which that tension does not reach
+    the floor, ``no_tensile_edge``.
     """
-    return (
-        not rows
-        and res["end_reason"] == "separated"
-        and "beyond the specimen's size" in res["end_detail"]
-    )
+    if rows:
+        return False
+    if res["end_reason"] == "no_tensile_edge":
+        return True
+    return res["end_reason"] == "separated" and "beyond the specimen's size" in res["end_detail"]
 
 
 def slip_stress(beta: float, comm: MPI.Comm = MPI.COMM_SELF) -> float:

@@ -98,7 +98,47 @@ def test_driver_first_event_under_uniform_strain(strain):
     are frozen), so the mean of two equal cell values is that value.
     """
     sets = [f"exact.{k}={v}" for k, v in zip(("exx", "eyy", "gxy"), strain, strict=True)]
-    events = run_case(str(SCENE), sets, MPI.COMM_SELF)
+    events = run_case(str(SCENE), [*sets, "cracking.criterion=principal"], MPI.COMM_SELF)
     sigma = D @ np.array(strain)
     assert events.count == 1 and events.end_reason == "max_events"
     assert events.load_factor[0] == pytest.approx(FT / closed_form_sigma1(sigma), rel=1e-9)
+
+
+@pytest.mark.parametrize("criterion", ["traction", "direction"])
+@pytest.mark.parametrize("strain", [(0.002, -0.0005, 0.0), (0.001, 0.0005, 0.002)])
+def test_first_event_under_uniform_strain_by_traction(strain, criterion):
+    """The traction criteria's first event: r = f_t / max n·σ·n over the crack sites.
+
+    No crack has a tip before the first event, so the direction criterion starts one
+    where the traction across an edge is largest. The sites are the interior edges of
+    the cells that touch no boundary node (the whole boundary is held); the edge
+    normals come from the mesh's coordinates, the traction from the closed-form stress.
+    """
+    from geofrac.effects.cracking import scene_driver
+    from geofrac.scene import load_scene_collective
+
+    sets = [f"exact.{k}={v}" for k, v in zip(("exx", "eyy", "gxy"), strain, strict=True)]
+    scene = load_scene_collective(MPI.COMM_SELF, SCENE, [*sets, f"cracking.criterion={criterion}"])
+    driver = scene_driver(scene, MPI.COMM_SELF)
+    try:
+        driver.run()
+    finally:
+        driver.problem.destroy()
+    mesh = driver.state.mesh
+    x, cells = mesh.coords, mesh.cells
+    pairs = np.sort(np.concatenate([cells[:, [1, 2]], cells[:, [2, 0]], cells[:, [0, 1]]]), axis=1)
+    keys, count = np.unique(pairs, axis=0, return_counts=True)
+    boundary_nodes = np.unique(keys[count == 1])
+    held_cells = np.isin(cells, boundary_nodes).any(axis=1)
+    held = np.unique(
+        np.sort(np.concatenate([c[[[1, 2], [2, 0], [0, 1]]] for c in cells[held_cells]]), axis=1),
+        axis=0,
+    )
+    sites = keys[(count == 2) & ~(keys[:, None, :] == held[None]).all(axis=2).any(axis=1)]
+    t = x[sites[:, 1]] - x[sites[:, 0]]
+    n = np.stack([-t[:, 1], t[:, 0]], axis=1) / np.hypot(*t.T)[:, None]
+    sx, sy, sxy = D @ np.array(strain)
+    traction = sx * n[:, 0] ** 2 + sy * n[:, 1] ** 2 + 2 * sxy * n[:, 0] * n[:, 1]
+    rows = driver.rows
+    assert len(rows) == 1
+    assert rows[0]["load_factor"] == pytest.approx(FT / traction.max(), rel=1e-9)
