@@ -64,3 +64,8 @@ class CrackingConfig:
     #: ``friction_angle`` in degrees): None for tension-only cracking.
     shear_cohesion: float | None = None
     shear_friction_angle: float = 0.0
+    #: how ``control`` drives the events: "displacement" (a [[bc]] group) or "force"
+    #: (a traction, pressure or point [[load]] group).
+    control_kind: str = "displacement"
+    #: force control: read the displacement at the mesh node nearest to this point.
+    control_point: tuple[float, float] | None = None
