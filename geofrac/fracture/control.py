@@ -148,10 +148,9 @@ def force_control(
     if not total > 0.0:
         raise ValueError(f"the [[load]] on '{group}' gives no nodal force")
     size = float(np.hypot(*resultant))
-    direction: np.ndarray | None = resultant / size
-    unit = size
-    if size <= SELF_EQUILIBRATED * total:
-        direction, unit = None, total
+    balanced = size <= SELF_EQUILIBRATED * total
+    direction = None if balanced else resultant / size
+    unit = total if balanced else size
     node = dofs = None
     if point_dofs is not None:
         if direction is None:
