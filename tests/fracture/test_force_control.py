@@ -1,4 +1,4 @@
-"""Force control: a traction, pressure or point load drives the events (issue 43, item 3).
+"""Force control: a traction, pressure or point load drives the events.
 
 A 5 x 5 plate on rollers pulled by a uniform traction σ on its right side
 (scenes/plate_force.toml) carries the uniform uniaxial stress σ_xx = σ, which CST
