@@ -89,6 +89,19 @@ def test_pressure_load_drives_the_events():
     assert driver.rows[0]["control_displacement"] == pytest.approx(DISPLACEMENT_1, rel=1e-9)
 
 
+def test_point_load_force_is_thickness_times_its_value():
+    """A point load is a force per unit thickness: F = t |P| (docs/scenes.md, "Loads")."""
+    beam = SCENES.parents[1] / "fem" / "point_beam.toml"  # point load [0, 1] on "tip"
+    sets = ('effects=["cracking"]', 'discretization.element="cst"')
+    sets += ("material.tensile_strength=1.0", "material.thickness=2.0", "cracking.max_events=1")
+    driver, res = run(beam, *sets)
+    assert res["control"]["group"] == "tip" and res["control"]["kind"] == "force"
+    assert res["control"]["unit_force"] == pytest.approx(2.0, rel=1e-12)
+    np.testing.assert_allclose(res["control"]["resultant"], [0.0, 2.0], atol=1e-12)
+    row = driver.rows[0]
+    assert row["reaction"] == pytest.approx(row["load_factor"] * 2.0, rel=1e-12)
+
+
 def test_force_control_of_a_self_equilibrated_and_a_point_load():
     """F is the resultant; a balanced load (a pressure in a hole) has F = Σ|f_i|."""
     bs = 2
