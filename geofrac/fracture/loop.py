@@ -219,7 +219,7 @@ class EventLoop:
                 if len(edges) == 0:
                     end = "no_tensile_edge"
                     break
-                detail = scales.beyond(r, first_r)
+                detail = scales.beyond(r, first_r, control_displacement=r * unit[1])
                 if detail is not None:
                     end = "separated"
                     break

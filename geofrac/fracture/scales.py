@@ -133,13 +133,26 @@ class Scales:
             f"the unit-load strain energy {energy:.3g} is below {SEPARATED:g} of {of} ({scale:.3g})"
         )
 
-    def beyond(self, load_factor: float, first_load_factor: float | None) -> str | None:
+    def beyond(
+        self,
+        load_factor: float,
+        first_load_factor: float | None,
+        *,
+        control_displacement: float | None = None,
+    ) -> str | None:
         """Why an event at ``load_factor`` would be an artefact of a lost load path, or None.
 
-        The control displacement r δ must stay within the specimen's size L, and r within
-        :data:`MAX_LOAD_RATIO` times the first event's (None at the first event).
+        The event's control displacement must stay within the specimen's size L, and r
+        within :data:`MAX_LOAD_RATIO` times the first event's (None at the first event).
+        ``control_displacement``: the event's |control displacement| as measured (force
+        control: r |δ_u|, :meth:`~geofrac.fracture.control.Control.measure`); default
+        r δ, the control displacement of displacement control.
         """
-        control = load_factor * self.displacement
+        control = (
+            load_factor * self.displacement
+            if control_displacement is None
+            else abs(control_displacement)
+        )
         if not control <= self.length:
             return (
                 f"the next event would need a control displacement of {control:.3g}, beyond "

@@ -80,6 +80,18 @@ def test_control_point_reads_the_nearest_node_along_the_load():
     assert row["reaction"] == pytest.approx(FORCE_1, rel=1e-9)
 
 
+def test_force_control_ends_when_the_plate_is_cut_through():
+    """Once a crack crosses the plate the load finds no path: the run ends ``separated``.
+
+    The bound is the measured control displacement r δ_u against the plate's diagonal,
+    not the a-priori r F/(E t), which stays far below it while the loaded side runs off.
+    """
+    driver, res = run(FORCE, "cracking.max_events=300")
+    assert res["end_reason"] == "separated"
+    assert "beyond the specimen's size" in res["end_detail"]
+    assert max(abs(r["control_displacement"]) for r in driver.rows) <= L * np.sqrt(2.0)
+
+
 def test_pressure_load_drives_the_events():
     """A pressure p < 0 pulls (traction −p n): the same plate, the same first event."""
     driver, res = run(FORCE, "load.0.type=pressure", "load.0.value=[-1.0]")
