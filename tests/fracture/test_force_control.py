@@ -54,6 +54,20 @@ def test_traction_first_event_is_the_closed_form():
     assert unit["stiffness"] == pytest.approx(E * L * T / L, rel=1e-9)
 
 
+def test_grain_interfaces_under_force_control():
+    """EFMM (grain interfaces): F and the force column are exact, the rest near the bar's.
+
+    EFMM's grain fields reproduce a uniform stress only approximately: r, hence the
+    displacement, within a relative 1e-5 of the closed form.
+    """
+    driver, res = run(FORCE, "discretization.element=efmm")
+    row = driver.rows[0]
+    assert res["control"]["unit_force"] == pytest.approx(SIGMA * L * T, rel=1e-12)
+    assert row["reaction"] == pytest.approx(row["load_factor"] * SIGMA * L * T, rel=1e-12)
+    assert row["reaction"] == pytest.approx(FORCE_1, rel=1e-5)
+    assert row["control_displacement"] == pytest.approx(DISPLACEMENT_1, rel=1e-5)
+
+
 def test_displacement_twin_gives_the_same_first_event():
     driver, res = run(TWIN)
     row = driver.rows[0]
