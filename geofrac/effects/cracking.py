@@ -78,6 +78,7 @@ from geofrac.effects import ConfigureContext
 from geofrac.elements.kinematics import KINDS
 from geofrac.fracture import SOLVERS
 from geofrac.fracture.config import CrackingConfig, JointProperties
+from geofrac.fracture.control import FORCE_LOADS
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import finite, short
 
@@ -133,9 +134,6 @@ KEYS = (
     "contact",
     *CONTACT_KEYS,
 )
-
-#: Load types a ``control`` group may carry (force control).
-FORCE_LOADS = ("traction", "pressure", "point")
 
 #: Keys of a ``[cracking.joints.NAME]`` table.
 JOINT_KEYS = ("friction", "cohesion")
@@ -250,12 +248,8 @@ def _control(table: dict[str, Any], ctx: ConfigureContext) -> tuple[str, str]:
     """
     file = ctx.file
     bc_groups = [bc.group for bc in ctx.bcs]
-    moving = [
-        bc.group
-        for bc in ctx.bcs
-        if bc.value == "exact" or any(v != 0 for v in bc.value)  # type: ignore[union-attr]
-    ]
     nonzero = [bc.group for bc in ctx.bcs if bc.value != "exact" and any(v != 0 for v in bc.value)]
+    moving = [*nonzero, *(bc.group for bc in ctx.bcs if bc.value == "exact")]
     forces = [ld.group for ld in ctx.loads if ld.type in FORCE_LOADS]
     default = nonzero[0] if nonzero else (forces[0] if forces else None)
     control = table.get("control", default)

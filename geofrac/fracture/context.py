@@ -26,7 +26,12 @@ from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem
 from geofrac.fem.solution import Solution
 from geofrac.fracture.config import CrackingConfig
-from geofrac.fracture.control import Control, displacement_control, force_control
+from geofrac.fracture.control import (
+    FORCE_LOADS,
+    Control,
+    displacement_control,
+    force_control,
+)
 from geofrac.fracture.scales import Scales
 from geofrac.materials import d_matrix, lame
 from geofrac.meshing.distribute import TaggedMesh
@@ -53,9 +58,6 @@ if TYPE_CHECKING:
     from petsc4py import PETSc
 
 _T = TypeVar("_T")
-
-#: Load types that may drive the events (:data:`geofrac.effects.cracking.FORCE_LOADS`).
-FORCE_LOADS = ("traction", "pressure", "point")
 
 
 @dataclass

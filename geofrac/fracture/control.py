@@ -27,10 +27,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["KINDS", "SELF_EQUILIBRATED", "Control", "displacement_control", "force_control"]
+__all__ = [
+    "FORCE_LOADS",
+    "KINDS",
+    "SELF_EQUILIBRATED",
+    "Control",
+    "displacement_control",
+    "force_control",
+]
 
 #: The kinds of ``cracking.control``.
 KINDS = ("displacement", "force")
+
+#: ``[[load]]`` types whose group may be the control (force control); a body force acts
+#: on no group.
+FORCE_LOADS = ("traction", "pressure", "point")
 
 #: A control load whose resultant is below this fraction of the sum of its nodal forces'
 #: magnitudes Σ|f_i| is self-equilibrated (a pressure on a closed boundary: zero in exact
