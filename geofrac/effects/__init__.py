@@ -75,6 +75,8 @@ class ConfigureContext:
         gradient_bc: the scene's ``discretization.gradient_bc``.
         previous: the configurations of the effects declared before this one, by name
             (``cracking`` reads the ``dfn`` fracture sets' names).
+        loads: the validated loads (:class:`geofrac.model.scene.Load`; ``cracking``
+            reads the one its ``control`` names).
     """
 
     file: str
@@ -86,6 +88,7 @@ class ConfigureContext:
     method: str = "fem"
     gradient_bc: str = "consistent"
     previous: dict[str, Any] = field(default_factory=dict)
+    loads: tuple = ()
 
 
 def available() -> tuple[str, ...]:

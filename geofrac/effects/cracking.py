@@ -25,7 +25,8 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
 - ``switch`` (``"patch"``; ``efmm`` only): which nodes a cracked interface switches to
   C-MultiMLSM: ``"patch"`` the vertices of the triangles it crosses, ``"grain"`` only
   the two nodes whose grains it separates (the thesis's literal rule, docs/granular.md).
-- ``criterion`` (``"direction"``; element edges): which edge cracks.
+- ``criterion`` (``"direction"``; ``"principal"``, the only one, for grain interfaces):
+  which edge cracks.
   ``"direction"``: a crack tip grows, when the largest σ1 of the edges within
   ``averaging_radius`` of it (default: twice the mean length of its edges) reaches f_t,
   along the edge that follows the direction of the stress averaged over that radius;
@@ -34,8 +35,15 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
   edge's midpoint (docs/cracking.md, "Mesh dependence").
 - ``mls_region``: ``[x0, y0, x1, y1]``: cells whose centroid is inside use MLS from the
   start (the patch test's core).
-- ``control``: the Dirichlet group whose prescribed displacement is the load (default:
-  the first ``[[bc]]`` with a non-zero value).
+- ``control``: the group whose load each event scales and whose displacement and force
+  the event log reports: a ``[[bc]]`` group with a non-zero prescribed displacement
+  (displacement control), or a ``[[load]]`` group of type traction, pressure or point
+  (force control; a body force cannot). Default: the first ``[[bc]]`` with a non-zero
+  value, else the first such ``[[load]]``. Every load and prescribed displacement of the
+  scene scales with r either way (docs/cracking.md, "Loads that drive the events").
+- ``control_point``: ``[x, y]``, force control only: report the displacement of the
+  mesh node nearest to this point along the control load's resultant instead of the
+  load's work-conjugate displacement.
 - ``edges_per_event`` (1), ``batch_tolerance`` (0): crack up to ``edges_per_event`` edges
   with r ≤ (1 + batch_tolerance) r_min in one event.
 - ``solver`` (``"update"``): ``"update"`` keeps one factorisation and corrects its
@@ -78,6 +86,7 @@ from geofrac.effects import ConfigureContext
 from geofrac.elements.kinematics import KINDS
 from geofrac.fracture import CRITERION_NAMES, SOLVERS
 from geofrac.fracture.config import CrackingConfig, JointProperties
+from geofrac.fracture.control import FORCE_LOADS
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import finite, short
 
@@ -91,6 +100,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CONTACT_KEYS",
+    "FORCE_LOADS",
     "KEYS",
     "LIMITS",
     "STRAIGHT_CELLS",
@@ -117,6 +127,7 @@ KEYS = (
     "precracked",
     "mls_region",
     "control",
+    "control_point",
     "edges_per_event",
     "batch_tolerance",
     "solver",
@@ -238,6 +249,99 @@ def _contact(table: dict[str, Any], ctx: ConfigureContext, precracked: list[str]
     }
 
 
+def _control(table: dict[str, Any], ctx: ConfigureContext) -> tuple[str, str]:
+    """The group whose load each event scales, and its kind: "displacement" or "force".
+
+    A ``[[bc]]`` group with a non-zero (or ``exact``) prescribed displacement, else a
+    ``[[load]]`` group of a type in :data:`FORCE_LOADS` with a non-zero value. Default:
+    the first non-zero ``[[bc]]``, else the first such ``[[load]]``.
+    """
+    file = ctx.file
+    bc_groups = [bc.group for bc in ctx.bcs]
+    nonzero = [bc.group for bc in ctx.bcs if bc.value != "exact" and any(v != 0 for v in bc.value)]
+    moving = [*nonzero, *(bc.group for bc in ctx.bcs if bc.value == "exact")]
+    forces = [ld.group for ld in ctx.loads if ld.type in FORCE_LOADS]
+    default = nonzero[0] if nonzero else (forces[0] if forces else None)
+    control = table.get("control", default)
+    either = (
+        "a [[bc]] group with a non-zero displacement or a traction, pressure or point "
+        "[[load]] group"
+    )
+    if control is None:
+        raise SceneError(
+            file,
+            "cracking.control",
+            "no [[bc]] prescribes a non-zero displacement and no [[load]] is a traction, "
+            f"pressure or point load, so nothing drives the events; name {either}",
+        )
+    if not isinstance(control, str):
+        raise SceneError(file, "cracking.control", f"must be a group name, got {short(control)}")
+    if control in moving:
+        return control, "displacement"
+    if control in forces:
+        load = next(ld for ld in ctx.loads if ld.group == control and ld.type in FORCE_LOADS)
+        if load.value != "exact" and all(v == 0 for v in load.value):
+            raise SceneError(
+                file,
+                "cracking.control",
+                f"the {load.type} [[load]] on '{control}' is zero: the unit load that each "
+                "event scales must push the control group",
+            )
+        return control, "force"
+    if control in ("body_force", "gravity"):
+        raise SceneError(
+            file,
+            "cracking.control",
+            f"'{control}': a body force cannot drive the events (it acts on no group, so "
+            f"no force or displacement of a group can be reported); name {either}",
+        )
+    if control in bc_groups:
+        raise SceneError(
+            file,
+            "cracking.control",
+            f"the [[bc]] group '{control}' prescribes no non-zero displacement: the unit load "
+            "that each event scales must move or push the control group"
+            + (f" (groups that do: {', '.join([*nonzero, *forces])})" if nonzero or forces else ""),
+        )
+    if control in ctx.groups:
+        raise SceneError(
+            file,
+            "cracking.control",
+            f"the group '{control}' has neither a [[bc]] nor a [[load]]; name {either}"
+            + did_you_mean(control, [*moving, *forces]),
+        )
+    raise SceneError(
+        file,
+        "cracking.control",
+        f"must name {either}" + did_you_mean(control, [*bc_groups, *forces]),
+    )
+
+
+def _control_point(table: dict[str, Any], file: str, kind: str) -> tuple[float, float] | None:
+    """``control_point`` [x, y]: where a force control's displacement is read, or None."""
+    point = table.get("control_point")
+    if point is None:
+        return None
+    if kind != "force":
+        raise SceneError(
+            file,
+            "cracking.control_point",
+            "applies when cracking.control names a [[load]] group (force control) only",
+        )
+    if (
+        not isinstance(point, list)
+        or len(point) != 2
+        or not all(isinstance(c, int | float) and not isinstance(c, bool) for c in point)
+        or not all(finite(c) for c in point)
+    ):
+        raise SceneError(
+            file,
+            "cracking.control_point",
+            f"must be [x, y], two finite numbers, got {short(point)}",
+        )
+    return float(point[0]), float(point[1])
+
+
 def _check_basis(file: str, ctx: ConfigureContext) -> None:
     """Refuse conditions that give the vertex DOFs a change of basis (w = Q h).
 
@@ -327,30 +431,8 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
                 f"must be [x0, y0, x1, y1] with x0 < x1, y0 < y1, got {short(region)}",
             )
         region = tuple(float(c) for c in region)
-    nonzero = [bc.group for bc in ctx.bcs if bc.value != "exact" and any(v != 0 for v in bc.value)]
-    bc_groups = [bc.group for bc in ctx.bcs]
-    control = table.get("control", nonzero[0] if nonzero else None)
-    if control is None:
-        raise SceneError(
-            file,
-            "cracking.control",
-            "no [[bc]] prescribes a non-zero displacement; name the control group",
-        )
-    if not isinstance(control, str) or control not in bc_groups:
-        raise SceneError(
-            file,
-            "cracking.control",
-            "must name a [[bc]] group" + did_you_mean(str(control), bc_groups),
-        )
-    exact = [bc.group for bc in ctx.bcs if bc.value == "exact"]
-    if control not in nonzero and control not in exact:
-        raise SceneError(
-            file,
-            "cracking.control",
-            f"the [[bc]] group '{control}' prescribes no non-zero displacement: the unit load "
-            "that each event scales must move the control group"
-            + (f" (groups that do: {', '.join(nonzero)})" if nonzero else ""),
-        )
+    control, control_kind = _control(table, ctx)
+    control_point = _control_point(table, file, control_kind)
     face = table.get("face")
     if face is not None and (not isinstance(face, str) or face not in ctx.groups):
         raise SceneError(
@@ -387,7 +469,8 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "'reuse' (CG) needs a symmetric system; friction on slipping faces makes it "
             "unsymmetric: use 'update' or 'refactor' with contact",
         )
-    criterion = table.get("criterion", CRITERION_NAMES[0])
+    grains = spec.cracking != "edges"
+    criterion = table.get("criterion", "principal" if grains else CRITERION_NAMES[0])
     if not isinstance(criterion, str) or criterion not in CRITERION_NAMES:
         raise SceneError(
             file,
@@ -395,14 +478,13 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             f"must be one of {', '.join(CRITERION_NAMES)}, got {short(criterion)}"
             + did_you_mean(str(criterion), list(CRITERION_NAMES)),
         )
-    for key in ("criterion", "averaging_radius"):
-        if key in table and spec.cracking != "edges":
-            raise SceneError(
-                file,
-                f"cracking.{key}",
-                f"applies to elements cracked at edges, not '{ctx.element}' (grain "
-                "interfaces crack by their own traction, docs/granular.md)",
-            )
+    if grains and (criterion != "principal" or "averaging_radius" in table):
+        raise SceneError(
+            file,
+            "cracking.averaging_radius" if criterion == "principal" else "cracking.criterion",
+            f"'{ctx.element}' cracks grain interfaces by the larger σ1 of the two grains "
+            "(Edo (2016), eq. 3.8: criterion = 'principal', the only one it has)",
+        )
     if "averaging_radius" in table and criterion != "direction":
         raise SceneError(
             file,
@@ -420,6 +502,8 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         precracked=tuple(precracked),
         mls_region=region,
         control=control,
+        control_kind=control_kind,
+        control_point=control_point,
         edges_per_event=_number(table, file, "edges_per_event", 1, int, 1),
         batch_tolerance=_number(table, file, "batch_tolerance", 0.0, float, 0.0),
         solver=solver,

@@ -24,7 +24,7 @@ from geofrac.errors import RunError
 from geofrac.fem import loads
 from geofrac.materials import lame
 from geofrac.meshing.distribute import TaggedMesh
-from geofrac.model.scene import Scene
+from geofrac.model.scene import Load, Scene
 from geofrac.solvers import LinearSolver, rigid_body_modes
 from geofrac_forms import elasticity as forms
 from geofrac_forms.gradient_dofs import penalty_forms
@@ -154,27 +154,25 @@ class ElasticProblem:
     def _linear_form(self, v: Any) -> Any:
         """The distributed loads (:mod:`geofrac.fem.loads`) and the effects' terms as one form."""
         mesh, gdim = self.mesh, self.mesh.geometry.dim
-        terms = []
-        for load in self.scene.loads:
-            if load.type == "point":
-                continue  # added to the assembled vector (self.point_forces)
-            value = None
-            if load.value == "exact":
-                assert self.exact is not None
-                u_ex, sig = exact_ufl(self.exact, mesh)
-                if load.type == "traction":
-                    value = sig * ufl.FacetNormal(mesh)
-                else:  # the body force that makes u_exact an equilibrium state
-                    value = -ufl.div(forms.sigma(u_ex, self.lam, self.mu))
-            terms.append(
-                loads.load_form(load, v, self.tagged, self.ds, self.dx, self.thickness, value)
-            )
+        terms = [self._load_term(load, v) for load in self.scene.loads if load.type != "point"]
         ctx = FormContext(mesh, v, self.dx, self.thickness)
         terms += [term(ctx) for term in self.terms]
         if not terms:
             zero = dolfinx.fem.Constant(mesh, np.zeros(gdim, dtype=PETSc.ScalarType))
             terms.append(ufl.inner(zero, v) * self.dx)
         return sum(terms[1:], terms[0])
+
+    def _load_term(self, load: Load, v: Any) -> ufl.Form:
+        """The linear form of one distributed load (not ``point``)."""
+        value = None
+        if load.value == "exact":
+            assert self.exact is not None
+            u_ex, sig = exact_ufl(self.exact, self.mesh)
+            if load.type == "traction":
+                value = sig * ufl.FacetNormal(self.mesh)
+            else:  # the body force that makes u_exact an equilibrium state
+                value = -ufl.div(forms.sigma(u_ex, self.lam, self.mu))
+        return loads.load_form(load, v, self.tagged, self.ds, self.dx, self.thickness, value)
 
     #: whether the unknowns are in a changed basis (:class:`GradientDofProblem`).
     changes_basis = False
@@ -320,6 +318,31 @@ class ElasticProblem:
         b = dolfinx.fem.petsc.assemble_vector(self.L)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         self._add_point_forces(b)
+        return b
+
+    def load_part(self, index: int) -> PETSc.Vec:
+        """The load vector on the unknowns of the scene's load ``index`` alone (collective).
+
+        Without Dirichlet conditions and without the other loads and the effects' terms
+        (what :meth:`load_vector` sums); the caller destroys it.
+        """
+        load = self.scene.loads[index]
+        V = self.element.space
+        t = float(self.thickness.value)
+        if load.type == "point":
+            zero = dolfinx.fem.Constant(self.mesh, np.zeros(self.mesh.geometry.dim))
+            form = ufl.inner(zero, ufl.TestFunction(V)) * self.dx
+            points = loads.point_forces(self.tagged, V, (load,), t)
+        else:
+            form = self._load_term(load, ufl.TestFunction(V))
+            points = loads.point_forces(self.tagged, V, (), t)
+        b = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(form))
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        points.add_to(b)
+        return self._on_unknowns(b)
+
+    def _on_unknowns(self, b: PETSc.Vec) -> PETSc.Vec:
+        """A load vector of the displacement space on the unknowns: itself here."""
         return b
 
     def dirichlet(self) -> tuple[np.ndarray, np.ndarray]:
@@ -544,7 +567,10 @@ class GradientDofProblem(ElasticProblem):
 
     def load_vector(self) -> PETSc.Vec:
         """Qᵀ Tᵀ b_P2: the load vector on the unknowns, without Dirichlet conditions."""
-        b_v = super().load_vector()
+        return self._on_unknowns(super().load_vector())
+
+    def _on_unknowns(self, b_v: PETSc.Vec) -> PETSc.Vec:
+        """Qᵀ Tᵀ b_v of a load vector b_v on the displacement space (destroys b_v)."""
         try:
             b = self.element.prolongation().createVecRight()
             self.element.prolongation().multTranspose(b_v, b)

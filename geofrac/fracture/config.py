@@ -69,3 +69,8 @@ class CrackingConfig:
     #: the radius R of a crack tip's zone and averaged stress (``"direction"``); None:
     #: :data:`~geofrac.fracture.direction.RADIUS_FACTOR` mean lengths of the tip's edges.
     averaging_radius: float | None = None
+    #: how ``control`` drives the events: "displacement" (a [[bc]] group) or "force"
+    #: (a traction, pressure or point [[load]] group).
+    control_kind: str = "displacement"
+    #: force control: read the displacement at the mesh node nearest to this point.
+    control_point: tuple[float, float] | None = None

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -26,6 +26,12 @@ from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem
 from geofrac.fem.solution import Solution
 from geofrac.fracture.config import CrackingConfig
+from geofrac.fracture.control import (
+    FORCE_LOADS,
+    Control,
+    displacement_control,
+    force_control,
+)
 from geofrac.fracture.scales import Scales
 from geofrac.materials import d_matrix, lame
 from geofrac.meshing.distribute import TaggedMesh
@@ -47,6 +53,9 @@ JsonValue = int | float | str | bool | None | list["JsonValue"] | dict[str, "Jso
 
 #: Progress printer (rank 0 prints).
 Say = Callable[[str], None]
+
+if TYPE_CHECKING:
+    from petsc4py import PETSc
 
 _T = TypeVar("_T")
 
@@ -168,10 +177,14 @@ class CrackContext:
             elsewhere), shape=(n_global,).
         bc_row_nodes: node of each Dirichlet DOF, shape=(k,); bc_nodes: those nodes,
             unique.
-        control_rows, control_vals: the prescribed non-zero DOFs of ``control``.
+        control_rows, control_vals: the prescribed non-zero DOFs of ``control`` (empty
+            under force control).
         control_sign: their direction per DOF (0 elsewhere; one trailing 0 for the
-            padding index of the MLS table), shape=(n_global + 1,).
-        control_unit: mean |prescribed control displacement|.
+            padding index of the MLS table), shape=(n_global + 1,); all 0 under force
+            control, so the units' reaction on them is 0 and unused.
+        control_unit: the unit load's a-priori displacement δ: the mean |prescribed
+            control displacement|, or F/(E t) under force control (``scales.displacement``).
+        control: how the events' control displacement and force are measured.
         face_nodes: nodes of the ``face`` group, or None.
         scales: the unit load's a-priori scales (size, δ, E, volume) that the loop's
             decisions are judged against.
@@ -202,6 +215,7 @@ class CrackContext:
     control_vals: np.ndarray
     control_sign: np.ndarray
     control_unit: float
+    control: Control
     face_nodes: np.ndarray | None
     scales: Scales
 
@@ -242,6 +256,56 @@ class CrackContext:
         return out
 
 
+def _gather_vector(v: PETSc.Vec, comm: MPI.Comm) -> np.ndarray:
+    """The owned entries of every rank in global order, shape=(size_global,) (collective)."""
+    return np.concatenate(comm.allgather(np.array(v.getArray(readonly=True), dtype=float)))
+
+
+def _force(
+    config: CrackingConfig, problem: ElasticProblem, gm: GlobalMesh, *, bs: int, say: Say
+) -> Control:
+    """Force control by the traction, pressure and point loads on ``config.control``.
+
+    Their unit nodal forces are assembled alone (:meth:`ElasticProblem.load_part`) and
+    gathered on every rank. Collective.
+    """
+    scene, comm = problem.scene, problem.comm
+    forces = None
+    for i, load in enumerate(scene.loads):
+        if load.group != config.control or load.type not in FORCE_LOADS:
+            continue
+        v = problem.load_part(i)
+        try:
+            part = _gather_vector(v, comm)
+        finally:
+            v.destroy()
+        forces = part if forces is None else forces + part
+    if forces is None:  # the scene loader checked this
+        raise RunError(f"cracking.control: no [[load]] on '{config.control}'")
+    point = None
+    if config.control_point is not None:
+        xy = np.asarray(config.control_point)
+        node = int(np.argmin(np.hypot(*(gm.coords - xy).T)))
+        point = (node, gm.node_block[node] * bs + np.arange(2))
+    mat = scene.material
+    try:
+        control = force_control(
+            config.control, forces, bs=bs, modulus=mat.E, thickness=mat.thickness, point_dofs=point
+        )
+    except ValueError as exc:
+        raise RunError(f"cracking.control: {exc}") from None
+    text = f"F = {control.unit:.6g}"
+    if control.direction is None:
+        text += " (self-equilibrated: the sum of its nodal forces' magnitudes)"
+    if control.node is not None:
+        x, y = gm.coords[control.node]
+        text += (
+            f"; control_point reads node {int(gm.input_ids[control.node])} at ({x:.6g}, {y:.6g})"
+        )
+    say(f"cracking: force control by the [[load]] on '{config.control}', {text}")
+    return control
+
+
 def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> CrackContext:
     """The shared data of a set-up problem (collective)."""
     scene, problem, tagged = solution.scene, solution.problem, solution.tagged
@@ -271,20 +335,26 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
     bc_full[bc_rows] = bc_vals
     order = np.argsort(gm.node_block)
     bc_row_nodes = order[np.searchsorted(gm.node_block[order], bc_rows // bs)]
-    # the control group: its prescribed, non-zero DOFs
+    # the control group: its prescribed, non-zero DOFs (none under force control)
     control_nodes = np.unique(facet_nodes(tagged, gm, config.control))
     on = np.isin(bc_row_nodes, control_nodes) & (bc_vals != 0)
+    if config.control_kind == "force":
+        on[:] = False
     control_sign = np.zeros(n_global + 1)
     control_sign[bc_rows[on]] = np.sign(bc_vals[on])
     face_nodes = None
     if config.face is not None:
         face_nodes = np.unique(facet_nodes(tagged, gm, config.face))
-    control_unit = float(np.mean(np.abs(bc_vals[on]))) if np.any(on) else 0.0
-    if not control_unit > 0.0:
+    if config.control_kind == "force":
+        control = _force(config, problem, gm, bs=bs, say=say)
+    else:
+        control = displacement_control(config.control, bc_vals[on])
+    if not control.unit > 0.0:
         raise RunError(
             f"cracking.control: the group '{config.control}' prescribes no non-zero "
             "displacement, so there is no unit load to scale"
         )
+    control_unit = control.scale
     return CrackContext(
         config=config,
         scene=scene,
@@ -311,6 +381,7 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
         control_vals=bc_vals[on],
         control_sign=control_sign,
         control_unit=control_unit,
+        control=control,
         face_nodes=face_nodes,
         scales=Scales.of_mesh(
             gm.coords, gm.cells, displacement=control_unit, modulus=mat.E, thickness=mat.thickness

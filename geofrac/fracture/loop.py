@@ -1,6 +1,6 @@
 """The sequentially linear event loop (Edo (2016), Fig. 2.6), on any composition of parts.
 
-Each event: unit load (the scene's prescribed displacements as given) → solve
+Each event: unit load (the scene's loads and prescribed displacements as given) → solve
 (:class:`~geofrac.fracture.linear.SolverStrategy`) → σ1 of the units
 (:class:`~geofrac.fracture.units.Units`) → σ1 per site and the sites of least
 r = f_t/σ1 (:class:`~geofrac.fracture.event_criterion.EventCriterion`) → the solution
@@ -165,11 +165,12 @@ class EventLoop:
         output.open(rows, None if resume is None else float(done))
         started = time.perf_counter()
         error = None
-        #: the last solved unit-load state: (strain energy, control reaction).
-        unit: tuple[float, float] | None = None
+        #: the last solved unit-load state: (strain energy, control displacement, force).
+        unit: tuple[float, float, float] | None = None
         if cfg.max_events == 0:
             u_unit, _ = strategy.solve(u_unit, x, gather)
-            unit = units.measures(u_unit)[1:]
+            _, energy_unit, reaction_unit = units.measures(u_unit)
+            unit = (energy_unit, *ctx.control.measure(u_unit, reaction_unit))
             if ctx.problem.exact is not None:
                 error = units.l2_error(u_unit)
                 say(f"cracking: displacement error (2.22) {error:.4e}")
@@ -205,7 +206,7 @@ class EventLoop:
                 timing.iterations += its
                 t = time.perf_counter()
                 unit_s1, energy_unit, reaction_unit = units.measures(u_unit)
-                unit = (energy_unit, reaction_unit)
+                unit = (energy_unit, *ctx.control.measure(u_unit, reaction_unit))
                 sigma1 = self.criterion.site_stress(unit_s1)
                 first_r = rows[0]["load_factor"] if event > 1 and rows else None
                 detail = scales.separated(energy_unit, first_energy if event > 1 else None)
@@ -220,7 +221,7 @@ class EventLoop:
                 if len(edges) == 0:
                     end = "no_tensile_edge"
                     break
-                detail = scales.beyond(r, first_r)
+                detail = scales.beyond(r, first_r, control_displacement=r * unit[1])
                 if detail is not None:
                     end = "separated"
                     break
@@ -233,7 +234,7 @@ class EventLoop:
                             f"run {batches[event - 1]}; the checkpoint does not reproduce it"
                         )
                 else:
-                    row = self._row(event, edges, r, its, energy, reaction_unit)
+                    row = self._row(event, edges, r, its, energy, (unit[1], unit[2]))
                     row["mode"] = mode
                     if contact is not None:
                         row |= contact.record(r)
@@ -321,9 +322,13 @@ class EventLoop:
         r: float,
         its: int,
         energy: float,
-        reaction_unit: float,
+        control: tuple[float, float],
     ) -> Row:
-        """The event log's row of an event that cracked ``edges`` (the first is reported)."""
+        """The event log's row of an event that cracked ``edges`` (the first is reported).
+
+        ``control``: the unit solution's control displacement and force
+        (:meth:`~geofrac.fracture.control.Control.measure`); the row holds r times them.
+        """
         gm, state = self.ctx.gm, self.units.state
         a, b = state.mesh.edges[edges[0]]
         mid = self.units.site_point(int(edges[0]))
@@ -336,8 +341,8 @@ class EventLoop:
             "y": float(mid[1]),
             "r": r,
             "load_factor": r,
-            "control_displacement": r * self.ctx.control_unit,
-            "reaction": r * reaction_unit,
+            "control_displacement": r * control[0],
+            "reaction": r * control[1],
             "strain_energy": energy,
             "edges_cracked": len(edges),
             "iterations": its,
@@ -614,6 +619,7 @@ class EventLoop:
             }
             if cfg.face == "top":
                 out["crack_top_x_mm"] = x
+        out["control"] = ctx.control.describe(ctx.gm.input_ids, ctx.gm.coords)  # type: ignore[assignment]
         self.units.results(out, n_pre, len(self.sites.random))
         out["events_by_mode"] = {m: sum(1 for r in rows if r.get("mode") == m) for m in MODES}
         if self.contact is not None:
@@ -621,19 +627,20 @@ class EventLoop:
             out["contact"] = self.contact.summary(len(rows), control)  # type: ignore[assignment]
         return out
 
-    def _unit_load(self, energy: float, reaction: float) -> dict[str, JsonValue]:
+    def _unit_load(self, energy: float, delta: float, reaction: float) -> dict[str, JsonValue]:
         """The last solved unit-load state (the results' ``unit_load``).
 
-        What the body carries at the end under the scene's prescribed displacements as
-        given (before any scaling by r): also when the run ends before its first event
-        (a crack pulled open, a specimen in which no edge reaches tension).
+        What the body carries at the end under the scene's loads and prescribed
+        displacements as given (before any scaling by r): also when the run ends before
+        its first event (a crack pulled open, a specimen in which no edge reaches
+        tension). ``delta``, ``reaction``: the control displacement and force
+        (:meth:`~geofrac.fracture.control.Control.measure`); the stiffness is their ratio.
         """
-        delta = self.ctx.scales.displacement
         out: dict[str, JsonValue] = {
             "control_displacement": delta,
             "reaction": reaction,
             "strain_energy": energy,
-            "stiffness": reaction / delta,
+            "stiffness": reaction / delta if delta != 0.0 else None,  # a held control point
         }
         if self.contact is not None:
             pairs = self.contact.pairs

@@ -369,8 +369,14 @@ class EventOutput:
         ax.plot(d, [0.0] + [r["reaction"] for r in rows], lw=0.8, marker=".", ms=2)
         ax.xaxis.set_major_locator(MaxNLocator(6))
         units = self.ctx.scene.units
-        ax.set_xlabel(f"control displacement, {self.ctx.config.control} ({units.length})")
-        ax.set_ylabel(f"reaction on the control DOFs ({units.force})")
+        group, control = self.ctx.config.control, self.ctx.control
+        if control.kind == "force":
+            along = "work-conjugate" if control.node is None else "control_point node"
+            ax.set_xlabel(f"displacement of the load on {group}, {along} ({units.length})")
+            ax.set_ylabel(f"force of the load on {group} ({units.force})")
+        else:
+            ax.set_xlabel(f"control displacement, {group} ({units.length})")
+            ax.set_ylabel(f"reaction on the control DOFs ({units.force})")
         ax.set_title(f"{self.ctx.scene.name}: load against displacement, {len(rows)} events")
         fig.tight_layout()
         fig.savefig(self.out_dir / "load_displacement.png", dpi=90)

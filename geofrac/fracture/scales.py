@@ -1,7 +1,7 @@
 """The scales that every decision of the event loop is judged against (pure numpy).
 
-A sequentially linear run solves the *unit load* (the scene's prescribed displacements
-as given) and scales it by r (Edo (2016), eqs. 2.20-2.21). Whether the body still
+A sequentially linear run solves the *unit load* (the scene's loads and prescribed
+displacements as given) and scales it by r (Edo (2016), eqs. 2.20-2.21). Whether the body still
 carries load, whether an edge is in tension, whether a pair of crack faces is shut:
 each is a comparison of a computed number with zero, and a computed zero is round-off
 whose sign and size depend on the BLAS kernel, the number of ranks and the numbering of
@@ -9,8 +9,9 @@ the mesh. So each comparison is made against a stated scale with a stated tolera
 
 - a priori, from the scene alone (:class:`Scales`): the specimen's size L (diagonal of
   the mesh's bounding box), the unit load's displacement δ (the control group's mean
-  prescribed |u|), E and the volume V = t·area; from them the stress E δ / L and the
-  energy ½ E V (δ / L)² of a uniform strain δ / L;
+  prescribed |u|; under force control F/(E t), F the control load's resultant,
+  :mod:`~geofrac.fracture.control`), E and the volume V = t·area; from them the stress
+  E δ / L and the energy ½ E V (δ / L)² of a uniform strain δ / L;
 - from the solution being judged: its root-mean-square stress √(2 E W / V), W its
   strain energy.
 
@@ -59,7 +60,8 @@ class Scales:
 
     Attributes:
         length: L, the diagonal of the mesh's bounding box.
-        displacement: δ, the control group's mean |prescribed displacement|, > 0.
+        displacement: δ, the control group's mean |prescribed displacement|, or F/(E t)
+            under force control (F the control load's resultant), > 0.
         modulus: E.
         volume: V, thickness × area of the mesh.
     """
@@ -131,13 +133,26 @@ class Scales:
             f"the unit-load strain energy {energy:.3g} is below {SEPARATED:g} of {of} ({scale:.3g})"
         )
 
-    def beyond(self, load_factor: float, first_load_factor: float | None) -> str | None:
+    def beyond(
+        self,
+        load_factor: float,
+        first_load_factor: float | None,
+        *,
+        control_displacement: float | None = None,
+    ) -> str | None:
         """Why an event at ``load_factor`` would be an artefact of a lost load path, or None.
 
-        The control displacement r δ must stay within the specimen's size L, and r within
-        :data:`MAX_LOAD_RATIO` times the first event's (None at the first event).
+        The event's control displacement must stay within the specimen's size L, and r
+        within :data:`MAX_LOAD_RATIO` times the first event's (None at the first event).
+        ``control_displacement``: the event's |control displacement| as measured (force
+        control: r |δ_u|, :meth:`~geofrac.fracture.control.Control.measure`); default
+        r δ, the control displacement of displacement control.
         """
-        control = load_factor * self.displacement
+        control = (
+            load_factor * self.displacement
+            if control_displacement is None
+            else abs(control_displacement)
+        )
         if not control <= self.length:
             return (
                 f"the next event would need a control displacement of {control:.3g}, beyond "

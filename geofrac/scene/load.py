@@ -669,6 +669,7 @@ def _effects(
     discretization: Discretization,
     bcs: tuple[BoundaryCondition, ...],
     configured: dict[str, Any],
+    loads: tuple[Load, ...] = (),
 ) -> tuple[EffectSpec, ...]:
     """Configure each declared effect (``configured``: those already done, by name)."""
     ctx = effects.ConfigureContext(
@@ -679,6 +680,7 @@ def _effects(
         dict(geometry.groups),
         bcs,
         gradient_bc=discretization.gradient_bc,
+        loads=loads,
     )
     _check_methods(file, declared, "fem")
     _check_drivers(file, declared)
@@ -1105,7 +1107,9 @@ def _validate(
         trusted,
         next((e for e in declared if effects.drives(e)), None),
     )
-    specs = _effects(file, data, declared, geometry, material, discretization, bcs, configured)
+    specs = _effects(
+        file, data, declared, geometry, material, discretization, bcs, configured, loads
+    )
     return Scene(
         warnings=_warnings(file, material, discretization, geometry.dim),
         path=file.resolve(),

@@ -55,6 +55,14 @@ def test_events_beyond_the_specimen_or_far_beyond_the_first_load_are_refused():
     assert SCALES.beyond(math.nan, None) is not None
 
 
+def test_a_measured_control_displacement_replaces_r_delta():
+    """Force control: the bound is on the event's measured |control displacement|."""
+    L = SCALES.length
+    assert SCALES.beyond(1.0, None, control_displacement=0.99 * L) is None
+    assert "specimen's size" in SCALES.beyond(1.0, None, control_displacement=-1.01 * L)
+    assert SCALES.beyond(1.0, None, control_displacement=math.nan) is not None
+
+
 def test_round_off_tension_is_no_tension():
     """σ_xx of uniaxial compression is 0 ± round-off: below the floor no edge cracks."""
     rms = 1.25
