@@ -1,5 +1,5 @@
 // Symmetric notched three-point-bend beam, the mesh-dependence specimen of the cracking
-// criterion (docs/cracking_paths.md, scripts/mesh_dependence.py): a beam of length 440 mm
+// criterion (docs/cracking.md, geofrac bench mesh-dependence): a beam of length 440 mm
 // (-220 <= x <= 220) and depth 100 mm (0 <= y <= 100) on a span of 400 mm: point supports
 // on the bottom edge at x = -200 (pin) and x = +200 (roller). The load is a prescribed
 // downward displacement of a pad of width `pad` on the top edge centred on x = 0 (physical
@@ -9,7 +9,7 @@
 // axis: how far a computed path strays from it measures the mesh's pull on the crack.
 // Mesh: h_fine in the band |x| < band (bottom to top), growing linearly to h over
 // `transition` mm outside it; nothing in the mesh follows the axis (no embedded line).
-// Defaults give about 5,600 nodes. Units: mm. Parameters come from a scene's
+// Defaults give 4,300-4,700 nodes by mesher. Units: mm. Parameters come from a scene's
 // [geometry.parameters]; the mesher from its geometry.algorithm (which overrides
 // Mesh.Algorithm set here).
 DefineConstant[

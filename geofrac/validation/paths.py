@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -60,24 +62,28 @@ class CrackEvents:
         """Number of events."""
         return len(self.event)
 
+    @classmethod
+    def from_rows(cls, rows: Sequence[Mapping[str, Any]]) -> CrackEvents:
+        """From the rows of ``events.csv`` (strings) or of a driver's event log (numbers)."""
+
+        def column(name: str, kind: type) -> np.ndarray:
+            return np.array([kind(float(r[name])) for r in rows], dtype=kind)
+
+        return cls(
+            event=column("event", int),
+            node_a=column("node_a", int),
+            node_b=column("node_b", int),
+            x=column("x", float),
+            y=column("y", float),
+            load_factor=column("load_factor", float),
+            reaction=column("reaction", float),
+        )
+
 
 def read_events(out: Path) -> CrackEvents:
     """The events of the run whose output directory is ``out`` (its ``events.csv``)."""
     with open(Path(out) / "events.csv", newline="") as f:
-        rows = list(csv.DictReader(f))
-
-    def column(name: str, kind: type) -> np.ndarray:
-        return np.array([kind(float(r[name])) for r in rows], dtype=kind)
-
-    return CrackEvents(
-        event=column("event", int),
-        node_a=column("node_a", int),
-        node_b=column("node_b", int),
-        x=column("x", float),
-        y=column("y", float),
-        load_factor=column("load_factor", float),
-        reaction=column("reaction", float),
-    )
+        return CrackEvents.from_rows(list(csv.DictReader(f)))
 
 
 def main_crack(events: CrackEvents, *, gap: float = 0.0, upto: int | None = None) -> np.ndarray:
