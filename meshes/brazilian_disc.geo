@@ -11,9 +11,10 @@
 // symmetric. Uniform element size h (default 1 mm: about 2,600 nodes); the strip ends are
 // mesh nodes. gmsh also keeps a node at the centre (the arcs' centre point), which no
 // element uses. Units: mm, degrees. Parameters come from a scene's [geometry.parameters].
+// strip_deg is 2 alpha, the strips' angular width in degrees.
 DefineConstant[
   D = {50, Name "Parameters/D"},
-  strip_deg = {10, Name "Parameters/strip_deg"},  // 2 alpha, the strip's angular width
+  strip_deg = {10, Name "Parameters/strip_deg"},
   h = {1, Name "Parameters/h"}
 ];
 
