@@ -45,6 +45,10 @@ BENCHES: dict[str, tuple[str, str]] = {
         "crack events along EFMM grain interfaces (Edo (2016), §3.5-3.6): events/s, phases, "
         "patterns",
     ),
+    "mesh-dependence": (
+        "geofrac.bench.mesh_dependence",
+        "symmetric notched beam on the three gmsh meshers: how far the crack strays from the axis",
+    ),
     "mms3d": (
         "geofrac.bench.mms3d",
         "manufactured smooth 3D displacement on a box: error against DOFs and wall time",

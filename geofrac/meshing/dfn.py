@@ -24,6 +24,7 @@ import numpy as np
 
 from geofrac.dfn.clean import CleanNetwork
 from geofrac.dfn.polygon import nearest_boundary_point
+from geofrac.meshing.geo import ALGORITHMS
 from geofrac.meshing.quality import triangle_quality
 
 __all__ = ["ALGORITHMS", "DOMAIN_GROUP", "FRACTURE_GROUP", "MeshSpec", "mesh_network"]
@@ -31,8 +32,6 @@ __all__ = ["ALGORITHMS", "DOMAIN_GROUP", "FRACTURE_GROUP", "MeshSpec", "mesh_net
 #: Physical group names of the surface and of the fracture lines.
 DOMAIN_GROUP = "domain"
 FRACTURE_GROUP = "fractures"
-#: gmsh 2D algorithms by name (``Mesh.Algorithm``).
-ALGORITHMS = {"frontal-delaunay": 6, "delaunay": 5, "meshadapt": 1}
 
 
 @dataclass(frozen=True)

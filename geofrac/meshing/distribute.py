@@ -292,6 +292,7 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
                         time_limit=geometry.time_limit,
                         trusted=geometry.trusted,
                         verbose=verbose,
+                        algorithm=geometry.algorithm,
                     )
                 )
             if len(gmsh.model.mesh.getNodes()[0]) == 0:

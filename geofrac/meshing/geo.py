@@ -34,6 +34,7 @@ from geofrac import interrupt
 from geofrac.meshing.geo_guard import scan_geo
 
 __all__ = [
+    "ALGORITHMS",
     "DEFAULT_MESH_TIME_LIMIT",
     "DEFAULT_READ_TIME_LIMIT",
     "MAX_TIME_LIMIT",
@@ -48,6 +49,9 @@ __all__ = [
     "meshed_model",
 ]
 
+#: gmsh 2D algorithms by name (``Mesh.Algorithm``): a scene's ``geometry.algorithm`` and
+#: the ``dfn`` effect's ``algorithm``.
+ALGORITHMS = {"frontal-delaunay": 6, "delaunay": 5, "meshadapt": 1}
 #: Seconds gmsh may take to read a ``.geo`` file (``geofrac check``) by default.
 DEFAULT_READ_TIME_LIMIT = 60.0
 #: Seconds gmsh may take to read and mesh a ``.geo`` file (a run) by default.
@@ -296,13 +300,16 @@ def meshed_model(
     time_limit: float | None = None,
     trusted: bool = False,
     verbose: bool = False,
+    algorithm: str | None = None,
 ) -> Iterator[Any]:
     """A gmsh session holding the meshed model of ``path``; yields the gmsh module.
 
     A ``.msh`` file is read as it is. A ``.geo`` file is checked (unless ``trusted``),
     meshed to dimension ``dim`` by gmsh in a child process within ``time_limit`` seconds
     (default :data:`DEFAULT_MESH_TIME_LIMIT`) and written as a binary ``.msh`` to a
-    temporary directory, which is read here and deleted.
+    temporary directory, which is read here and deleted. ``algorithm`` (a key of
+    :data:`ALGORITHMS`) overrides the ``Mesh.Algorithm`` the ``.geo`` file set; None
+    keeps the file's own.
 
     Raises:
         GeoRefused: the file does more than describe a geometry.
@@ -323,6 +330,7 @@ def meshed_model(
             "path": str(path),
             "parameters": parameters,
             "mesh_size": mesh_size,
+            "algorithm": None if algorithm is None else ALGORITHMS[algorithm],
             "dim": dim,
             "out": str(out),
             "options": _WRITE_OPTIONS,

@@ -3,10 +3,11 @@
 Run as ``python -m geofrac.meshing.geo_worker REQUEST``.
 ``REQUEST`` is a JSON file: ``mode`` (``"inspect"`` or ``"mesh"``), ``path``,
 ``parameters``, ``answer`` (where to write the JSON answer), and for ``"mesh"`` also
-``mesh_size``, ``dim``, ``out`` (the ``.msh`` to write), ``options`` (gmsh options set
-before writing) and ``verbose``. The answer is ``{"ok": true, ...}`` (``"inspect"``:
-``dim``, ``groups`` as [name, dim] pairs, ``overlaps``, ``order``) or
-``{"ok": false, "error": ...}``.
+``mesh_size``, ``algorithm`` (gmsh's ``Mesh.Algorithm`` number, set after the file is
+read so it overrides the file's; null keeps it), ``dim``, ``out`` (the ``.msh`` to
+write), ``options`` (gmsh options set before writing) and ``verbose``. The answer is
+``{"ok": true, ...}`` (``"inspect"``: ``dim``, ``groups`` as [name, dim] pairs,
+``overlaps``, ``order``) or ``{"ok": false, "error": ...}``.
 
 Loads gmsh and nothing of MPI, so it is safe to start from an MPI rank.
 """
@@ -41,6 +42,8 @@ def run(request: dict[str, Any]) -> dict[str, Any]:
                         "overlaps": [list(o) for o in info.overlaps],
                         "order": info.order,
                     }
+                if request.get("algorithm") is not None:
+                    gmsh.option.setNumber("Mesh.Algorithm", int(request["algorithm"]))
                 gmsh.model.mesh.generate(int(request["dim"]))
                 for name, value in request.get("options", {}).items():
                     gmsh.option.setNumber(name, value)

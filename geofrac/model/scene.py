@@ -42,6 +42,8 @@ class Geometry:
         file: gmsh ``.geo`` (or ``.msh``) file, or None when ``builder`` makes the model.
         parameters: values for the ``DefineConstant`` entries of the ``.geo`` file.
         mesh_size: upper bound on the element size (gmsh ``Mesh.MeshSizeMax``), or None.
+        algorithm: gmsh 2D algorithm (a key of :data:`geofrac.meshing.geo.ALGORITHMS`)
+            overriding the ``.geo`` file's ``Mesh.Algorithm``, or None (the file's own).
         dim: topological dimension of the meshed domain (2 or 3), read from the file.
         groups: physical group name -> dimension, read from the file (or declared by the
             builder).
@@ -72,6 +74,7 @@ class Geometry:
     time_limit: float | None = None
     order: int = 1
     renumber: int | None = None
+    algorithm: str | None = None
 
 
 @dataclass(frozen=True)

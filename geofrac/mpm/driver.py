@@ -198,6 +198,7 @@ def _meshed(
                 spec.bed_group,
                 time_limit=geometry.time_limit,
                 trusted=geometry.trusted,
+                algorithm=geometry.algorithm,
             )
             missing = [g for g in groups or () if g not in result[0]]
             if missing:

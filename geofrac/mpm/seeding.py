@@ -62,11 +62,13 @@ def mesh_cells(
     *,
     time_limit: float | None = None,
     trusted: bool = False,
+    algorithm: str | None = None,
 ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], np.ndarray | None]:
     """Mesh a gmsh geometry; the simplices of each ``dim``-D physical group, and a curve.
 
     A ``.geo`` file is checked (unless ``trusted``) and meshed by gmsh in a child process
-    within ``time_limit`` seconds (:func:`geofrac.meshing.geo.meshed_model`).
+    within ``time_limit`` seconds (:func:`geofrac.meshing.geo.meshed_model`), with the 2D
+    ``algorithm`` overriding the file's (None: the file's).
 
     Returns:
         (group name -> (vertex coordinates shape=(num_points, dim), simplices
@@ -83,7 +85,13 @@ def mesh_cells(
     simplex = {2: 2, 3: 4}[dim]  # gmsh element types: 3-node triangle, 4-node tetrahedron
     out = {}
     with meshed_model(
-        file, parameters, mesh_size, dim, time_limit=time_limit, trusted=trusted
+        file,
+        parameters,
+        mesh_size,
+        dim,
+        time_limit=time_limit,
+        trusted=trusted,
+        algorithm=algorithm,
     ) as gmsh:
         model = gmsh.model  # type: ignore[attr-defined]
         tags, coords, _ = model.mesh.getNodes()

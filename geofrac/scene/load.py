@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from geofrac import analytic, effects, elements
-from geofrac.meshing.geo import define_constants, inspect_geometry
+from geofrac.meshing.geo import ALGORITHMS, define_constants, inspect_geometry
 from geofrac.model import expr
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.scene import (
@@ -90,7 +90,7 @@ METHODS = ("fem", "mpm", "blocks")
 #: Keys each table accepts (the single source for validation and for docs/scenes.md).
 SECTION_KEYS: dict[str, tuple[str, ...]] = {
     "units": ("length", "force", "stress", "time"),
-    "geometry": ("file", "parameters", "mesh_size", "trusted", "time_limit"),
+    "geometry": ("file", "parameters", "mesh_size", "algorithm", "trusted", "time_limit"),
     "material": (
         "E",
         "nu",
@@ -267,6 +267,11 @@ def _geometry(file: Path, raw: Any) -> Geometry:
         for k, message in check_parameters(parameters, specs, counts):
             raise p.error(k, message)
     mesh_size = t.number("mesh_size", positive=True)
+    algorithm = None
+    if t.has("algorithm"):
+        algorithm = t.string("algorithm", choices=tuple(ALGORITHMS))
+        if path.suffix != ".geo":
+            raise t.error("algorithm", "applies only to .geo files (a .msh file is meshed)")
     try:
         info = inspect_geometry(path, parameters, time_limit, trusted)
     except (GeoRefused, GmshTimeout) as exc:
@@ -299,6 +304,7 @@ def _geometry(file: Path, raw: Any) -> Geometry:
         trusted=trusted,
         time_limit=time_limit,
         order=info.order,
+        algorithm=algorithm,
     )
 
 

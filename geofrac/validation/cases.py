@@ -135,6 +135,32 @@ class Case:
         return f"geofrac run {self.scene}{sets}"
 
 
+#: depth (mm) and element size h in the band around the axis (mm) of
+#: meshes/sym_notched_beam.geo (its defaults).
+SYM_BEAM_DEPTH, SYM_BEAM_H = 100.0, 1.45
+
+
+def _sym_beam(algorithm: str, short: str) -> Case:
+    """The symmetric notched beam on one gmsh mesher: the crack should stay on the axis."""
+    return Case(
+        f"sym_beam_{short}",
+        "Cracking",
+        f"symmetric notched beam, {algorithm} mesh: the crack follows the axis",
+        "largest distance from the axis (mm)",
+        Reference(
+            SYM_BEAM_H,
+            "symmetry: the exact path is the axis x = 0; within one element size h = 1.45 mm",
+            kind="at_most",
+        ),
+        _axis_distance,
+        scene="jobs/validation/sym_notched_beam.toml",
+        overrides=(f"geometry.algorithm={algorithm}",),
+        estimate_s=15.0,
+        known="the edge criterion follows the mesh's lattice (docs/cracking.md, "
+        '"Does the crack follow the stress or the mesh?")',
+    )
+
+
 # -- reading results ---------------------------------------------------------------------
 
 
@@ -245,6 +271,13 @@ def _p21(summary: dict[str, Any], out: Path) -> float:
 
 def _crack_top(summary: dict[str, Any], out: Path) -> float:
     return _results(summary)["cracking"]["crack_top_x_mm"]
+
+
+def _axis_distance(summary: dict[str, Any], out: Path) -> float:
+    """Largest distance of the symmetric beam's crack from its axis until it reaches the top."""
+    from geofrac.validation.paths import axis_deviation, read_events
+
+    return axis_deviation(read_events(out), face_y=SYM_BEAM_DEPTH, reach=0.75 * SYM_BEAM_H).distance
 
 
 def _first_slip_stress(width: float, thickness: float) -> Callable[[dict[str, Any], Path], float]:
@@ -499,6 +532,9 @@ CASES: tuple[Case, ...] = (
         known="29.85 mm: 0.15 mm short of the experimental band on the default mesh "
         "(docs/cracking.md)",
     ),
+    _sym_beam("frontal-delaunay", "frontal"),
+    _sym_beam("delaunay", "delaunay"),
+    _sym_beam("meshadapt", "meshadapt"),
     Case(
         "jaeger_60",
         "Cracking",

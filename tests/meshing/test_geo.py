@@ -88,3 +88,12 @@ def test_group_outside_the_domain_is_an_error_not_an_abort(tmp_path):
     with pytest.raises(RunError, match=r"physical group 'stray' has \d+ node\(s\) outside"):
         run_scene(scene, MPI.COMM_SELF, verbose=False)
     assert not (tmp_path / "out" / "results.xdmf").exists()
+
+
+def test_the_mesh_dependence_specimens_declare_their_parameters():
+    """Every DefineConstant is found (a comment inside the block would hide the next one)."""
+    for name, expected in (
+        ("brazilian_disc.geo", ["D", "strip_deg", "h"]),
+        ("sym_notched_beam.geo", ["a", "w", "pad", "h", "h_fine", "band", "transition"]),
+    ):
+        assert define_constants((REPO / "meshes" / name).read_text()) == expected

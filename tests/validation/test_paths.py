@@ -1,0 +1,89 @@
+"""Path measures on hand-made event logs whose answers are read off the construction."""
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from geofrac.fracture.output import EVENT_COLUMNS
+from geofrac.validation.paths import axis_deviation, disc_split, main_crack, read_events
+
+
+def write_events(path, edges):
+    """``events.csv`` with one row per (node_a, node_b, x, y[, reaction]) of ``edges``."""
+    path.mkdir(parents=True, exist_ok=True)
+    with open(path / "events.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=EVENT_COLUMNS)
+        w.writeheader()
+        for i, e in enumerate(edges):
+            row = dict.fromkeys(EVENT_COLUMNS, 0)
+            row.update(
+                event=i + 1, edge=i, node_a=e[0], node_b=e[1], x=e[2], y=e[3], mode="tension"
+            )
+            row.update(
+                r=0.1 * (i + 1), load_factor=0.1 * (i + 1), reaction=e[4] if len(e) > 4 else 1.0
+            )
+            w.writerow(row)
+    return read_events(path)
+
+
+#: a crack from the notch tip (y = 50) up a zig-zag to the top (y = 100), with two cracks
+#: under the load pad (nodes 100-102, not joined) cracking before it arrives, and one more
+#: edge after it reached the top.
+BEAM = [
+    (1, 2, 0.5, 51.0),
+    (2, 3, -1.0, 60.0),
+    (3, 4, -6.0, 70.0),  # furthest below the pad zone
+    (100, 101, 2.0, 98.0),  # pad crack
+    (4, 5, -3.0, 85.0),
+    (101, 102, 7.5, 98.2),  # pad crack, further out
+    (5, 6, -2.0, 96.0),
+    (6, 7, -1.5, 99.6),  # reaches the top (y = 100 within 0.75)
+    (7, 8, -30.0, 99.0),  # after: not counted
+]
+
+
+def test_main_crack_follows_shared_nodes(tmp_path):
+    ev = write_events(tmp_path, BEAM)
+    assert main_crack(ev).tolist() == [True, True, True, False, True, False, True, True, True]
+    assert main_crack(ev, upto=4).tolist() == [True] * 3 + [False] * 6
+    # a gap of 8 joins the pad cracks to the crack at (-2, 96) and (-1.5, 99.6)
+    assert main_crack(ev, gap=8.0).all()
+
+
+def test_axis_deviation_stops_where_the_crack_reaches_the_face(tmp_path):
+    ev = write_events(tmp_path, BEAM)
+    d = axis_deviation(ev, face_y=100.0, reach=0.75)
+    assert (d.distance, d.x, d.y) == (6.0, -6.0, 70.0)
+    assert d.reached_event == 8 and d.face_x == -1.5
+    assert d.events == 8 and d.main_edges == 6
+    below = axis_deviation(ev, face_y=100.0, reach=0.75, below=65.0, axis=-1.0)
+    assert below.distance == pytest.approx(1.5) and below.main_edges == 2
+
+
+def test_axis_deviation_over_the_whole_run_when_the_face_is_never_reached(tmp_path):
+    ev = write_events(tmp_path, BEAM[:7])
+    d = axis_deviation(ev, face_y=100.0, reach=0.75)
+    assert d.reached_event is None and d.face_x is None
+    assert d.distance == 6.0 and d.events == 7
+
+
+def test_disc_split(tmp_path):
+    D, t, a = 50.0, 25.0, math.radians(5.0)
+    edges = [
+        (1, 2, 0.3, 1.2, 800.0),
+        (2, 3, -0.4, 3.0, 2000.0),
+        (3, 4, 1.7, 8.0, 5000.0),  # the peak
+        (50, 51, 3.9, 24.6, 1200.0),  # at a strip's end, not joined
+        (4, 5, 0.9, 15.0, 900.0),
+    ]
+    s = disc_split(write_events(tmp_path, edges), diameter=D, thickness=t, alpha=a)
+    assert s.first_from_diameter == pytest.approx(0.3)
+    assert s.first_from_centre == pytest.approx(math.hypot(0.3, 1.2))
+    assert s.main_from_diameter == pytest.approx(1.7) and s.any_from_diameter == pytest.approx(3.9)
+    assert s.peak_load == 5000.0 and s.peak_event == 3
+    assert s.strength_isrm == pytest.approx(2 * 5000.0 / (math.pi * D * t), rel=1e-14)
+    hondros = (math.sin(2 * a) - a) / math.sin(a)
+    assert s.strength_hondros == pytest.approx(s.strength_isrm * hondros, rel=1e-14)
+    assert np.isclose(hondros, 0.99112, rtol=1e-4)
