@@ -68,7 +68,7 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
     from geofrac.io.summary import write_json
     from geofrac.log import echo
     from geofrac.scene import load_scene_collective
-    from geofrac.validation.paths import CrackEvents, axis_deviation
+    from geofrac.validation.paths import CrackEvents, axis_deviation, spread_until
 
     user = tuple(getattr(args, "overrides", None) or ())
     records, panels = [], []
@@ -88,6 +88,7 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
         reach = 0.75 * h
         dev = axis_deviation(events, face_y=top, reach=reach)
         low = axis_deviation(events, face_y=top, reach=reach, below=top - PAD_ZONE)
+        every, stop = spread_until(events, y_stop=top - PAD_ZONE)
         record = {
             "case": algorithm,
             "nodes": len(mesh.coords),
@@ -97,6 +98,9 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
             "distance": dev.distance,
             "distance_over_h": dev.distance / h,
             "distance_below_pad": low.distance,
+            "every_edge_to_pad": every,
+            "every_edge_to_pad_over_h": every / h,
+            "pad_zone_event": stop,
             "deviation": asdict(dev),
             "crack_top_x_mm": res.get("crack_top_x_mm"),
             "overrides": list(user),
@@ -116,9 +120,10 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
 def _table(records: list[dict[str, Any]]) -> str:
     """The records as a Markdown table."""
     lines = [
-        "| mesher | nodes | h (mm) | events | largest distance from the axis (mm) | "
-        "/ h | below the pad zone (mm) | reaches the top at x (mm), event |",
-        "|---|---|---|---|---|---|---|---|",
+        "| mesher | nodes | h (mm) | events | every cracked edge until the crack enters the "
+        "pad zone: largest distance from the axis (mm) | / h | main crack: largest distance "
+        "(mm) | below the pad zone (mm) | reaches the top at x (mm), event |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in records:
         dev = r["deviation"]
@@ -127,10 +132,13 @@ def _table(records: list[dict[str, Any]]) -> str:
             if dev["reached_event"] is not None
             else "not reached"
         )
+        stop = r["pad_zone_event"]
         lines.append(
             f"| {r['case']} | {r['nodes']} | {r['h']:.2f} | {r['events']} | "
+            f"{r['every_edge_to_pad']:.2f} ({'event ' + str(stop) if stop else 'never'}) | "
+            f"{r['every_edge_to_pad_over_h']:.2f} | "
             f"{r['distance']:.1f} at ({dev['x']:.1f}, {dev['y']:.1f}) | "
-            f"{r['distance_over_h']:.1f} | {r['distance_below_pad']:.1f} | {top} |"
+            f"{r['distance_below_pad']:.1f} | {top} |"
         )
     return "\n".join(lines)
 

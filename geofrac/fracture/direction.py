@@ -7,10 +7,12 @@ direction, so the mesh's lattice picks the path. This module separates *which wa
 crack grows from *where* and *when*:
 
 - **Tips.** A tip is an interior node with exactly one cracked edge
-  (:func:`tip_nodes`). Its direction of growth is perpendicular to the largest
-  principal direction of the stress averaged over a disc about the tip
-  (:func:`averaged_stress`: Gaussian weights of radius R, cells within :data:`CUTOFF` R), which does
-  not depend on which edge lies closest to the tip. R is ``cracking.averaging_radius``
+  (:func:`tip_nodes`), or the corner of a notch (:func:`notch_corners`) while no crack
+  lies within R of it, with the corner's bisector as its last direction. Its
+  direction of growth is perpendicular to the largest principal direction of the
+  stress averaged over a disc about the tip (:func:`averaged_stress`: Gaussian
+  weights of radius R, cells within :data:`CUTOFF` R), which does not depend on which
+  edge lies closest to the tip. R is ``cracking.averaging_radius``
   or, by default, :data:`RADIUS_FACTOR` times the mean length of the tip's edges.
 - **Path tracking.** Each tip carries an *ideal point* p on the continuous path the
   directions describe. The tip grows along the uncracked edge (a, b) whose far node b
@@ -41,12 +43,14 @@ __all__ = [
     "CUTOFF",
     "FORWARD",
     "ISOTROPIC",
+    "NOTCH_ANGLE",
     "RADIUS_FACTOR",
     "Tip",
     "TipTracker",
     "averaged_stress",
     "choose_edge",
     "growth_direction",
+    "notch_corners",
     "nucleation_tips",
     "principal_direction",
     "tip_nodes",
@@ -61,6 +65,11 @@ CUTOFF = 2.0
 #: An edge counts as growing forward when it advances along the direction by at least
 #: this fraction of its length (an angle below about 84° to the direction).
 FORWARD = 0.1
+
+#: A boundary node is a notch's corner (a tip before any crack) when the body's angle
+#: there exceeds this (radians: 240°; a V notch of 90° leaves 270°, the V's shoulders
+#: on a slot's faces 225°).
+NOTCH_ANGLE = np.radians(240.0)
 
 #: The averaged stress is *isotropic* (no direction of its own) when σ1 − σ2 is below
 #: this fraction of max(|σ1|, |σ2|); the tip then keeps its previous direction.
@@ -90,6 +99,38 @@ def tip_nodes(mesh: EdgeMesh, cracked: np.ndarray, on_boundary: np.ndarray) -> n
     """
     count = np.bincount(mesh.edges[cracked].ravel(), minlength=len(mesh.coords))
     return np.flatnonzero((count == 1) & ~on_boundary)
+
+
+def notch_corners(mesh: EdgeMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary nodes at re-entrant corners, and the bisector into the body at each.
+
+    A corner is re-entrant when the body's angle there (the sum of its cells' angles)
+    exceeds :data:`NOTCH_ANGLE`: the tip of a V notch (270° for a 90° V), the corners
+    of a slot's end; not the nodes of a polygon approximating a hole (180° plus 360°
+    over the number of segments).
+
+    Returns:
+        (nodes, sorted, shape=(k,); unit bisectors pointing into the body, shape=(k, 2)).
+    """
+    x = mesh.coords[mesh.cells]  # shape=(num_cells, 3, 2)
+    angle = np.zeros(len(mesh.coords))
+    for j in range(3):
+        a, b = x[:, (j + 1) % 3] - x[:, j], x[:, (j + 2) % 3] - x[:, j]
+        cos = np.sum(a * b, axis=1) / (np.hypot(*a.T) * np.hypot(*b.T))
+        np.add.at(angle, mesh.cells[:, j], np.arccos(np.clip(cos, -1.0, 1.0)))
+    bnd = mesh.edges[mesh.boundary_edges]
+    on = np.zeros(len(mesh.coords), dtype=bool)
+    on[bnd.ravel()] = True
+    nodes = np.flatnonzero(on & (angle > NOTCH_ANGLE))
+    out = np.zeros((len(nodes), 2))
+    for i, v in enumerate(nodes.tolist()):
+        ends = bnd[(bnd == v).any(axis=1)]
+        others = np.where(ends[:, 0] == v, ends[:, 1], ends[:, 0])
+        u = mesh.coords[others] - mesh.coords[v]
+        u /= np.hypot(*u.T)[:, None]
+        d = -u.sum(axis=0)  # the opening lies between the two boundary edges
+        out[i] = d / np.hypot(*d)
+    return nodes, out
 
 
 def principal_direction(stress: np.ndarray) -> tuple[float, float, np.ndarray]:
@@ -215,6 +256,8 @@ class TipTracker:
     radius: float | None = None
     #: tip node -> its ideal point and last direction.
     tips: dict[int, Tip] = field(default_factory=dict)
+    #: notch corner node -> its bisector into the body (:func:`notch_corners`).
+    notches: dict[int, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:  # noqa: D105
         m = self.mesh
@@ -259,6 +302,8 @@ class TipTracker:
         known = self.tips.get(node)
         if known is not None:
             return known
+        if node in self.notches:
+            return Tip(self.mesh.coords[node].copy(), self.notches[node].copy())
         e = self.edges_at(node)
         e = e[cracked[e]][0]
         a, b = self.mesh.edges[e]

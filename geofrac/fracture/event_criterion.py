@@ -33,6 +33,7 @@ from geofrac.fracture.direction import (
     averaged_stress,
     choose_edge,
     growth_direction,
+    notch_corners,
     nucleation_tips,
     tip_nodes,
 )
@@ -107,6 +108,14 @@ def next_sites(
         floor=floor,
         points=points,
     )
+
+
+def state_crackable_at(state: SiteState, nodes: np.ndarray) -> np.ndarray:
+    """Whether any edge at each node may crack, shape=(k,)."""
+    ends = state.mesh.edges[state.crackable]
+    has = np.zeros(len(state.mesh.coords), dtype=bool)
+    has[ends.ravel()] = True
+    return has[nodes]
 
 
 class StatelessCriterion:
@@ -190,6 +199,11 @@ class DirectionCriterion(TractionCriterion):
         self.on_boundary = np.zeros(len(mesh.coords), dtype=bool)
         self.on_boundary[mesh.edges[mesh.boundary_edges].ravel()] = True
         self.tracker = TipTracker(mesh, self.on_boundary, config.averaging_radius)
+        corners, bisectors = notch_corners(mesh)
+        keep = state_crackable_at(self.state, corners)
+        self.tracker.notches = {
+            int(v): d for v, d, k in zip(corners, bisectors, keep, strict=True) if k
+        }
         self._s1 = np.zeros(0)
         #: what each selected edge starts: edge -> [(node, tip)].
         self._grown: dict[int, list[tuple[int, Tip]]] = {}
@@ -213,13 +227,15 @@ class DirectionCriterion(TractionCriterion):
         chosen: dict[int, list[tuple[int, Tip]]] = {}
         tip_drive: dict[int, float] = {}
         tips = tip_nodes(mesh, cracked, self.on_boundary)
+        notches = [v for v in tracker.notches if not cracked[tracker.near(v)[2]].any()]
+        tips = np.union1d(tips, np.array(notches, dtype=np.int64))
         tracker.prune(tips)
         self.last_tips = []
+        zones = self._zones(tips.tolist(), open_)
         for a in tips.tolist():
-            cells, dist, near = tracker.near(a)
+            cells, dist, _ = tracker.near(a)
             at = tracker.edges_at(a)
-            zone = np.union1d(near, at)
-            zone = zone[open_[zone]]
+            zone = zones[a]
             peak = float(self._s1[zone].max()) if len(zone) else -np.inf
             tip = tracker.tip(a, cracked)
             if not peak > floor or not len(cells):
@@ -255,6 +271,28 @@ class DirectionCriterion(TractionCriterion):
                 starts = nucleation_tips(mesh.coords[[a, b]], self.edge_stress[e])
                 self._grown[e] = [(int((a, b)[i]), t) for i, t in starts]
         return edges, r
+
+    def _zones(self, tips: list[int], open_: np.ndarray) -> dict[int, np.ndarray]:
+        """Each tip's zone: the open edges at it or within R, shared out to the nearest tip.
+
+        An edge in the zones of several tips (a V notch's corners, two tips about to
+        meet) belongs to the one whose node is nearest to its midpoint (ties: the lower
+        node id), so that one stress peak drives one tip.
+        """
+        tracker, mesh = self.tracker, self.state.mesh
+        owner: dict[int, tuple[float, int]] = {}
+        mids = self.points
+        for a in tips:
+            zone = np.union1d(tracker.near(a)[2], tracker.edges_at(a))
+            zone = zone[open_[zone]]
+            dist = np.hypot(*(mids[zone] - mesh.coords[a]).T)
+            for e, d in zip(zone.tolist(), dist.tolist(), strict=True):
+                if e not in owner or (d, a) < owner[e]:
+                    owner[e] = (d, a)
+        out: dict[int, list[int]] = {a: [] for a in tips}
+        for e, (_, a) in owner.items():
+            out[a].append(e)
+        return {a: np.array(sorted(v), dtype=np.int64) for a, v in out.items()}
 
     def cracked(self, sites: np.ndarray) -> None:
         """Track the tips the cracked edges start (shear cracks: their own direction)."""

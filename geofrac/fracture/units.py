@@ -207,7 +207,12 @@ class EdgeUnits:
         cfg = ctx.config
         settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
         self.state: CrackState = CrackState(
-            mesh_e, frozen, forced, settings, ctx.rank_map, cut=cfg.contact
+            mesh_e,
+            frozen,
+            forced,
+            settings,
+            ctx.rank_map,
+            cut=cfg.contact or cfg.criterion != "principal",
         )
         self._edge_keys = mesh_e.edges[:, 0] * len(gm.coords) + mesh_e.edges[:, 1]
         own = np.flatnonzero(gm.owned)

@@ -33,6 +33,7 @@ __all__ = [
     "disc_split",
     "main_crack",
     "read_events",
+    "spread_until",
 ]
 
 
@@ -196,6 +197,33 @@ def axis_deviation(
         events=stop,
         main_edges=int(counted.sum()),
     )
+
+
+def spread_until(
+    events: CrackEvents, *, y_stop: float, axis: float = 0.0
+) -> tuple[float, int | None]:
+    """Largest distance of *every* cracked edge from the axis until the crack reaches y_stop.
+
+    The count stops at the first event whose edge belongs to the main crack
+    (:func:`main_crack`) and lies at y ≥ ``y_stop`` (the beam's load-pad zone): every
+    edge cracked up to that event counts, on the main crack or not.
+
+    Args:
+        events: the run's events (the first at the notch tip).
+        y_stop: the ordinate that ends the count.
+        axis: the axis' abscissa.
+
+    Returns:
+        (the distance, nan without events; the stopping event, or None when the crack
+        never reached y_stop and every event counted).
+    """
+    if len(events) == 0:
+        return math.nan, None
+    member = main_crack(events)
+    hits = np.flatnonzero(member & (events.y >= y_stop))
+    stop = int(hits[0]) + 1 if len(hits) else len(events)
+    distance = float(np.abs(events.x[:stop] - axis).max())
+    return distance, (int(events.event[hits[0]]) if len(hits) else None)
 
 
 @dataclass(frozen=True)
