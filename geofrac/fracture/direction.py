@@ -23,11 +23,15 @@ crack grows from *where* and *when*:
 - **Where and when.** A tip and the uncracked edges at it or within R of it form
   the tip's *zone*: the zone cracks when the largest σ1 of its edges (at their
   midpoints, the thesis's measure: the singular value at the tip) reaches f_t, and
-  then along the tip's chosen edge only. Away from tips a new crack starts where the
-  traction across an edge, n·σ·n (mean of its two cells at the midpoint), first
-  reaches f_t: the direction of an edge counts where no tip sets it. The stress is
-  averaged for the direction only: an average over R mixes a tip's small tensile lobe
-  with the compression around it (a wing crack), which would delay the event.
+  then along the tip's chosen edge only. Away from tips a new crack starts where σ1
+  of an edge first reaches f_t (the thesis's measure, blind to the edge's direction,
+  so that the place is the stress's), along the edge there (itself or one sharing a
+  node with it) whose normal lies nearest to σ1's direction. The traction n·σ·n would
+  pick the best-aligned edge anywhere in a region of near-uniform stress instead: on a
+  Brazilian disc whose central 20 mm carry σ_xx within 1 %, an edge 7° off the
+  diameter 3.7 mm from the centre, at a load 14 % too high. The stress is averaged for
+  the direction only: an average over R mixes a tip's small tensile lobe with the
+  compression around it (a wing crack), which would delay the event.
 """
 
 from __future__ import annotations
@@ -213,30 +217,35 @@ def choose_edge(
     return int(edges[pick]), ideal.point + along[pick] * direction
 
 
-def nucleation_tips(ends: np.ndarray, stress: np.ndarray) -> list[tuple[int, Tip]]:
+def nucleation_tips(
+    ends: np.ndarray, stress: np.ndarray, *, through: np.ndarray | None = None
+) -> list[tuple[int, Tip]]:
     """The tips a new crack on one edge starts at its two nodes.
 
-    The ideal line runs through the edge's midpoint perpendicular to σ1's direction
-    there (not along the edge: the lattice's direction is not the crack's); each node's
-    ideal point is its projection onto that line, its direction the line's, pointing
-    away from the midpoint. An isotropic stress (:data:`ISOTROPIC`) takes the edge's
-    own direction.
+    The ideal line runs through ``through`` (default: the edge's midpoint) perpendicular
+    to σ1's direction there (not along the edge: the lattice's direction is not the
+    crack's); each node's ideal point is its projection onto that line, its direction
+    the line's, pointing away from the line's point. An isotropic stress
+    (:data:`ISOTROPIC`) takes the edge's own direction.
 
     Args:
         ends: the two nodes' coordinates, shape=(2, 2).
-        stress: (σ_xx, σ_yy, σ_xy) at the edge's midpoint, shape=(3,).
+        stress: (σ_xx, σ_yy, σ_xy) where the crack starts, shape=(3,).
+        through: the point the ideal line runs through, shape=(2,).
 
     Returns:
         [(0, tip of the first node), (1, tip of the second)] (local node indices).
     """
-    mid = ends.mean(axis=0)
+    mid = ends.mean(axis=0) if through is None else np.asarray(through, dtype=float)
     along = ends[1] - ends[0]
     _, d = growth_direction(stress, along / np.hypot(*along))
     out = []
     for i, x in enumerate(ends):
         s = float((x - mid) @ d)
+        if s == 0.0:  # a node on the normal through the point: away from the other node
+            s = float((x - ends[1 - i]) @ d)
         di = d if s >= 0.0 else -d
-        out.append((i, Tip(mid + s * d, di.copy())))
+        out.append((i, Tip(mid + float((x - mid) @ d) * d, di.copy())))
     return out
 
 

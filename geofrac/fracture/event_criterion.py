@@ -26,7 +26,13 @@ import numpy as np
 
 from geofrac.fracture.config import CrackingConfig
 from geofrac.fracture.contact import edge_frames
-from geofrac.fracture.criterion import edge_means, edge_principal, normal_stress, select_edges
+from geofrac.fracture.criterion import (
+    edge_means,
+    edge_principal,
+    normal_stress,
+    select_edges,
+    tie_order,
+)
 from geofrac.fracture.direction import (
     Tip,
     TipTracker,
@@ -35,6 +41,7 @@ from geofrac.fracture.direction import (
     growth_direction,
     notch_corners,
     nucleation_tips,
+    principal_direction,
     tip_nodes,
 )
 from geofrac.fracture.units import SiteState
@@ -185,8 +192,9 @@ class DirectionCriterion(TractionCriterion):
 
     See :mod:`geofrac.fracture.direction`. A tip's zone (the open edges at it or within
     R of it) offers one edge, chosen by :func:`choose_edge` along the direction of the
-    stress averaged about the tip, driven by the largest σ1 of the zone's edges; every
-    other edge is driven by the traction across it, n·σ·n.
+    stress averaged about the tip, driven by the largest σ1 of the zone's edges. Every
+    other edge is driven by its σ1 (where a new crack starts), and the new crack takes
+    the edge there most nearly across σ1's direction (:meth:`_aligned`).
 
     Args:
         units: the edge units (their stress tensors: ``keep_stress``).
@@ -211,9 +219,10 @@ class DirectionCriterion(TractionCriterion):
         self.last_tips: list[tuple[int, float, np.ndarray, int]] = []
 
     def site_stress(self, unit_s1: np.ndarray) -> np.ndarray:
-        """n·σ·n per edge, shape=(num_edges,); tips are judged in :meth:`select`."""
+        """σ1 per edge (where a crack starts), shape=(num_edges,); tips: :meth:`select`."""
         self._s1 = edge_principal(self.state.mesh, unit_s1)
-        return super().site_stress(unit_s1)
+        self.edge_stress = edge_means(self.state.mesh, self.units.midpoint_stress)
+        return self._s1
 
     def select(self, sigma1: np.ndarray, *, floor: float) -> tuple[np.ndarray, float]:
         """The edges of least r once the tips' zones have chosen their edges."""
@@ -263,14 +272,38 @@ class DirectionCriterion(TractionCriterion):
             drive[e] = s1
         edges, r = next_sites(state, self.config, drive, floor=floor, points=self.points)
         self._grown = {}
+        out: list[int] = []
         for e in edges.tolist():
             if e in chosen:
+                site = e
                 self._grown[e] = chosen[e]
-            else:
-                a, b = mesh.edges[e]
-                starts = nucleation_tips(mesh.coords[[a, b]], self.edge_stress[e])
-                self._grown[e] = [(int((a, b)[i]), t) for i, t in starts]
-        return edges, r
+            else:  # a new crack at e's σ1, along the edge there that follows the stress
+                site = self._aligned(e, open_ & ~blocked)
+                a, b = mesh.edges[site]
+                starts = nucleation_tips(
+                    mesh.coords[[a, b]], self.edge_stress[e], through=self.points[e]
+                )
+                self._grown[site] = [(int((a, b)[i]), t) for i, t in starts]
+            if site not in out:
+                out.append(site)
+        return np.array(out, dtype=np.int64), r
+
+    def _aligned(self, edge: int, free: np.ndarray) -> int:
+        """The edge at ``edge`` (itself or one sharing a node) most nearly across σ1 there.
+
+        The normal of the chosen edge is the nearest to σ1's direction at ``edge``'s
+        midpoint (:func:`~geofrac.fracture.direction.principal_direction` of the edge's
+        mean stress); ties (within 1e-9) go to the edge that comes first by position.
+        ``free``: the edges that may crack, shape=(num_edges,).
+        """
+        tracker = self.tracker
+        a, b = self.state.mesh.edges[edge]
+        near = np.union1d(tracker.edges_at(int(a)), tracker.edges_at(int(b)))
+        near = near[free[near] | (near == edge)]
+        _, _, v = principal_direction(self.edge_stress[edge])
+        fit = np.abs(self.normals[near] @ v)
+        best = near[fit >= fit.max() - 1e-9]
+        return int(best[tie_order(best, self.points)[0]])
 
     def _zones(self, tips: list[int], open_: np.ndarray) -> dict[int, np.ndarray]:
         """Each tip's zone: the open edges at it or within R, shared out to the nearest tip.

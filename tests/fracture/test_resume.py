@@ -280,7 +280,7 @@ def test_edge_cracking_resumes_exactly(tmp_path, solver):
         "cracking.output_every=4",
         f"cracking.solver={solver[0]}",
     )
-    got = stop_and_resume(tmp_path, BEAM, overrides + solver[1:], k=17, comm=MPI.COMM_SELF)
+    got = stop_and_resume(tmp_path, BEAM, overrides + solver[1:], k=9, comm=MPI.COMM_SELF)
     print(f"edge cracking {solver}: {got}")
 
 
@@ -393,7 +393,7 @@ def test_edge_cracking_resumes_exactly_on_2_ranks(tmp_path, solver):
         "cracking.update_dofs=60",
         f"cracking.solver={solver}",
     )
-    got = stop_and_resume(tmp_path, BEAM, overrides, k=19, comm=MPI.COMM_WORLD)
+    got = stop_and_resume(tmp_path, BEAM, overrides, k=11, comm=MPI.COMM_WORLD)
     print(f"edge cracking {solver} on {MPI.COMM_WORLD.size} ranks: {got}")
 
 
