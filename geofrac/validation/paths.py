@@ -33,6 +33,7 @@ __all__ = [
     "disc_split",
     "main_crack",
     "read_events",
+    "split_through",
     "spread_until",
 ]
 
@@ -235,7 +236,7 @@ class DiscSplit:
         first_from_centre: distance of the first cracked edge from the centre.
         main_from_diameter: largest distance of a main-crack edge from the loaded diameter.
         any_from_diameter: largest distance of any cracked edge from the loaded diameter.
-        peak_load: the largest |reaction| of the run (the splitting load P under force
+        peak_load: the largest |reaction| of the events measured (the splitting load P under force
             control, where the reaction is the load factor times the strip's resultant).
         peak_event: the event of ``peak_load``.
         strength_isrm: 2P / (π D t) (ISRM).
@@ -254,6 +255,34 @@ class DiscSplit:
     strength_hondros: float
 
 
+def split_through(
+    events: CrackEvents,
+    *,
+    radius: float,
+    reach: float,
+    centre: tuple[float, float] = (0.0, 0.0),
+    gap: float = 0.0,
+) -> int | None:
+    """The event at which the main crack has split the disc: it reaches the rim on both sides.
+
+    The main crack (:func:`main_crack`) reaches the rim on a side of the centre (y above
+    or below centre[1]) at its first edge there whose midpoint lies within ``reach`` of
+    the rim (distance from the centre ≥ radius − reach). The cells at the strips'
+    centres hold the supports and never crack, so a split along the loaded diameter
+    stops about one element short of the rim: a ``reach`` of 1.5 h counts it.
+
+    Returns:
+        the number of the event at which both sides are reached, or None (not split).
+    """
+    member = main_crack(events, gap=gap)
+    dx, dy = events.x - centre[0], events.y - centre[1]
+    near = member & (np.hypot(dx, dy) >= radius - reach)
+    above, below = np.flatnonzero(near & (dy > 0)), np.flatnonzero(near & (dy < 0))
+    if not (len(above) and len(below)):
+        return None
+    return int(events.event[max(above[0], below[0])])
+
+
 def disc_split(
     events: CrackEvents,
     *,
@@ -262,6 +291,7 @@ def disc_split(
     alpha: float,
     centre: tuple[float, float] = (0.0, 0.0),
     gap: float = 0.0,
+    upto: int | None = None,
 ) -> DiscSplit:
     """The split of a disc loaded along the diameter x = centre[0] (the y direction).
 
@@ -272,15 +302,18 @@ def disc_split(
         alpha: half the strips' angular width, radians.
         centre: the disc's centre.
         gap: see :func:`main_crack`.
+        upto: measure the first ``upto`` events only (None: all), e.g. until the split
+            (:func:`split_through`).
 
     Raises:
         ValueError: no events.
     """
     if len(events) == 0:
         raise ValueError("no crack events")
-    off = np.abs(events.x - centre[0])
-    member = main_crack(events, gap=gap)
-    k = int(np.argmax(np.abs(events.reaction)))
+    n = len(events) if upto is None else max(1, min(upto, len(events)))
+    off = np.abs(events.x[:n] - centre[0])
+    member = main_crack(events, gap=gap, upto=n)[:n]
+    k = int(np.argmax(np.abs(events.reaction[:n])))
     peak = float(abs(events.reaction[k]))
     return DiscSplit(
         first_from_diameter=float(off[0]),

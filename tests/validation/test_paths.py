@@ -7,7 +7,13 @@ import numpy as np
 import pytest
 
 from geofrac.fracture.output import EVENT_COLUMNS
-from geofrac.validation.paths import axis_deviation, disc_split, main_crack, read_events
+from geofrac.validation.paths import (
+    axis_deviation,
+    disc_split,
+    main_crack,
+    read_events,
+    split_through,
+)
 
 
 def write_events(path, edges):
@@ -87,3 +93,25 @@ def test_disc_split(tmp_path):
     hondros = (math.sin(2 * a) - a) / math.sin(a)
     assert s.strength_hondros == pytest.approx(s.strength_isrm * hondros, rel=1e-14)
     assert np.isclose(hondros, 0.99112, rtol=1e-4)
+
+
+def test_split_through_and_disc_split_until_it(tmp_path):
+    """The split ends when the main crack nears the rim above and below; later events drop."""
+    D, t, a = 50.0, 25.0, math.radians(5.0)
+    edges = [
+        (1, 2, 0.2, -0.5, 5900.0),  # the peak, at the first event
+        (2, 3, -0.6, 12.0, 3000.0),
+        (60, 61, 9.0, 5.0, 2500.0),  # elsewhere, not joined: counts for any_from_diameter
+        (3, 4, 0.8, 23.8, 900.0),  # within 1.5 of the rim above
+        (1, 5, -1.1, -12.0, 800.0),
+        (5, 6, 0.4, -23.6, 700.0),  # within 1.5 below: the split (event 6)
+        (4, 7, 6.0, 20.0, 9000.0),  # after the split: not measured
+    ]
+    events = write_events(tmp_path, edges)
+    assert split_through(events, radius=D / 2, reach=1.5) == 6
+    assert split_through(events, radius=D / 2, reach=1.0) is None  # 23.6 is 1.4 short
+    s = disc_split(events, diameter=D, thickness=t, alpha=a, upto=6)
+    assert s.main_from_diameter == pytest.approx(1.1) and s.any_from_diameter == pytest.approx(9.0)
+    assert s.peak_load == 5900.0 and s.peak_event == 1
+    whole = disc_split(events, diameter=D, thickness=t, alpha=a)
+    assert whole.main_from_diameter == pytest.approx(6.0) and whole.peak_load == 9000.0
