@@ -4,9 +4,11 @@ Runs the symmetric notched beam (jobs/sym_notched_beam.toml, whose exact crack p
 the axis x = 0) on each gmsh 2D mesher (``geometry.algorithm``), with the user's ``--set``
 overrides on every run (e.g. ``--set cracking.criterion=...`` for a new criterion), and
 reports per mesher: nodes, the mean edge length h in the fine band |x| < 25 mm, events,
-the largest distance of the main crack from the axis until it reaches the top face
-(:func:`geofrac.validation.paths.axis_deviation`; also without the load pad's zone,
-y <= 95 mm), and where it reaches the top. ``--picture`` draws the three paths side by
+the largest distance of every cracked edge from the axis until the crack enters the load
+pad's zone (y ≥ 95 mm, :func:`geofrac.validation.paths.spread_until`: the issue's
+measure), that of the main crack until it reaches the top face
+(:func:`geofrac.validation.paths.axis_deviation`; also without the pad's zone), and
+where it reaches the top. ``--picture`` draws the three paths side by
 side (docs/img/cracking/mesh_dependence_before.png is today's criterion).
 
     python -m geofrac bench mesh-dependence --picture docs/img/cracking/mesh_dependence_before.png
@@ -23,14 +25,13 @@ import numpy as np
 
 from geofrac.bench.args import name_list
 from geofrac.meshing.geo import ALGORITHMS
+from geofrac.validation.paths import PAD_ZONE
 
 __all__ = ["BAND", "PAD_ZONE", "SCENE", "add_arguments", "band_h", "draw_paths", "run"]
 
 SCENE = Path(__file__).resolve().parents[2] / "jobs" / "sym_notched_beam.toml"
 #: half-width of the fine band of meshes/sym_notched_beam.geo (mm): h is measured in it.
 BAND = 25.0
-#: the top's depth below which the crack's distance is also given (the pad's zone, mm).
-PAD_ZONE = 5.0
 #: the picture's window around the axis (mm).
 WINDOW = 45.0
 

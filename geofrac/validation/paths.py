@@ -26,6 +26,7 @@ import numpy as np
 from geofrac.validation.brazilian import splitting_tensile_strength
 
 __all__ = [
+    "PAD_ZONE",
     "AxisDeviation",
     "CrackEvents",
     "DiscSplit",
@@ -36,6 +37,12 @@ __all__ = [
     "split_through",
     "spread_until",
 ]
+
+
+#: The depth below the symmetric beam's top (mm) that the load pad's frozen cells and its
+#: compression take: a crack that enters it has reached the load (its 6 mm pad holds the
+#: cells touching it, one element deep, which no crack may cross).
+PAD_ZONE = 5.0
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from geofrac.validation.paths import (
     main_crack,
     read_events,
     split_through,
+    spread_until,
 )
 
 
@@ -115,3 +116,22 @@ def test_split_through_and_disc_split_until_it(tmp_path):
     assert s.peak_load == 5900.0 and s.peak_event == 1
     whole = disc_split(events, diameter=D, thickness=t, alpha=a)
     assert whole.main_from_diameter == pytest.approx(6.0) and whole.peak_load == 9000.0
+
+
+def test_spread_until_counts_every_edge_until_the_main_crack_enters_the_zone(tmp_path):
+    """A side crack (not joined to the main one) counts; edges after the stop do not."""
+    events = write_events(
+        tmp_path,
+        [
+            (1, 2, 0.2, 50.5),  # main crack from the notch
+            (2, 3, -0.3, 52.0),
+            (10, 11, 1.1, 53.0),  # a side crack, not joined: counts
+            (3, 4, 0.4, 94.0),
+            (4, 5, -0.2, 96.0),  # the main crack enters y >= 95: the count stops here
+            (5, 6, 6.0, 98.0),  # spreading under the pad: not counted
+        ],
+    )
+    distance, stop = spread_until(events, y_stop=95.0)
+    assert (distance, stop) == (1.1, 5)
+    distance, stop = spread_until(events, y_stop=99.0)  # never reached: every event
+    assert (distance, stop) == (6.0, None)
