@@ -64,3 +64,8 @@ class CrackingConfig:
     #: ``friction_angle`` in degrees): None for tension-only cracking.
     shear_cohesion: float | None = None
     shear_friction_angle: float = 0.0
+    #: fracture energy G_f (material ``fracture_energy``): cracked edges soften over
+    #: ``teeth`` saw-tooth steps (docs/cracking.md, "Fracture energy"); None: brittle.
+    fracture_energy: float | None = None
+    #: teeth of the saw-tooth (with ``fracture_energy``).
+    teeth: int = 10
