@@ -5,15 +5,41 @@ References are closed forms, not the code under test:
 - the saw-tooth (:func:`~geofrac.fracture.softening.saw_tooth`): the area between the
   consecutive secants of its teeth, ½ w_i² (k_i − k_{i+1}), summed over the teeth, is G_f;
   the teeth straddle the linear envelope σ(w) = f_t (1 − (w − w₀)/(w_c − w₀)),
-  w_c = 2 G_f / f_t, within the band p f_t, and soften monotonically.
+  w_c = 2 G_f / f_t, within the band p f_t, and soften monotonically;
+- a bar in uniaxial tension (tests/fracture/scenes/tension_bar.toml, ν = 0): the first
+  crack at P = f_t H t, brittle or cohesive;
+- each tooth's drop at fixed opening releases ½ w_i² (k_i − k_{i+1}) from its springs;
+  at a fixed load-point displacement the body, relaxing to its new minimum of energy,
+  releases at least that (minimum potential energy), so the secant triangle
+  ½ δ_i (P_i − δ_i K_{i+1}) of every ``soften`` event bounds its logged dissipation;
+- without a fracture energy nothing changes (no column, no key; the stored paths of
+  tests/fracture/test_paths.py hold).
+
+Known failures (strict xfail, docs/cracking.md "Fracture energy", status): at the bar's
+full separation the teeth have dissipated far less than G_f × crack area, and the
+energy differs between two mesh sizes: cells isolated by a zig-zag crack lose their MLS
+fit (void cells), which drops their face pairs with teeth left.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from mpi4py import MPI
 
+from geofrac.effects.cracking import scene_driver
 from geofrac.fracture.softening import saw_tooth
+from geofrac.scene import load_scene_collective
+from tests.conftest import REPO
+
+#: The bar: H, thickness, f_t of tests/fracture/scenes/tension_bar.toml.
+BAR = REPO / "tests" / "fracture" / "scenes" / "tension_bar.toml"
+H, THICKNESS, FT = 10.0, 1.0, 1.0
+#: G_f of the cohesive bar: w_c = 0.01, Hillerborg's length E G_f / f_t² = 5 = H / 2.
+GF = 0.005
+#: Relative tolerance of the first crack's load against f_t H t: the stress is uniform
+#: and the elements reproduce it exactly; round-off of the solve.
+ONSET_RTOL = 1e-8
 
 #: Relative tolerance of the teeth's energy against G_f: the roots are found to 1e-15.
 ENERGY_RTOL = 1e-12
@@ -64,3 +90,89 @@ def test_saw_tooth_per_pair_and_refusals():
     # ½ f_t² / k0 = 1 ≥ G_f: the elastic branch alone stores G_f
     with pytest.raises(ValueError, match="elastic energy"):
         saw_tooth(np.array([0.5]), ft=1.0, gf=1.0, n=10)
+
+
+def run_bar(*overrides: str) -> tuple[list, dict, object]:
+    """(event rows, results, crack state) of the bar with ``overrides``."""
+    scene = load_scene_collective(MPI.COMM_SELF, BAR, list(overrides))
+    driver = scene_driver(scene, MPI.COMM_SELF)
+    try:
+        res = driver.run()
+        return driver.rows, res, driver.state
+    finally:
+        driver.problem.destroy()
+
+
+@pytest.fixture(scope="module")
+def brittle():
+    return run_bar()
+
+
+@pytest.fixture(scope="module")
+def cohesive():
+    return run_bar(f"material.fracture_energy={GF}")
+
+
+def test_brittle_bar_cracks_at_the_strength_and_dissipates_nothing(brittle):
+    rows, res, _ = brittle
+    assert rows[0]["reaction"] == pytest.approx(FT * H * THICKNESS, rel=ONSET_RTOL)
+    assert res["end_reason"] == "separated"
+    # unchanged outputs: no softening column, key or mode
+    assert "dissipated_energy" not in res and "dissipated_energy" not in rows[0]
+    assert set(res["events_by_mode"]) == {"tension", "shear", "slip"}
+    # brittle: the load never comes back above the first crack's
+    assert max(r["reaction"] for r in rows[1:]) < rows[0]["reaction"]
+
+
+def test_cohesive_bar_cracks_at_the_strength_and_softens(cohesive):
+    rows, res, _ = cohesive
+    assert rows[0]["reaction"] == pytest.approx(FT * H * THICKNESS, rel=ONSET_RTOL)
+    modes = [r["mode"] for r in rows]
+    assert "soften" in modes and res["events_by_mode"]["soften"] == modes.count("soften")
+    energy = np.array([r["dissipated_energy"] for r in rows])
+    assert np.all(np.diff(energy) >= 0.0)
+    assert res["dissipated_energy"] == energy[-1] > 0.0
+    # soften events add energy, and only they and the cracks' onsets do
+    steps = np.diff(np.r_[0.0, energy])
+    assert all(d > 0.0 for d, m in zip(steps, modes, strict=True) if m == "soften")
+
+
+def test_each_tooth_releases_no_more_than_the_body(cohesive):
+    """Minimum potential energy: ½ δ (P − δ K_after) ≥ the tooth's ½ w² Δk L t."""
+    rows, _, _ = cohesive
+    checked = 0
+    for i, row in enumerate(rows[:-1]):
+        if row["mode"] != "soften":
+            continue
+        d, P = row["control_displacement"], row["reaction"]
+        after = rows[i + 1]["reaction"] / rows[i + 1]["control_displacement"]
+        released = 0.5 * d * (P - d * after)
+        tooth = row["dissipated_energy"] - rows[i - 1]["dissipated_energy"]
+        # round-off of the two solves: 1e-9 of the event's work ½ δ P
+        assert tooth <= released + 1e-9 * 0.5 * d * P, (row["event"], tooth, released)
+        checked += 1
+    assert checked >= 10
+
+
+def separation_energy(rows: list, state) -> tuple[float, float]:
+    """(teeth's dissipation at the end, G_f × the cracked edges' area)."""
+    m = state.mesh
+    cracked = np.flatnonzero(state.cracked)
+    seg = m.coords[m.edges[cracked]]
+    length = float(np.hypot(*(seg[:, 1] - seg[:, 0]).T).sum())
+    return rows[-1]["dissipated_energy"], GF * length * THICKNESS
+
+
+@pytest.mark.xfail(strict=True, reason="void cells drop face pairs before their last tooth")
+def test_full_separation_dissipates_gf_times_the_crack_area(cohesive):
+    rows, res, state = cohesive
+    assert res["end_reason"] == "separated"
+    teeth, expected = separation_energy(rows, state)
+    assert teeth == pytest.approx(expected, rel=0.1)
+
+
+@pytest.mark.xfail(strict=True, reason="void cells drop face pairs before their last tooth")
+def test_dissipated_energy_does_not_depend_on_the_mesh(cohesive):
+    fine = run_bar(f"material.fracture_energy={GF}", "geometry.parameters.h=0.5")
+    assert fine[0][0]["reaction"] == pytest.approx(cohesive[0][0]["reaction"], rel=1e-6)
+    assert fine[1]["dissipated_energy"] == pytest.approx(cohesive[1]["dissipated_energy"], rel=0.1)
