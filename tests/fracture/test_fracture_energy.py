@@ -176,3 +176,72 @@ def test_dissipated_energy_does_not_depend_on_the_mesh(cohesive):
     fine = run_bar(f"material.fracture_energy={GF}", "geometry.parameters.h=0.5")
     assert fine[0][0]["reaction"] == pytest.approx(cohesive[0][0]["reaction"], rel=1e-6)
     assert fine[1]["dissipated_energy"] == pytest.approx(cohesive[1]["dissipated_energy"], rel=0.1)
+
+
+def test_cohesive_cracking_resumes_exactly(tmp_path):
+    """The teeth come back with the face pairs: the resumed run's events are the whole run's.
+
+    The coarse notched beam of tests/fracture/test_resume.py with Gálvez's G_f; stopped
+    after event 17, with ``soften`` events before and after the stop.
+    """
+    from tests.fracture.test_resume import BEAM, read_log, stop_and_resume
+
+    overrides = (
+        "cracking.max_events=30",
+        "cracking.output_every=4",
+        "material.fracture_energy=0.069",
+    )
+    got = stop_and_resume(tmp_path, BEAM, overrides, k=17, comm=MPI.COMM_SELF)
+    whole, out = (
+        read_log(tmp_path / "whole" / "events.csv"),
+        read_log(tmp_path / "stopped" / "events.csv"),
+    )
+    modes = [r["mode"] for r in whole]
+    assert "soften" in modes[:17] and "soften" in modes[17:], modes
+    assert [r["mode"] for r in out] == modes
+    np.testing.assert_allclose(
+        [float(r["dissipated_energy"]) for r in out],
+        [float(r["dissipated_energy"]) for r in whole],
+        rtol=1e-10,
+        atol=0.0,
+    )
+    assert got["replay_from"] <= 17
+
+
+#: The coarse notched beam of tests/fracture/test_resume.py, 40 events, Gálvez's G_f.
+BEAM_JOB = REPO / "jobs" / "notched_beam.toml"
+BEAM_COHESIVE = (
+    "geometry.parameters.h_fine=8",
+    "geometry.parameters.h=30",
+    "cracking.max_events=40",
+    "material.fracture_energy=0.069",
+)
+
+
+def run_beam(*overrides: str) -> tuple[list, dict]:
+    scene = load_scene_collective(MPI.COMM_SELF, BEAM_JOB, [*BEAM_COHESIVE, *overrides])
+    driver = scene_driver(scene, MPI.COMM_SELF)
+    try:
+        return driver.run(), driver.rows
+    finally:
+        driver.problem.destroy()
+
+
+def test_cohesive_faces_with_contact_close_without_interpenetrating():
+    """Closed cohesive faces keep the contact penalty: the worst gap stays at its scale.
+
+    The penalty (100 E / L) lets closed faces penetrate by about 1/100 of a cell's
+    elastic shortening, far below 1 % of the control displacement.
+    """
+    res, rows = run_beam("cracking.contact=true")
+    assert res["events_by_mode"]["soften"] > 0
+    assert res["contact"]["stick"] > 0  # some cohesive faces closed
+    assert res["contact"]["worst_gap_relative"] > -0.01
+    assert res["dissipated_energy"] == rows[-1]["dissipated_energy"] > 0.0
+
+
+def test_shear_cracks_compete_with_softening():
+    """Mohr-Coulomb shear events still win where they come first (shear cracks are free)."""
+    res, _ = run_beam("material.cohesion=2.0", "material.friction_angle=30")
+    modes = res["events_by_mode"]
+    assert modes["tension"] > 0 and modes["shear"] > 0 and modes["soften"] > 0
