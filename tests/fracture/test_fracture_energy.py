@@ -245,3 +245,35 @@ def test_shear_cracks_compete_with_softening():
     res, _ = run_beam("material.cohesion=2.0", "material.friction_angle=30")
     modes = res["events_by_mode"]
     assert modes["tension"] > 0 and modes["shear"] > 0 and modes["soften"] > 0
+
+
+@pytest.mark.mpi(min_size=2)
+def test_cohesive_bar_is_the_same_on_1_and_n_ranks():
+    """The crack state is replicated: the same events and dissipation on every rank count."""
+    world = MPI.COMM_WORLD
+    scene = load_scene_collective(world, BAR, [f"material.fracture_energy={GF}"])
+    driver = scene_driver(scene, world)
+    try:
+        res = driver.run()
+        rows = driver.rows
+    finally:
+        driver.problem.destroy()
+    serial, res_s, _ = run_bar(f"material.fracture_energy={GF}")
+    assert [(r["edge"], r["mode"]) for r in rows] == [(r["edge"], r["mode"]) for r in serial]
+    assert res["dissipated_energy"] == pytest.approx(res_s["dissipated_energy"], rel=1e-8)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "key"),
+    [
+        (("cracking.teeth=5",), "cracking.teeth"),
+        (("material.fracture_energy=0.05", "cracking.teeth=1"), "cracking.teeth"),
+        (("material.fracture_energy=-1",), "material.fracture_energy"),
+        (("material.fracture_energy=0.05", "cracking.solver=reuse"), "cracking.solver"),
+    ],
+)
+def test_fracture_energy_settings_are_validated(overrides, key):
+    from geofrac.model.errors import SceneError
+
+    with pytest.raises(SceneError, match=key.replace(".", r"\.")):
+        load_scene_collective(MPI.COMM_SELF, BAR, list(overrides))
