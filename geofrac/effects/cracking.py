@@ -71,6 +71,14 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
 Material ``cohesion`` (and ``friction_angle``, degrees) adds shear events: an intact edge
 cracks in shear when the traction on it reaches |τ| = c − σn tan φ (σn > 0 in tension).
 
+Material ``fracture_energy`` (G_f > 0, force/length: energy per unit crack area, e.g.
+N/mm) makes cracks quasi-brittle: an edge cracked in tension keeps cohesive springs
+across its faces that soften over a saw-tooth dissipating G_f per unit area, one
+``"soften"`` event per tooth (docs/cracking.md, "Fracture energy"). Element edges only;
+without it every run is brittle as before.
+
+- ``teeth`` (10; with ``fracture_energy`` only): teeth N ≥ 2 of the saw-tooth.
+
 The event loop is :class:`geofrac.fracture.driver.CrackDriver`, composed of the edge or
 grain variant by the element's ``cracking`` mode; this module only validates, and is
 cheap to import.
@@ -143,6 +151,7 @@ KEYS = (
     "averaging_radius",
     "contact",
     *CONTACT_KEYS,
+    "teeth",
 )
 
 #: Keys of a ``[cracking.joints.NAME]`` table.
@@ -166,6 +175,7 @@ LIMITS: dict[str, float] = {
     "cohesion": 1e15,
     "contact_penalty": 1e8,
     "contact_iterations": 1000,
+    "teeth": 10000,
 }
 
 
@@ -492,6 +502,22 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             f"applies to criterion = 'direction' only, not '{criterion}'",
         )
     shear_c = getattr(ctx.material, "cohesion", None)
+    gf = getattr(ctx.material, "fracture_energy", None)
+    if gf is not None and spec.cracking != "edges":
+        raise SceneError(
+            file,
+            "material.fracture_energy",
+            f"applies to elements cracked at edges, not '{ctx.element}'",
+        )
+    if "teeth" in table and gf is None:
+        raise SceneError(file, "cracking.teeth", "applies with material.fracture_energy only")
+    if gf is not None and solver == "reuse":
+        raise SceneError(
+            file,
+            "cracking.solver",
+            "'reuse' (CG) does not take the cohesive faces' springs (they use the "
+            "contact machinery): use 'update' or 'refactor' with fracture_energy",
+        )
     return CrackingConfig(
         method=method,
         max_events=max_events,
@@ -520,6 +546,8 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         averaging_radius=_number(table, file, "averaging_radius", None, float, 0.0, closed=False),
         shear_cohesion=None if shear_c is None else float(shear_c),
         shear_friction_angle=float(getattr(ctx.material, "friction_angle", 0.0)),
+        fracture_energy=None if gf is None else float(gf),
+        teeth=_number(table, file, "teeth", 10, int, 2),
         **contact,
     )
 

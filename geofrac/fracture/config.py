@@ -74,3 +74,8 @@ class CrackingConfig:
     control_kind: str = "displacement"
     #: force control: read the displacement at the mesh node nearest to this point.
     control_point: tuple[float, float] | None = None
+    #: fracture energy G_f (material ``fracture_energy``): cracked edges soften over
+    #: ``teeth`` saw-tooth steps (docs/cracking.md, "Fracture energy"); None: brittle.
+    fracture_energy: float | None = None
+    #: teeth of the saw-tooth (with ``fracture_energy``).
+    teeth: int = 10

@@ -40,6 +40,19 @@ r = c / (|τ| − μ p) (:meth:`FacePairs.slip_factors`); the first such event i
 slip on a joint (Jaeger's single plane of weakness). Slipping or opening breaks the bond
 (c is a peak strength; the residual strength is friction only, as the residual tensile
 strength of a cracked edge is zero).
+
+A *cohesive* pair (fracture energy, :mod:`geofrac.fracture.softening`) has, besides its
+state's penalty block, springs of its current tooth's stiffness k_i per unit area in the
+normal and the tangential direction, t·L·k_i (BₙᵀBₙ + BₜᵀBₜ), whatever its state: open,
+they carry the crack's cohesion (traction k_i [u]); closed, the penalty adds to them, so
+the normal spring is never below the contact penalty. The springs being alike in both
+directions, their traction and energy are those of the effective opening
+w = √(⟨g⟩² + s²) (⟨g⟩ = max(g, 0): closed faces drive the teeth by slip only): traction
+k_i w, energy ½ k_i w² per unit area, so that a tooth's drop dissipates ½ w_i² (k_i −
+k_{i+1}) in mixed mode too (the edges crack on σ1, Edo (2016) eq. 2.20, whatever their
+orientation: an edge along the load opens in slip). Its next tooth is an event at
+r = f_i / (k_i w) (:meth:`FacePairs.soften_factors`); after its last tooth it carries
+nothing more than a contact pair.
 """
 
 from __future__ import annotations
@@ -278,22 +291,78 @@ class FacePairs:
         #: how far the last :meth:`update` found each pair outside its state's
         #: conditions, in units of the largest |g|, |s| (0: consistent).
         self.violation = np.zeros(ne)
+        #: cohesive pairs: the index of the current tooth (−1: not cohesive).
+        self.tooth = np.full(ne, -1, dtype=np.int64)
+        #: the teeth of each pair made cohesive: (k per unit area, peak traction), each
+        #: shape=(N,) (:func:`~geofrac.fracture.softening.saw_tooth`).
+        self.teeth: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         #: the jump operator of each pair with fits on both sides (absent: inactive).
         self.ops: dict[int, PairOperator] = {}
         #: padded arrays of the operators for :meth:`measure` (None: rebuild).
         self._table: tuple[np.ndarray, ...] | None = None
 
     # -- topology --------------------------------------------------------------------
-    def add(self, edges: np.ndarray) -> np.ndarray:
+    def add(self, edges: np.ndarray, state: int = STICK) -> np.ndarray:
         """Make newly cracked interior ``edges`` pairs; returns the new ones, shape=(k,).
 
-        New pairs are closed and sticking, bonded when their cohesion is positive.
+        New pairs are in ``state`` (closed and sticking by default), bonded when their
+        cohesion is positive.
         """
         edges = np.asarray(edges, dtype=np.int64)
         new = edges[(self.plus[edges] >= 0) & (self.state[edges] == NO_PAIR)]
-        self.state[new] = STICK
+        self.state[new] = state
         self.bonded[new] = self.cohesion[new] > 0.0
         return new
+
+    def make_cohesive(self, edges: np.ndarray, k: np.ndarray, f: np.ndarray) -> None:
+        """Give pairs ``edges`` teeth: stiffness ``k`` and peak traction ``f``, shape=(m, N)."""
+        for j, e in enumerate(np.asarray(edges, dtype=np.int64).tolist()):
+            self.teeth[e] = (np.array(k[j], dtype=float), np.array(f[j], dtype=float))
+            self.tooth[e] = 0
+
+    def remove(self, edge: int) -> None:
+        """The pair is no pair any more (its faces carry nothing, even closed)."""
+        self.state[edge] = NO_PAIR
+        self.tooth[edge] = -1
+        if self.ops.pop(edge, None) is not None:
+            self._table = None
+
+    def soften_factors(self, *, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Cohesive pairs and the load factor r = f_i / (k_i w) of their next tooth.
+
+        w = √(⟨g⟩² + s²) is the effective opening of the last :meth:`update` (module
+        docstring): k_i w is the springs' traction, whose work the teeth dissipate.
+
+        Args:
+            floor: the traction must exceed it (≥ 0;
+                :data:`~geofrac.fracture.scales.TENSION_FLOOR`).
+
+        Returns:
+            (pairs, r), shape=(k,) each; pairs whose faces do not move are left out.
+        """
+        edges = np.flatnonzero(self.tooth >= 0)
+        edges = edges[np.isin(edges, self.active())]
+        if not len(edges):
+            return edges, np.zeros(0)
+        k = np.array([self.teeth[e][0][self.tooth[e]] for e in edges.tolist()])
+        f = np.array([self.teeth[e][1][self.tooth[e]] for e in edges.tolist()])
+        traction = k * np.hypot(np.maximum(self.gap[edges], 0.0), self.slip[edges])
+        ok = traction > max(floor, 0.0)
+        return edges[ok], f[ok] / traction[ok]
+
+    def soften(self, edge: int) -> tuple[float, bool]:
+        """The pair's next tooth: (energy dissipated per unit area, whether it was the last).
+
+        The drop from tooth i to i + 1 at the peak opening w_i = f_i / k_i dissipates
+        ½ w_i² (k_i − k_{i+1}) (k_{N+1} = 0).
+        """
+        k, f = self.teeth[edge]
+        i = int(self.tooth[edge])
+        w = f[i] / k[i]
+        k_next = k[i + 1] if i + 1 < len(k) else 0.0
+        last = i + 1 == len(k)
+        self.tooth[edge] = -1 if last else i + 1
+        return 0.5 * w * w * (k[i] - k_next), last
 
     def pairs_of_cells(self, cells: np.ndarray) -> np.ndarray:
         """The pairs with ``cells`` on either side, sorted, shape=(k,)."""
@@ -470,20 +539,29 @@ class FacePairs:
         """
         op = self.ops.get(edge)
         st = int(self.state[edge])
-        if op is None or st not in (STICK, SLIP):
+        tooth = int(self.tooth[edge])
+        if op is None or (st not in (STICK, SLIP) and tooth < 0):
             return None
         Bn, Bt = _jump_row(op, self.normal[edge]), _jump_row(op, self.tangent[edge])
+        out = None
         if st == STICK:
             K = np.outer(Bn, Bn) + np.outer(Bt, Bt)
-        else:
+            out = self.block_scale * K
+        elif st == SLIP:
             K = np.outer(Bn, Bn) - self.friction[edge] * self.sign[edge] * np.outer(Bt, Bn)
-        return op.nodes, self.block_scale * K
+            out = self.block_scale * K
+        if tooth >= 0:  # the cohesive springs, t L k_i (BnᵀBn + BtᵀBt) per unit thickness
+            springs = self.length[edge] * self.teeth[edge][0][tooth]
+            cohesive = springs * (np.outer(Bn, Bn) + np.outer(Bt, Bt))
+            out = cohesive if out is None else out + cohesive
+        return op.nodes, out
 
     def links(self) -> tuple[np.ndarray, np.ndarray]:
         """Node pairs (a, b) joined across closed faces: the pieces' graph."""
         a, b = [], []
         for e, op in self.ops.items():
-            if self.state[e] in (STICK, SLIP) and len(op.nodes) > 1:
+            joined = self.state[e] in (STICK, SLIP) or self.tooth[e] >= 0
+            if joined and len(op.nodes) > 1:
                 a += [int(op.nodes[0])] * (len(op.nodes) - 1)
                 b += op.nodes[1:].tolist()
         return np.array(a, dtype=np.int64), np.array(b, dtype=np.int64)
@@ -494,15 +572,18 @@ class FacePairs:
         Row r is Σ weights · u_component(node) over its terms, shape=(k,) each. A
         sticking pair ties both components of its faces' jump (two rows); a slipping
         pair the normal one only: its block (B_n − μ s B_t) B_nᵀ has no stiffness for a
-        motion with B_n · u = 0, so the pieces it joins may slide along it.
+        motion with B_n · u = 0, so the pieces it joins may slide along it. A cohesive
+        pair's springs tie both components whatever its state.
         """
         rows, nodes, comps, weights = [], [], [], []
         r = 0
         for e in sorted(self.ops):
             op, st = self.ops[e], self.state[e]
-            if st not in (STICK, SLIP):
+            cohesive = self.tooth[e] >= 0
+            if st not in (STICK, SLIP) and not cohesive:
                 continue
-            dirs = [self.normal[e]] if st == SLIP else [self.normal[e], self.tangent[e]]
+            both = st == STICK or cohesive
+            dirs = [self.normal[e], self.tangent[e]] if both else [self.normal[e]]
             q = len(op.nodes)
             for d in dirs:
                 rows += [r] * (2 * q)

@@ -163,9 +163,10 @@ class CrackDriver:
         self.criterion: EventCriterion = variant.criterion(ctx, self.units)
         self.sites = _sites(ctx, self.units, self.criterion.points)
         self.assembler = Assembler(ctx, self.units)
-        #: crack-face contact (``cracking.contact``), or None.
+        #: crack-face contact (``cracking.contact``) and cohesive faces (fracture
+        #: energy), or None.
         self.contact: Faces | None = None
-        if config.contact:
+        if config.contact or config.fracture_energy is not None:
             assert isinstance(self.units, EdgeUnits)
             self.contact = Faces(ctx, self.units, self.sites)
             self.assembler.contact = self.contact

@@ -11,6 +11,17 @@ Per event the loop calls :meth:`Faces.settle`: an active-set iteration (solve, u
 states, apply the changed blocks, solve again) until no pair changes state, at most
 ``contact_iterations`` times; a state that does not settle ends the run with
 ``end_reason = "contact"``.
+
+With a fracture energy (material ``fracture_energy``) the faces of every edge cracked in
+tension are *cohesive* (docs/cracking.md, "Fracture energy"): springs of the edge's
+saw-tooth (:func:`~geofrac.fracture.softening.saw_tooth`). Its first tooth is the intact
+edge: the stiffness of closed faces, k₀ = ``contact_penalty`` · E / L per unit area
+(closed faces so held carry the intact load within 2 %, tests/fracture/
+test_contact_mechanics.py), so cracking does not make the edge jump below the intact
+stiffness; the crack's onset (the tension event) is that tooth's drop, each later drop
+a ``"soften"`` event. Without ``cracking.contact`` only cohesive pairs exist: they start
+open, close without friction (the penalty normal spring) and stop being pairs after
+their last tooth (the brittle crack's free faces).
 """
 
 from __future__ import annotations
@@ -18,8 +29,9 @@ from __future__ import annotations
 import numpy as np
 
 from geofrac.errors import RunError
-from geofrac.fracture.contact import NO_PAIR, ROUNDOFF, SLIP, FacePairs
+from geofrac.fracture.contact import NO_PAIR, OPEN, ROUNDOFF, SLIP, FacePairs
 from geofrac.fracture.context import CrackContext, JsonValue, Sites, facet_nodes
+from geofrac.fracture.softening import saw_tooth
 from geofrac.fracture.units import Block, EdgeUnits
 
 __all__ = ["PAIR_FIELDS", "Faces", "joint_properties"]
@@ -87,7 +99,12 @@ class Faces:
 
     def __init__(self, ctx: CrackContext, units: EdgeUnits, sites: Sites) -> None:
         self.ctx, self.units = ctx, units
-        mu, c = joint_properties(ctx, units, sites)
+        #: crack-face contact (``cracking.contact``); False: cohesive pairs only.
+        self.contact_on = ctx.config.contact
+        if self.contact_on:
+            mu, c = joint_properties(ctx, units, sites)
+        else:  # cohesive faces close without friction
+            mu = c = np.zeros(len(units.state.mesh.edges))
         E = float(ctx.scene.material.E)
         self.pairs = FacePairs(
             units.state.mesh,
@@ -113,6 +130,39 @@ class Faces:
         #: the largest violation so held (units of the largest |g|, |s|).
         self.frozen_pairs = 0
         self.worst_violation = 0.0
+        #: energy dissipated by the cohesive pairs' teeth so far (times the thickness).
+        self.dissipated = 0.0
+        #: the first tooth's stiffness per unit area of each edge, E / d (module
+        #: docstring), shape=(num_edges,); None without a fracture energy.
+        self.k0: np.ndarray | None = None
+        if ctx.config.fracture_energy is not None:
+            self.k0 = self.pairs.k.copy()
+
+    @property
+    def softening(self) -> bool:
+        """Whether cracked edges get cohesive faces (a fracture energy is given)."""
+        return self.k0 is not None
+
+    def _teeth(self, edges: np.ndarray) -> None:
+        """Give the pairs ``edges`` their saw-tooth (collective-free: replicated).
+
+        Raises:
+            RunError: G_f is not above a first tooth's elastic energy (cells too large).
+        """
+        cfg = self.ctx.config
+        assert self.k0 is not None and cfg.fracture_energy is not None
+        if not len(edges):
+            return
+        try:
+            st = saw_tooth(
+                self.k0[edges], ft=cfg.tensile_strength, gf=cfg.fracture_energy, n=cfg.teeth
+            )
+        except ValueError as exc:
+            raise RunError(
+                f"material.fracture_energy: {exc} (edge {int(edges[0])}: refine the mesh, "
+                "cells must be narrower than 2 E G_f / f_t²)"
+            ) from None
+        self.pairs.make_cohesive(edges, st.k, st.f)
 
     # -- the system ------------------------------------------------------------------
     def _block(self, edge: int) -> Block | None:
@@ -145,14 +195,37 @@ class Faces:
         return out
 
     def start(self, cracked: np.ndarray) -> None:
-        """Pairs of the edges cracked before loading (their blocks go into the assembly)."""
+        """Pairs of the edges cracked before loading (their blocks go into the assembly).
+
+        Pre-cracked edges (notches, joints) are never cohesive: without contact they
+        are no pairs.
+        """
+        if not self.contact_on:
+            return
         new = self.pairs.add(cracked)
         self.pairs.refresh(new, self.units.state.fits)
         self._diff(new)
 
-    def cracked(self, edges: np.ndarray, changed_cells: np.ndarray) -> list[Block]:
-        """New pairs for ``edges`` and new operators where cells changed; the block changes."""
-        new = self.pairs.add(edges)
+    def cracked(
+        self, edges: np.ndarray, changed_cells: np.ndarray, *, cohesive: bool = False
+    ) -> list[Block]:
+        """New pairs for ``edges`` and new operators where cells changed; the block changes.
+
+        ``cohesive``: the edges cracked in tension with a fracture energy; their pairs get
+        teeth (without contact, only such edges become pairs, open at first).
+        """
+        edges = np.asarray(edges, dtype=np.int64)
+        if self.contact_on:
+            new = self.pairs.add(edges)
+        elif cohesive:
+            new = self.pairs.add(edges, OPEN)
+        else:
+            new = np.zeros(0, dtype=np.int64)
+        if cohesive and self.softening:
+            self._teeth(new)
+            for e in new.tolist():  # the crack's onset is the first tooth's drop
+                energy, _ = self.pairs.soften(e)
+                self.dissipated += energy * float(self.pairs.length[e]) * self.ctx.t
         touched = np.union1d(new, self.pairs.pairs_of_cells(changed_cells))
         self.release(touched)
         self.pairs.refresh(touched, self.units.state.fits)
@@ -168,6 +241,18 @@ class Faces:
         changes = self.pairs.update(self.nodal(u))
         blocks = self._diff(np.array([e for e, _, _ in changes], dtype=np.int64))
         return changes, blocks
+
+    def soften(self, edge: int) -> list[Block]:
+        """The pair's next tooth (a ``"soften"`` event); the block changes.
+
+        Adds the tooth's dissipation times the edge's area L t to :attr:`dissipated`.
+        After the last tooth a pair without contact is no pair any more.
+        """
+        energy, last = self.pairs.soften(edge)
+        self.dissipated += energy * float(self.pairs.length[edge]) * self.ctx.t
+        if last and not self.contact_on:
+            self.pairs.remove(edge)
+        return self._diff(np.array([edge], dtype=np.int64))
 
     def freeze_least_violated(self, history: dict[int, dict[int, tuple[float, float]]]) -> int:
         """Hold each pair that cycled in the state it violated least; returns how many.
@@ -248,6 +333,9 @@ class Faces:
             "frozen_pairs": self.frozen_pairs,
             "worst_violation": self.worst_violation,
         }
+        if self.softening:  # the teeth follow from the mesh; the current tooth does not
+            arrays["contact_tooth"] = p.tooth[edges].copy()
+            counters["dissipated"] = self.dissipated
         return counters, arrays
 
     def restore(
@@ -275,6 +363,16 @@ class Faces:
         p.state[:] = NO_PAIR
         for name, v in values.items():
             getattr(p, name)[edges] = v
+        p.tooth[:] = -1
+        p.teeth.clear()
+        if self.softening:
+            if "contact_tooth" not in arrays or len(arrays["contact_tooth"]) != len(edges):
+                raise RunError("--resume: the checkpoint was written without fracture energy")
+            tooth = arrays["contact_tooth"].astype(np.int64)
+            cohesive = edges[tooth >= 0]
+            self._teeth(cohesive)
+            p.tooth[cohesive] = tooth[tooth >= 0]
+            self.dissipated = float(counters["dissipated"])  # type: ignore[arg-type]
         p.ops.clear()
         p.refresh(edges, self.units.state.fits)
         self.applied = {}

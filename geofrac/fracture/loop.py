@@ -56,8 +56,9 @@ END_REASONS = (
 )
 
 #: Event modes (``events.csv`` column ``mode``): an edge cracks in tension (2.20) or in
-#: shear (Mohr-Coulomb), or a bonded joint starts to slip.
-MODES = ("tension", "shear", "slip")
+#: shear (Mohr-Coulomb), a bonded joint starts to slip, or the cohesive faces of a crack
+#: drop to their next tooth (fracture energy, docs/cracking.md "Fracture energy").
+MODES = ("tension", "shear", "slip", "soften")
 
 
 class ContactUnsettled(Exception):
@@ -91,7 +92,7 @@ class EventLoop:
         sites: the pre-cracked sites.
         timing: the phases and solver counts (shared with ``strategy``).
         control: checkpoints, signal stop and resume data, or None.
-        contact: crack-face contact, or None.
+        contact: the crack faces' pairs (contact, cohesive faces), or None.
     """
 
     def __init__(
@@ -236,7 +237,9 @@ class EventLoop:
                 else:
                     row = self._row(event, edges, r, its, energy, (unit[1], unit[2]))
                     row["mode"] = mode
-                    if contact is not None:
+                    if contact is not None and contact.softening:
+                        row["dissipated_energy"] = 0.0  # set below, after the event
+                    if contact is not None and cfg.contact:
                         row |= contact.record(r)
                         row["contact_changes"] = len(changes)
                         pairs = contact.pairs
@@ -250,6 +253,9 @@ class EventLoop:
                     assert contact is not None
                     contact.pairs.unbond(cracked[0])
                     changed = np.zeros(0, dtype=np.int64)
+                elif mode == "soften":
+                    assert contact is not None
+                    strategy.contact_changed(contact.soften(cracked[0]))
                 else:
                     self.modes[cracked] = 1 + MODES.index(mode)
                     changed = state.crack_many(cracked)
@@ -257,7 +263,10 @@ class EventLoop:
                     strategy.changed(changed)
                     units.changed(changed)
                     if contact is not None:
-                        strategy.contact_changed(contact.cracked(edges, changed))
+                        blocks = contact.cracked(edges, changed, cohesive=mode == "tension")
+                        strategy.contact_changed(blocks)
+                if not replay and contact is not None and contact.softening:
+                    row["dissipated_energy"] = contact.dissipated
                 if face_hit is None and ctx.face_nodes is not None:
                     x_hit = units.face_x(edges)
                     if x_hit is not None:
@@ -405,10 +414,10 @@ class EventLoop:
     def _other_modes(
         self, edges: np.ndarray, r: float, floor: float
     ) -> tuple[np.ndarray, float, str]:
-        """The event of least r over tension (given), shear and joint slip.
+        """The event of least r over tension (given), shear, joint slip and softening.
 
-        A shear or slip drive counts only above ``floor`` (the stress floor of the
-        tension criterion). Ties within :data:`~geofrac.fracture.criterion.TIE_TOLERANCE`
+        A shear, slip or softening drive counts only above ``floor`` (the stress floor
+        of the tension criterion). Ties within :data:`~geofrac.fracture.criterion.TIE_TOLERANCE`
         keep the earlier mode of :data:`MODES`, then the edge that comes first by
         position (:func:`~geofrac.fracture.criterion.tie_order`).
         """
@@ -430,18 +439,23 @@ class EventLoop:
             e, rj = least(pairs, r_j, self.criterion.points)
             if rj < r * (1.0 - TIE_TOLERANCE):
                 edges, r, mode = np.array([e]), rj, "slip"
+        if self.contact is not None and self.contact.softening:
+            pairs, r_c = self.contact.pairs.soften_factors(floor=floor)
+            e, rc = least(pairs, r_c, self.criterion.points)
+            if rc < r * (1.0 - TIE_TOLERANCE):
+                edges, r, mode = np.array([e]), rc, "soften"
         return edges, r, mode
 
     def _edge_data(self, r: float) -> dict[str, np.ndarray]:
         """Per-edge fields of the crack series beside ``crack``: mode, contact at load r."""
         out = {"mode": self.modes.astype(float)}
-        if self.contact is not None:
+        if self.contact is not None and self.ctx.config.contact:
             out |= self.contact.frame(r)
         return out
 
     def _slipping(self) -> np.ndarray:
         """Edges whose faces slip in the last state, shape=(k,)."""
-        if self.contact is None:
+        if self.contact is None or not self.ctx.config.contact:
             return np.zeros(0, dtype=np.int64)
         pairs = self.contact.pairs
         act = pairs.active()
@@ -535,7 +549,10 @@ class EventLoop:
         data, arrays = read_checkpoint(ck, self.ctx.n_global)
         replay_from = int(data["replay_from"])  # type: ignore[arg-type]
         batches: list[list[int]] = data["batches"]  # type: ignore[assignment]
-        for batch in batches[: replay_from - 1]:
+        logged: list[Row] = data["rows"]  # type: ignore[assignment]
+        for batch, row in zip(batches[: replay_from - 1], logged, strict=False):
+            if row.get("mode") == "soften":  # a tooth of an edge cracked before
+                continue
             self.units.state.crack_many([int(e) for e in batch])
         held = self.assembler
         held.fragment_nodes = arrays["fragment_nodes"].astype(np.int64)
@@ -557,7 +574,7 @@ class EventLoop:
             self.contact.restore(
                 data["contact"],  # type: ignore[arg-type]
                 arrays,
-                [float(r["min_gap"]) for r in rows],
+                [float(r.get("min_gap", 0.0)) for r in rows],
             )
         hit = data["face_hit"]
         face_hit = None if hit is None else (int(hit[0]), float(hit[1]))  # type: ignore[index, arg-type]
@@ -621,10 +638,13 @@ class EventLoop:
                 out["crack_top_x_mm"] = x
         out["control"] = ctx.control.describe(ctx.gm.input_ids, ctx.gm.coords)  # type: ignore[assignment]
         self.units.results(out, n_pre, len(self.sites.random))
-        out["events_by_mode"] = {m: sum(1 for r in rows if r.get("mode") == m) for m in MODES}
-        if self.contact is not None:
+        modes = MODES if self.contact is not None and self.contact.softening else MODES[:3]
+        out["events_by_mode"] = {m: sum(1 for r in rows if r.get("mode") == m) for m in modes}
+        if self.contact is not None and cfg.contact:
             control = max((abs(r["control_displacement"]) for r in rows), default=0.0)
             out["contact"] = self.contact.summary(len(rows), control)  # type: ignore[assignment]
+        if self.contact is not None and self.contact.softening:
+            out["dissipated_energy"] = self.contact.dissipated
         return out
 
     def _unit_load(self, energy: float, delta: float, reaction: float) -> dict[str, JsonValue]:
@@ -642,7 +662,7 @@ class EventLoop:
             "strain_energy": energy,
             "stiffness": reaction / delta if delta != 0.0 else None,  # a held control point
         }
-        if self.contact is not None:
+        if self.contact is not None and self.ctx.config.contact:
             pairs = self.contact.pairs
             act = pairs.active()
             out["min_gap"] = min(float(pairs.gap[act].min()), 0.0) if len(act) else 0.0

@@ -35,6 +35,7 @@ __all__ = [
     "CHANGE_COLUMNS",
     "CONTACT_COLUMNS",
     "EVENT_COLUMNS",
+    "SOFTENING_COLUMNS",
     "EdgeDrawing",
     "EventLog",
     "EventOutput",
@@ -63,6 +64,10 @@ EVENT_COLUMNS = (
     "iterations",
     "mode",
 )
+
+#: Column of ``events.csv`` added with a fracture energy: the energy dissipated by the
+#: cohesive faces' teeth up to and including the event (times the thickness).
+SOFTENING_COLUMNS = ("dissipated_energy",)
 
 #: Columns of ``events.csv`` added with crack-face contact: pairs per state, the most
 #: negative gap of a closed pair at the event's load, state changes in the event.
@@ -272,7 +277,12 @@ class EventOutput:
                 self._open_series("damage.xdmf", gm.coords, gm.cells, keep_until),
             )
         handle = open(self.out_dir / "events.csv", "w", newline="")  # noqa: SIM115
-        columns = EVENT_COLUMNS + (CONTACT_COLUMNS if self._contact else ())
+        softening = self.ctx.config.fracture_energy is not None
+        columns = (
+            EVENT_COLUMNS
+            + (SOFTENING_COLUMNS if softening else ())
+            + (CONTACT_COLUMNS if self._contact else ())
+        )
         writer = csv.DictWriter(handle, fieldnames=columns)
         writer.writeheader()
         writer.writerows(rows)

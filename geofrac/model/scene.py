@@ -91,6 +91,9 @@ class Material:
         cohesion: c of the Mohr-Coulomb shear strength c + σn tan φ of intact rock
             (``cracking``: edges crack in shear), or None (no shear events).
         friction_angle: φ in degrees, with ``cohesion`` (0 when absent).
+        fracture_energy: G_f, energy per unit crack area (force/length), or None
+            (``cracking``: cracked edges soften over a saw-tooth that dissipates G_f
+            instead of losing their strength at once).
     """
 
     E: float
@@ -101,6 +104,7 @@ class Material:
     tensile_strength: float | None = None
     cohesion: float | None = None
     friction_angle: float = 0.0
+    fracture_energy: float | None = None
 
 
 @dataclass(frozen=True)

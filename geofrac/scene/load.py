@@ -100,6 +100,7 @@ SECTION_KEYS: dict[str, tuple[str, ...]] = {
         "tensile_strength",
         "cohesion",
         "friction_angle",
+        "fracture_energy",
     ),
     "discretization": (
         "element",
@@ -331,6 +332,7 @@ def _material(file: Path, raw: Any, dim: int) -> Material:
         tensile_strength=t.number("tensile_strength", positive=True, maximum=MAX_MODULUS),
         cohesion=cohesion,
         friction_angle=friction_angle,
+        fracture_energy=t.number("fracture_energy", positive=True, maximum=MAX_MODULUS),
     )
 
 
