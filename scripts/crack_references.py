@@ -51,7 +51,12 @@ class Case:
 CASES: dict[str, Case] = {
     "notched_beam": Case(
         "jobs/notched_beam.toml",
-        ("geometry.parameters.h_fine=4", "geometry.parameters.h=20", "cracking.max_events=45"),
+        (
+            "geometry.parameters.h_fine=4",
+            "geometry.parameters.h=20",
+            "cracking.max_events=45",
+            "cracking.criterion=principal",
+        ),
         4.0,
         "Edo (2016) 2.4.3, Galvez et al.: the crack starts at the notch tip (0, 75) and "
         "curves towards the load point (150, 150), meeting the top about 30 mm right of "
@@ -60,21 +65,21 @@ CASES: dict[str, Case] = {
     ),
     "plate_hole": Case(
         "jobs/plate_hole.toml",
-        ("geometry.parameters.h=3", "cracking.max_events=60"),
+        ("geometry.parameters.h=3", "cracking.max_events=60", "cracking.criterion=principal"),
         3.0,
         "Edo (2016) 2.4.4, Tang et al.: tensile cracks start at the top (25, 95) and bottom "
         "(25, 75) of the hole and run straight up and down, parallel to the compression.",
     ),
     "dcn_plate": Case(
         "jobs/dcn_plate.toml",
-        ("geometry.parameters.h=4", "cracking.max_events=80"),
+        ("geometry.parameters.h=4", "cracking.max_events=80", "cracking.criterion=principal"),
         4.0,
         "Edo (2016) 2.4.5, Zhu and Tang: seeds at the notch tips, then the crack of one "
         "notch dominates and runs towards the top and bottom faces, parallel to the load.",
     ),
     "dfn_model1": Case(
         "jobs/crack_model1.toml",
-        ("dfn.mesh_size=6", "cracking.max_events=40"),
+        ("dfn.mesh_size=6", "cracking.max_events=40", "cracking.criterion=principal"),
         6.0,
         "Edo (2016) 2.5.1, Model 1 coarsened: new cracks start at the tips of pre-existing "
         "fractures (DFN set 1, seed 1) and run parallel to the compression.",
@@ -92,6 +97,28 @@ CASES: dict[str, Case] = {
         "within two grain sizes of the edge crack (tests/fracture/test_grain_edge_path.py).",
         (-120.0, 200.0, 0.0, 150.0),
     ),
+}
+
+
+def _direction(name: str) -> Case:
+    """The thesis's case ``name`` with the default criterion (``"direction"``)."""
+    case = CASES[name]
+    overrides = tuple(o for o in case.overrides if o != "cracking.criterion=principal")
+    return Case(
+        case.scene,
+        overrides,
+        case.mesh_size,
+        case.description.split(":")[0]
+        + ", the default criterion ('direction', docs/cracking.md \"Mesh dependence\")"
+        + ":"
+        + case.description.split(":", 1)[1],
+        case.view,
+    )
+
+
+CASES |= {
+    f"{name}_direction": _direction(name)
+    for name in ("notched_beam", "plate_hole", "dcn_plate", "dfn_model1")
 }
 
 

@@ -52,4 +52,8 @@ def test_every_case_has_a_reference():
         "dcn_plate",
         "dfn_model1",
         "grain_notched_beam",
+        "notched_beam_direction",
+        "plate_hole_direction",
+        "dcn_plate_direction",
+        "dfn_model1_direction",
     }
