@@ -172,3 +172,41 @@ def test_point_index_finds_exactly_the_points_in_a_disk():
         d = np.hypot(*(points - centre).T)
         got = index.query(np.array(centre), r)
         np.testing.assert_array_equal(got, np.flatnonzero(d <= r * (1 + 1e-9)))
+
+
+def test_only_interior_edges_are_crack_sites():
+    """An edge on the boundary has one cell, no second face: never a crack site."""
+    coords, cells = grid_mesh(4)
+    m = edge_mesh(coords, cells)
+    state = CrackState(m, np.zeros(len(cells), bool), np.zeros(len(cells), bool), MlsSettings())
+    one_cell = (m.edge_cells < 0).any(axis=1)
+    assert one_cell.sum() == 16
+    np.testing.assert_array_equal(state.crackable, ~one_cell)
+
+
+def test_no_satellite_across_a_notch():
+    """A cracked cell beside a slot does not see the nodes across the slot's gap.
+
+    A slot from the bottom of a 9 x 9 grid, 1 wide (4 < x < 5) and 5 deep, is modelled by
+    removing its cells. A crack beside its left face hides nothing on the right, yet the
+    nodes on the slot's right face lie within the fitted cells' influence circles: none
+    of them below the slot's top may be a satellite.
+    """
+    coords, cells = grid_mesh(9)
+    centre = coords[cells].mean(axis=1)
+    keep = ~((centre[:, 0] > 4.0) & (centre[:, 0] < 5.0) & (centre[:, 1] < 5.0))
+    m = edge_mesh(coords, cells[keep])
+    n = int(keep.sum())
+    state = CrackState(m, np.zeros(n, bool), np.zeros(n, bool), MlsSettings())
+    seg = m.coords[m.edges]
+    # the horizontal edge 3 <= x <= 4 at y = 2, ending on the slot's left face
+    crack = np.flatnonzero(
+        (seg[:, 0, 1] == 2.0) & (seg[:, 1, 1] == 2.0) & (seg[:, :, 0].max(axis=1) == 4.0)
+    )
+    assert len(crack) == 1
+    state.start(crack)
+    assert state.fits
+    for fit in state.fits.values():
+        assert fit is not None
+        x, y = m.coords[fit.nodes].T
+        assert np.all(x[y < 5.0] <= 4.0)
