@@ -101,6 +101,25 @@ def orient(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     )
 
 
+def _orientations(
+    p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """The segments p–q_k against a_j–b_j, broadcast: (P, Q, A, B, scale, tol, orients).
+
+    P, Q: shape=(k, 1, 2); A, B: shape=(1, m, 2); scale: each segment's largest extent,
+    shape=(k, 1); tol: :data:`TOLERANCE` times scale times the larger extent of the
+    pair, shape=(k, m); orients: (o(P, Q, A), o(P, Q, B), o(A, B, P), o(A, B, Q)), each
+    shape=(k, m) (:func:`orient`).
+    """
+    P = np.broadcast_to(p, q.shape)[:, None, :]
+    Q, A, B = q[:, None, :], a[None, :, :], b[None, :, :]
+    scale = np.maximum(np.abs(q - p).max(axis=1), 1e-300)[:, None]
+    obst = np.maximum(np.abs(b - a).max(axis=1), 1e-300)[None, :]
+    tol = TOLERANCE * scale * np.maximum(scale, obst)
+    orients = (orient(P, Q, A), orient(P, Q, B), orient(A, B, P), orient(A, B, Q))
+    return P, Q, A, B, scale, tol, orients
+
+
 def blocked(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Whether each closed segment p–q_k touches any closed segment a_j–b_j.
 
@@ -115,13 +134,7 @@ def blocked(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
     """
     if len(a) == 0 or len(q) == 0:
         return np.zeros(len(q), dtype=bool)
-    P = np.broadcast_to(p, q.shape)[:, None, :]
-    Q, A, B = q[:, None, :], a[None, :, :], b[None, :, :]
-    scale = np.maximum(np.abs(q - p).max(axis=1), 1e-300)[:, None]
-    obst = np.maximum(np.abs(b - a).max(axis=1), 1e-300)[None, :]
-    tol = TOLERANCE * scale * np.maximum(scale, obst)
-    o1, o2 = orient(P, Q, A), orient(P, Q, B)
-    o3, o4 = orient(A, B, P), orient(A, B, Q)
+    P, Q, A, B, scale, tol, (o1, o2, o3, o4) = _orientations(p, q, a, b)
     s1, s2 = (
         np.where(np.abs(o1) <= tol, 0, np.sign(o1)),
         np.where(np.abs(o2) <= tol, 0, np.sign(o2)),
@@ -160,13 +173,7 @@ def leaves(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nda
     """
     if len(a) == 0 or len(q) == 0:
         return np.zeros(len(q), dtype=bool)
-    P = np.broadcast_to(p, q.shape)[:, None, :]
-    Q, A, B = q[:, None, :], a[None, :, :], b[None, :, :]
-    scale = np.maximum(np.abs(q - p).max(axis=1), 1e-300)[:, None]
-    obst = np.maximum(np.abs(b - a).max(axis=1), 1e-300)[None, :]
-    tol = TOLERANCE * scale * np.maximum(scale, obst)
-    o1, o2 = orient(P, Q, A), orient(P, Q, B)
-    o3, o4 = orient(A, B, P), orient(A, B, Q)
+    P, _, A, B, _, tol, (o1, o2, o3, o4) = _orientations(p, q, a, b)
     proper = (o1 * o2 < 0) & (np.abs(o1) > tol) & (np.abs(o2) > tol)
     proper &= (o3 * o4 < 0) & (np.abs(o3) > tol) & (np.abs(o4) > tol)
     d = q - p

@@ -166,8 +166,6 @@ DISC_D, DISC_T, DISC_ALPHA, DISC_FT, DISC_H = 50.0, 25.0, math.radians(5.0), 3.0
 #: the splitting load of the ISRM formula f_t = 2P / (π D t): P = π D t f_t / 2 (N).
 DISC_LOAD = math.pi * DISC_D * DISC_T * DISC_FT / 2.0
 
-#: the measured misses of the default (direction) criterion at h = 1 mm, 2026-11-26.
-
 
 def _disc_split(algorithm: str, short: str) -> Case:
     """The Brazilian disc on one gmsh mesher: the split should follow the loaded diameter."""
