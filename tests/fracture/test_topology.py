@@ -126,7 +126,7 @@ def _pairs(at: list[float], states: list[int]) -> SimpleNamespace:
     """Face pairs at x = ``at`` on the crack: MLS fits of each side's nodes.
 
     Carries what :meth:`FacePairs.constraint_terms` reads (the pairs' operators,
-    states and frames).
+    states, frames and teeth).
     """
     ops = {}
     for e, x in enumerate(at):
@@ -136,7 +136,11 @@ def _pairs(at: list[float], states: list[int]) -> SimpleNamespace:
         ops[e] = pair_operator(plus, minus, p, T, N, d_matrix(1.0, 0.25, 2, "strain"))
     k = len(at)
     return SimpleNamespace(
-        ops=ops, state=np.array(states), normal=np.tile(N, (k, 1)), tangent=np.tile(T, (k, 1))
+        ops=ops,
+        state=np.array(states),
+        normal=np.tile(N, (k, 1)),
+        tangent=np.tile(T, (k, 1)),
+        tooth=np.full(k, -1),  # no cohesive pair (fracture energy)
     )
 
 
