@@ -25,9 +25,8 @@ import numpy as np
 
 from geofrac.bench.args import name_list
 from geofrac.meshing.geo import ALGORITHMS
-from geofrac.validation.paths import PAD_ZONE
 
-__all__ = ["BAND", "PAD_ZONE", "SCENE", "add_arguments", "band_h", "draw_paths", "run"]
+__all__ = ["BAND", "SCENE", "add_arguments", "band_h", "draw_paths", "run"]
 
 SCENE = Path(__file__).resolve().parents[2] / "jobs" / "sym_notched_beam.toml"
 #: half-width of the fine band of meshes/sym_notched_beam.geo (mm): h is measured in it.
@@ -69,7 +68,7 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
     from geofrac.io.summary import write_json
     from geofrac.log import echo
     from geofrac.scene import load_scene_collective
-    from geofrac.validation.paths import CrackEvents, axis_deviation, spread_until
+    from geofrac.validation.paths import PAD_ZONE, CrackEvents, axis_deviation, spread_until
 
     user = tuple(getattr(args, "overrides", None) or ())
     records, panels = [], []
