@@ -309,22 +309,24 @@ class DirectionCriterion(TractionCriterion):
         """Each tip's zone: the open edges at it or within R, shared out to the nearest tip.
 
         An edge in the zones of several tips (a V notch's corners, two tips about to
-        meet) belongs to the one whose node is nearest to its midpoint (ties: the lower
-        node id), so that one stress peak drives one tip.
+        meet) belongs to the one whose node is nearest to its midpoint (ties: the node
+        that comes first by position, x then y), so that one stress peak drives one tip.
         """
         tracker, mesh = self.tracker, self.state.mesh
-        owner: dict[int, tuple[float, int]] = {}
+        owner: dict[int, tuple[float, float, float, int]] = {}
         mids = self.points
         for a in tips:
             zone = np.union1d(tracker.near(a)[2], tracker.edges_at(a))
             zone = zone[open_[zone]]
+            x, y = mesh.coords[a, :2]
             dist = np.hypot(*(mids[zone] - mesh.coords[a]).T)
             for e, d in zip(zone.tolist(), dist.tolist(), strict=True):
-                if e not in owner or (d, a) < owner[e]:
-                    owner[e] = (d, a)
+                key = (d, float(x), float(y), a)  # ties: the tip first by position
+                if e not in owner or key < owner[e]:
+                    owner[e] = key
         out: dict[int, list[int]] = {a: [] for a in tips}
-        for e, (_, a) in owner.items():
-            out[a].append(e)
+        for e, key in owner.items():
+            out[key[3]].append(e)
         return {a: np.array(sorted(v), dtype=np.int64) for a, v in out.items()}
 
     def cracked(self, sites: np.ndarray) -> None:
