@@ -225,68 +225,96 @@ class DirectionCriterion(TractionCriterion):
         return self._s1
 
     def select(self, sigma1: np.ndarray, *, floor: float) -> tuple[np.ndarray, float]:
-        """The edges of least r once the tips' zones have chosen their edges."""
-        state, tracker = self.state, self.tracker
-        mesh = state.mesh
+        """The edges of least r once the tips' zones have chosen their edges.
+
+        A tip's zone is driven by its largest σ1, whichever edge it grows along, so the
+        sites of least r are found first (each active zone stands in by its peak edge)
+        and only the tips that win look for their direction and edge. A winning tip
+        with no edge leading on drops out, its zone's edges become sites of their own,
+        and the search is made again.
+        """
+        state, mesh = self.state, self.state.mesh
         cracked = state.cracked
         open_ = ~cracked & state.crackable
-        cell_stress = self.units.midpoint_stress.mean(axis=1)  # shape=(num_cells, 3)
-        drive = sigma1.copy()
-        blocked = np.zeros(len(drive), dtype=bool)
-        chosen: dict[int, list[tuple[int, Tip]]] = {}
-        tip_drive: dict[int, float] = {}
         tips = tip_nodes(mesh, cracked, self.on_boundary)
-        notches = [v for v in tracker.notches if not cracked[tracker.near(v)[2]].any()]
+        notches = [v for v in self.tracker.notches if not cracked[self.tracker.near(v)[2]].any()]
         tips = np.union1d(tips, np.array(notches, dtype=np.int64))
-        tracker.prune(tips)
+        self.tracker.prune(tips)
+        owner = self._zone_owner(tips, open_)  # shape=(num_edges,), index into tips or -1
+        in_zone = owner >= 0
+        peak = np.full(len(tips), -np.inf)
+        np.maximum.at(peak, owner[in_zone], self._s1[in_zone])
+        active = peak > floor
+        # the peak edge of each zone stands for it (ties: the edge first by position)
+        rep = np.full(len(tips), -1, dtype=np.int64)
+        zone_edges = np.flatnonzero(in_zone)
+        order = tie_order(zone_edges, self.points)
+        ranked = zone_edges[order][np.lexsort((-self._s1[zone_edges[order]],))]
+        for e in ranked[::-1].tolist():  # the last write per tip is its best edge
+            rep[owner[e]] = e
         self.last_tips = []
-        zones = self._zones(tips.tolist(), open_)
-        for a in tips.tolist():
-            cells, dist, _ = tracker.near(a)
-            at = tracker.edges_at(a)
-            zone = zones[a]
-            peak = float(self._s1[zone].max()) if len(zone) else -np.inf
-            tip = tracker.tip(a, cracked)
-            if not peak > floor or not len(cells):
-                self.last_tips.append((a, peak, tip.direction, -1))
-                continue
-            s_bar = averaged_stress(
-                cell_stress[cells], tracker.areas[cells], dist, tracker.tip_radius(a)
-            )
-            _, d = growth_direction(s_bar, tip.direction)
-            cand = at[open_[at]]
-            ends = mesh.edges[cand]
-            others = np.where(ends[:, 0] == a, ends[:, 1], ends[:, 0])
-            pick = choose_edge(mesh.coords, a, tip, d, cand, others)
-            if pick is None:  # no edge leads on: the zone's edges stay sites of their own
-                self.last_tips.append((a, peak, d, -1))
-                continue
-            blocked[zone] = True
-            e, p = pick
-            b = int(others[cand == e][0])
-            chosen.setdefault(e, []).append((b, Tip(p, d.copy())))
-            tip_drive[e] = max(tip_drive.get(e, -np.inf), peak)
-            self.last_tips.append((a, peak, d, e))
-        drive[blocked] = -np.inf
-        for e, s1 in tip_drive.items():
-            drive[e] = s1
-        edges, r = next_sites(state, self.config, drive, floor=floor, points=self.points)
-        self._grown = {}
-        out: list[int] = []
-        for e in edges.tolist():
-            if e in chosen:
-                site = e
-                self._grown[e] = chosen[e]
-            else:  # a new crack at e's σ1, along the edge there that follows the stress
-                site = self._aligned(e, open_ & ~blocked)
-                a, b = mesh.edges[site]
-                starts = nucleation_tips(
-                    mesh.coords[[a, b]], self.edge_stress[e], through=self.points[e]
-                )
-                self._grown[site] = [(int((a, b)[i]), t) for i, t in starts]
-            if site not in out:
-                out.append(site)
-        return np.array(out, dtype=np.int64), r
+        while True:
+            blocked = in_zone.copy()
+            blocked[in_zone] = active[owner[in_zone]]
+            drive = sigma1.copy()
+            drive[blocked] = -np.inf
+            drive[rep[active]] = peak[active]
+            edges, r = next_sites(state, self.config, drive, floor=floor, points=self.points)
+            stand_in = {int(rep[i]): i for i in np.flatnonzero(active)}
+            grown: dict[int, list[tuple[int, Tip]]] = {}
+            out: list[int] = []
+            retry = False
+            for e in edges.tolist():
+                if e in stand_in:
+                    i = stand_in[e]
+                    pick = self._grow(int(tips[i]), float(peak[i]), open_)
+                    if pick is None:  # no edge leads on: its zone's edges are sites
+                        active[i] = False
+                        retry = True
+                        break
+                    site, starts = pick
+                else:  # a new crack at e's σ1, along the edge there that follows the stress
+                    site = self._aligned(e, open_ & ~blocked)
+                    a, b = mesh.edges[site]
+                    made = nucleation_tips(
+                        mesh.coords[[a, b]], self.edge_stress[e], through=self.points[e]
+                    )
+                    starts = [(int((a, b)[i]), t) for i, t in made]
+                if site not in out:
+                    out.append(site)
+                    grown[site] = starts
+            if not retry:
+                self._grown = grown
+                return np.array(out, dtype=np.int64), r
+
+    def _grow(
+        self, a: int, peak: float, open_: np.ndarray
+    ) -> tuple[int, list[tuple[int, Tip]]] | None:
+        """The edge tip ``a`` grows along and the tip it leaves at its far node, or None.
+
+        The direction is perpendicular to σ1 of the stress averaged about the tip
+        (:func:`averaged_stress`), the edge the one nearest to the ideal line
+        (:func:`choose_edge`). ``open_``: the edges that may crack, shape=(num_edges,).
+        """
+        tracker, mesh = self.tracker, self.state.mesh
+        cells, dist, _ = tracker.near(a)
+        tip = tracker.tip(a, self.state.cracked)
+        if not len(cells):
+            return None
+        cell_stress = self.units.midpoint_stress[cells].mean(axis=1)
+        s_bar = averaged_stress(cell_stress, tracker.areas[cells], dist, tracker.tip_radius(a))
+        _, d = growth_direction(s_bar, tip.direction)
+        at = tracker.edges_at(a)
+        cand = at[open_[at]]
+        ends = mesh.edges[cand]
+        others = np.where(ends[:, 0] == a, ends[:, 1], ends[:, 0])
+        pick = choose_edge(mesh.coords, a, tip, d, cand, others)
+        self.last_tips.append((a, peak, d, -1 if pick is None else pick[0]))
+        if pick is None:
+            return None
+        e, p = pick
+        b = int(others[cand == e][0])
+        return e, [(b, Tip(p, d.copy()))]
 
     def _aligned(self, edge: int, free: np.ndarray) -> int:
         """The edge at ``edge`` (itself or one sharing a node) most nearly across σ1 there.
@@ -305,29 +333,37 @@ class DirectionCriterion(TractionCriterion):
         best = near[fit >= fit.max() - 1e-9]
         return int(best[tie_order(best, self.points)[0]])
 
-    def _zones(self, tips: list[int], open_: np.ndarray) -> dict[int, np.ndarray]:
-        """Each tip's zone: the open edges at it or within R, shared out to the nearest tip.
+    def _zone_owner(self, tips: np.ndarray, open_: np.ndarray) -> np.ndarray:
+        """The tip whose zone each edge is in: an index into ``tips``, or -1.
 
-        An edge in the zones of several tips (a V notch's corners, two tips about to
-        meet) belongs to the one whose node is nearest to its midpoint (ties: the node
-        that comes first by position, x then y), so that one stress peak drives one tip.
+        A tip's zone is the open edges at it or within R of it. An edge in the zones of
+        several tips (a V notch's corners, two tips about to meet) belongs to the one
+        whose node is nearest to its midpoint (ties: the node that comes first by
+        position, x then y), so that one stress peak drives one tip.
+
+        Args:
+            tips: tip nodes, shape=(k,).
+            open_: the edges that may crack, shape=(num_edges,).
+
+        Returns:
+            shape=(num_edges,).
         """
         tracker, mesh = self.tracker, self.state.mesh
-        owner: dict[int, tuple[float, float, float, int]] = {}
-        mids = self.points
-        for a in tips:
-            zone = np.union1d(tracker.near(a)[2], tracker.edges_at(a))
-            zone = zone[open_[zone]]
-            x, y = mesh.coords[a, :2]
-            dist = np.hypot(*(mids[zone] - mesh.coords[a]).T)
-            for e, d in zip(zone.tolist(), dist.tolist(), strict=True):
-                key = (d, float(x), float(y), a)  # ties: the tip first by position
-                if e not in owner or key < owner[e]:
-                    owner[e] = key
-        out: dict[int, list[int]] = {a: [] for a in tips}
-        for e, key in owner.items():
-            out[key[3]].append(e)
-        return {a: np.array(sorted(v), dtype=np.int64) for a, v in out.items()}
+        owner = np.full(len(mesh.edges), -1, dtype=np.int64)
+        if not len(tips):
+            return owner
+        parts = [np.union1d(tracker.near(int(a))[2], tracker.edges_at(int(a))) for a in tips]
+        edges = np.concatenate(parts)
+        which = np.repeat(np.arange(len(tips)), [len(z) for z in parts])
+        keep = open_[edges]
+        edges, which = edges[keep], which[keep]
+        xy = mesh.coords[tips[which], :2]
+        dist = np.hypot(*(self.points[edges] - xy).T)
+        order = np.lexsort((tips[which], xy[:, 1], xy[:, 0], dist, edges))
+        first = np.ones(len(order), dtype=bool)
+        first[1:] = edges[order][1:] != edges[order][:-1]
+        owner[edges[order][first]] = which[order][first]
+        return owner
 
     def cracked(self, sites: np.ndarray) -> None:
         """Track the tips the cracked edges start (shear cracks: their own direction)."""
