@@ -30,7 +30,8 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
   ``"direction"``: a crack tip grows, when the largest σ1 of the edges within
   ``averaging_radius`` of it (default: twice the mean length of its edges) reaches f_t,
   along the edge that follows the direction of the stress averaged over that radius;
-  new cracks start where the traction across an edge n·σ·n reaches f_t;
+  new cracks start where an edge's σ1 reaches f_t, on the edge there most nearly
+  across σ1;
   ``"traction"``: n·σ·n on every edge; ``"principal"``: Edo (2016), §2.3.2, σ1 at the
   edge's midpoint (docs/cracking.md, "Mesh dependence").
 - ``mls_region``: ``[x0, y0, x1, y1]``: cells whose centroid is inside use MLS from the

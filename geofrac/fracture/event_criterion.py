@@ -6,8 +6,8 @@ per crack site and picks the sites with least r = f_t / drive (Edo (2016), eq. 2
 
 - ``"direction"`` (:class:`DirectionCriterion`, the default): a crack tip grows, when
   the largest σ1 about it reaches f_t, along the edge that follows the direction of
-  the stress averaged about the tip; new cracks start where the traction across an
-  edge reaches f_t (:mod:`~geofrac.fracture.direction`);
+  the stress averaged about the tip; new cracks start where an edge's σ1 reaches f_t,
+  on the edge there most nearly across σ1 (:mod:`~geofrac.fracture.direction`);
 - ``"traction"`` (:class:`TractionCriterion`): the traction across each edge, n·σ·n;
 - ``"principal"`` (:class:`EdgeCriterion`): Edo (2016), §2.3.2: σ1 at the edge's
   midpoint, the mean of its two cells'.
@@ -188,7 +188,7 @@ class TractionCriterion(EdgeCriterion):
 
 
 class DirectionCriterion(TractionCriterion):
-    """Tips grow along the averaged stress's direction; new cracks start by the traction.
+    """Tips grow along the averaged stress's direction; new cracks start across σ1.
 
     See :mod:`geofrac.fracture.direction`. A tip's zone (the open edges at it or within
     R of it) offers one edge, chosen by :func:`choose_edge` along the direction of the
