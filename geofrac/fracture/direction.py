@@ -123,9 +123,7 @@ def notch_corners(mesh: EdgeMesh) -> tuple[np.ndarray, np.ndarray]:
         cos = np.sum(a * b, axis=1) / (np.hypot(*a.T) * np.hypot(*b.T))
         np.add.at(angle, mesh.cells[:, j], np.arccos(np.clip(cos, -1.0, 1.0)))
     bnd = mesh.edges[mesh.boundary_edges]
-    on = np.zeros(len(mesh.coords), dtype=bool)
-    on[bnd.ravel()] = True
-    nodes = np.flatnonzero(on & (angle > NOTCH_ANGLE))
+    nodes = np.flatnonzero(mesh.boundary_nodes() & (angle > NOTCH_ANGLE))
     out = np.zeros((len(nodes), 2))
     for i, v in enumerate(nodes.tolist()):
         ends = bnd[(bnd == v).any(axis=1)]
@@ -270,12 +268,8 @@ class TipTracker:
 
     def __post_init__(self) -> None:  # noqa: D105
         m = self.mesh
-        n = len(m.coords)
-        ends = m.edges.ravel()
-        order = np.argsort(ends, kind="stable")
         #: edges at each node as CSR: offsets, shape=(num_nodes + 1,); edge ids.
-        self._ptr = np.searchsorted(ends[order], np.arange(n + 1))
-        self._node_edges = order // 2
+        self._ptr, self._node_edges = m.node_edges()
         seg = m.coords[m.edges]
         self.lengths = np.hypot(*(seg[:, 1] - seg[:, 0]).T)
         self._centroids = m.centroids()

@@ -204,8 +204,7 @@ class DirectionCriterion(TractionCriterion):
     def __init__(self, units: EdgeUnits, config: CrackingConfig) -> None:
         super().__init__(units, config)
         mesh = self.state.mesh
-        self.on_boundary = np.zeros(len(mesh.coords), dtype=bool)
-        self.on_boundary[mesh.edges[mesh.boundary_edges].ravel()] = True
+        self.on_boundary = mesh.boundary_nodes()
         self.tracker = TipTracker(mesh, self.on_boundary, config.averaging_radius)
         corners, bisectors = notch_corners(mesh)
         keep = state_crackable_at(self.state, corners)

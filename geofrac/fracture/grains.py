@@ -216,18 +216,14 @@ class GrainState:
         self.crack_bins = Bins(bin_size)
         self.crackable = ~(self.frozen[m.edges[:, 0]] | self.frozen[m.edges[:, 1]])
         #: incident edges of each node as CSR (offsets, edge ids).
-        flat = m.edges.ravel()
-        order = np.argsort(flat, kind="stable")
-        self.node_edge_offsets = np.searchsorted(flat[order], np.arange(n + 1))
-        self.node_edge_ids = order // 2
+        self.node_edge_offsets, self.node_edge_ids = m.node_edges()
         self._h = np.zeros(n)
         b = m.boundary_edges
         self._bnd = m.coords[m.edges[b]]  # boundary edges, shape=(nb, 2, 2)
         self._bnd_bins = Bins(bin_size)
         for k, (a, c) in enumerate(self._bnd):
             self._bnd_bins.add(k, np.minimum(a, c), np.maximum(a, c))
-        self._on_boundary = np.zeros(n, dtype=bool)
-        self._on_boundary[m.edges[b].ravel()] = True
+        self._on_boundary = m.boundary_nodes()
         self._cell_bins = Bins(bin_size)
         x = m.coords[m.cells]
         for k in range(len(x)):

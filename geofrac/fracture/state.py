@@ -87,8 +87,7 @@ class CrackState:
         n_nodes = len(m.coords)
         #: cracked edges at each node, shape=(num_nodes,).
         self.node_cracks = np.zeros(n_nodes, dtype=np.int64)
-        self._on_boundary = np.zeros(n_nodes, dtype=bool)
-        self._on_boundary[m.edges[m.boundary_edges].ravel()] = True
+        self._on_boundary = m.boundary_nodes()
         order = np.argsort(m.cells.ravel(), kind="stable")
         self._star = order // 3  # cells around each node, grouped by node
         self._star_ptr = np.searchsorted(m.cells.ravel()[order], np.arange(n_nodes + 1))

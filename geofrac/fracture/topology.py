@@ -72,6 +72,18 @@ class EdgeMesh:
         d1, d2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
         return 0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
 
+    def boundary_nodes(self) -> np.ndarray:
+        """Whether each node lies on a boundary edge, shape=(num_nodes,)."""
+        out = np.zeros(len(self.coords), dtype=bool)
+        out[self.edges[self.boundary_edges].ravel()] = True
+        return out
+
+    def node_edges(self) -> tuple[np.ndarray, np.ndarray]:
+        """Edges at each node as CSR (offsets, shape=(num_nodes + 1,); edge ids)."""
+        flat = self.edges.ravel()
+        order = np.argsort(flat, kind="stable")
+        return np.searchsorted(flat[order], np.arange(len(self.coords) + 1)), order // 2
+
     def node_cells(self) -> tuple[np.ndarray, np.ndarray]:
         """Cells around each node as CSR (offsets, shape=(num_nodes + 1,); cells)."""
         n = len(self.coords)
