@@ -278,6 +278,8 @@ class TipTracker:
         self.areas = m.areas()
         #: per tip node: (cells within CUTOFF R, their distances), (edges within R).
         self._near: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        #: per tip node: its zone's edges (:meth:`zone`).
+        self._zones: dict[int, np.ndarray] = {}
 
     def edges_at(self, node: int) -> np.ndarray:
         """The edges at a node, shape=(k,)."""
@@ -299,6 +301,13 @@ class TipTracker:
             edges = np.array(sorted(self._mids.query_ball_point(x, r)), dtype=np.int64)
             hit = self._near[node] = (cells, np.asarray(dist, dtype=float), edges)
         return hit
+
+    def zone(self, node: int) -> np.ndarray:
+        """The edges at a tip node or within R of it (open or not), sorted, shape=(k,)."""
+        zone = self._zones.get(node)
+        if zone is None:
+            zone = self._zones[node] = np.union1d(self.near(node)[2], self.edges_at(node))
+        return zone
 
     def tip(self, node: int, cracked: np.ndarray) -> Tip:
         """The tracked tip at ``node``, or a new one there (its crack's own direction)."""

@@ -214,8 +214,6 @@ class DirectionCriterion(TractionCriterion):
         self._s1 = np.zeros(0)
         #: what each selected edge starts: edge -> [(node, tip)].
         self._grown: dict[int, list[tuple[int, Tip]]] = {}
-        #: per tip of the last :meth:`select`: (node, zone drive, direction, edge or -1).
-        self.last_tips: list[tuple[int, float, np.ndarray, int]] = []
 
     def site_stress(self, unit_s1: np.ndarray) -> np.ndarray:
         """σ1 per edge (where a crack starts), shape=(num_edges,); tips: :meth:`select`."""
@@ -251,7 +249,6 @@ class DirectionCriterion(TractionCriterion):
         ranked = zone_edges[order][np.lexsort((-self._s1[zone_edges[order]],))]
         for e in ranked[::-1].tolist():  # the last write per tip is its best edge
             rep[owner[e]] = e
-        self.last_tips = []
         while True:
             blocked = in_zone.copy()
             blocked[in_zone] = active[owner[in_zone]]
@@ -266,7 +263,7 @@ class DirectionCriterion(TractionCriterion):
             for e in edges.tolist():
                 if e in stand_in:
                     i = stand_in[e]
-                    pick = self._grow(int(tips[i]), float(peak[i]), open_)
+                    pick = self._grow(int(tips[i]), open_)
                     if pick is None:  # no edge leads on: its zone's edges are sites
                         active[i] = False
                         retry = True
@@ -286,9 +283,7 @@ class DirectionCriterion(TractionCriterion):
                 self._grown = grown
                 return np.array(out, dtype=np.int64), r
 
-    def _grow(
-        self, a: int, peak: float, open_: np.ndarray
-    ) -> tuple[int, list[tuple[int, Tip]]] | None:
+    def _grow(self, a: int, open_: np.ndarray) -> tuple[int, list[tuple[int, Tip]]] | None:
         """The edge tip ``a`` grows along and the tip it leaves at its far node, or None.
 
         The direction is perpendicular to σ1 of the stress averaged about the tip
@@ -308,7 +303,6 @@ class DirectionCriterion(TractionCriterion):
         ends = mesh.edges[cand]
         others = np.where(ends[:, 0] == a, ends[:, 1], ends[:, 0])
         pick = choose_edge(mesh.coords, a, tip, d, cand, others)
-        self.last_tips.append((a, peak, d, -1 if pick is None else pick[0]))
         if pick is None:
             return None
         e, p = pick
@@ -351,7 +345,7 @@ class DirectionCriterion(TractionCriterion):
         owner = np.full(len(mesh.edges), -1, dtype=np.int64)
         if not len(tips):
             return owner
-        parts = [np.union1d(tracker.near(int(a))[2], tracker.edges_at(int(a))) for a in tips]
+        parts = [tracker.zone(int(a)) for a in tips]
         edges = np.concatenate(parts)
         which = np.repeat(np.arange(len(tips)), [len(z) for z in parts])
         keep = open_[edges]
