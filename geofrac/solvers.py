@@ -31,6 +31,8 @@ __all__ = [
     "AUTO_DIRECT_MAX_DOFS",
     "MAX_RELATIVE_RESIDUAL",
     "LinearSolver",
+    "Matrix",
+    "Vector",
     "block_diagonal",
     "mumps_inverse_entries",
     "mumps_sparse_solve",
@@ -38,6 +40,11 @@ __all__ = [
     "preset_options",
     "rigid_body_modes",
 ]
+
+#: The distributed matrix and vector types the rest of geofrac passes around (and annotates
+#: with) without importing petsc4py.
+Matrix = PETSc.Mat
+Vector = PETSc.Vec
 
 #: A solution whose relative residual ||b - Ax|| / ||b|| exceeds this is rejected.
 MAX_RELATIVE_RESIDUAL = 1e-6
