@@ -110,7 +110,7 @@ def quasi_static_bar(
     steps = round(L0 / mat.wave_speed(rho0, 1) / dt)
     t0 = time.perf_counter()
     for _ in range(steps):
-        step(g, p, mat, s)
+        step(g, p, mat, settings=s)
     seconds = time.perf_counter() - t0
     x, stress = p.x[:, 0].copy(), p.stress[:, 0, 0].copy()
     exact = self_weight_stress(x, E, rho0, b, L0)
@@ -294,7 +294,7 @@ def impact_bar(
     steps = round(0.8 * L0 / c / dt)
     t0 = time.perf_counter()
     for _ in range(steps):
-        step(g, p, mat, s)
+        step(g, p, mat, settings=s)
     seconds = time.perf_counter() - t0
     exact = E * ((c * 1.0 - v0 * 1.0) / (c * 1.0) - 1)  # eq. 4.75 (independent of t)
     ratio = p.stress[:, 0, 0] / exact

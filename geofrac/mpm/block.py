@@ -95,7 +95,7 @@ def gravity_block(
         scheme, shape, dt, np.array([0.0, -9.81]), fixed, smoothing, backend=backend, domain=dom
     )
     t0 = time.perf_counter()
-    step(g, p, mat, s)
+    step(g, p, mat, settings=s)
     warmup = time.perf_counter() - t0
     if dom is not None:
         comm.Barrier()
@@ -107,7 +107,7 @@ def gravity_block(
     t0 = time.perf_counter()
     for _ in range(steps):
         done += p.n
-        step(g, p, mat, s)
+        step(g, p, mat, settings=s)
     if dom is not None:
         comm.Barrier()
     seconds = time.perf_counter() - t0

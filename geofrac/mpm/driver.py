@@ -53,13 +53,13 @@ from geofrac.errors import RunError
 from geofrac.io.checkpoint import RunControl
 from geofrac.log import format_seconds, sayer
 from geofrac.model.scene import Scene
+from geofrac.mpm import shapes
 from geofrac.mpm.boundaries import boundary_rows, scene_grid
 from geofrac.mpm.constitutive import ConstitutiveModel
 from geofrac.mpm.energy import CSV_COLUMNS, EnergyLog, StepBudget
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles, concat, take
 from geofrac.mpm.schemes import StepSettings, particle_strain_energy, step, time_step
-from geofrac.mpm.shapes import support_margin
 from geofrac.timing import Timings
 
 __all__ = ["MPM", "OUTPUT_FILES", "MpmMethod", "MpmRun", "advance", "prepare", "simulate"]
@@ -258,9 +258,7 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
     assert spec is not None
     g = scene_grid(spec.lower, spec.upper, spec.spacing, spec.padding)
     p, bed, bodies = _all_particles(scene, comm)
-    margin = support_margin(spec.shape, spec.spacing)
-    if margin is None:
-        margin = p.lp if spec.shape != "mpm" else 0.0
+    margin = shapes.get(spec.shape).margin(spec.spacing, p.lp)
     if np.any(g.outside(p.x, margin)):
         raise RunError(
             f"mpm.grid: {int(np.sum(g.outside(p.x, margin)))} particle(s) start outside the "
@@ -370,7 +368,7 @@ def advance(run: MpmRun, comm: MPI.Comm, log: EnergyLog, k: int) -> list[float]:
         second).
     """
     budget = StepBudget()
-    step(run.local, run.particles, run.material, _settings(run, k), budget)
+    step(run.local, run.particles, run.material, settings=_settings(run, k), budget=budget)
     kin, strain, pot, terms = _energies(run, comm, budget)
     return log.record(kin, strain, log.potential(pot, _gravity_factor(run, k)), terms)
 

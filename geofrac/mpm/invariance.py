@@ -179,9 +179,9 @@ def compare_ranks(
     spent = [0.0, 0.0]
     for k in range(1, steps + 1):
         t0 = time.perf_counter()
-        step(g, serial, mat, s)
+        step(g, serial, mat, settings=s)
         t1 = time.perf_counter()
-        step(dom.local, mine, mat, sd)
+        step(dom.local, mine, mat, settings=sd)
         spent[0] += t1 - t0
         spent[1] += time.perf_counter() - t1
         crossed.update(mine.ids[start_owner[mine.ids] != comm.rank].tolist())

@@ -150,7 +150,7 @@ def test_a_block_slides_down_a_30_degree_bed_at_the_coulomb_rate(representation)
     fr = friction(ids, nrm, mu, planes)
     s = StepSettings("musl", "ugimp", dt, np.array([0.0, -G0]), fixed, friction=fr)
     for _ in range(round(t_end / dt)):
-        step(g, p, MAT, s)
+        step(g, p, MAT, settings=s)
     v = (p.mass @ p.v / p.mass.sum()) @ t
     exact = G0 * (np.sin(np.radians(theta)) - mu * np.cos(np.radians(theta))) * t_end
     assert abs(v - exact) < 0.01 * exact

@@ -15,7 +15,7 @@ from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
 from geofrac.mpm.plasticity import DruckerPrager
 from geofrac.mpm.schemes import SCHEMES, StepSettings, step, strain_energy, time_step
-from geofrac.mpm.shapes import SHAPES
+from geofrac.mpm.shapes import REGISTRY
 
 # --- a rigidly rotating prestressed body ------------------------------------------------
 
@@ -56,7 +56,7 @@ def _spin(material, scheme: str, shape: str, steps: int, backend: str = "numpy")
     inner = np.linalg.norm(p.x - CENTRE, axis=1) < (1.0 if shape == "bspline2" else 2.0)
     for _ in range(steps):
         p.v = (p.x - CENTRE) @ J.T
-        step(g, p, material, s)
+        step(g, p, material, settings=s)
     return p.stress[inner], p.stress_zz[inner]
 
 
@@ -87,7 +87,7 @@ MATERIALS = {
 
 
 @pytest.mark.parametrize("material", list(MATERIALS))
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", REGISTRY)
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_spinning_prestressed_body_keeps_its_stress_turning_with_it(scheme, shape, material):
     """σ = R(θ) σ₀ R(θ)ᵀ after θ = 0.5 rad, to the explicit update's first-order error.
@@ -165,7 +165,7 @@ def _column(
     budget = StepBudget()
     base = []
     for _ in range(round(periods * T / dt)):
-        step(g, p, COLUMN, s, budget)
+        step(g, p, COLUMN, settings=s, budget=budget)
         bottom = p.stress[y0 < CELL / 2, 1, 1]
         base.append(bottom.mean() if len(bottom) else np.nan)
     total = budget.damping

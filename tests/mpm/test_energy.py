@@ -50,7 +50,7 @@ def _run(g, p, mat, s, steps):
     row = log.first_row()
     for _ in range(steps):
         b = StepBudget()
-        step(g, p, mat, s, b)
+        step(g, p, mat, settings=s, budget=b)
         pot = -float(p.mass @ (p.x @ s.gravity)) - u0
         row = log.record(p.kinetic_energy(), strain_energy(p, mat), pot, b.terms())
     return log, row
@@ -138,7 +138,7 @@ def test_consistent_smoothing_makes_the_grid_work_the_stress_work():
     Σ V σ : (Φ Δε(v)) for any σ and v; the seed's forces (from σ) do not satisfy it.
     """
     from geofrac.mpm.consistent import mls_operator
-    from geofrac.mpm.shapes import weights
+    from geofrac.mpm.shapes import UGIMP, weights
 
     rng = np.random.default_rng(7)
     g = grid([0.0, 0.0], 0.5, [12, 12])
@@ -149,7 +149,7 @@ def test_consistent_smoothing_makes_the_grid_work_the_stress_work():
     stress = stress + np.swapaxes(stress, 1, 2)
     v = rng.normal(size=(g.num_nodes, 2))
     dt = 1e-3
-    w = weights(g, p.x, p.lp)
+    w = weights(g, p.x, UGIMP, lp=p.lp)
     op = mls_operator(p.x, 2 * g.spacing)
     L = np.matmul(np.swapaxes(v[w.nodes], 1, 2), w.grad)
     deps = 0.5 * dt * (L + np.swapaxes(L, 1, 2))

@@ -119,7 +119,7 @@ def _run(p, gravity, mu, scheme, shape, t_end, **kw):
     bottom = p.x[:, 1] < CELL / 2
     y0 = p.x[bottom, 1].mean()
     for _ in range(round(t_end / s.dt)):
-        step(g, p, MAT, s)
+        step(g, p, MAT, settings=s)
     return (
         p.mass @ p.x[:, 0] / m - x0,
         p.mass @ p.v[:, 0] / m,
@@ -250,7 +250,7 @@ def test_a_block_on_a_30_degree_slope_sticks_on_two_ranks(scheme):
     m = dom.allsum(float(mine.mass.sum()))
     x0 = dom.allsum(float(mine.mass @ mine.x[:, 0])) / m
     for _ in range(round(0.3 / s.dt)):
-        step(dom.local, mine, MAT, s)
+        step(dom.local, mine, MAT, settings=s)
     moved = dom.allsum(float(mine.mass @ mine.x[:, 0])) / m - x0
     v = dom.allsum(float(mine.mass @ mine.v[:, 0])) / m
     assert abs(moved) < 0.005 and abs(v) < 0.01
@@ -338,7 +338,7 @@ def _run_bed(mu, scheme, shape, t_end, dom=None):
     m = total(float(p.mass.sum()))
     x0 = np.array([total(float(p.mass @ p.x[:, a])) for a in range(2)]) / m
     for _ in range(round(t_end / dt)):
-        step(g, p, MAT, s)
+        step(g, p, MAT, settings=s)
     x1 = np.array([total(float(p.mass @ p.x[:, a])) for a in range(2)]) / m
     v1 = np.array([total(float(p.mass @ p.v[:, a])) for a in range(2)]) / m
     return (x1 - x0) @ down, v1 @ down, (x1 - x0) @ up
@@ -410,7 +410,7 @@ def _run_walled(p, walls, frictional, gravity, scheme, shape, t_end, up, dom=Non
 
     energies = [energy()]
     for _ in range(round(t_end / dt)):
-        step(g, p, MAT, s)
+        step(g, p, MAT, settings=s)
         energies.append(energy())
     return p, np.array(energies)
 

@@ -14,7 +14,7 @@ from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
 from geofrac.mpm.plasticity import DruckerPrager
 from geofrac.mpm.schemes import SCHEMES, StepSettings, step, time_step
-from geofrac.mpm.shapes import SHAPES, weights
+from geofrac.mpm.shapes import REGISTRY, Shape, compiled_weights, weights
 from geofrac.mpm.smoothing import neighbour_pairs, smooth
 
 FIELDS = ("x", "v", "stress", "stress_zz", "volume", "F", "lp", "plastic")
@@ -52,7 +52,7 @@ def _scene(dim: int, shape: str, scheme: str, smoothing: float | None):
 
 @pytest.mark.parametrize("smoothing", [None, 2.0])
 @pytest.mark.parametrize("scheme", SCHEMES)
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", REGISTRY)
 @pytest.mark.parametrize("dim", [1, 2, 3])
 def test_numba_steps_equal_the_numpy_reference(dim, shape, scheme, smoothing):
     """20 steps with gravity, walls, friction, plasticity (2D/3D) and MLS: round-off."""
@@ -60,25 +60,23 @@ def test_numba_steps_equal_the_numpy_reference(dim, shape, scheme, smoothing):
     q = copy.deepcopy(p)
     fast = replace(s, backend="numba")
     for _ in range(20):
-        step(g, p, mat, s)
-        step(g, q, mat, fast)
+        step(g, p, mat, settings=s)
+        step(g, q, mat, settings=fast)
     assert np.abs(p.stress).max() > 0
     if dim > 1:
         assert p.plastic.max() > 0  # the return mapping was exercised
     _assert_close(p, q)
 
 
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", REGISTRY.values(), ids=str)
 @pytest.mark.parametrize("dim", [1, 2, 3])
-def test_compiled_weights_equal_the_reference(dim, shape):
-    from geofrac.mpm.kernels import grid_weights
-
+def test_compiled_weights_equal_the_reference(dim, shape: Shape):
     rng = np.random.default_rng(7)
     g = grid(np.full(dim, -1.0), 0.5, [7] * dim)
     x = rng.uniform(-0.4, 2.0, size=(200, dim))
     x[0] = 0.5  # on a node
-    lp = rng.uniform(0.05, 0.3, size=x.shape) if shape != "mpm" else None
-    ref, got = weights(g, x, lp), grid_weights(g, x, lp)
+    lp = rng.uniform(0.05, 0.3, size=x.shape) if shape.boxes else None
+    ref, got = weights(g, x, shape, lp=lp), compiled_weights(g, x, shape, lp=lp)
     np.testing.assert_array_equal(got.nodes, ref.nodes)
     np.testing.assert_allclose(got.phi, ref.phi, rtol=1e-14, atol=1e-15)
     np.testing.assert_allclose(got.grad, ref.grad, rtol=1e-14, atol=1e-14)

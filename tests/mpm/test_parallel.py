@@ -28,7 +28,7 @@ from geofrac.mpm.schemes import (
     step,
     time_step,
 )
-from geofrac.mpm.shapes import SHAPES
+from geofrac.mpm.shapes import REGISTRY
 
 
 def _settings(g, scheme, shape, smoothing, dt, backend="numba", domain=None, kind="standard"):
@@ -85,8 +85,8 @@ def _run(comm, scheme, shape, smoothing, material_name, steps, backend="numba", 
     crossed = set()
     start_owner = dom.owner(whole.x)
     for _ in range(steps):
-        step(g, serial, mat, s)
-        step(dom.local, mine, mat, sd)
+        step(g, serial, mat, settings=s)
+        step(dom.local, mine, mat, settings=sd)
         crossed.update(mine.ids[start_owner[mine.ids] != comm.rank].tolist())
     totals = (dom.allsum(float(mine.mass.sum())), dom.allsum(mine.momentum()))
     crossed = dom.allsum(len(crossed))
@@ -124,7 +124,7 @@ def test_decomposed_run_equals_the_serial_one(scheme, shape, smoothing, material
 
 @pytest.mark.mpi(min_size=2)
 @pytest.mark.parametrize("material", ["elastic", "drucker-prager"])
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", REGISTRY)
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_decomposed_run_without_smoothing_is_bitwise_the_serial_one(scheme, shape, material):
     """Exact nodal sums: 300 steps of the sliding block across the slabs, no bit differs.
@@ -223,7 +223,7 @@ def test_particle_leaving_the_grid_raises_on_every_rank():
     sd = _settings(dom.local, "musl", "mpm", None, dt, domain=dom)
     with pytest.raises(ParticlesLeftGrid) as info:
         for _ in range(100):
-            step(dom.local, mine, mat, sd)
+            step(dom.local, mine, mat, settings=sd)
     assert info.value.ids.tolist() == [5]
     flags = comm.allgather(True)
     assert all(flags)
@@ -241,7 +241,7 @@ def test_unstable_step_raises_on_every_rank():
     sd = _settings(dom.local, "musl", "mpm", None, 40 * dt, domain=dom)  # Courant 8
     with pytest.raises(RunError):
         for _ in range(50):
-            step(dom.local, mine, mat, sd)
+            step(dom.local, mine, mat, settings=sd)
     assert all(comm.allgather(True))
 
 

@@ -108,7 +108,7 @@ def _column(material, t_end: float = 0.6):
     s = StepSettings("musl", "cpgimp", dt, np.array([0.0, -9.81]), fixed)
     top = p.x[:, 1].max()
     for _ in range(round(t_end / dt)):
-        step(g, p, material, s)
+        step(g, p, material, settings=s)
     return p, top - p.x[:, 1].max()
 
 
@@ -143,7 +143,7 @@ def test_plasticity_is_refused_in_1d():
     g = grid([0.0], 1.0, [4])
     s = StepSettings("musl", "mpm", 1e-3, np.zeros(1), np.zeros((g.num_nodes, 1), bool))
     with pytest.raises(ValueError, match="2D or 3D"):
-        step(g, p, DruckerPrager(1.0, 0.3, 20.0), s)
+        step(g, p, DruckerPrager(1.0, 0.3, 20.0), settings=s)
 
 
 # --- pure shear beyond the cone: the closed-form return (Edo (2016), eqs. 4.39-4.43) ----
@@ -228,7 +228,7 @@ def _pure_shear_step(scheme: str, psi: float):
         scheme, "ugimp", dt, np.zeros(2), np.zeros((g.num_nodes, 2), bool), backend="numpy"
     )
     m = DruckerPrager(E_DP, NU_DP, friction_angle=PHI, cohesion=COHESION, dilatancy_angle=psi)
-    step(g, p, m, s)
+    step(g, p, m, settings=s)
     full = np.zeros((int(inner.sum()), 3, 3))
     full[:, :2, :2] = p.stress[inner]
     full[:, 2, 2] = p.stress_zz[inner]

@@ -320,7 +320,7 @@ def _outcome(name: str, q: Perturbation | None = None, dom: Domain | None = None
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(contact, "apply_friction", spy)
         for _ in range(round(scene.t_end / s.dt)):
-            step(g, p, material, s)
+            step(g, p, material, settings=s)
     keys, states, agree = _rows(spy, g, dom)
     x, v = _gathered(p, dom)
     return Outcome(keys, states, agree, x0, x, v, scene.t_end)

@@ -59,7 +59,7 @@ def _settle(initial: bool) -> float:
     fixed = boundary_rows(g, (0.0, 0.0), (8.0, 8.0), walls, ())[0]
     s = StepSettings("musl", "ugimp", time_step(0.2, 1.0, mat, 1000.0, 2), gravity, fixed)
     for _ in range(200):
-        step(g, p, mat, s)
+        step(g, p, mat, settings=s)
     return float(np.max(np.linalg.norm(p.v, axis=1)))
 
 
