@@ -51,6 +51,7 @@ __all__ = [
     "COND_MAX",
     "MARGIN",
     "basis",
+    "components",
     "cubic_spline",
     "exponents",
     "moment_tables",
@@ -79,6 +80,11 @@ def cubic_spline(s: np.ndarray) -> np.ndarray:
         2 / 3 - 4 * s**2 + 4 * s**3,
         np.where(s < 1.0, 4 / 3 - 4 * s + 4 * s**2 - 4 / 3 * s**3, 0.0),
     )
+
+
+def components(dim: int) -> int:
+    """Columns each compiled fit takes: the independent components of a symmetric dim×dim."""
+    return dim * (dim + 1) // 2
 
 
 def exponents(dim: int) -> np.ndarray:
@@ -250,7 +256,6 @@ def _fit(
     other column counts are fitted in chunks of that many (zero-padded).
     """
     from geofrac.mpm import mls_kernels
-    from geofrac.mpm.mls_codegen import components
 
     dim = x.shape[1]
     kernel = {1: mls_kernels.fit1, 2: mls_kernels.fit2, 3: mls_kernels.fit3}[dim]
