@@ -169,7 +169,13 @@ def _plot(runs: dict[tuple[str, str, float], Any], Ws: list[float], path: Path) 
             if w == W and scheme == "musl":
                 ax.plot(res.x / delta, res.stress / W, ".", ms=3, label=f"{shape} (MUSL)")
         x = np.linspace(0.0, delta, 200)
-        ax.plot(x / delta, self_weight_stress(x, E, rho0, b, L0) / W, "k-", lw=1, label="eq. 4.73")
+        ax.plot(
+            x / delta,
+            self_weight_stress(x, E=E, rho0=rho0, b=b, L0=L0) / W,
+            "k-",
+            lw=1,
+            label="eq. 4.73",
+        )
         ax.set_xlabel("x / Δ")
         ax.set_title(f"W = {W:g}")
     save_figure(
@@ -216,7 +222,7 @@ def _smoothing_panels(
 def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None:
     """Total energy E(t)/E₀ per variant, without and with smoothing (Fig. 4.20-4.21)."""
 
-    def draw(ax: Any, shape: str, scheme: str, h: Any) -> None:
+    def _draw(ax: Any, shape: str, scheme: str, h: Any) -> None:
         ax.plot(h.t, h.total, lw=1, label=f"{shape} ({scheme})")
 
     def reference(ax: Any) -> None:
@@ -225,14 +231,14 @@ def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None
 
     _smoothing_panels(
         histories, path, "Translating bar (Edo (2016), 4.5.3): total energy", "E(t) / E0", "t",
-        draw, reference,
+        _draw, reference,
     )  # fmt: skip
 
 
 def _plot_impact(impacts: dict[tuple[str, str, str], Any], path: Path) -> None:
     """σ/σ₇₅ against X/L₀ (MUSL, each shape), without and with smoothing (Fig. 4.17-4.18)."""
 
-    def draw(ax: Any, shape: str, scheme: str, r: Any) -> None:
+    def _draw(ax: Any, shape: str, scheme: str, r: Any) -> None:
         if scheme == "musl":
             ax.plot(r.x0 / r.x0.max(), r.stress, ".-", ms=3, lw=0.7, label=f"{shape} (MUSL)")
 
@@ -241,7 +247,7 @@ def _plot_impact(impacts: dict[tuple[str, str, str], Any], path: Path) -> None:
 
     _smoothing_panels(
         impacts, path, "Bar with initial velocity at t = 0.8 L0/c", "σ / (−E v0/c)",
-        "X / L0 (initial position)", draw, reference,
+        "X / L0 (initial position)", _draw, reference,
     )  # fmt: skip
 
 
@@ -301,7 +307,7 @@ def _ranks(comm: Any, shape: str, scheme: str, t_end: float, progress: Any) -> l
 
     records = []
     for case in ("translating", "sliding"):
-        d = compare_ranks(comm, case, shape, scheme, t_end=t_end)
+        d = compare_ranks(comm, case, shape, scheme=scheme, t_end=t_end)
         if d is not None:
             first = d.first_above(0.0)
             n = 20 if case == "translating" else 32
@@ -371,7 +377,15 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     for shape in shapes if "block" in cases else ():
         plain = None
         for sm in smoothings:
-            tp = gravity_block(args.particles, "musl", shape, sm, args.steps, comm, args.backend)
+            tp = gravity_block(
+                args.particles,
+                "musl",
+                shape,
+                smoothing=sm,
+                steps=args.steps,
+                comm=comm,
+                backend=args.backend,
+            )
             ratio = None if sm is None else plain.particle_steps_per_s / tp.particle_steps_per_s
             records.append(
                 _record(

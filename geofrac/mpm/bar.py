@@ -52,7 +52,7 @@ __all__ = [
 ]
 
 
-def self_weight_stress(x: np.ndarray, E: float, rho0: float, b: float, L0: float) -> np.ndarray:
+def self_weight_stress(x: np.ndarray, *, E: float, rho0: float, b: float, L0: float) -> np.ndarray:
     """Eqs. 4.73-4.74: axial stress at current heights x of a bar on a fixed base.
 
     Args:
@@ -91,6 +91,7 @@ def quasi_static_bar(
     shape: str,
     scheme: str,
     W: float = 1000.0,
+    *,
     E: float = 1e6,
     rho0: float = 1.0,
     L0: float = 50.0,
@@ -101,10 +102,10 @@ def quasi_static_bar(
     """Run the bar to t = L₀/c with one shape and scheme; compare with eq. 4.73."""
     b = W / (rho0 * L0)
     h = L0 / n
-    p = lattice([0.0], [n], h, rho0)
+    p = lattice([0.0], [n], h, density=rho0)
     g = grid([-2.0 * cell], cell, [int(np.ceil(L0 / cell)) + 6])
     mat = Elastic(E)
-    dt = time_step(courant, cell, mat, rho0, 1)
+    dt = time_step(courant, cell, mat, density=rho0, dim=1)
     fixed = (g.nodes() <= 0.0).reshape(-1, 1)
     s = StepSettings(scheme, shape, dt, np.array([-b]), fixed)
     steps = round(L0 / mat.wave_speed(rho0, 1) / dt)
@@ -113,7 +114,7 @@ def quasi_static_bar(
         step(g, p, mat, settings=s)
     seconds = time.perf_counter() - t0
     x, stress = p.x[:, 0].copy(), p.stress[:, 0, 0].copy()
-    exact = self_weight_stress(x, E, rho0, b, L0)
+    exact = self_weight_stress(x, E=E, rho0=rho0, b=b, L0=L0)
     error = float(np.sqrt(np.mean((stress - exact) ** 2)) / (rho0 * b * L0))
     return BarResult(x, stress, exact, error, steps, seconds)
 
@@ -163,6 +164,7 @@ def translating_overrides(
     shape: str,
     scheme: str,
     smoothing: float | None,
+    *,
     t_end: float,
     smoothing_kind: str = "standard",
 ) -> list[str]:
@@ -181,6 +183,7 @@ def translating_bar(
     shape: str,
     scheme: str = "musl",
     smoothing: float | None = None,
+    *,
     t_end: float = 100.0,
     steps: int | None = None,
     samples: int = 2000,
@@ -210,9 +213,10 @@ def translating_bar(
 
     if steps is not None:  # the scene's rule dt = t_end / ceil(t_end / dt_courant)
         E, rho, cell = 500.0, 1.0, 0.5
-        t_end = steps * time_step(0.1, cell, Elastic(E), rho, 1)
+        t_end = steps * time_step(0.1, cell, Elastic(E), density=rho, dim=1)
     scene = load_scene(
-        TRANSLATING_SCENE, translating_overrides(shape, scheme, smoothing, t_end, smoothing_kind)
+        TRANSLATING_SCENE,
+        translating_overrides(shape, scheme, smoothing, t_end=t_end, smoothing_kind=smoothing_kind),
     )
     comm = MPI.COMM_SELF
     run = prepare(scene, comm)
@@ -225,7 +229,7 @@ def translating_bar(
     t0 = time.perf_counter()
     try:
         for k in range(1, run.steps + 1):
-            row = advance(run, comm, log, k)
+            row = advance(run, comm, log, k=k)
             if k % every == 0 or k == run.steps:
                 rows.append([k * run.settings.dt, *row])
     except RunError:
@@ -276,19 +280,19 @@ class ImpactResult:
 
 
 def impact_bar(
-    shape: str, scheme: str = "musl", smoothing: float | None = None, n: int = 100
+    shape: str, scheme: str = "musl", smoothing: float | None = None, *, n: int = 100
 ) -> ImpactResult:
     """Run the bar of Edo (2016), §4.5.2 to t = 0.8 L₀/c; compare with eq. 4.75."""
     E, rho0, L0, cell = 1e6, 1.0, 50.0, 1.0
     h = L0 / n
-    p = lattice([0.0], [n], h, rho0)
+    p = lattice([0.0], [n], h, density=rho0)
     x0 = p.x[:, 0].copy()
     mat = Elastic(E)
     c = mat.wave_speed(rho0, 1)
     v0 = c / 50
     p.v[:] = -v0
     g = grid([-2.0 * cell], cell, [round(L0 / cell) + 6])
-    dt = time_step(0.1, cell, mat, rho0, 1)
+    dt = time_step(0.1, cell, mat, density=rho0, dim=1)
     fixed = (g.nodes() <= 0.0).reshape(-1, 1)
     s = StepSettings(scheme, shape, dt, np.zeros(1), fixed, smoothing)
     steps = round(0.8 * L0 / c / dt)

@@ -89,11 +89,11 @@ def _translating(shape: str, scheme: str) -> tuple[Grid, Particles, Elastic, Any
     """The translating bar of sec. 4.5.3 (as :func:`geofrac.mpm.bar.translating_bar`)."""
     E, rho, length, v0, cell, ppc = 500.0, 1.0, 5.0, 2.0, 0.5, 2
     n = round(length / cell) * ppc
-    p = lattice([25.0 - length / 2], [n], length / n, rho)
+    p = lattice([25.0 - length / 2], [n], length / n, density=rho)
     p.v[:] = v0
     g = grid([-2 * cell], cell, [round(50.0 / cell) + 4])
     mat = Elastic(E)
-    dt = time_step(0.1, cell, mat, rho, 1)
+    dt = time_step(0.1, cell, mat, density=rho, dim=1)
 
     def settings(local: Grid, domain: Any) -> StepSettings:
         X = local.nodes()[:, 0]
@@ -109,10 +109,10 @@ def _sliding(shape: str, scheme: str) -> tuple[Grid, Particles, Elastic, Any]:
 
     g = grid([0.0, 0.0], 0.25, [16, 8])
     rho = 1000.0
-    p = lattice([1.0, 0.5], [8, 4], 0.125, rho)
+    p = lattice([1.0, 0.5], [8, 4], 0.125, density=rho)
     p.v[:, 0] = 2.0
     mat = Elastic(1e5, 0.3)
-    dt = time_step(0.2, g.spacing, mat, rho, 2)
+    dt = time_step(0.2, g.spacing, mat, density=rho, dim=2)
 
     def settings(local: Grid, domain: Any) -> StepSettings:
         X = local.nodes()
@@ -139,6 +139,7 @@ def compare_ranks(
     comm: Any,
     case: str,
     shape: str = "ugimp",
+    *,
     scheme: str = "musl",
     steps: int | None = None,
     samples: int = 200,

@@ -134,7 +134,7 @@ def strain_energy(p: Particles, material: ConstitutiveModel) -> float:
 
 
 def time_step(
-    courant: float, spacing: float, material: ConstitutiveModel, density: float, dim: int
+    courant: float, spacing: float, material: ConstitutiveModel, *, density: float, dim: int
 ) -> float:
     """Δt = α L / c from the Courant number α < 1 (eq. 4.72), c the material's wave speed."""
     if not 0 < courant < 1:
@@ -208,7 +208,7 @@ def rest_speed(spacing: float, dt: float) -> float:
     return REST_TOL * spacing / dt
 
 
-def local_damping(f: np.ndarray, v: np.ndarray, alpha: float, rest: float = 0.0) -> np.ndarray:
+def local_damping(f: np.ndarray, v: np.ndarray, alpha: float, *, rest: float = 0.0) -> np.ndarray:
     """Cundall's local damping force −α |f| sign(v), per node and component.
 
     The force of each component opposes the velocity with a fraction α of the
@@ -250,7 +250,7 @@ def _scatter(w: Weights, terms: np.ndarray, bound: np.ndarray, num_nodes: int) -
     from geofrac.mpm.fixedpoint import accumulate, scales
 
     with np.errstate(invalid="ignore"):  # a non-finite column turns NaN in _complete
-        return accumulate(w.nodes, terms, scales(bound), num_nodes)
+        return accumulate(w.nodes, terms, scales(bound), num=num_nodes)
 
 
 def _to_grid(
@@ -410,7 +410,7 @@ def _apply_increment(
 
     The kinematics run compiled when the backend and the material's update are.
     """
-    material.stress_update(p, deps, L, dt, s.backend, budget)
+    material.stress_update(p, deps, L, dt=dt, backend=s.backend, budget=budget)
     if s.backend == "numba" and material.compiled:
         from geofrac.mpm import kernels
 
@@ -435,7 +435,7 @@ def _smoothed(deps: np.ndarray, smooth_at: tuple, s: StepSettings) -> np.ndarray
         n, d = deps.shape[:2]
         return smooth_at[3].apply(deps.reshape(n, d * d)).reshape(n, d, d)
     x0, ids, h = smooth_at[:3]
-    return smooth_strain(deps, x0, ids, h, s.backend, s.domain)
+    return smooth_strain(deps, x0, ids, h=h, backend=s.backend, domain=s.domain)
 
 
 @dataclass
@@ -531,9 +531,17 @@ def step(
 
         x_start, v_start = p.x.copy(), p.v.copy()
         budget.grid_terms(
-            s.dt, nodes.mass, nodes.mom, nodes.f, a, s.fixed, nodes.mass[:, None] * s.gravity,
-            MASS_FLOOR * nodes.peak, owned_nodes(s.domain, nodes.num_nodes), f_damp,
-        )  # fmt: skip
+            s.dt,
+            mass=nodes.mass,
+            mom=nodes.mom,
+            f=nodes.f,
+            a=a,
+            fixed=s.fixed,
+            gravity_force=nodes.mass[:, None] * s.gravity,
+            floor=MASS_FLOOR * nodes.peak,
+            owned=owned_nodes(s.domain, nodes.num_nodes),
+            damping=f_damp,
+        )
     _grid_to_particles(nodes, p, a, v_new, s.dt)
     if s.scheme in ("musl", "usavg"):  # D.6-D.8, D.26-D.28: stress from the re-mapped v
         _remap_velocity(nodes, p, s)
@@ -565,7 +573,7 @@ def _start(g: Grid, p: Particles, s: StepSettings) -> _Nodes:
         if s.smoothing_kind == "consistent":
             from geofrac.mpm.consistent import mls_operator
 
-            smooth_at += (mls_operator(p.x, s.smoothing * g.spacing, p.ids, s.domain),)
+            smooth_at += (mls_operator(p.x, s.smoothing * g.spacing, p.ids, domain=s.domain),)
     # the terms' bounds need no pass over the weights: every shape has 0 <= φ <=
     # phi_bound and |∂φ/∂x_a| <= grad_bound / L (eqs. 4.29, 4.31; bspline2: N <= 3/4,
     # |N'| <= 1/L; a test pins them)
@@ -650,7 +658,14 @@ def _velocity_and_contact(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
 
         lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
         nodes.allow = approach_allowed(
-            s.friction, p.x, lp, nodes.w.nodes, nodes.w.phi, N, s.dt, s.domain
+            s.friction,
+            p.x,
+            lp,
+            nodes=nodes.w.nodes,
+            phi=nodes.w.phi,
+            num_nodes=N,
+            dt=s.dt,
+            dom=s.domain,
         )
         nodes.v_mapped = nodes.v.copy()
         apply_friction(nodes.v, s.friction, nodes.allow, tol=nodes.rest)
@@ -692,7 +707,7 @@ def _grid_update(
     mass, v, N, dt = nodes.mass, nodes.v, nodes.num_nodes, s.dt
     f_damp, f_total = None, nodes.f
     if s.damping > 0:  # a branch: no extra work without damping
-        f_damp = local_damping(nodes.f, v, s.damping, nodes.rest)
+        f_damp = local_damping(nodes.f, v, s.damping, rest=nodes.rest)
         f_total = nodes.f + f_damp
     if nodes.fast:
         from geofrac.mpm import kernels
@@ -793,7 +808,7 @@ def _check_inside(g: Grid, p: Particles, s: StepSettings) -> None:
     if len(ids):
         order = np.argsort(ids)
         raise ParticlesLeftGrid(ids[order], positions[order])
-    if dom.any(bool(np.any(_outside(g, p, s)))):
+    if dom.any(local=bool(np.any(_outside(g, p, s)))):
         raise RunError(
             f"a particle's support reaches beyond its rank's halo of {dom.halo} cells; "
             "decompose with a wider halo"

@@ -488,7 +488,7 @@ def _upper(b: Body) -> tuple[float, ...]:
 
 
 def mpm_output(
-    file: Path, raw: Any, name: str, dim: int, out: Path | None, trusted: bool = False
+    file: Path, raw: Any, name: str, *, dim: int, out: Path | None, trusted: bool = False
 ) -> Output:
     """``[output]`` of an MPM scene: particle fields; probes are particles nearest a point.
 

@@ -31,7 +31,7 @@ def test_self_weight_stress_is_in_equilibrium():
     E, rho0, b, L0 = 1e6, 1.0, 2000.0, 50.0
     delta = L0 - rho0 * b * L0**2 / (2 * E)
     x = np.linspace(0.0, delta, 201)
-    s = self_weight_stress(x, E, rho0, b, L0)
+    s = self_weight_stress(x, E=E, rho0=rho0, b=b, L0=L0)
     assert s[-1] == pytest.approx(0.0, abs=1e-9)
     rho = rho0 / (1 + s / E)
     np.testing.assert_allclose(np.gradient(s, x, edge_order=2), rho * b, rtol=1e-6)

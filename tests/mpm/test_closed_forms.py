@@ -45,7 +45,7 @@ def _spin(material, scheme: str, shape: str, steps: int, backend: str = "numpy")
         about the centre of the half-width-4 body; the quadratic B-spline's 1.5 cells:
         three cells, radius 1).
     """
-    p = lattice(CENTRE - 4.0, [16, 16], 0.5, 1.0e3)
+    p = lattice(CENTRE - 4.0, [16, 16], 0.5, density=1.0e3)
     p.stress[:] = S0
     p.stress_zz[:] = SZZ
     g = grid([0.0, 0.0], 1.0, [20, 20])
@@ -146,7 +146,7 @@ def _column(
         Δt, base stress history shape=(steps,), damping work of every rank summed).
     """
     H = height * CELL
-    p = lattice([0.0, 0.0], [4, 2 * height], CELL / 2, RHO)
+    p = lattice([0.0, 0.0], [4, 2 * height], CELL / 2, density=RHO)
     g = grid([-2 * CELL, -2 * CELL], CELL, [6, height + 4])
     if domain is not None:
         p, g = domain.distribute(p), domain.local
@@ -154,7 +154,7 @@ def _column(
     fixed = np.zeros((g.num_nodes, 2), dtype=bool)
     fixed[X[:, 1] <= 1e-9, 1] = True
     fixed[(X[:, 0] <= 1e-9) | (X[:, 0] >= 2 * CELL - 1e-9), 0] = True
-    dt = time_step(0.2, CELL, COLUMN, RHO, 2)
+    dt = time_step(0.2, CELL, COLUMN, density=RHO, dim=2)
     lam, mu = COLUMN.lame()
     T = 4 * H / np.sqrt((lam + 2 * mu) / RHO)
     s = StepSettings(

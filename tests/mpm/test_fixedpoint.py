@@ -47,7 +47,7 @@ def test_non_finite_column_turns_nan():
 def _nodal(dim, shape, order):
     """Nodal mass and momentum pairs of a jittered block, the particles in ``order``."""
     rng = np.random.default_rng(dim)
-    p = lattice([1.0] * dim, [6] * dim, 0.25, 2.0)
+    p = lattice([1.0] * dim, [6] * dim, 0.25, density=2.0)
     p.x += rng.uniform(-0.05, 0.05, p.x.shape)
     p.v = rng.normal(size=p.x.shape)
     p.x, p.v, p.mass, p.lp = p.x[order], p.v[order], p.mass[order], p.lp[order]
@@ -71,7 +71,7 @@ def test_compiled_nodal_sums_are_the_reference_integers_in_any_order(dim, shape)
         axis=2,
     )
     bound = np.abs(terms).max(axis=(0, 1))
-    ref = accumulate(w.nodes, terms, scales(bound), g.num_nodes)
+    ref = accumulate(w.nodes, terms, scales(bound), num=g.num_nodes)
     for seed in range(3):
         order = np.random.default_rng(seed).permutation(n)
         _, q, wq = _nodal(dim, shape, order)
@@ -86,14 +86,14 @@ def test_compiled_nodal_sums_are_the_reference_integers_in_any_order(dim, shape)
 def test_light_nodes_keep_their_digits():
     """Nodes 1e-13 of the heaviest (below the mass floor): relative error 1e-16."""
     rng = np.random.default_rng(5)
-    heavy = lattice([1.0, 1.0], [8, 8], 0.25, 2.0)
+    heavy = lattice([1.0, 1.0], [8, 8], 0.25, density=2.0)
     x = np.concatenate([heavy.x, [[4.3, 3.1], [4.6, 3.35]]])  # two far from the block
     mass = np.concatenate([heavy.mass * rng.uniform(0.5, 2.0, heavy.n), [1e-13, 3e-14]])
     g = grid(np.zeros(2), 0.5, [10, 10])
     w = weights(g, x, HAT)
     terms = (w.phi * mass[:, None])[:, :, None]
     bound = np.abs(terms).max(axis=(0, 1))
-    got = to_float(accumulate(w.nodes, terms, scales(bound), g.num_nodes), bound)[:, 0]
+    got = to_float(accumulate(w.nodes, terms, scales(bound), num=g.num_nodes), bound)[:, 0]
     exact = [Fraction(0)] * g.num_nodes
     for i in range(len(x)):
         for c in range(w.nodes.shape[1]):

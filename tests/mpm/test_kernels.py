@@ -30,7 +30,7 @@ def _assert_close(p, q, rtol: float = 1e-12) -> None:
 
 def _scene(dim: int, shape: str, scheme: str, smoothing: float | None):
     """A block thrown at a floor with friction, plastic in 2D/3D, elastic in 1D."""
-    p = lattice([1.0] * dim, [6] * dim, 0.25, 2.0)
+    p = lattice([1.0] * dim, [6] * dim, 0.25, density=2.0)
     p.v = np.random.default_rng(dim).normal(scale=0.5, size=p.x.shape)
     g = grid(np.zeros(dim), 0.5, [8] * dim)
     mat = Elastic(1000.0, 0.3) if dim == 1 else DruckerPrager(1000.0, 0.3, 20.0, 1.0)
@@ -45,7 +45,7 @@ def _scene(dim: int, shape: str, scheme: str, smoothing: float | None):
         fr = friction(floor, np.tile(normal, (len(floor), 1)), 0.3)
     gravity = np.zeros(dim)
     gravity[-1] = -9.81
-    dt = time_step(0.2, g.spacing, mat, 2.0, dim)
+    dt = time_step(0.2, g.spacing, mat, density=2.0, dim=dim)
     s = StepSettings(scheme, shape, dt, gravity, fixed, smoothing, fr, backend="numpy")
     return g, p, mat, s
 
@@ -116,7 +116,7 @@ def test_numba_is_imported_only_by_a_compiled_step():
 
 
 def test_particles_carry_ids():
-    p = lattice([0.0, 0.0], [3, 2], 0.5, 1.0)
+    p = lattice([0.0, 0.0], [3, 2], 0.5, density=1.0)
     np.testing.assert_array_equal(p.ids, np.arange(6))
     assert p.ids.dtype == np.int64
     with pytest.raises(ValueError, match="backend 'cuda'"):

@@ -47,10 +47,10 @@ def _settings(g, scheme, shape, smoothing, dt, backend="numba", domain=None, kin
 def _scene(material):
     """A 2 m × 1 m block sliding at 2 m/s on a floor, across the middle of a 24-cell grid."""
     g = grid([0.0, 0.0], 0.25, [24, 12])
-    p = lattice([1.5, 0.5], [16, 8], 0.125, 1000.0)
+    p = lattice([1.5, 0.5], [16, 8], 0.125, density=1000.0)
     p.v[:, 0] = 2.0
     p.v[:, 1] = 0.3 * np.sin(3.0 * p.x[:, 0])  # some shear, so stresses vary
-    dt = time_step(0.2, g.spacing, material, 1000.0, 2)
+    dt = time_step(0.2, g.spacing, material, density=1000.0, dim=2)
     return g, p, dt
 
 
@@ -177,7 +177,7 @@ def test_translating_bar_stays_rank_invariant():
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    d = compare_ranks(comm, "translating", "mpm", "musl", steps=6800, samples=30)
+    d = compare_ranks(comm, "translating", "mpm", scheme="musl", steps=6800, samples=30)
     if comm.rank == 0:
         assert d.t[-1] > 15.0 and d.crossed >= 10  # one half crossed to the other rank
         assert d.worst == 0.0, f"1 and 2 ranks part at t = {d.first_above(0.0)}"
@@ -192,7 +192,7 @@ def test_sliding_block_stays_rank_invariant():
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    d = compare_ranks(comm, "sliding", "cpgimp", "musl", steps=SLIDING_STEPS, samples=30)
+    d = compare_ranks(comm, "sliding", "cpgimp", scheme="musl", steps=SLIDING_STEPS, samples=30)
     if comm.rank == 0:
         assert d.crossed > 10
         assert d.worst == 0.0, f"1 and 2 ranks part at t = {d.first_above(0.0)}"
@@ -276,7 +276,7 @@ def test_throughput_block_runs_decomposed():
     from geofrac.mpm.block import gravity_block
 
     comm = MPI.COMM_WORLD
-    tp = gravity_block(1600, "musl", "cpgimp", 2.0, steps=3, comm=comm)
+    tp = gravity_block(1600, "musl", "cpgimp", smoothing=2.0, steps=3, comm=comm)
     assert tp.ranks == comm.size and len(tp.per_rank) == comm.size
     assert tp.particles == 1600
     assert all(r > 0 for r in tp.per_rank)

@@ -100,11 +100,11 @@ def _column(material, t_end: float = 0.6):
     from geofrac.mpm.schemes import StepSettings, step, time_step
 
     cell, h = 0.25, 0.125
-    p = lattice([2.0, 1.0], [16, 16], h, 2000.0)
+    p = lattice([2.0, 1.0], [16, 16], h, density=2000.0)
     g = grid([0.0, 0.0], cell, [48, 16])
     fixed = np.zeros((g.num_nodes, 2), dtype=bool)
     fixed[g.nodes()[:, 1] <= 1.0] = True
-    dt = time_step(0.2, cell, material, 2000.0, 2)
+    dt = time_step(0.2, cell, material, density=2000.0, dim=2)
     s = StepSettings("musl", "cpgimp", dt, np.array([0.0, -9.81]), fixed)
     top = p.x[:, 1].max()
     for _ in range(round(t_end / dt)):
@@ -139,7 +139,7 @@ def test_plasticity_is_refused_in_1d():
     from geofrac.mpm.particles import particles
     from geofrac.mpm.schemes import StepSettings, step
 
-    p = particles(np.array([[1.0]]), np.ones(1), 1.0, np.full((1, 1), 0.25))
+    p = particles(np.array([[1.0]]), np.ones(1), 1.0, lp0=np.full((1, 1), 0.25))
     g = grid([0.0], 1.0, [4])
     s = StepSettings("musl", "mpm", 1e-3, np.zeros(1), np.zeros((g.num_nodes, 1), bool))
     with pytest.raises(ValueError, match="2D or 3D"):
@@ -217,7 +217,7 @@ def _pure_shear_step(scheme: str, psi: float):
     from geofrac.mpm.schemes import StepSettings, step
 
     centre = np.array([8.0, 8.0])
-    p = lattice(centre - 4.0, [16, 16], 0.5, 1.0e4)
+    p = lattice(centre - 4.0, [16, 16], 0.5, density=1.0e4)
     p.stress[:] = -20.0 * np.eye(2)
     p.stress_zz[:] = -20.0
     rate, dt = 37.5, 1e-3  # Δε_xy = 0.0375: τ* = 2G Δε_xy = 30 (USAVG: twice 15)

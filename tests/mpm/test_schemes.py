@@ -21,7 +21,7 @@ from geofrac.mpm.shapes import REGISTRY, get, weights
 
 def _block(dim: int, n_side: int = 6, h: float = 0.25):
     """Particles filling a cube of side n_side·h at 1.0, two per cell of size 2h."""
-    return lattice([1.0] * dim, [n_side] * dim, h, 2.0)
+    return lattice([1.0] * dim, [n_side] * dim, h, density=2.0)
 
 
 @pytest.mark.parametrize("shape", REGISTRY)
@@ -50,7 +50,7 @@ def test_uniformly_moving_block_stays_stress_free(dim, shape, scheme):
     p.v[:] = v0
     mat = Elastic(E=1000.0, nu=0.3)
     g = grid(np.zeros(dim), 0.5, [8] * dim)
-    dt = time_step(0.2, g.spacing, mat, 2.0, dim)
+    dt = time_step(0.2, g.spacing, mat, density=2.0, dim=dim)
     s = StepSettings(scheme, shape, dt, np.zeros(dim), np.zeros((g.num_nodes, dim), bool))
     x0 = p.x.copy()
     for _ in range(400):
@@ -63,7 +63,7 @@ def test_uniformly_moving_block_stays_stress_free(dim, shape, scheme):
 
 
 def test_particle_leaving_the_grid_is_reported_and_nothing_changes():
-    p = particles(np.array([[0.5], [3.8]]), np.ones(2), 1.0, np.full((2, 1), 0.25))
+    p = particles(np.array([[0.5], [3.8]]), np.ones(2), 1.0, lp0=np.full((2, 1), 0.25))
     p.v[1] = 5.0
     g = grid([0.0], 1.0, [4])
     mat = Elastic(100.0)
@@ -101,7 +101,7 @@ def test_bad_settings_are_refused():
     with pytest.raises(ValueError, match="shape 'gimp'"):
         StepSettings("musl", "gimp", 0.1, np.zeros(1), fixed)
     with pytest.raises(ValueError, match="Courant"):
-        time_step(1.2, 1.0, Elastic(1.0), 1.0, 1)
+        time_step(1.2, 1.0, Elastic(1.0), density=1.0, dim=1)
 
 
 def test_smoothing_code_is_not_loaded_unless_asked():
@@ -127,7 +127,7 @@ def test_unstable_step_raises_instead_of_carrying_nan():
 
     h = 0.25
     p = particles(
-        (1000.0 + (np.arange(8) + 0.5) * h)[:, None], np.full(8, h), 2.0, np.full((8, 1), h / 2)
+        (1000.0 + (np.arange(8) + 0.5) * h)[:, None], np.full(8, h), 2.0, lp0=np.full((8, 1), h / 2)
     )
     p.v[:, 0] = np.linspace(-1.0, 1.0, p.n)
     mat = Elastic(E=1e4)

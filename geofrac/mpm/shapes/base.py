@@ -102,7 +102,7 @@ class Shape:
         """
         raise NotImplementedError
 
-    def fill_compiled(self, g: Grid, x: np.ndarray, lp: np.ndarray | None, out: Weights) -> bool:
+    def fill_compiled(self, g: Grid, x: np.ndarray, lp: np.ndarray | None, *, out: Weights) -> bool:
         """The weights into ``out``'s arrays (shape=(n, k1**dim) ...), compiled.
 
         The default copies the numpy reference (a new shape may add a numba kernel
@@ -189,6 +189,6 @@ def compiled_weights(
         phi = np.empty((n, k))
         grad = np.empty((n, k, dim))
     out = Weights(nodes, phi, grad)
-    if not shape.fill_compiled(g, x, lp, out):
+    if not shape.fill_compiled(g, x, lp, out=out):
         raise ValueError("weights: a particle's support reaches beyond the grid")
     return out

@@ -54,7 +54,7 @@ class QuadraticBSpline(Shape):
         phi, dphi = bspline2_1d(r, L)
         return idx, phi, dphi
 
-    def fill_compiled(self, g: Grid, x: np.ndarray, lp: np.ndarray | None, out: Weights) -> bool:
+    def fill_compiled(self, g: Grid, x: np.ndarray, lp: np.ndarray | None, *, out: Weights) -> bool:
         """:func:`geofrac.mpm.kernels.weights_bspline2`."""
         from geofrac.mpm import kernels
 

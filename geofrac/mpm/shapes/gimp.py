@@ -92,7 +92,7 @@ class Gimp(Shape):
         phi, dphi = gimp_1d(r.reshape(n * dim, k1), L, lp.reshape(n * dim, 1))
         return idx, phi.reshape(n, dim, k1), dphi.reshape(n, dim, k1)
 
-    def fill_compiled(self, g: Grid, x: np.ndarray, lp: np.ndarray | None, out: Weights) -> bool:
+    def fill_compiled(self, g: Grid, x: np.ndarray, lp: np.ndarray | None, *, out: Weights) -> bool:
         """:func:`geofrac.mpm.kernels.weights_gimp`."""
         from geofrac.mpm import kernels
 

@@ -54,7 +54,7 @@ class Hat(Shape):
         phi, dphi = hat_1d(s.ravel(), L)
         return idx, phi.reshape(n, dim, 2), dphi.reshape(n, dim, 2)
 
-    def fill_compiled(self, g: Grid, x: np.ndarray, lp: np.ndarray | None, out: Weights) -> bool:
+    def fill_compiled(self, g: Grid, x: np.ndarray, lp: np.ndarray | None, *, out: Weights) -> bool:
         """:func:`geofrac.mpm.kernels.weights_hat` (a point inside the grid never fails)."""
         from geofrac.mpm import kernels
 
