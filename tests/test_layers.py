@@ -82,9 +82,6 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             # measures (geofrac.validation.paths): it sits above the validation, which
             # uses the other benches' reporting
             "geofrac.bench.mesh_dependence",
-            # the bar cases of the MPM benchmarks and tests load scene files: they sit with
-            # the benchmarks, though the module lives with the engine
-            "geofrac.mpm.bar",
         ),
     ),
 )

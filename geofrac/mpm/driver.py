@@ -354,7 +354,7 @@ def advance(run: MpmRun, comm: MPI.Comm, log: EnergyLog, *, k: int) -> list[floa
     """Step ``k`` of ``run`` with its energy budget recorded in ``log`` (collective).
 
     The step uses :func:`_settings` (gravity ramped during ``[gravity] ramp``). The
-    scene's time loop and the translating-bar bench (:func:`geofrac.mpm.bar.
+    scene's time loop and the translating-bar bench (:func:`geofrac.bench.mpm.
     translating_bar`) both step through here, so they report the same energies.
 
     Args:

@@ -9,7 +9,7 @@ relative to the initial total:
 
 - ``translating``: the translating bar of Edo (2016), sec. 4.5.3 (E = 500, ρ = 1, length
   5, v₀ = 2, cell 0.5, Courant number 0.1, walls at x = 0 and 50; the same set-up as
-  :func:`geofrac.mpm.bar.translating_bar`), to t = 100. On 2 ranks the slabs meet at
+  :func:`geofrac.bench.mpm.translating_bar`), to t = 100. On 2 ranks the slabs meet at
   x = 25, the bar's centre at the start: the bar crosses the rank boundary at every
   pass between the walls.
 - ``sliding``: a 2D elastic block of 8 × 4 particles thrown at 2 m/s along a frictional
@@ -86,7 +86,7 @@ class Divergence:
 
 
 def _translating(shape: str, scheme: str) -> tuple[Grid, Particles, Elastic, Any]:
-    """The translating bar of sec. 4.5.3 (as :func:`geofrac.mpm.bar.translating_bar`)."""
+    """The translating bar of sec. 4.5.3 (as :func:`geofrac.bench.mpm.translating_bar`)."""
     E, rho, length, v0, cell, ppc = 500.0, 1.0, 5.0, 2.0, 0.5, 2
     n = round(length / cell) * ppc
     p = lattice([25.0 - length / 2], [n], length / n, density=rho)

@@ -491,11 +491,11 @@ def step(
     The parts of the algorithm (App. D): the grid check and the weights
     (:func:`_start`); the transfer of mass and momentum to the grid, with MUSL's forces
     (:func:`_map_mass_momentum`); the nodal velocity and the contact
-    (:func:`_velocity_and_contact`); USF's and USAVG's stress update; the forces of the updated
-    stress (:func:`_map_forces`, USF, USAVG); the grid update (:func:`_grid_update`);
-    the particles' velocity and position from the grid (:func:`_grid_to_particles`);
-    MUSL's and USAVG's nodal velocity re-mapped from the new particle momentum
-    (:func:`_remap_velocity`) and their stress update from it.
+    (:func:`_velocity_and_contact`); USF's and USAVG's stress update; the forces of the
+    updated stress (:func:`_map_forces`, USF, USAVG); the grid update
+    (:func:`_grid_update`); the particles' velocity and position from the grid
+    (:func:`_grid_to_particles`); MUSL's and USAVG's nodal velocity re-mapped from the
+    new particle momentum (:func:`_remap_velocity`) and their stress update from it.
 
     ``budget``: add this step's energy terms (this rank's part, each node counted on one
     rank: sum over the ranks for the whole) to it (:mod:`~geofrac.mpm.energy`), among

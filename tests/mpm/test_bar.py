@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from geofrac.mpm.bar import impact_bar, quasi_static_bar, self_weight_stress, translating_bar
+from geofrac.bench.mpm import translating_bar
+from geofrac.mpm.bar import impact_bar, quasi_static_bar, self_weight_stress
 from geofrac.mpm.schemes import SCHEMES
 from geofrac.mpm.shapes import REGISTRY
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from geofrac.mpm.bar import TRANSLATING_SCENE, translating_bar, translating_overrides
+from geofrac.bench.mpm import TRANSLATING_SCENE, translating_bar, translating_overrides
 from geofrac.mpm.driver import simulate
 from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.energy import EnergyLog, StepBudget

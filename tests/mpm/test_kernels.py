@@ -105,7 +105,7 @@ def test_numba_is_imported_only_by_a_compiled_step():
     probe = (
         "import sys\n"
         "import geofrac.mpm.schemes, geofrac.mpm.parallel, geofrac.mpm.bar\n"
-        "from geofrac.mpm.bar import translating_bar\n"
+        "from geofrac.bench.mpm import translating_bar\n"
         "print('numba' in sys.modules)\n"
         "from geofrac.mpm.schemes import StepSettings\n"
         "translating_bar('mpm', steps=3)\n"

@@ -240,12 +240,13 @@ class _Spy:
         v: np.ndarray,
         fr: contact.Friction,
         allow: np.ndarray | None = None,
+        *,
         sliding_only: bool = False,
         tol: float = 0.0,
     ) -> np.ndarray:
         self.fr = fr
         self.calls.append(contact.contact_states(v, fr, allow, sliding_only=sliding_only, tol=tol))
-        return APPLY(v, fr, allow, sliding_only, tol)
+        return APPLY(v, fr, allow, sliding_only=sliding_only, tol=tol)
 
 
 def _perturbed(scene: Scene, q: Perturbation) -> tuple[Particles, np.ndarray, Elastic, float]:

@@ -111,7 +111,7 @@ def test_smoothing_code_is_not_loaded_unless_asked():
 
     probe = (
         "import sys, numpy as np\n"
-        "from geofrac.mpm.bar import translating_bar\n"
+        "from geofrac.bench.mpm import translating_bar\n"
         "translating_bar('mpm', steps=5)\n"
         "print('geofrac.mpm.smoothing' in sys.modules)\n"
         "translating_bar('mpm', smoothing=2.0, steps=5)\n"
