@@ -6,10 +6,10 @@ Cases (``--cases``):
   at W = ρ₀|b|L₀ in ``--W`` (the thesis's 1000, 12500, 100000) for every shape and scheme:
   the RMS stress error against eq. 4.73 (normalised by ρ₀|b|L₀); plot ``mpm_bar.png``
   (after Fig. 4.13-4.15);
-- ``translating``: the translating bar of §4.5.3 (:func:`geofrac.mpm.bar.
-  translating_bar`: the scene ``jobs/mpm_translating_bar.toml`` run through the driver's
-  step, so ``geofrac run`` of the same variant reports the same numbers) to ``--t-end``
-  (100, Fig. 4.20-4.21) for every shape and scheme, without and with MLS smoothing
+- ``translating``: the translating bar of §4.5.3 (:func:`translating_bar`: the scene
+  ``jobs/mpm_translating_bar.toml`` run through the driver's step, so ``geofrac run``
+  of the same variant reports the same numbers) to ``--t-end`` (100, Fig. 4.20-4.21)
+  for every shape and scheme, without and with MLS smoothing
   (radius ``--smoothing`` cells) of each kind of ``--smoothing-kinds`` (``standard``, the
   thesis's, and ``consistent``): the largest drift of the total energy over every step,
   max |E(t) − E₀|/E₀, with the stored energy as ½ V σ : D⁻¹ : σ (``energy_drift_max``) and
@@ -58,12 +58,24 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import name_list, number_list
 
-__all__ = ["COLUMNS", "add_arguments", "run"]
+if TYPE_CHECKING:
+    import numpy as np
+
+__all__ = [
+    "COLUMNS",
+    "TRANSLATING_SCENE",
+    "EnergyHistory",
+    "add_arguments",
+    "run",
+    "translating_bar",
+    "translating_overrides",
+]
 
 #: (key, header, format) of the printed table.
 COLUMNS = (
@@ -85,6 +97,153 @@ COLUMNS = (
 
 #: Cases of ``--cases``.
 CASES = ("bar", "translating", "impact", "block", "ranks")
+
+
+# The translating bar (Edo (2016), 4.5.3, Fig. 4.19-4.21): length 5, E = 500, ρ = 1, centred
+# at x = 25 in a box 0 … 50 with walls (fixed nodes) at both ends, initial velocity 2.0,
+# cell 0.5, Courant number 0.1; it flies, hits a wall, bounces, and so on. The energies
+# (kinetic, strain, total) are normalised by the initial (kinetic) energy; without
+# dissipation the total should stay 1. The thesis does not give the particle count; the
+# scene has two per cell (20), as the quasi-static bar.
+
+#: The translating bar's scene: the bench runs it (with overrides), as ``geofrac run`` does.
+TRANSLATING_SCENE = Path(__file__).resolve().parents[2] / "jobs" / "mpm_translating_bar.toml"
+
+
+@dataclass(frozen=True)
+class EnergyHistory:
+    """Energies of a translating-bar run, normalised by the initial energy.
+
+    Attributes:
+        t: times, shape=(k,).
+        kinetic: shape=(k,).
+        strain: ½ V σ : D⁻¹ : σ, shape=(k,).
+        total: kinetic + strain, shape=(k,).
+        drift_max: max |E(t) − E₀| / E₀ over the run (every step), E = kinetic + strain.
+        finite: the run ended without a non-finite state.
+        steps: time steps taken.
+        seconds: wall time of the steps.
+        particles: number of particles.
+        stored_work: the stored energy as stress work W (:mod:`~geofrac.mpm.energy`),
+            shape=(k,).
+        drift_work_max: max |K + W − E₀| / E₀ over the run (every step).
+        budget: the cumulative budget terms of :data:`~geofrac.mpm.energy.COLUMNS`
+            normalised by E₀, name -> shape=(k,).
+        closure_max: the budget's largest closure error over E₀ (round-off).
+    """
+
+    t: np.ndarray
+    kinetic: np.ndarray
+    strain: np.ndarray
+    total: np.ndarray
+    drift_max: float
+    finite: bool
+    steps: int
+    seconds: float
+    particles: int
+    stored_work: np.ndarray
+    drift_work_max: float
+    budget: dict[str, np.ndarray]
+    closure_max: float
+
+
+def translating_overrides(
+    shape: str,
+    scheme: str,
+    smoothing: float | None,
+    *,
+    t_end: float,
+    smoothing_kind: str = "standard",
+) -> list[str]:
+    """The ``--set`` overrides of :data:`TRANSLATING_SCENE` for one variant."""
+    sets = [f"mpm.shape={shape}", f"mpm.scheme={scheme}", f"mpm.t_end={t_end!r}"]
+    if smoothing is not None:
+        sets += [
+            'effects=["mls_smoothing"]',
+            f"mls_smoothing.radius={smoothing!r}",
+            f"mls_smoothing.kind={smoothing_kind}",
+        ]
+    return sets
+
+
+def translating_bar(
+    shape: str,
+    scheme: str = "musl",
+    smoothing: float | None = None,
+    *,
+    t_end: float = 100.0,
+    steps: int | None = None,
+    samples: int = 2000,
+    smoothing_kind: str = "standard",
+) -> EnergyHistory:
+    """Run the translating bar of Edo (2016), §4.5.3 to ``t_end`` (or for ``steps`` steps).
+
+    The scene ``jobs/mpm_translating_bar.toml`` with :func:`translating_overrides`, on one
+    process, stepped by :func:`geofrac.mpm.driver.advance`: the same grid, walls, time
+    step and energies as ``geofrac run jobs/mpm_translating_bar.toml --set ...``.
+
+    Args:
+        shape: shape functions.
+        scheme: update scheme.
+        smoothing: MLS radius factor (None: no smoothing).
+        t_end: end time (Edo (2016), Fig. 4.21, runs to about 100).
+        steps: run exactly this many steps of the Courant time step instead.
+        samples: about this many energy samples are kept (the drifts use every step).
+        smoothing_kind: ``standard`` (Edo (2016)'s) or ``consistent``
+            (:data:`~geofrac.mpm.schemes.SMOOTHINGS`).
+    """
+    import numpy as np
+    from mpi4py import MPI
+
+    from geofrac.errors import RunError
+    from geofrac.mpm.driver import advance, prepare, start_log
+    from geofrac.mpm.elastic import Elastic
+    from geofrac.mpm.energy import COLUMNS, CSV_COLUMNS
+    from geofrac.mpm.schemes import time_step
+    from geofrac.scene import load_scene
+
+    if steps is not None:  # the scene's rule dt = t_end / ceil(t_end / dt_courant)
+        E, rho, cell = 500.0, 1.0, 0.5
+        t_end = steps * time_step(0.1, cell, Elastic(E), density=rho, dim=1)
+    scene = load_scene(
+        TRANSLATING_SCENE,
+        translating_overrides(shape, scheme, smoothing, t_end=t_end, smoothing_kind=smoothing_kind),
+    )
+    comm = MPI.COMM_SELF
+    run = prepare(scene, comm)
+    log = start_log(run, comm)
+    e0 = log.e0
+    every = max(1, run.steps // samples)
+    rows = [[0.0, *log.first_row()]]
+    finite = True
+    k = 0
+    t0 = time.perf_counter()
+    try:
+        for k in range(1, run.steps + 1):
+            row = advance(run, comm, log, k=k)
+            if k % every == 0 or k == run.steps:
+                rows.append([k * run.settings.dt, *row])
+    except RunError:
+        finite = False
+    seconds = time.perf_counter() - t0
+    arr = np.array(rows)
+    col = {name: i - 1 for i, name in enumerate(CSV_COLUMNS) if i >= 1}
+    budget = {c: arr[:, col[c]] / e0 for c in COLUMNS}
+    return EnergyHistory(
+        t=arr[:, 0],
+        kinetic=arr[:, col["kinetic"]] / e0,
+        strain=arr[:, col["strain"]] / e0,
+        total=arr[:, col["total"]] / e0,
+        drift_max=float(log.drift_max) if finite else float("inf"),
+        finite=finite,
+        steps=k,
+        seconds=seconds,
+        particles=run.total,
+        stored_work=budget["stored_work"],
+        drift_work_max=float(log.drift_work_max) if finite else float("inf"),
+        budget=budget,
+        closure_max=log.closure / e0,
+    )
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -169,7 +328,13 @@ def _plot(runs: dict[tuple[str, str, float], Any], Ws: list[float], path: Path) 
             if w == W and scheme == "musl":
                 ax.plot(res.x / delta, res.stress / W, ".", ms=3, label=f"{shape} (MUSL)")
         x = np.linspace(0.0, delta, 200)
-        ax.plot(x / delta, self_weight_stress(x, E, rho0, b, L0) / W, "k-", lw=1, label="eq. 4.73")
+        ax.plot(
+            x / delta,
+            self_weight_stress(x, E=E, rho0=rho0, b=b, L0=L0) / W,
+            "k-",
+            lw=1,
+            label="eq. 4.73",
+        )
         ax.set_xlabel("x / Δ")
         ax.set_title(f"W = {W:g}")
     save_figure(
@@ -216,7 +381,7 @@ def _smoothing_panels(
 def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None:
     """Total energy E(t)/E₀ per variant, without and with smoothing (Fig. 4.20-4.21)."""
 
-    def draw(ax: Any, shape: str, scheme: str, h: Any) -> None:
+    def _draw(ax: Any, shape: str, scheme: str, h: Any) -> None:
         ax.plot(h.t, h.total, lw=1, label=f"{shape} ({scheme})")
 
     def reference(ax: Any) -> None:
@@ -225,14 +390,14 @@ def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None
 
     _smoothing_panels(
         histories, path, "Translating bar (Edo (2016), 4.5.3): total energy", "E(t) / E0", "t",
-        draw, reference,
+        _draw, reference,
     )  # fmt: skip
 
 
 def _plot_impact(impacts: dict[tuple[str, str, str], Any], path: Path) -> None:
     """σ/σ₇₅ against X/L₀ (MUSL, each shape), without and with smoothing (Fig. 4.17-4.18)."""
 
-    def draw(ax: Any, shape: str, scheme: str, r: Any) -> None:
+    def _draw(ax: Any, shape: str, scheme: str, r: Any) -> None:
         if scheme == "musl":
             ax.plot(r.x0 / r.x0.max(), r.stress, ".-", ms=3, lw=0.7, label=f"{shape} (MUSL)")
 
@@ -241,7 +406,7 @@ def _plot_impact(impacts: dict[tuple[str, str, str], Any], path: Path) -> None:
 
     _smoothing_panels(
         impacts, path, "Bar with initial velocity at t = 0.8 L0/c", "σ / (−E v0/c)",
-        "X / L0 (initial position)", draw, reference,
+        "X / L0 (initial position)", _draw, reference,
     )  # fmt: skip
 
 
@@ -301,7 +466,7 @@ def _ranks(comm: Any, shape: str, scheme: str, t_end: float, progress: Any) -> l
 
     records = []
     for case in ("translating", "sliding"):
-        d = compare_ranks(comm, case, shape, scheme, t_end=t_end)
+        d = compare_ranks(comm, case, shape, scheme=scheme, t_end=t_end)
         if d is not None:
             first = d.first_above(0.0)
             n = 20 if case == "translating" else 32
@@ -322,7 +487,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     from geofrac.bench.report import format_table
     from geofrac.io.summary import versions, write_json
     from geofrac.log import Progress, echo
-    from geofrac.mpm.bar import impact_bar, quasi_static_bar, translating_bar
+    from geofrac.mpm.bar import impact_bar, quasi_static_bar
     from geofrac.mpm.block import gravity_block
 
     cases, shapes, schemes, Ws = args.cases, args.shapes, args.schemes, args.W
@@ -371,7 +536,15 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     for shape in shapes if "block" in cases else ():
         plain = None
         for sm in smoothings:
-            tp = gravity_block(args.particles, "musl", shape, sm, args.steps, comm, args.backend)
+            tp = gravity_block(
+                args.particles,
+                "musl",
+                shape,
+                smoothing=sm,
+                steps=args.steps,
+                comm=comm,
+                backend=args.backend,
+            )
             ratio = None if sm is None else plain.particle_steps_per_s / tp.particle_steps_per_s
             records.append(
                 _record(

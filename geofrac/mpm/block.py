@@ -59,6 +59,7 @@ def gravity_block(
     n_particles: int,
     scheme: str = "musl",
     shape: str = "mpm",
+    *,
     smoothing: float | None = None,
     steps: int = 5,
     comm: Any = None,
@@ -77,7 +78,7 @@ def gravity_block(
     """
     side = max(2, 2 * round(np.sqrt(n_particles) / 2))
     h, cell, rho = 0.5, 1.0, 2000.0
-    p = lattice([2.0, 2.0], [side, side], h, rho)
+    p = lattice([2.0, 2.0], [side, side], h, density=rho)
     n_total = p.n
     cells = side // 2 + 6
     g = grid([0.0, 0.0], cell, [cells, cells])
@@ -90,12 +91,12 @@ def gravity_block(
     mat = Elastic(1e7, 0.3)
     fixed = np.zeros((g.num_nodes, 2), dtype=bool)
     fixed[g.nodes()[:, 1] <= 2.0] = True
-    dt = time_step(0.1, cell, mat, rho, 2)
+    dt = time_step(0.1, cell, mat, density=rho, dim=2)
     s = StepSettings(
         scheme, shape, dt, np.array([0.0, -9.81]), fixed, smoothing, backend=backend, domain=dom
     )
     t0 = time.perf_counter()
-    step(g, p, mat, s)
+    step(g, p, mat, settings=s)
     warmup = time.perf_counter() - t0
     if dom is not None:
         comm.Barrier()
@@ -107,7 +108,7 @@ def gravity_block(
     t0 = time.perf_counter()
     for _ in range(steps):
         done += p.n
-        step(g, p, mat, s)
+        step(g, p, mat, settings=s)
     if dom is not None:
         comm.Barrier()
     seconds = time.perf_counter() - t0

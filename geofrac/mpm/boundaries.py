@@ -49,7 +49,7 @@ TOL = 1e-9
 
 
 def scene_grid(
-    lower: tuple[float, ...], upper: tuple[float, ...], spacing: float, padding: int
+    lower: tuple[float, ...], upper: tuple[float, ...], spacing: float, *, padding: int
 ) -> Grid:
     """The background grid covering the box plus ``padding`` cells on every side."""
     lo, up = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
@@ -58,7 +58,7 @@ def scene_grid(
 
 
 def wall_nodes(
-    nodes: np.ndarray, lower: np.ndarray, upper: np.ndarray, side: str, spacing: float
+    nodes: np.ndarray, lower: np.ndarray, upper: np.ndarray, *, side: str, spacing: float
 ) -> tuple[np.ndarray, int, float]:
     """Nodes on or beyond a box side.
 
@@ -97,7 +97,7 @@ def _below(x: np.ndarray, y: np.ndarray, bed: np.ndarray, tol: float) -> tuple[n
 
 
 def bed_nodes(
-    nodes: np.ndarray, bed: np.ndarray, spacing: float, representation: str = "plane"
+    nodes: np.ndarray, bed: np.ndarray, spacing: float, *, representation: str = "plane"
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Nodes on or below the bed polyline within its x-range, with normals into the bed.
 
@@ -151,6 +151,7 @@ def boundary_rows(
     g: Grid,
     lower: tuple[float, ...],
     upper: tuple[float, ...],
+    *,
     walls: dict[str, str],
     bed: tuple[tuple[float, float], ...],
     frictional: tuple[str, ...] = (),
@@ -180,7 +181,7 @@ def boundary_rows(
     fixed = np.zeros((g.num_nodes, g.dim), dtype=bool)
     rows: list[tuple[np.ndarray, np.ndarray, np.ndarray, int]] = []
     for side, kind in walls.items():
-        mask, axis, sign = wall_nodes(nodes, lo, up, side, g.spacing)
+        mask, axis, sign = wall_nodes(nodes, lo, up, side=side, spacing=g.spacing)
         if side in frictional:
             ids = np.flatnonzero(mask)
             normal = np.zeros((len(ids), g.dim))
@@ -193,7 +194,7 @@ def boundary_rows(
             fixed[mask, axis] = True
     if bed:
         ids, normals, planes, deep = bed_nodes(
-            nodes, np.asarray(bed, dtype=float), g.spacing, bed_representation
+            nodes, np.asarray(bed, dtype=float), g.spacing, representation=bed_representation
         )
         fixed[deep] = True
         if "bed" in frictional:

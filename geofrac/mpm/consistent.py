@@ -59,6 +59,7 @@ class MlsOperator:
         rows: np.ndarray,
         cols: np.ndarray,
         phi: np.ndarray,
+        *,
         n: int,
         ids: np.ndarray,
         domain: Domain | None = None,
@@ -124,7 +125,7 @@ class MlsOperator:
 
 
 def mls_operator(
-    x: np.ndarray, h: float, ids: np.ndarray | None = None, domain: Domain | None = None
+    x: np.ndarray, h: float, ids: np.ndarray | None = None, *, domain: Domain | None = None
 ) -> MlsOperator:
     """Φ of :func:`geofrac.mpm.smoothing.smooth` (same fits, same rule for who is fitted).
 
@@ -177,4 +178,4 @@ def mls_operator(
     rows = np.concatenate([p[keep], ident])
     cols = np.concatenate([q[keep], ident])
     phi = np.concatenate([phi[keep], np.ones(len(ident))])
-    return MlsOperator(rows, cols, phi, n, ids, domain, sent, source)
+    return MlsOperator(rows, cols, phi, n=n, ids=ids, domain=domain, sent=sent, source=source)

@@ -98,6 +98,7 @@ class ConstitutiveModel(Protocol):
         p: Particles,
         deps: np.ndarray,
         L: np.ndarray,
+        *,
         dt: float,
         backend: str,
         budget: StepBudget | None,

@@ -53,13 +53,13 @@ from geofrac.errors import RunError
 from geofrac.io.checkpoint import RunControl
 from geofrac.log import format_seconds, sayer
 from geofrac.model.scene import Scene
+from geofrac.mpm import shapes
 from geofrac.mpm.boundaries import boundary_rows, scene_grid
 from geofrac.mpm.constitutive import ConstitutiveModel
 from geofrac.mpm.energy import CSV_COLUMNS, EnergyLog, StepBudget
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles, concat, take
 from geofrac.mpm.schemes import StepSettings, particle_strain_energy, step, time_step
-from geofrac.mpm.shapes import support_margin
 from geofrac.timing import Timings
 
 __all__ = ["MPM", "OUTPUT_FILES", "MpmMethod", "MpmRun", "advance", "prepare", "simulate"]
@@ -127,7 +127,7 @@ def _all_particles(
         for b in spec.bodies:
             density = mat.density if b.density is None else b.density
             if b.kind == "lattice":
-                part = from_lattice(b.lower, b.counts, b.spacing, density)
+                part = from_lattice(b.lower, b.counts, b.spacing, density=density)
             else:
                 points, cells = meshed[b.group]  # type: ignore[index]
                 part = from_cells(points, cells, np.full(len(cells), density))
@@ -146,7 +146,7 @@ def _all_particles(
             for i, (b, q) in enumerate(zip(spec.bodies, parts, strict=True))
         }
     elif src.kind == "lattice":
-        p = from_lattice(src.lower, src.counts, src.spacing, mat.density)
+        p = from_lattice(src.lower, src.counts, src.spacing, density=mat.density)
         p.v[:] = _velocity(spec.velocity, p.x, "mpm.velocity")
         polyline = None
     else:
@@ -194,8 +194,8 @@ def _meshed(
                 geometry.file,
                 geometry.parameters,
                 geometry.mesh_size,
-                geometry.dim,
-                spec.bed_group,
+                dim=geometry.dim,
+                curve=spec.bed_group,
                 time_limit=geometry.time_limit,
                 trusted=geometry.trusted,
                 algorithm=geometry.algorithm,
@@ -256,11 +256,9 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
     """
     spec = scene.mpm
     assert spec is not None
-    g = scene_grid(spec.lower, spec.upper, spec.spacing, spec.padding)
+    g = scene_grid(spec.lower, spec.upper, spec.spacing, padding=spec.padding)
     p, bed, bodies = _all_particles(scene, comm)
-    margin = support_margin(spec.shape, spec.spacing)
-    if margin is None:
-        margin = p.lp if spec.shape != "mpm" else 0.0
+    margin = shapes.get(spec.shape).margin(spec.spacing, p.lp)
     if np.any(g.outside(p.x, margin)):
         raise RunError(
             f"mpm.grid: {int(np.sum(g.outside(p.x, margin)))} particle(s) start outside the "
@@ -271,12 +269,12 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
     if spec.initial_stress == "geostatic":
         from geofrac.mpm.seeding import geostatic
 
-        geostatic(p, np.asarray(gravity.acceleration), scene.material.nu, spec.spacing)
+        geostatic(p, np.asarray(gravity.acceleration), scene.material.nu, width=spec.spacing)
     density = float(np.min(p.density))  # the fastest wave: the lightest particle
     if spec.dt is not None:
         dt = spec.dt
     else:
-        dt = time_step(spec.courant, spec.spacing, material, density, spec.dim)  # type: ignore[arg-type]
+        dt = time_step(spec.courant, spec.spacing, material, density=density, dim=spec.dim)  # type: ignore[arg-type]
     steps = max(1, math.ceil(spec.t_end / dt - 1e-9))
     dt = spec.t_end / steps  # end exactly at t_end (never a larger step)
     probes = {}
@@ -297,17 +295,17 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
         local,
         spec.lower,
         spec.upper,
-        spec.walls,
-        bed,
-        fric.boundaries if fric else (),
-        spec.bed_representation,
+        walls=spec.walls,
+        bed=bed,
+        frictional=fric.boundaries if fric else (),
+        bed_representation=spec.bed_representation,
     )
     friction = None
     if fric is not None and len(f_nodes):
         from geofrac.mpm.friction import friction as make_friction
 
         mus = np.asarray(fric.mus or (fric.mu,) * len(fric.boundaries))
-        friction = make_friction(f_nodes, f_normals, mus[f_which], f_planes)
+        friction = make_friction(f_nodes, f_normals, mus[f_which], offsets=f_planes)
     settings = StepSettings(
         spec.scheme,
         spec.shape,
@@ -352,11 +350,11 @@ def _energies(
     return kin, strain, pot, terms
 
 
-def advance(run: MpmRun, comm: MPI.Comm, log: EnergyLog, k: int) -> list[float]:
+def advance(run: MpmRun, comm: MPI.Comm, log: EnergyLog, *, k: int) -> list[float]:
     """Step ``k`` of ``run`` with its energy budget recorded in ``log`` (collective).
 
     The step uses :func:`_settings` (gravity ramped during ``[gravity] ramp``). The
-    scene's time loop and the translating-bar bench (:func:`geofrac.mpm.bar.
+    scene's time loop and the translating-bar bench (:func:`geofrac.bench.mpm.
     translating_bar`) both step through here, so they report the same energies.
 
     Args:
@@ -370,9 +368,9 @@ def advance(run: MpmRun, comm: MPI.Comm, log: EnergyLog, k: int) -> list[float]:
         second).
     """
     budget = StepBudget()
-    step(run.local, run.particles, run.material, _settings(run, k), budget)
+    step(run.local, run.particles, run.material, settings=_settings(run, k), budget=budget)
     kin, strain, pot, terms = _energies(run, comm, budget)
-    return log.record(kin, strain, log.potential(pot, _gravity_factor(run, k)), terms)
+    return log.record(kin, strain, log.potential(pot, _gravity_factor(run, k)), terms=terms)
 
 
 def start_log(run: MpmRun, comm: MPI.Comm) -> EnergyLog:
@@ -415,6 +413,7 @@ def _fields(p: Particles, x0: np.ndarray, wanted: tuple[str, ...]) -> dict[str, 
 def simulate(
     scene: Scene,
     comm: MPI.Comm,
+    *,
     timings: Timings | None = None,
     verbose: bool = True,
     write: bool = False,
@@ -441,105 +440,179 @@ def simulate(
             checkpoint is written.
     """
     timings = timings or Timings()
-    say = sayer(comm, verbose)
+    say = sayer(comm, verbose=verbose)
     spec = scene.mpm
     assert spec is not None
     with timings.phase("setup"):
         run = prepare(scene, comm)
-    s = run.settings
     say(
         f"mpm: {run.total} particles, grid {'x'.join(map(str, run.grid.cells))} cells of "
-        f"{run.grid.spacing:g}, {spec.scheme}/{spec.shape}, dt = {s.dt:.4g}, "
+        f"{run.grid.spacing:g}, {spec.scheme}/{spec.shape}, dt = {run.settings.dt:.4g}, "
         f"{run.steps} steps to t = {spec.t_end:g} on {comm.size} rank(s)"
     )
-    out = scene.output
     resume = control.resume if control is not None else None
-    if resume is not None:
-        assert control is not None
-        control.check_resume(ranks_must_match=False)
-        loop = _restore(run, resume, comm)
-        moved = (
-            f"; written on {resume.ranks()} rank(s), its particles are redistributed over "
-            f"{comm.size} (the result agrees with an uninterrupted run to round-off only)"
-            if resume.ranks() != comm.size
-            else ""
-        )
-        say(
-            f"mpm: resuming from step {loop['k']} (t = {loop['k'] * s.dt:.6g}) of checkpoint "
-            f"{resume.path}{moved}"
-        )
-    else:
-        loop = _start(run, comm)
-    x0 = loop["x0"]
-    series = csv = None
-    error = None
-    if write and comm.rank == 0:
-        try:
-            series, csv = _open_logs(run, out, loop, resume is not None)
-        except (OSError, ValueError) as exc:  # e.g. an unreadable particles.h5 on --resume
-            error = f"cannot {'continue' if resume else 'write'} the output in {out.dir}: {exc}"
-    error = comm.bcast(error, root=0)
-    if error is not None:
-        raise RunError(error)
-    every = max(1, run.steps // spec.frames)
-    log = loop["log"]
-    history, probes = loop["history"], loop["probes"]
+    loop = _begin(run, comm, control, say)
+    series, csv = _open_output(run, scene, loop, comm, write=write, resumed=resume is not None)
+    out = scene.output
     t_wall = time.perf_counter()
-    last_say = t_wall
-    first_step = loop["k"] + 1
     try:
         with timings.phase("steps"):
-            for k in range(first_step, run.steps + 1):
-                row = advance(run, comm, log, k)
-                kin, strain = row[0], row[1]
-                if csv is not None:
-                    csv.write(",".join([str(k), repr(k * s.dt), *map(repr, row)]) + "\n")
-                    csv.flush()  # a killed run keeps every completed step
-                if k % every == 0 or k == run.steps:
-                    t = k * s.dt
-                    history["t"].append(t)
-                    history["front_x"].append(_front(run, comm))
-                    gathered = _gather(run, comm)
-                    if gathered is not None:
-                        for name, pid in run.probes.items():
-                            probes[name].append(_probe(gathered, pid, x0))
-                        if series is not None:
-                            series.write(t, gathered.x, _fields(gathered, x0, out.fields))  # type: ignore[arg-type]
-                now = time.perf_counter()
-                if now - last_say > PROGRESS_EVERY_S or k == run.steps:
-                    last_say = now
-                    done = k - first_step + 1
-                    rate = done * run.total / (now - t_wall)
-                    say(
-                        f"mpm [{k}/{run.steps}] t = {k * s.dt:.4g}: kinetic {kin:.4g}, "
-                        f"strain {strain:.4g}, front x {history['front_x'][-1]:.4g} "
-                        f"({rate:.3g} particle-steps/s, elapsed "
-                        f"{format_seconds(now - t_wall)}, left "
-                        f"~{format_seconds((run.steps - k) * (now - t_wall) / done)})"
-                    )
-                if control is not None:
-                    save, stop = control.poll(k)
-                    if save and k < run.steps:
-                        state = {"k": k, "log": log.state()}
-                        state |= {"front0": loop["front0"], "history": history, "probes": probes}
-                        control.save(
-                            k,
-                            state,
-                            shared=None if x0 is None else {"x0": x0},
-                            local=run.particles.state(),
-                        )
-                    if stop and k < run.steps:
-                        control.interrupt(f"step {k}")
+            _time_loop(
+                run, comm, loop, say=say, series=series, csv=csv, control=control,
+                every=max(1, run.steps // spec.frames), fields=out.fields, t_wall=t_wall,
+            )  # fmt: skip
     finally:
         if csv is not None:
             csv.close()
     seconds = time.perf_counter() - t_wall
-    steps_done = run.steps - first_step + 1
-    probes = comm.bcast(probes, root=0)  # rank 0 gathered them; every rank returns the same
-    results: dict[str, Any] = {
+    results = _results(run, comm, loop, seconds, scene)
+    if resume is not None:
+        results["resumed_at_step"] = resume.k
+    results.update(run.material.results())
+    return results
+
+
+def _begin(run: MpmRun, comm: MPI.Comm, control: RunControl | None, say: Any) -> dict[str, Any]:
+    """The loop's state: at t = 0, or restored from ``control.resume`` (collective)."""
+    resume = control.resume if control is not None else None
+    if resume is None:
+        return _start(run, comm)
+    assert control is not None
+    control.check_resume(ranks_must_match=False)
+    loop = _restore(run, resume, comm)
+    moved = (
+        f"; written on {resume.ranks()} rank(s), its particles are redistributed over "
+        f"{comm.size} (the result agrees with an uninterrupted run to round-off only)"
+        if resume.ranks() != comm.size
+        else ""
+    )
+    say(
+        f"mpm: resuming from step {loop['k']} (t = {loop['k'] * run.settings.dt:.6g}) of "
+        f"checkpoint {resume.path}{moved}"
+    )
+    return loop
+
+
+def _open_output(
+    run: MpmRun,
+    scene: Scene,
+    loop: dict[str, Any],
+    comm: MPI.Comm,
+    *,
+    write: bool,
+    resumed: bool,
+) -> tuple[Any, Any]:
+    """``particles.xdmf`` and ``energies.csv`` on rank 0 with ``write`` (else None, None).
+
+    Raises:
+        RunError: on every rank, when rank 0 cannot write or continue them.
+    """
+    out = scene.output
+    series = csv = None
+    error = None
+    if write and comm.rank == 0:
+        try:
+            series, csv = _open_logs(run, out, loop, resumed)
+        except (OSError, ValueError) as exc:  # e.g. an unreadable particles.h5 on --resume
+            error = f"cannot {'continue' if resumed else 'write'} the output in {out.dir}: {exc}"
+    error = comm.bcast(error, root=0)
+    if error is not None:
+        raise RunError(error)
+    return series, csv
+
+
+def _time_loop(
+    run: MpmRun,
+    comm: MPI.Comm,
+    loop: dict[str, Any],
+    *,
+    say: Any,
+    series: Any,
+    csv: Any,
+    control: RunControl | None,
+    every: int,
+    fields: tuple[str, ...],
+    t_wall: float,
+) -> None:
+    """Steps ``loop["k"] + 1`` … ``run.steps``: energies, frames, progress, checkpoints.
+
+    A frame every ``every`` steps and at the end (``fields``: ``output.fields``); progress
+    lines timed from ``t_wall``.
+    """
+    s, log = run.settings, loop["log"]
+    last_say = t_wall
+    first_step = loop["k"] + 1
+    for k in range(first_step, run.steps + 1):
+        row = advance(run, comm, log, k=k)
+        if csv is not None:
+            csv.write(",".join([str(k), repr(k * s.dt), *map(repr, row)]) + "\n")
+            csv.flush()  # a killed run keeps every completed step
+        if k % every == 0 or k == run.steps:
+            _frame(run, comm, loop, k, series, fields)
+        now = time.perf_counter()
+        if now - last_say > PROGRESS_EVERY_S or k == run.steps:
+            last_say = now
+            done = k - first_step + 1
+            rate = done * run.total / (now - t_wall)
+            say(
+                f"mpm [{k}/{run.steps}] t = {k * s.dt:.4g}: kinetic {row[0]:.4g}, "
+                f"strain {row[1]:.4g}, front x {loop['history']['front_x'][-1]:.4g} "
+                f"({rate:.3g} particle-steps/s, elapsed "
+                f"{format_seconds(now - t_wall)}, left "
+                f"~{format_seconds((run.steps - k) * (now - t_wall) / done)})"
+            )
+        if control is not None:
+            _poll(run, loop, k, control)
+
+
+def _frame(
+    run: MpmRun,
+    comm: MPI.Comm,
+    loop: dict[str, Any],
+    k: int,
+    series: Any,
+    fields: tuple[str, ...],
+) -> None:
+    """Record step ``k``'s front and probes and write its particle frame (collective)."""
+    t = k * run.settings.dt
+    x0, history, probes = loop["x0"], loop["history"], loop["probes"]
+    history["t"].append(t)
+    history["front_x"].append(_front(run, comm))
+    gathered = _gather(run, comm)
+    if gathered is not None:
+        for name, pid in run.probes.items():
+            probes[name].append(_probe(gathered, pid, x0))
+        if series is not None:
+            series.write(t, gathered.x, _fields(gathered, x0, fields))
+
+
+def _poll(run: MpmRun, loop: dict[str, Any], k: int, control: RunControl) -> None:
+    """After step ``k``: write a checkpoint, or stop on a signal, as ``control`` says."""
+    save, stop = control.poll(k)
+    if save and k < run.steps:
+        state = {"k": k, "log": loop["log"].state()}
+        state |= {"front0": loop["front0"], "history": loop["history"], "probes": loop["probes"]}
+        x0 = loop["x0"]
+        control.save(
+            k, state, shared=None if x0 is None else {"x0": x0}, local=run.particles.state()
+        )
+    if stop and k < run.steps:
+        control.interrupt(f"step {k}")
+
+
+def _results(
+    run: MpmRun, comm: MPI.Comm, loop: dict[str, Any], seconds: float, scene: Scene
+) -> dict[str, Any]:
+    """The run's JSON-ready results (every rank returns the same)."""
+    spec = scene.mpm
+    assert spec is not None
+    log, history = loop["log"], loop["history"]
+    steps_done = run.steps - loop["k"]
+    probes = comm.bcast(loop["probes"], root=0)  # rank 0 gathered them
+    return {
         "particles": run.total,
         "steps": run.steps,
-        "dt": s.dt,
+        "dt": run.settings.dt,
         "t_end": spec.t_end,
         "runout_m": history["front_x"][-1] - loop["front0"],
         "energy_drift_max": log.drift_max,
@@ -551,10 +624,6 @@ def simulate(
         "probes": probes,
         "bodies": run.bodies,
     }
-    if resume is not None:
-        results["resumed_at_step"] = resume.k
-    results.update(run.material.results())
-    return results
 
 
 def _settings(run: MpmRun, k: int) -> StepSettings:
@@ -734,7 +803,11 @@ class MpmMethod:
         self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
     ) -> dict[str, Any]:
         """:func:`simulate` with its output; the summary entries."""
-        return {"results": simulate(scene, comm, timings, verbose, write=True, control=control)}
+        return {
+            "results": simulate(
+                scene, comm, timings=timings, verbose=verbose, write=True, control=control
+            )
+        }
 
     def report(self, summary: dict[str, Any]) -> list[str]:
         """The runout, the friction angle and the energy drift."""

@@ -61,7 +61,7 @@ class Elastic:
 
     def stored_energy(self, p: Particles) -> np.ndarray:
         """½ V_p σ_p : D⁻¹ : σ_p per particle, shape=(n,) (plane strain: with σ_zz)."""
-        return stored(p.stress, p.stress_zz, p.volume, self.E, self.nu)
+        return stored(p.stress, p.stress_zz, p.volume, E=self.E, nu=self.nu)
 
     def results(self) -> dict[str, float]:
         """Nothing: E and ν are in the scene."""
@@ -72,6 +72,7 @@ class Elastic:
         p: Particles,
         deps: np.ndarray,
         L: np.ndarray,
+        *,
         dt: float,
         backend: str,
         budget: StepBudget | None,

@@ -74,7 +74,7 @@ COLUMNS = (
 
 
 def stored(
-    stress: np.ndarray, stress_zz: np.ndarray, volume: np.ndarray, E: float, nu: float
+    stress: np.ndarray, stress_zz: np.ndarray, volume: np.ndarray, *, E: float, nu: float
 ) -> np.ndarray:
     """½ V σ : D⁻¹ : σ per particle, shape=(n,).
 
@@ -160,6 +160,7 @@ class StepBudget:
     def grid_terms(
         self,
         dt: float,
+        *,
         mass: np.ndarray,
         mom: np.ndarray,
         f: np.ndarray,
@@ -323,7 +324,7 @@ class EnergyLog:
         return potential - self.u0 + self.ramp_offset
 
     def record(
-        self, kinetic: float, strain: float, gravity: float, terms: np.ndarray
+        self, kinetic: float, strain: float, gravity: float, *, terms: np.ndarray
     ) -> list[float]:
         """Add a step: its energies (Π relative to t = 0) and its :class:`StepBudget` terms.
 

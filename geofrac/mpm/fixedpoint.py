@@ -115,7 +115,7 @@ def _halves(hi: np.ndarray, lo_upper: np.ndarray, lo_lower: np.ndarray) -> np.nd
     return normalise(acc)
 
 
-def accumulate(nodes: np.ndarray, terms: np.ndarray, scale: np.ndarray, num: int) -> np.ndarray:
+def accumulate(nodes: np.ndarray, terms: np.ndarray, scale: np.ndarray, *, num: int) -> np.ndarray:
     """Exact sums of per-(item, node) terms onto ``num`` nodes: the numpy reference.
 
     lo is summed in two halves of 31 bits (exact for fewer than 2^32 terms a node), so

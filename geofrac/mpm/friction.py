@@ -150,6 +150,7 @@ def friction(
     nodes: np.ndarray,
     normals: np.ndarray,
     mu: float | np.ndarray,
+    *,
     offsets: np.ndarray | None = None,
 ) -> Friction:
     """Validated :class:`Friction` (normals normalised, μ one per row)."""
@@ -190,6 +191,7 @@ def gaps(
     fr: Friction,
     x: np.ndarray,
     lp: np.ndarray,
+    *,
     nodes: np.ndarray,
     phi: np.ndarray,
     num_nodes: int,
@@ -236,6 +238,7 @@ def approach_allowed(
     fr: Friction,
     x: np.ndarray,
     lp: np.ndarray,
+    *,
     nodes: np.ndarray,
     phi: np.ndarray,
     num_nodes: int,
@@ -259,7 +262,7 @@ def approach_allowed(
     """
     if fr.offsets is None:
         return None
-    g = gaps(fr, x, lp, nodes, phi, num_nodes)
+    g = gaps(fr, x, lp, nodes=nodes, phi=phi, num_nodes=num_nodes)
     if dom is not None:
         g = dom.min_halo(g)
     # continuous in g: material reaching past the boundary (g < 0) may not approach more
@@ -270,6 +273,7 @@ def apply_friction(
     v: np.ndarray,
     fr: Friction,
     allow: np.ndarray | None = None,
+    *,
     sliding_only: bool = False,
     tol: float = 0.0,
 ) -> np.ndarray:
@@ -298,6 +302,7 @@ def contact_states(
     v: np.ndarray,
     fr: Friction,
     allow: np.ndarray | None = None,
+    *,
     sliding_only: bool = False,
     tol: float = 0.0,
 ) -> np.ndarray:

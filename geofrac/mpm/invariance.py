@@ -9,7 +9,7 @@ relative to the initial total:
 
 - ``translating``: the translating bar of Edo (2016), sec. 4.5.3 (E = 500, ρ = 1, length
   5, v₀ = 2, cell 0.5, Courant number 0.1, walls at x = 0 and 50; the same set-up as
-  :func:`geofrac.mpm.bar.translating_bar`), to t = 100. On 2 ranks the slabs meet at
+  :func:`geofrac.bench.mpm.translating_bar`), to t = 100. On 2 ranks the slabs meet at
   x = 25, the bar's centre at the start: the bar crosses the rank boundary at every
   pass between the walls.
 - ``sliding``: a 2D elastic block of 8 × 4 particles thrown at 2 m/s along a frictional
@@ -86,14 +86,14 @@ class Divergence:
 
 
 def _translating(shape: str, scheme: str) -> tuple[Grid, Particles, Elastic, Any]:
-    """The translating bar of sec. 4.5.3 (as :func:`geofrac.mpm.bar.translating_bar`)."""
+    """The translating bar of sec. 4.5.3 (as :func:`geofrac.bench.mpm.translating_bar`)."""
     E, rho, length, v0, cell, ppc = 500.0, 1.0, 5.0, 2.0, 0.5, 2
     n = round(length / cell) * ppc
-    p = lattice([25.0 - length / 2], [n], length / n, rho)
+    p = lattice([25.0 - length / 2], [n], length / n, density=rho)
     p.v[:] = v0
     g = grid([-2 * cell], cell, [round(50.0 / cell) + 4])
     mat = Elastic(E)
-    dt = time_step(0.1, cell, mat, rho, 1)
+    dt = time_step(0.1, cell, mat, density=rho, dim=1)
 
     def settings(local: Grid, domain: Any) -> StepSettings:
         X = local.nodes()[:, 0]
@@ -109,10 +109,10 @@ def _sliding(shape: str, scheme: str) -> tuple[Grid, Particles, Elastic, Any]:
 
     g = grid([0.0, 0.0], 0.25, [16, 8])
     rho = 1000.0
-    p = lattice([1.0, 0.5], [8, 4], 0.125, rho)
+    p = lattice([1.0, 0.5], [8, 4], 0.125, density=rho)
     p.v[:, 0] = 2.0
     mat = Elastic(1e5, 0.3)
-    dt = time_step(0.2, g.spacing, mat, rho, 2)
+    dt = time_step(0.2, g.spacing, mat, density=rho, dim=2)
 
     def settings(local: Grid, domain: Any) -> StepSettings:
         X = local.nodes()
@@ -139,6 +139,7 @@ def compare_ranks(
     comm: Any,
     case: str,
     shape: str = "ugimp",
+    *,
     scheme: str = "musl",
     steps: int | None = None,
     samples: int = 200,
@@ -179,9 +180,9 @@ def compare_ranks(
     spent = [0.0, 0.0]
     for k in range(1, steps + 1):
         t0 = time.perf_counter()
-        step(g, serial, mat, s)
+        step(g, serial, mat, settings=s)
         t1 = time.perf_counter()
-        step(dom.local, mine, mat, sd)
+        step(dom.local, mine, mat, settings=sd)
         spent[0] += t1 - t0
         spent[1] += time.perf_counter() - t1
         crossed.update(mine.ids[start_owner[mine.ids] != comm.rank].tolist())

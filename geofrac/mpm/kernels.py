@@ -19,9 +19,6 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from geofrac.mpm.grid import Grid
-from geofrac.mpm.shapes import Weights, gimp_nodes
-
 __all__ = [
     "bad_particles",
     "bin_neighbours",
@@ -30,7 +27,6 @@ __all__ = [
     "forces_bounds",
     "from_grid",
     "from_grid2",
-    "grid_weights",
     "kinematics",
     "mass_momentum",
     "mass_momentum_bounds",
@@ -66,44 +62,6 @@ def scratch(name: str, shape: tuple[int, ...], dtype: type = float) -> np.ndarra
         buf = np.empty(need + need // 4, dtype)
         _SCRATCH[name] = buf
     return buf[:need].reshape(shape)
-
-
-def grid_weights(
-    g: Grid,
-    x: np.ndarray,
-    lp: np.ndarray | None = None,
-    reuse: bool = False,
-    bspline: bool = False,
-) -> Weights:
-    """Compiled :func:`geofrac.mpm.shapes.weights` (same arguments, same result).
-
-    With ``reuse`` the arrays are :func:`scratch` buffers, overwritten by the next call
-    (a step's own weights).
-
-    Raises:
-        ValueError: a node with weight lies outside the grid.
-    """
-    n, dim = x.shape
-    shape = np.asarray(g.shape, dtype=np.int64)
-    origin = np.ascontiguousarray(g.origin, dtype=float)
-    k1 = 3 if bspline else 2 if lp is None else gimp_nodes(g.spacing, lp)
-    k = k1**dim
-    if reuse:
-        nodes = scratch("nodes", (n, k), np.int64)
-        phi = scratch("phi", (n, k))
-        grad = scratch("grad", (n, k, dim))
-    else:
-        nodes = np.empty((n, k), np.int64)
-        phi = np.empty((n, k))
-        grad = np.empty((n, k, dim))
-    if bspline:
-        if not weights_bspline2(x, origin, g.spacing, shape, nodes, phi, grad):
-            raise ValueError("weights: a particle's support reaches beyond the grid")
-    elif lp is None:
-        weights_hat(x, origin, g.spacing, shape, nodes, phi, grad)
-    elif not weights_gimp(x, lp, origin, g.spacing, shape, k1, nodes, phi, grad):
-        raise ValueError("weights: a particle's support reaches beyond the grid")
-    return Weights(nodes, phi, grad)
 
 
 @_jit
@@ -897,14 +855,23 @@ def nodal_acceleration(
 
 @_jit
 def outside(
-    x: np.ndarray, lp: np.ndarray, gimp: bool, lo: np.ndarray, hi: np.ndarray, out: np.ndarray
+    x: np.ndarray,
+    lp: np.ndarray,
+    boxes: bool,
+    reach: float,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    out: np.ndarray,
 ) -> int:
     """:meth:`geofrac.mpm.grid.Grid.outside`: which particles reach beyond [lo, hi].
 
+    The margin of :meth:`geofrac.mpm.shapes.Shape.margin`: ``lp`` or ``reach``.
+
     Args:
         x: positions, shape=(n, dim).
-        lp: half-widths, shape=(n, dim), used when ``gimp``.
-        gimp: whether the particles have boxes (else points).
+        lp: half-widths, shape=(n, dim), used when ``boxes``.
+        boxes: whether the particles have boxes (GIMP).
+        reach: the support's half-width beyond a point particle (without ``boxes``).
         lo: the grid's lowest corner, shape=(dim,).
         hi: its highest corner, shape=(dim,).
         out: out, shape=(n,) bool.
@@ -917,7 +884,7 @@ def outside(
     for i in range(n):
         o = False
         for a in range(dim):
-            m = lp[i, a] if gimp else 0.0
+            m = lp[i, a] if boxes else reach
             if x[i, a] - m < lo[a] or x[i, a] + m > hi[a]:
                 o = True
         out[i] = o

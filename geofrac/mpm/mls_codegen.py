@@ -22,9 +22,9 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from geofrac.mpm.smoothing import exponents
+from geofrac.mpm.smoothing import components, exponents
 
-__all__ = ["UNROLLED", "components", "module_source"]
+__all__ = ["UNROLLED", "module_source"]
 
 #: Dimensions whose solve is unrolled too (3D's 20×20 would be ~4000 lines; it loops).
 UNROLLED = (1, 2)
@@ -139,11 +139,6 @@ def finish(
 '''
 
 
-def components(dim: int) -> int:
-    """Columns each kernel fits: the independent components of a symmetric dim×dim."""
-    return dim * (dim + 1) // 2
-
-
 def _name(prefix: str, e: tuple[int, ...]) -> str:
     return prefix + "".join(str(v) for v in e)
 
@@ -221,6 +216,11 @@ def _finish(dim: int) -> list[str]:
 
 def _kernel(dim: int) -> list[str]:
     """The source lines of ``_sums{dim}`` and ``fit{dim}``."""
+    return _sums_source(dim) + _fit_source(dim)
+
+
+def _sums_source(dim: int) -> list[str]:
+    """The source lines of ``_sums{dim}``: the moments and B v of the neighbours, unrolled."""
     exps = [tuple(int(v) for v in e) for e in exponents(dim)]
     nc = components(dim)
     moms = sorted({tuple(a + b for a, b in zip(r, c, strict=True)) for r in exps for c in exps})
@@ -283,6 +283,16 @@ def _kernel(dim: int) -> list[str]:
     for c in range(nc):
         for r, e in enumerate(exps):
             add(f"    B[{r}, {c}] = {_name(f'b{c}_', e)}")
+    return L
+
+
+def _fit_source(dim: int) -> list[str]:
+    """The source lines of ``fit{dim}``: gather each particle's neighbours, sum, solve."""
+    exps = [tuple(int(v) for v in e) for e in exponents(dim)]
+    nc = components(dim)
+    moms = sorted({tuple(a + b for a, b in zip(r, c, strict=True)) for r in exps for c in exps})
+    L: list[str] = []
+    add = L.append
     add("")
     add("")
     add("@_jit")

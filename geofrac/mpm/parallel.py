@@ -105,11 +105,11 @@ class Domain:
             return out
         return float(self.comm.allreduce(float(value), op=MPI.MAX))
 
-    def any(self, flag: bool) -> bool:
-        """Whether the flag is set on any rank."""
+    def any(self, *, local: bool) -> bool:
+        """Whether ``local`` (this rank's truth value) is true on any rank."""
         from mpi4py import MPI
 
-        return bool(self.comm.allreduce(bool(flag), op=MPI.LOR))
+        return bool(self.comm.allreduce(bool(local), op=MPI.LOR))
 
     def allgather_rows(self, *arrays: np.ndarray) -> list[np.ndarray]:
         """Each array's rows of all ranks, in rank order (every rank gets them all)."""
@@ -241,7 +241,7 @@ class Domain:
         ]
 
     def ghosts(
-        self, x: np.ndarray, values: np.ndarray, h: float, ids: np.ndarray
+        self, x: np.ndarray, values: np.ndarray, h: float, *, ids: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Other ranks' particles within ``h`` of this rank's slab (MLS ghosts).
 
@@ -264,7 +264,7 @@ class Domain:
         owner = self.owner(p.x)
         stay = owner == self.rank
         leaving = not stay.all()
-        if not self.any(leaving):
+        if not self.any(local=leaving):
             return
         send = [
             None if q == self.rank or not np.any(owner == q) else take(p, owner == q)

@@ -95,7 +95,7 @@ class Particles:
 
 
 def particles(
-    x: np.ndarray, volume: np.ndarray, density: np.ndarray | float, lp0: np.ndarray
+    x: np.ndarray, volume: np.ndarray, density: np.ndarray | float, *, lp0: np.ndarray
 ) -> Particles:
     """Particles at rest and stress-free.
 
@@ -142,7 +142,7 @@ def take(p: Particles, index: np.ndarray) -> Particles:
 def concat(parts: list[Particles], dim: int) -> Particles:
     """The particles of ``parts`` one after the other (none: an empty set of ``dim``)."""
     if not parts:
-        empty = particles(np.zeros((0, dim)), np.zeros(0), 1.0, np.zeros((0, dim)))
+        empty = particles(np.zeros((0, dim)), np.zeros(0), 1.0, lp0=np.zeros((0, dim)))
         return empty
     return Particles(
         **{f.name: np.concatenate([getattr(q, f.name) for q in parts]) for f in fields(Particles)}
@@ -150,7 +150,7 @@ def concat(parts: list[Particles], dim: int) -> Particles:
 
 
 def lattice(
-    lower: np.ndarray | list[float], counts: list[int], spacing: float, density: float
+    lower: np.ndarray | list[float], counts: list[int], spacing: float, *, density: float
 ) -> Particles:
     """Particles filling a box on a regular lattice, one per lattice cell, at its centre.
 
@@ -167,4 +167,4 @@ def lattice(
     axes = [lo[a] + (np.arange(n) + 0.5) * spacing for a, n in enumerate(counts)]
     x = np.stack([m.ravel() for m in np.meshgrid(*axes, indexing="ij")], axis=1)
     n = len(x)
-    return particles(x, np.full(n, spacing ** len(lo)), density, np.full(x.shape, spacing / 2))
+    return particles(x, np.full(n, spacing ** len(lo)), density, lp0=np.full(x.shape, spacing / 2))

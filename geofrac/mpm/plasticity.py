@@ -126,7 +126,7 @@ class DruckerPrager:
 
     def stored_energy(self, p: Particles) -> np.ndarray:
         """½ V_p σ_p : D⁻¹ : σ_p per particle (the elastic part), shape=(n,)."""
-        return stored(p.stress, p.stress_zz, p.volume, self.E, self.nu)
+        return stored(p.stress, p.stress_zz, p.volume, E=self.E, nu=self.nu)
 
     def results(self) -> dict[str, float]:
         """``friction_angle_deg``: φ, the parameter a landslide sweep varies."""
@@ -137,6 +137,7 @@ class DruckerPrager:
         p: Particles,
         deps: np.ndarray,
         L: np.ndarray,
+        *,
         dt: float,
         backend: str,
         budget: StepBudget | None,
@@ -161,7 +162,7 @@ class DruckerPrager:
         if budget is not None:  # stored energy of the elastic trial σ + D:Δε
             zz = p.stress_zz + (el.lame()[0] * tr if d == 2 else 0.0)
             trial = float(
-                np.sum(stored(p.stress + el.increment(deps), zz, volume, self.E, self.nu))
+                np.sum(stored(p.stress + el.increment(deps), zz, volume, E=self.E, nu=self.nu))
             )
         full = np.zeros((n, 3, 3))
         full[:, :d, :d] = p.stress
@@ -176,8 +177,8 @@ class DruckerPrager:
             zero = np.zeros(n)
             budget.plastic += float(
                 np.sum(
-                    stored(rotated + el.increment(deps3), zero, volume, self.E, self.nu)
-                    - stored(full + el.increment(deps3), zero, volume, self.E, self.nu)
+                    stored(rotated + el.increment(deps3), zero, volume, E=self.E, nu=self.nu)
+                    - stored(full + el.increment(deps3), zero, volume, E=self.E, nu=self.nu)
                 )
             )  # the return starts from the rotated trial
         new, dlam = self.update(rotated, deps3)
@@ -186,7 +187,7 @@ class DruckerPrager:
             p.stress_zz = new[:, 2, 2].copy()
         p.plastic += dlam
         if budget is not None:
-            after = stored(p.stress, p.stress_zz, volume, self.E, self.nu)
+            after = stored(p.stress, p.stress_zz, volume, E=self.E, nu=self.nu)
             budget.plastic += trial - float(np.sum(after))
 
     def update(self, stress: np.ndarray, deps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

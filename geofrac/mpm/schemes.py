@@ -47,7 +47,7 @@ import numpy as np
 from geofrac.errors import RunError
 from geofrac.mpm.grid import Grid
 from geofrac.mpm.particles import Particles
-from geofrac.mpm.shapes import SHAPES, Weights, support_margin, weights
+from geofrac.mpm.shapes import Shape, Weights, compiled_weights, get, weights
 
 if TYPE_CHECKING:  # imported only by a step that uses them
     from geofrac.mpm.constitutive import ConstitutiveModel
@@ -134,7 +134,7 @@ def strain_energy(p: Particles, material: ConstitutiveModel) -> float:
 
 
 def time_step(
-    courant: float, spacing: float, material: ConstitutiveModel, density: float, dim: int
+    courant: float, spacing: float, material: ConstitutiveModel, *, density: float, dim: int
 ) -> float:
     """Δt = α L / c from the Courant number α < 1 (eq. 4.72), c the material's wave speed."""
     if not 0 < courant < 1:
@@ -148,7 +148,8 @@ class StepSettings:
 
     Attributes:
         scheme: one of :data:`SCHEMES`.
-        shape: one of :data:`~geofrac.mpm.shapes.SHAPES`.
+        shape: the shape functions (:class:`~geofrac.mpm.shapes.Shape`); a registry name
+            (:data:`~geofrac.mpm.shapes.REGISTRY`) is looked up.
         dt: time step.
         gravity: body force per mass b, shape=(dim,).
         fixed: held velocity components of the nodes, shape=(num_nodes, dim) bool.
@@ -171,7 +172,7 @@ class StepSettings:
     """
 
     scheme: str
-    shape: str
+    shape: Shape
     dt: float
     gravity: np.ndarray
     fixed: np.ndarray = field(repr=False)
@@ -186,8 +187,8 @@ class StepSettings:
         """Check the names and the step."""
         if self.scheme not in SCHEMES:
             raise ValueError(f"scheme {self.scheme!r} is not one of {', '.join(SCHEMES)}")
-        if self.shape not in SHAPES:
-            raise ValueError(f"shape {self.shape!r} is not one of {', '.join(SHAPES)}")
+        if isinstance(self.shape, str):
+            object.__setattr__(self, "shape", get(self.shape))
         if not self.dt > 0:
             raise ValueError(f"dt must be > 0, got {self.dt}")
         if self.smoothing is not None and not self.smoothing > 0:
@@ -207,7 +208,7 @@ def rest_speed(spacing: float, dt: float) -> float:
     return REST_TOL * spacing / dt
 
 
-def local_damping(f: np.ndarray, v: np.ndarray, alpha: float, rest: float = 0.0) -> np.ndarray:
+def local_damping(f: np.ndarray, v: np.ndarray, alpha: float, *, rest: float = 0.0) -> np.ndarray:
     """Cundall's local damping force −α |f| sign(v), per node and component.
 
     The force of each component opposes the velocity with a fraction α of the
@@ -249,7 +250,7 @@ def _scatter(w: Weights, terms: np.ndarray, bound: np.ndarray, num_nodes: int) -
     from geofrac.mpm.fixedpoint import accumulate, scales
 
     with np.errstate(invalid="ignore"):  # a non-finite column turns NaN in _complete
-        return accumulate(w.nodes, terms, scales(bound), num_nodes)
+        return accumulate(w.nodes, terms, scales(bound), num=num_nodes)
 
 
 def _to_grid(
@@ -409,15 +410,15 @@ def _apply_increment(
 
     The kinematics run compiled when the backend and the material's update are.
     """
-    material.stress_update(p, deps, L, dt, s.backend, budget)
+    material.stress_update(p, deps, L, dt=dt, backend=s.backend, budget=budget)
     if s.backend == "numba" and material.compiled:
         from geofrac.mpm import kernels
 
-        kernels.kinematics(deps, L, dt, p.volume, p.F, p.lp0, p.lp, s.shape == "cpgimp")
+        kernels.kinematics(deps, L, dt, p.volume, p.F, p.lp0, p.lp, s.shape.follows_deformation)
         return
     p.volume *= 1.0 + np.trace(deps, axis1=1, axis2=2)
     p.F = np.matmul(np.eye(p.dim) + dt * L, p.F)
-    if s.shape == "cpgimp":
+    if s.shape.follows_deformation:
         p.lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
 
 
@@ -434,26 +435,76 @@ def _smoothed(deps: np.ndarray, smooth_at: tuple, s: StepSettings) -> np.ndarray
         n, d = deps.shape[:2]
         return smooth_at[3].apply(deps.reshape(n, d * d)).reshape(n, d, d)
     x0, ids, h = smooth_at[:3]
-    return smooth_strain(deps, x0, ids, h, s.backend, s.domain)
+    return smooth_strain(deps, x0, ids, h=h, backend=s.backend, domain=s.domain)
+
+
+@dataclass
+class _Nodes:
+    """One step's weights and nodal state, filled by the step's parts in turn.
+
+    Attributes:
+        w: the particles' weights at the step's start.
+        num_nodes: N, the grid's nodes.
+        smooth_at: (positions at the step's start, ids, radius(, the consistent kind's
+            operator)) for the MLS smoothing, or None.
+        fast: the compiled backend.
+        pmax: the shape's bound of φ_ip.
+        gmax: the shape's bound of |∂φ_ip/∂x_a|.
+        rest: the speed at or below which a nodal velocity is at rest (:func:`rest_speed`).
+        mass: m_i, shape=(N,).
+        mom: (m v)_i of the first transfer, shape=(N, dim).
+        f: f_int + f_ext, shape=(N, dim).
+        peak: the heaviest node's mass (over all ranks).
+        active: the nodes heavier than :data:`MASS_FLOOR` × ``peak``, shape=(N,).
+        v: the nodal velocity, shape=(N, dim).
+        allow: the contact's allowed approaches (friction), or None.
+        v_mapped: the nodal velocity before the contact acted (friction), or None.
+    """
+
+    w: Weights
+    num_nodes: int
+    smooth_at: tuple | None
+    fast: bool
+    pmax: float
+    gmax: float
+    rest: float
+    mass: np.ndarray = field(init=False, repr=False)
+    mom: np.ndarray = field(init=False, repr=False)
+    f: np.ndarray = field(init=False, repr=False)
+    peak: float = field(init=False)
+    active: np.ndarray = field(init=False, repr=False)
+    v: np.ndarray = field(init=False, repr=False)
+    allow: np.ndarray | None = field(default=None, init=False, repr=False)
+    v_mapped: np.ndarray | None = field(default=None, init=False, repr=False)
 
 
 def step(
     g: Grid,
     p: Particles,
     material: ConstitutiveModel,
-    s: StepSettings,
+    *,
+    settings: StepSettings,
     budget: StepBudget | None = None,
 ) -> None:
-    """Advance the particles by one step of ``s.scheme`` (in place).
+    """Advance the particles by one step of ``settings.scheme`` (in place).
+
+    The parts of the algorithm (App. D): the grid check and the weights
+    (:func:`_start`); the transfer of mass and momentum to the grid, with MUSL's forces
+    (:func:`_map_mass_momentum`); the nodal velocity and the contact
+    (:func:`_velocity_and_contact`); USF's and USAVG's stress update; the forces of the
+    updated stress (:func:`_map_forces`, USF, USAVG); the grid update
+    (:func:`_grid_update`); the particles' velocity and position from the grid
+    (:func:`_grid_to_particles`); MUSL's and USAVG's nodal velocity re-mapped from the
+    new particle momentum (:func:`_remap_velocity`) and their stress update from it.
 
     ``budget``: add this step's energy terms (this rank's part, each node counted on one
     rank: sum over the ranks for the whole) to it (:mod:`~geofrac.mpm.energy`), among
     them ``budget.damping``, the energy the local damping took out (``s.damping`` > 0);
     None (the default) computes none of them.
 
-    With ``s.domain``, ``g`` is ``s.domain.local`` and ``p`` this rank's particles; every
-    rank calls the step, and at its end ``p``'s arrays hold the particles the rank owns
-    then.
+    With ``settings.domain``, ``g`` is ``settings.domain.local`` and ``p`` this rank's
+    particles; every rank calls the step, and at its end ``p``'s arrays hold the particles
+    the rank owns then.
 
     Raises:
         ParticlesLeftGrid: a particle (or its GIMP box) is outside the grid; nothing
@@ -462,53 +513,104 @@ def step(
             its volume is not positive (an unstable step); with a domain also when a
             particle's support reaches beyond its rank's halo. On every rank alike.
     """
+    s = settings
     if p.dim not in material.dims:
         dims = " or ".join(f"{d}D" for d in material.dims)
         raise ValueError(f"the {material.name} material needs {dims} particles, got {p.dim}D")
-    dom = s.domain
-    gimp = s.shape in ("ugimp", "cpgimp")
-    spline = s.shape == "bspline2"
-    fast = s.backend == "numba"
-    if fast:
-        from geofrac.mpm import kernels
+    nodes = _start(g, p, s)
+    _map_mass_momentum(nodes, p, s)
+    _velocity_and_contact(nodes, p, s)
+    half = 0.5 if s.scheme == "usavg" else 1.0
+    if s.scheme in ("usf", "usavg"):  # D.11-D.13, D.19-D.21: stress first
+        _update_stress(nodes.w, p, material, nodes.v, half * s.dt, s, nodes.smooth_at, budget)
+    if s.scheme != "musl":
+        nodes.f = _map_forces(nodes, p, s)
+    a, v_new, f_damp = _grid_update(nodes, s)
+    if budget is not None:
+        from geofrac.mpm.energy import owned_nodes
+
+        x_start, v_start = p.x.copy(), p.v.copy()
+        budget.grid_terms(
+            s.dt,
+            mass=nodes.mass,
+            mom=nodes.mom,
+            f=nodes.f,
+            a=a,
+            fixed=s.fixed,
+            gravity_force=nodes.mass[:, None] * s.gravity,
+            floor=MASS_FLOOR * nodes.peak,
+            owned=owned_nodes(s.domain, nodes.num_nodes),
+            damping=f_damp,
+        )
+    _grid_to_particles(nodes, p, a, v_new, s.dt)
+    if s.scheme in ("musl", "usavg"):  # D.6-D.8, D.26-D.28: stress from the re-mapped v
+        _remap_velocity(nodes, p, s)
+        _update_stress(nodes.w, p, material, nodes.v, half * s.dt, s, nodes.smooth_at, budget)
+    if budget is not None:
+        budget.transfer += 0.5 * float(np.sum(p.mass * np.sum((p.v - v_start) ** 2, axis=1)))
+        budget.potential -= float(p.mass @ ((p.x - x_start) @ s.gravity))
+    _check(p, s.domain, nodes.fast)
+    if s.domain is not None:
+        s.domain.migrate(p)
+
+
+def _start(g: Grid, p: Particles, s: StepSettings) -> _Nodes:
+    """The grid check, the weights at the step's start and the smoothing's neighbourhoods.
+
+    Raises:
+        ParticlesLeftGrid: (:func:`_check_inside`) before anything changed.
+    """
+    shape, fast = s.shape, s.backend == "numba"
     _check_inside(g, p, s)
+    lp = p.lp if shape.boxes else None
     if fast:
-        w = kernels.grid_weights(g, p.x, p.lp if gimp else None, reuse=True, bspline=spline)
+        w = compiled_weights(g, p.x, shape, lp=lp, reuse=True)
     else:
-        w = weights(g, p.x, p.lp if gimp else None, bspline=spline)
-    N, dt, dim = g.num_nodes, s.dt, p.dim
+        w = weights(g, p.x, shape, lp=lp)
     smooth_at: tuple | None = None
     if s.smoothing is not None:
         smooth_at = (p.x.copy(), p.ids, s.smoothing * g.spacing)
         if s.smoothing_kind == "consistent":
             from geofrac.mpm.consistent import mls_operator
 
-            smooth_at += (mls_operator(p.x, s.smoothing * g.spacing, p.ids, dom),)
+            smooth_at += (mls_operator(p.x, s.smoothing * g.spacing, p.ids, domain=s.domain),)
+    # the terms' bounds need no pass over the weights: every shape has 0 <= φ <=
+    # phi_bound and |∂φ/∂x_a| <= grad_bound / L (eqs. 4.29, 4.31; bspline2: N <= 3/4,
+    # |N'| <= 1/L; a test pins them)
+    pmax, gmax = shape.phi_bound, shape.grad_bound / g.spacing
+    return _Nodes(w, g.num_nodes, smooth_at, fast, pmax, gmax, rest_speed(g.spacing, s.dt))
 
-    def force_stress() -> np.ndarray:
-        """The stresses the grid forces are made of (the adjoint fit: consistent kind)."""
-        if smooth_at is None or len(smooth_at) < 4:
-            return p.stress
-        flat = p.stress.reshape(p.n, dim * dim)
-        return np.ascontiguousarray(smooth_at[3].adjoint(flat, p.volume).reshape(p.n, dim, dim))
 
-    # MUSL's forces use σ^k: they join the first transfer (one pass, one exchange). The
-    # nodal sums are exact (fixed-point pairs, geofrac.mpm.fixedpoint), hence the same
-    # for any particle order and any decomposition; their scales come from bounds of
-    # the terms, the same on every rank.
+def _force_stress(p: Particles, smooth_at: tuple | None) -> np.ndarray:
+    """The stresses the grid forces are made of (the adjoint fit: consistent kind)."""
+    if smooth_at is None or len(smooth_at) < 4:
+        return p.stress
+    dim = p.dim
+    flat = p.stress.reshape(p.n, dim * dim)
+    return np.ascontiguousarray(smooth_at[3].adjoint(flat, p.volume).reshape(p.n, dim, dim))
+
+
+def _map_mass_momentum(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
+    """Particles to grid: m_i, (m v)_i and, for MUSL, f_i of σ^k (D.1-D.3, D.10, D.18).
+
+    MUSL's forces use σ^k: they join this transfer (one pass, one exchange). The nodal
+    sums are exact (fixed-point pairs, geofrac.mpm.fixedpoint), hence the same for any
+    particle order and any decomposition; their scales come from bounds of the terms,
+    the same on every rank.
+    """
+    w, fast, dom, dim = nodes.w, nodes.fast, s.domain, p.dim
+    N = nodes.num_nodes
     early = s.scheme == "musl"
     ncol = 1 + dim + dim * early  # mass, momentum (, force)
-    # every shape has 0 <= φ <= 1 and |∂φ/∂x_a| <= 1/L (eqs. 4.29, 4.31; bspline2:
-    # N <= 3/4, |N'| <= 1/L; a test pins it): the terms' bounds need no pass over the
-    # weights
-    pmax, gmax = 1.0, 1.0 / g.spacing
-    bound = _mass_momentum_bounds(p, pmax, fast)
+    bound = _mass_momentum_bounds(p, nodes.pmax, fast)
     if early:
-        fs = force_stress()
-        bound = np.concatenate([bound, _forces_bounds(p, fs, s.gravity, pmax, gmax, fast)])
+        fs = _force_stress(p, nodes.smooth_at)
+        forces_bound = _forces_bounds(p, fs, s.gravity, nodes.pmax, nodes.gmax, fast)
+        bound = np.concatenate([bound, forces_bound])
     if dom is not None:
         bound = dom.allmax(bound)
     if fast:
+        from geofrac.mpm import kernels
         from geofrac.mpm.fixedpoint import scales
 
         acc = kernels.scratch("acc", (N, ncol, 2), np.int64)
@@ -527,119 +629,158 @@ def step(
             terms[:, :, 1 + dim :] = _forces(w, p, fs, s.gravity)
         acc = _scatter(w, terms, bound, N)
     nodal = _complete(acc, bound, dom, fast)
-    mass, mom, f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
+    nodes.mass, nodes.mom, nodes.f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
+
+
+def _velocity_and_contact(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
+    """The active nodes and v_i = (m v)_i / m_i (D.6, D.10), then the contact on it.
+
+    The contact (friction.py) holds every nodal velocity: the approaches it allows are
+    decided here, from the material's deformed half-widths (cpGIMP's p.lp; also for the
+    shapes that do not use them, or the compression of the bottom layer would read as a
+    gap).
+    """
+    mass, N, dim = nodes.mass, nodes.num_nodes, p.dim
     peak = mass.max(initial=0.0)
-    if dom is not None:
-        peak = dom.allmax(peak)
-    active = mass > MASS_FLOOR * peak  # relative to the heaviest node (MASS_FLOOR)
-    if fast:
-        v = kernels.scratch("v", (N, dim))
-        kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
+    if s.domain is not None:
+        peak = s.domain.allmax(peak)
+    nodes.peak = peak
+    nodes.active = mass > MASS_FLOOR * peak  # relative to the heaviest node (MASS_FLOOR)
+    if nodes.fast:
+        from geofrac.mpm import kernels
+
+        nodes.v = kernels.scratch("v", (N, dim))
+        kernels.nodal_velocity(nodes.mom, mass, MASS_FLOOR * peak, s.fixed, nodes.v)
     else:
-        v = _velocity(mom, mass, active, s.fixed)
-    allow = None
-    rest = rest_speed(g.spacing, dt)  # velocities at or below it are ties (REST_TOL)
-    if s.friction is not None:  # the contact holds every nodal velocity (friction.py)
+        nodes.v = _velocity(nodes.mom, mass, nodes.active, s.fixed)
+    if s.friction is not None:
         from geofrac.mpm.friction import apply_friction, approach_allowed
 
-        # the material's deformed half-widths (cpGIMP's p.lp; also for the shapes that
-        # do not use them, or the compression of the bottom layer would read as a gap)
         lp = p.lp0 * np.abs(np.diagonal(p.F, axis1=1, axis2=2))
-        allow = approach_allowed(s.friction, p.x, lp, w.nodes, w.phi, N, dt, dom)
-        v_mapped = v.copy()
-        apply_friction(v, s.friction, allow, tol=rest)
-    half = 0.5 if s.scheme == "usavg" else 1.0
-    if s.scheme in ("usf", "usavg"):
-        _update_stress(w, p, material, v, half * dt, s, smooth_at, budget)
-    if not early:
-        fs = force_stress()
-        bound = _forces_bounds(p, fs, s.gravity, pmax, gmax, fast)
-        if dom is not None:
-            bound = dom.allmax(bound)
-        if fast:
-            from geofrac.mpm.fixedpoint import scales
+        nodes.allow = approach_allowed(
+            s.friction,
+            p.x,
+            lp,
+            nodes=nodes.w.nodes,
+            phi=nodes.w.phi,
+            num_nodes=N,
+            dt=s.dt,
+            dom=s.domain,
+        )
+        nodes.v_mapped = nodes.v.copy()
+        apply_friction(nodes.v, s.friction, nodes.allow, tol=nodes.rest)
 
-            acc = kernels.scratch("acc", (N, dim, 2), np.int64)
-            acc.fill(0)
-            kernels.forces(
-                w.nodes, w.phi, w.grad, p.volume, fs, p.mass, s.gravity, scales(bound), acc, 0
-            )
-        else:
-            acc = _scatter(w, _forces(w, p, fs, s.gravity), bound, N)
-        f = _complete(acc, bound, dom, fast)
-    f_damp, f_total = None, f
-    if s.damping > 0:  # a branch: no extra work without damping
-        f_damp = local_damping(f, v, s.damping, rest)
-        f_total = f + f_damp
+
+def _map_forces(nodes: _Nodes, p: Particles, s: StepSettings) -> np.ndarray:
+    """Particles to grid: f_i = f_int + f_ext of the updated stresses (D.14, D.22).
+
+    Returns:
+        shape=(N, dim).
+    """
+    w, fast, dom, N = nodes.w, nodes.fast, s.domain, nodes.num_nodes
+    fs = _force_stress(p, nodes.smooth_at)
+    bound = _forces_bounds(p, fs, s.gravity, nodes.pmax, nodes.gmax, fast)
+    if dom is not None:
+        bound = dom.allmax(bound)
     if fast:
-        a, v_new = kernels.scratch("a", (N, dim)), kernels.scratch("v_new", (N, dim))
-        kernels.nodal_acceleration(f_total, mass, MASS_FLOOR * peak, s.fixed, dt, v, a, v_new)
+        from geofrac.mpm import kernels
+        from geofrac.mpm.fixedpoint import scales
+
+        acc = kernels.scratch("acc", (N, p.dim, 2), np.int64)
+        acc.fill(0)
+        kernels.forces(
+            w.nodes, w.phi, w.grad, p.volume, fs, p.mass, s.gravity, scales(bound), acc, 0
+        )
     else:
-        a = np.zeros((N, dim))
-        a[active] = f_total[active] / mass[active, None]
+        acc = _scatter(w, _forces(w, p, fs, s.gravity), bound, N)
+    return _complete(acc, bound, dom, fast)
+
+
+def _grid_update(
+    nodes: _Nodes, s: StepSettings
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """The nodal acceleration and new velocity (D.4, D.15, D.23), damped, with contact.
+
+    Returns:
+        (a, v_new, the damping force or None), shape=(N, dim) each.
+    """
+    mass, v, N, dt = nodes.mass, nodes.v, nodes.num_nodes, s.dt
+    f_damp, f_total = None, nodes.f
+    if s.damping > 0:  # a branch: no extra work without damping
+        f_damp = local_damping(nodes.f, v, s.damping, rest=nodes.rest)
+        f_total = nodes.f + f_damp
+    if nodes.fast:
+        from geofrac.mpm import kernels
+
+        dim = v.shape[1]
+        a, v_new = kernels.scratch("a", (N, dim)), kernels.scratch("v_new", (N, dim))
+        kernels.nodal_acceleration(f_total, mass, MASS_FLOOR * nodes.peak, s.fixed, dt, v, a, v_new)
+    else:
+        a = np.zeros((N, v.shape[1]))
+        a[nodes.active] = f_total[nodes.active] / mass[nodes.active, None]
         a[s.fixed] = 0.0
         v_new = v + dt * a
     if s.friction is not None:
-        apply_friction(v_new, s.friction, allow, tol=rest)
+        from geofrac.mpm.friction import apply_friction
+
+        apply_friction(v_new, s.friction, nodes.allow, tol=nodes.rest)
         # the particles take every change the contact made, the mapped velocity's too
         # (else the approach it removed stays in their velocity, step after step, and
         # its friction is lost: a launched block slid 8 % too far)
-        a = (v_new - v_mapped) / dt
-    if budget is not None:
-        from geofrac.mpm.energy import owned_nodes
+        a = (v_new - nodes.v_mapped) / dt
+    return a, v_new, f_damp
 
-        x_start, v_start = p.x.copy(), p.v.copy()
-        budget.grid_terms(
-            dt, mass, mom, f, a, s.fixed, mass[:, None] * s.gravity, MASS_FLOOR * peak,
-            owned_nodes(dom, N), f_damp,
-        )  # fmt: skip
-    if fast:
+
+def _grid_to_particles(
+    nodes: _Nodes, p: Particles, a: np.ndarray, v_new: np.ndarray, dt: float
+) -> None:
+    """The particles' velocity and position from the grid (D.4-D.5, D.16-D.17, D.24-D.25)."""
+    w = nodes.w
+    if nodes.fast:
+        from geofrac.mpm import kernels
+
         kernels.from_grid2(w.nodes, w.phi, a, v_new, dt, p.v, p.x)  # D.4-D.5
     else:
         p.v += dt * _from_grid(w, a)  # D.4, D.16, D.24
         p.x += dt * _from_grid(w, v_new)  # D.5, D.17, D.25
-    if s.scheme in ("musl", "usavg"):
-        bound = _mass_momentum_bounds(p, pmax, fast)[1:]
-        if dom is not None:
-            bound = dom.allmax(bound)
-        if fast:
-            from geofrac.mpm.fixedpoint import scales
 
-            acc = kernels.scratch("acc", (N, dim, 2), np.int64)
-            acc.fill(0)
-            kernels.momentum(w.nodes, w.phi, p.mass, p.v, scales(bound), acc, 0)
-        else:
-            terms = w.phi[:, :, None] * (p.mass[:, None] * p.v)[:, None, :]
-            acc = _scatter(w, terms, bound, N)
-        mom = _complete(acc, bound, dom, fast)
-        if fast:  # D.6, D.26
-            kernels.nodal_velocity(mom, mass, MASS_FLOOR * peak, s.fixed, v)
-        else:
-            v = _velocity(mom, mass, active, s.fixed)
-        if s.friction is not None:
-            apply_friction(v, s.friction, allow, tol=rest)
-        _update_stress(w, p, material, v, half * dt, s, smooth_at, budget)
-    if budget is not None:
-        budget.transfer += 0.5 * float(np.sum(p.mass * np.sum((p.v - v_start) ** 2, axis=1)))
-        budget.potential -= float(p.mass @ ((p.x - x_start) @ s.gravity))
-    _check(p, dom, fast)
+
+def _remap_velocity(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
+    """MUSL's nodal velocity from the new particle momentum (D.6, D.26), contact held."""
+    w, fast, dom, N, dim = nodes.w, nodes.fast, s.domain, nodes.num_nodes, p.dim
+    bound = _mass_momentum_bounds(p, nodes.pmax, fast)[1:]
     if dom is not None:
-        dom.migrate(p)
+        bound = dom.allmax(bound)
+    if fast:
+        from geofrac.mpm import kernels
+        from geofrac.mpm.fixedpoint import scales
+
+        acc = kernels.scratch("acc", (N, dim, 2), np.int64)
+        acc.fill(0)
+        kernels.momentum(w.nodes, w.phi, p.mass, p.v, scales(bound), acc, 0)
+    else:
+        terms = w.phi[:, :, None] * (p.mass[:, None] * p.v)[:, None, :]
+        acc = _scatter(w, terms, bound, N)
+    mom = _complete(acc, bound, dom, fast)
+    if fast:  # D.6, D.26
+        kernels.nodal_velocity(mom, nodes.mass, MASS_FLOOR * nodes.peak, s.fixed, nodes.v)
+    else:
+        nodes.v = _velocity(mom, nodes.mass, nodes.active, s.fixed)
+    if s.friction is not None:
+        from geofrac.mpm.friction import apply_friction
+
+        apply_friction(nodes.v, s.friction, nodes.allow, tol=nodes.rest)
 
 
-def _outside(g: Grid, p: Particles, gimp: bool, fast: bool, margin: float | None) -> np.ndarray:
-    """Which particles (or their GIMP boxes) reach beyond the grid, shape=(n,).
-
-    ``margin``: a fixed support half-width instead (``bspline2``), or None.
-    """
-    if margin is not None:
-        return g.outside(p.x, margin)
-    if not fast:
-        return g.outside(p.x, p.lp if gimp else 0.0)
+def _outside(g: Grid, p: Particles, s: StepSettings) -> np.ndarray:
+    """Which particles' supports (:meth:`Shape.margin`) reach beyond the grid, shape=(n,)."""
+    shape = s.shape
+    if s.backend != "numba":
+        return g.outside(p.x, shape.margin(g.spacing, p.lp))
     from geofrac.mpm import kernels
 
     out = np.empty(p.n, dtype=bool)
-    kernels.outside(p.x, p.lp, gimp, g.origin, g.upper, out)
+    kernels.outside(p.x, p.lp, shape.boxes, shape.reach(g.spacing), g.origin, g.upper, out)
     return out
 
 
@@ -656,20 +797,18 @@ def _check_inside(g: Grid, p: Particles, s: StepSettings) -> None:
     pressed onto a boundary at the grid's edge by its elastic compression (a fraction of
     a millimetre, not round-off): an error on any machine.
     """
-    gimp, fast = s.shape in ("ugimp", "cpgimp"), s.backend == "numba"
-    margin = support_margin(s.shape, g.spacing)
     dom = s.domain
     if dom is None:
-        out = _outside(g, p, gimp, fast, margin)
+        out = _outside(g, p, s)
         if np.any(out):
             raise ParticlesLeftGrid(p.ids[out], p.x[out])
         return
-    out = _outside(dom.grid, p, gimp, fast, margin)
+    out = _outside(dom.grid, p, s)
     ids, positions = dom.allgather_rows(p.ids[out], p.x[out])
     if len(ids):
         order = np.argsort(ids)
         raise ParticlesLeftGrid(ids[order], positions[order])
-    if dom.any(bool(np.any(_outside(g, p, gimp, fast, margin)))):
+    if dom.any(local=bool(np.any(_outside(g, p, s)))):
         raise RunError(
             f"a particle's support reaches beyond its rank's halo of {dom.halo} cells; "
             "decompose with a wider halo"

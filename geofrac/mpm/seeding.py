@@ -26,10 +26,10 @@ COLUMN_TOL = 1e-9
 
 
 def from_lattice(
-    lower: tuple[float, ...], counts: tuple[int, ...], spacing: float, density: float
+    lower: tuple[float, ...], counts: tuple[int, ...], spacing: float, *, density: float
 ) -> Particles:
     """Particles on a regular lattice (one per lattice cell, at its centre)."""
-    return lattice(list(lower), list(counts), spacing, density)
+    return lattice(list(lower), list(counts), spacing, density=density)
 
 
 def from_cells(points: np.ndarray, cells: np.ndarray, density: np.ndarray) -> Particles:
@@ -50,16 +50,18 @@ def from_cells(points: np.ndarray, cells: np.ndarray, density: np.ndarray) -> Pa
     if np.any(measure <= 0):
         raise ValueError(f"{int(np.sum(measure <= 0))} degenerate cell(s) in the particle mesh")
     half = 0.5 * measure ** (1.0 / dim)
-    return particles(corners.mean(axis=1), measure, density, np.repeat(half[:, None], dim, axis=1))
+    return particles(
+        corners.mean(axis=1), measure, density, lp0=np.repeat(half[:, None], dim, axis=1)
+    )
 
 
 def mesh_cells(
     file: Path,
     parameters: dict[str, float],
     mesh_size: float | None,
+    *,
     dim: int,
     curve: str | None = None,
-    *,
     time_limit: float | None = None,
     trusted: bool = False,
     algorithm: str | None = None,
@@ -126,7 +128,7 @@ def mesh_cells(
     return out, polyline
 
 
-def geostatic(p: Particles, gravity: np.ndarray, nu: float, width: float) -> None:
+def geostatic(p: Particles, gravity: np.ndarray, nu: float, *, width: float) -> None:
     """Give the particles the at-rest stress of their own weight (in place).
 
     The vertical stress of a particle is the weight of the particles above it in its

@@ -51,6 +51,7 @@ __all__ = [
     "COND_MAX",
     "MARGIN",
     "basis",
+    "components",
     "cubic_spline",
     "exponents",
     "moment_tables",
@@ -79,6 +80,11 @@ def cubic_spline(s: np.ndarray) -> np.ndarray:
         2 / 3 - 4 * s**2 + 4 * s**3,
         np.where(s < 1.0, 4 / 3 - 4 * s + 4 * s**2 - 4 / 3 * s**3, 0.0),
     )
+
+
+def components(dim: int) -> int:
+    """Columns each compiled fit takes: the independent components of a symmetric dim×dim."""
+    return dim * (dim + 1) // 2
 
 
 def exponents(dim: int) -> np.ndarray:
@@ -152,6 +158,7 @@ def smooth(
     x: np.ndarray,
     values: np.ndarray,
     h: float,
+    *,
     backend: str = "numpy",
     ids: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -250,7 +257,6 @@ def _fit(
     other column counts are fitted in chunks of that many (zero-padded).
     """
     from geofrac.mpm import mls_kernels
-    from geofrac.mpm.mls_codegen import components
 
     dim = x.shape[1]
     kernel = {1: mls_kernels.fit1, 2: mls_kernels.fit2, 3: mls_kernels.fit3}[dim]
@@ -305,7 +311,7 @@ _BY_DOMAIN: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _STATS = {"builds": 0, "build_seconds": 0.0, "uses": 0}
 
 
-def neighbour_stats(reset: bool = False) -> dict[str, float]:
+def neighbour_stats(*, reset: bool = False) -> dict[str, float]:
     """How often this process built and used Verlet lists, and the builds' wall seconds.
 
     Args:
@@ -333,6 +339,7 @@ def smooth_particles(
     x: np.ndarray,
     ids: np.ndarray,
     values: np.ndarray,
+    *,
     h: float,
     backend: str = "numba",
     domain: Domain | None = None,
@@ -361,18 +368,18 @@ def smooth_particles(
     ids = np.asarray(ids, dtype=np.int64)
     if backend != "numba":
         if domain is not None:
-            gx, gv, gids = domain.ghosts(x, values, h, ids)
+            gx, gv, gids = domain.ghosts(x, values, h, ids=ids)
             x, values = np.concatenate([x, gx]), np.concatenate([values, gv])
             ids = np.concatenate([ids, gids])
         if n == 0:
             return values[:0]
-        return smooth(x, values, h, backend, ids)[0][:n]
+        return smooth(x, values, h, backend=backend, ids=ids)[0][:n]
     from geofrac.mpm import kernels
 
     lists = _SERIAL[0] if domain is None else _BY_DOMAIN.get(domain)
     stale = _stale(lists, x, ids, h, margin)
     if domain is not None:
-        stale = domain.any(stale)
+        stale = domain.any(local=stale)
     if stale:
         t0 = time.perf_counter()
         radius = h * (1 + margin)
@@ -403,6 +410,7 @@ def smooth_strain(
     deps: np.ndarray,
     x: np.ndarray,
     ids: np.ndarray,
+    *,
     h: float,
     backend: str = "numba",
     domain: Domain | None = None,
@@ -423,7 +431,7 @@ def smooth_strain(
     """
     n, d = len(deps), deps.shape[1]
     a, b = np.triu_indices(d)
-    fits = smooth_particles(x, ids, deps[:, a, b], h, backend, domain)
+    fits = smooth_particles(x, ids, deps[:, a, b], h=h, backend=backend, domain=domain)
     out = np.empty((n, d, d))
     out[:, a, b] = fits
     out[:, b, a] = fits

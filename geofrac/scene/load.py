@@ -762,9 +762,9 @@ def _mpm_scene(
         file,
         data.get("output", {}),
         common["name"],
-        spec.dim,
-        None if out is None else Path(out),
-        trusted,
+        dim=spec.dim,
+        out=None if out is None else Path(out),
+        trusted=trusted,
     )
     has_bed = bool(spec.bed) or spec.bed_group is not None
     sides = {side: 1 for side in spec.walls} | ({"bed": 1} if has_bed else {})

@@ -407,10 +407,10 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     """Validate ``[mpm]`` (with the geometry, when particles come from one)."""
     t = Table(file, "mpm", raw, MPM_KEYS["mpm"])
     from geofrac.mpm.schemes import SCHEMES
-    from geofrac.mpm.shapes import SHAPES
+    from geofrac.mpm.shapes import REGISTRY
 
     scheme = t.string("scheme", default="musl", choices=SCHEMES)
-    shape = t.string("shape", default="mpm", choices=SHAPES)
+    shape = t.string("shape", default="mpm", choices=tuple(REGISTRY))
     if not t.has("grid"):
         raise t.error("grid", "missing (required table: lower, upper, spacing)")
     lower, upper, spacing, padding = _grid(file, t.data["grid"])
@@ -488,7 +488,7 @@ def _upper(b: Body) -> tuple[float, ...]:
 
 
 def mpm_output(
-    file: Path, raw: Any, name: str, dim: int, out: Path | None, trusted: bool = False
+    file: Path, raw: Any, name: str, *, dim: int, out: Path | None, trusted: bool = False
 ) -> Output:
     """``[output]`` of an MPM scene: particle fields; probes are particles nearest a point.
 

@@ -32,11 +32,11 @@ def test_plane_and_staircase_nodes_under_a_sloping_bed_counted_by_hand():
     (4, 0) sees (5, 1) above the bed, (1, 1) sees (2, 2), the column x = 0 sees x = −1.
     """
     g = grid([0.0, 0.0], 1.0, (6, 4))
-    ids, n, d, deep = bed_nodes(g.nodes(), BED, 1.0, "plane")
+    ids, n, d, deep = bed_nodes(g.nodes(), BED, 1.0, representation="plane")
     below = [(0, 0), (0, 1), (0, 2), (1, 0), (1, 1), (1, 2), (2, 0), (2, 1)]
     below += [(3, 0), (3, 1), (4, 0), (4, 1), (5, 0), (6, 0)]
     assert _xy(g, ids) == sorted(below) and len(deep) == 0
-    ids_s, n_s, d_s, deep_s = bed_nodes(g.nodes(), BED, 1.0, "staircase")
+    ids_s, n_s, d_s, deep_s = bed_nodes(g.nodes(), BED, 1.0, representation="staircase")
     assert _xy(g, deep_s) == [(1, 0), (2, 0), (3, 0)]
     assert _xy(g, ids_s) == sorted(set(below) - {(1, 0), (2, 0), (3, 0)})
     # every row: the bed's normal (f', -1)/|.| into the bed, the plane through the bed
@@ -45,20 +45,27 @@ def test_plane_and_staircase_nodes_under_a_sloping_bed_counted_by_hand():
         np.testing.assert_allclose(nn, np.tile(normal, (len(i), 1)))
         np.testing.assert_allclose(dd, normal @ [0.0, 2.5])  # (0, 2.5) is on the bed
     with pytest.raises(ValueError, match="representation"):
-        bed_nodes(g.nodes(), BED, 1.0, "stairs")
+        bed_nodes(g.nodes(), BED, 1.0, representation="stairs")
 
 
 def test_staircase_holds_the_deep_nodes_and_a_held_bed_is_the_same_either_way():
-    g = scene_grid((0.0, 0.0), (6.0, 4.0), 1.0, 0)
+    g = scene_grid((0.0, 0.0), (6.0, 4.0), 1.0, padding=0)
     bed = tuple(map(tuple, BED))
     X = g.nodes()
     deep = [np.flatnonzero((X[:, 0] == x) & (X[:, 1] == 0)) for x in (1.0, 2.0, 3.0)]
-    fixed, ids, *_ = boundary_rows(g, (0, 0), (6, 4), {}, bed, ("bed",), "staircase")
+    fixed, ids, *_ = boundary_rows(
+        g, (0, 0), (6, 4), walls={}, bed=bed, frictional=("bed",), bed_representation="staircase"
+    )
     assert np.all(fixed[np.concatenate(deep)]) and fixed.sum() == 2 * 3
     assert len(ids) == 11 and not np.isin(np.concatenate(deep), ids).any()
-    fixed_p, ids_p, *_ = boundary_rows(g, (0, 0), (6, 4), {}, bed, ("bed",), "plane")
+    fixed_p, ids_p, *_ = boundary_rows(
+        g, (0, 0), (6, 4), walls={}, bed=bed, frictional=("bed",), bed_representation="plane"
+    )
     assert not fixed_p.any() and len(ids_p) == 14
-    held = [boundary_rows(g, (0, 0), (6, 4), {}, bed, (), r)[0] for r in ("plane", "staircase")]
+    held = [
+        boundary_rows(g, (0, 0), (6, 4), walls={}, bed=bed, frictional=(), bed_representation=r)[0]
+        for r in ("plane", "staircase")
+    ]
     np.testing.assert_array_equal(held[0], held[1])
     assert held[0].sum() == 2 * 14
 
@@ -120,7 +127,7 @@ def _block_on_bed(theta_deg: float):
     """
     th = np.radians(theta_deg)
     t, m = np.array([np.cos(th), -np.sin(th)]), np.array([np.sin(th), np.cos(th)])
-    p = lattice([0.0, 0.0], [20, 10], CELL / 2, RHO)
+    p = lattice([0.0, 0.0], [20, 10], CELL / 2, density=RHO)
     s, h = p.x[:, 0] + 0.5, p.x[:, 1].copy()
     p.x[:] = s[:, None] * t + h[:, None] * m
     d, k0 = 0.5 - h, MAT.nu / (1 - MAT.nu)
@@ -142,15 +149,17 @@ def test_a_block_slides_down_a_30_degree_bed_at_the_coulomb_rate(representation)
     theta, mu, t_end = 30.0, 0.3, 0.6
     p, t = _block_on_bed(theta)
     lo, up = (-0.5, -3.0), (4.0, 1.5)
-    g = scene_grid(lo, up, CELL, 2)
+    g = scene_grid(lo, up, CELL, padding=2)
     tan = np.tan(np.radians(theta))
     bed = ((-1.0, tan), (5.0, -5.0 * tan))
-    fixed, ids, nrm, planes, _ = boundary_rows(g, lo, up, {}, bed, ("bed",), representation)
-    dt = time_step(0.2, CELL, MAT, RHO, 2)
-    fr = friction(ids, nrm, mu, planes)
+    fixed, ids, nrm, planes, _ = boundary_rows(
+        g, lo, up, walls={}, bed=bed, frictional=("bed",), bed_representation=representation
+    )
+    dt = time_step(0.2, CELL, MAT, density=RHO, dim=2)
+    fr = friction(ids, nrm, mu, offsets=planes)
     s = StepSettings("musl", "ugimp", dt, np.array([0.0, -G0]), fixed, friction=fr)
     for _ in range(round(t_end / dt)):
-        step(g, p, MAT, s)
+        step(g, p, MAT, settings=s)
     v = (p.mass @ p.v / p.mass.sum()) @ t
     exact = G0 * (np.sin(np.radians(theta)) - mu * np.cos(np.radians(theta))) * t_end
     assert abs(v - exact) < 0.01 * exact

@@ -15,7 +15,7 @@ from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
 from geofrac.mpm.plasticity import DruckerPrager
 from geofrac.mpm.schemes import SCHEMES, StepSettings, step, strain_energy, time_step
-from geofrac.mpm.shapes import SHAPES
+from geofrac.mpm.shapes import REGISTRY
 
 # --- a rigidly rotating prestressed body ------------------------------------------------
 
@@ -45,7 +45,7 @@ def _spin(material, scheme: str, shape: str, steps: int, backend: str = "numpy")
         about the centre of the half-width-4 body; the quadratic B-spline's 1.5 cells:
         three cells, radius 1).
     """
-    p = lattice(CENTRE - 4.0, [16, 16], 0.5, 1.0e3)
+    p = lattice(CENTRE - 4.0, [16, 16], 0.5, density=1.0e3)
     p.stress[:] = S0
     p.stress_zz[:] = SZZ
     g = grid([0.0, 0.0], 1.0, [20, 20])
@@ -56,7 +56,7 @@ def _spin(material, scheme: str, shape: str, steps: int, backend: str = "numpy")
     inner = np.linalg.norm(p.x - CENTRE, axis=1) < (1.0 if shape == "bspline2" else 2.0)
     for _ in range(steps):
         p.v = (p.x - CENTRE) @ J.T
-        step(g, p, material, s)
+        step(g, p, material, settings=s)
     return p.stress[inner], p.stress_zz[inner]
 
 
@@ -87,7 +87,7 @@ MATERIALS = {
 
 
 @pytest.mark.parametrize("material", list(MATERIALS))
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", REGISTRY)
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_spinning_prestressed_body_keeps_its_stress_turning_with_it(scheme, shape, material):
     """σ = R(θ) σ₀ R(θ)ᵀ after θ = 0.5 rad, to the explicit update's first-order error.
@@ -146,7 +146,7 @@ def _column(
         Δt, base stress history shape=(steps,), damping work of every rank summed).
     """
     H = height * CELL
-    p = lattice([0.0, 0.0], [4, 2 * height], CELL / 2, RHO)
+    p = lattice([0.0, 0.0], [4, 2 * height], CELL / 2, density=RHO)
     g = grid([-2 * CELL, -2 * CELL], CELL, [6, height + 4])
     if domain is not None:
         p, g = domain.distribute(p), domain.local
@@ -154,7 +154,7 @@ def _column(
     fixed = np.zeros((g.num_nodes, 2), dtype=bool)
     fixed[X[:, 1] <= 1e-9, 1] = True
     fixed[(X[:, 0] <= 1e-9) | (X[:, 0] >= 2 * CELL - 1e-9), 0] = True
-    dt = time_step(0.2, CELL, COLUMN, RHO, 2)
+    dt = time_step(0.2, CELL, COLUMN, density=RHO, dim=2)
     lam, mu = COLUMN.lame()
     T = 4 * H / np.sqrt((lam + 2 * mu) / RHO)
     s = StepSettings(
@@ -165,7 +165,7 @@ def _column(
     budget = StepBudget()
     base = []
     for _ in range(round(periods * T / dt)):
-        step(g, p, COLUMN, s, budget)
+        step(g, p, COLUMN, settings=s, budget=budget)
         bottom = p.stress[y0 < CELL / 2, 1, 1]
         base.append(bottom.mean() if len(bottom) else np.nan)
     total = budget.damping

@@ -35,7 +35,7 @@ def _model(name, config="elastic range"):
 
 
 def _particles(dim, stress=None, n=2):
-    p = particles(np.zeros((n, dim)), np.full(n, 0.5), RHO, np.full((n, dim), 0.25))
+    p = particles(np.zeros((n, dim)), np.full(n, 0.5), RHO, lp0=np.full((n, dim), 0.25))
     if stress is not None:
         p.stress[:] = stress
     return p
@@ -73,7 +73,7 @@ def test_uniaxial_strain_gives_the_elastic_stress_and_energy(name, backend):
         deps = np.zeros((p.n, dim, dim))
         deps[:, 0, 0] = e
         budget = StepBudget()
-        model.stress_update(p, deps, deps / dt, dt, backend, budget)
+        model.stress_update(p, deps, deps / dt, dt=dt, backend=backend, budget=budget)
         expect = np.diag([LAM + 2 * MU] + [LAM] * (dim - 1))[:dim, :dim] * e
         if dim == 1:
             expect = np.array([[E * e]])
@@ -99,7 +99,7 @@ def test_a_rigid_spin_turns_the_stress(name, backend):
         p = _particles(dim, stress)
         L = np.zeros((p.n, dim, dim))
         L[:, 0, 1], L[:, 1, 0] = -omega, omega  # v = ω e_z × x
-        model.stress_update(p, np.zeros_like(L), L, dt, backend, None)
+        model.stress_update(p, np.zeros_like(L), L, dt=dt, backend=backend, budget=None)
         np.testing.assert_allclose(p.stress[:, 0, 1], omega * dt * s, rtol=1e-12)
         np.testing.assert_allclose(p.stress[:, 1, 0], omega * dt * s, rtol=1e-12)
         np.testing.assert_allclose(p.stress[:, 0, 0], s, rtol=1e-12)
@@ -129,7 +129,7 @@ def test_drucker_prager_shear_returns_to_the_closed_form_point(backend):
         deps = np.zeros((p.n, dim, dim))
         deps[:, 0, 1] = deps[:, 1, 0] = gamma
         budget = StepBudget()
-        model.stress_update(p, deps, deps / dt, dt, backend, budget)
+        model.stress_update(p, deps, deps / dt, dt=dt, backend=backend, budget=budget)
         expect = p0 * np.eye(dim)
         expect[0, 1] = expect[1, 0] = tau
         np.testing.assert_allclose(p.stress, np.broadcast_to(expect, p.stress.shape), rtol=1e-10)
@@ -148,7 +148,7 @@ def test_drucker_prager_tension_returns_to_the_apex(backend):
     for dim in (2, 3):
         p = _particles(dim)
         deps = np.broadcast_to(1e-2 * np.eye(dim), (p.n, dim, dim)).copy()
-        model.stress_update(p, deps, deps / dt, dt, backend, None)
+        model.stress_update(p, deps, deps / dt, dt=dt, backend=backend, budget=None)
         apex = K_DP / (3 * BETA)
         np.testing.assert_allclose(p.stress, np.broadcast_to(apex * np.eye(dim), p.stress.shape))
         if dim == 2:
@@ -183,7 +183,7 @@ def test_a_model_is_one_module_and_one_registry_line(monkeypatch, tmp_path):
         def results(self):
             return {"dust_calls": float(len(calls))}
 
-        def stress_update(self, p, deps, L, dt, backend, budget):
+        def stress_update(self, p, deps, L, *, dt, backend, budget):
             calls.append(dt)
 
     module = ModuleType("throwaway_dust_model")

@@ -29,7 +29,7 @@ def test_the_quasi_static_bar_scene_matches_eq_4_73(tmp_path):
     assert summary["status"] == "ok"
     frame = _last_frame(tmp_path)
     x, stress = frame["geometry"][:, 0], frame["stress"][:, 0]
-    exact = self_weight_stress(x, 1e6, 1.0, 20.0, 50.0)
+    exact = self_weight_stress(x, E=1e6, rho0=1.0, b=20.0, L0=50.0)
     assert np.sqrt(np.mean((stress - exact) ** 2)) / 1000.0 < 0.02
     # the top particle has moved down by about the bar's static shortening ρ b L0²/(2E)
     assert summary["results"]["runout_m"] == pytest.approx(-0.025, rel=0.1)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from geofrac.mpm.bar import TRANSLATING_SCENE, translating_bar, translating_overrides
+from geofrac.bench.mpm import TRANSLATING_SCENE, translating_bar, translating_overrides
 from geofrac.mpm.driver import simulate
 from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.energy import EnergyLog, StepBudget
@@ -21,7 +21,7 @@ def _block(scheme, shape="ugimp", smoothing=None, kind="standard", mu=0.3, backe
     """A 2D elastic block thrown sideways onto a frictional floor beside a fixed wall."""
     cell = 0.5
     g = grid([-1.0, -1.0], cell, [16, 12])
-    p = lattice([1.0, 0.0], [8, 6], cell / 2, 1000.0)
+    p = lattice([1.0, 0.0], [8, 6], cell / 2, density=1000.0)
     p.v[:] = [-4.0, -0.5]
     X = g.nodes()
     fixed = np.zeros((g.num_nodes, 2), dtype=bool)
@@ -35,7 +35,7 @@ def _block(scheme, shape="ugimp", smoothing=None, kind="standard", mu=0.3, backe
     else:
         fixed[floor, 1] = True
     mat = Elastic(1e6, 0.3)
-    dt = time_step(0.2, cell, mat, 1000.0, 2)
+    dt = time_step(0.2, cell, mat, density=1000.0, dim=2)
     s = StepSettings(
         scheme, shape, dt, np.array([0.0, -9.81]), fixed, smoothing, friction, backend,
         smoothing_kind=kind,
@@ -50,9 +50,9 @@ def _run(g, p, mat, s, steps):
     row = log.first_row()
     for _ in range(steps):
         b = StepBudget()
-        step(g, p, mat, s, b)
+        step(g, p, mat, settings=s, budget=b)
         pot = -float(p.mass @ (p.x @ s.gravity)) - u0
-        row = log.record(p.kinetic_energy(), strain_energy(p, mat), pot, b.terms())
+        row = log.record(p.kinetic_energy(), strain_energy(p, mat), pot, terms=b.terms())
     return log, row
 
 
@@ -138,18 +138,18 @@ def test_consistent_smoothing_makes_the_grid_work_the_stress_work():
     Σ V σ : (Φ Δε(v)) for any σ and v; the seed's forces (from σ) do not satisfy it.
     """
     from geofrac.mpm.consistent import mls_operator
-    from geofrac.mpm.shapes import weights
+    from geofrac.mpm.shapes import UGIMP, weights
 
     rng = np.random.default_rng(7)
     g = grid([0.0, 0.0], 0.5, [12, 12])
-    p = lattice([1.0, 1.0], [16, 16], 0.25, 1.0)
+    p = lattice([1.0, 1.0], [16, 16], 0.25, density=1.0)
     p.x += rng.uniform(-0.05, 0.05, p.x.shape)
     p.volume *= rng.uniform(0.8, 1.2, p.n)
     stress = rng.normal(size=(p.n, 2, 2))
     stress = stress + np.swapaxes(stress, 1, 2)
     v = rng.normal(size=(g.num_nodes, 2))
     dt = 1e-3
-    w = weights(g, p.x, p.lp)
+    w = weights(g, p.x, UGIMP, lp=p.lp)
     op = mls_operator(p.x, 2 * g.spacing)
     L = np.matmul(np.swapaxes(v[w.nodes], 1, 2), w.grad)
     deps = 0.5 * dt * (L + np.swapaxes(L, 1, 2))
@@ -166,7 +166,7 @@ def test_consistent_smoothing_makes_the_grid_work_the_stress_work():
 
 def test_the_bench_and_the_scene_report_the_same_drift():
     """One set-up, one answer: the bench's translating bar is the scene's run."""
-    overrides = translating_overrides("mpm", "musl", 2.0, 6.0)
+    overrides = translating_overrides("mpm", "musl", 2.0, t_end=6.0)
     scene = simulate(load_scene(TRANSLATING_SCENE, overrides), MPI.COMM_SELF, verbose=False)
     bench = translating_bar("mpm", "musl", 2.0, t_end=6.0)
     assert bench.drift_max == scene["energy_drift_max"]
@@ -193,7 +193,7 @@ def test_the_budget_closes_on_two_ranks_and_matches_one():
 
     Each node's terms are counted once (by the rank owning its node plane).
     """
-    overrides = translating_overrides("ugimp", "usavg", None, 16.0)
+    overrides = translating_overrides("ugimp", "usavg", None, t_end=16.0)
     overrides += ["mpm.particles.lower=[2.5]", "mpm.velocity=[-2.0]"]
     one = simulate(load_scene(TRANSLATING_SCENE, overrides), MPI.COMM_SELF, verbose=False)
     two = simulate(load_scene(TRANSLATING_SCENE, overrides), MPI.COMM_WORLD, verbose=False)
@@ -208,7 +208,7 @@ def test_consistent_smoothing_on_two_ranks_gives_the_serial_energies():
     The bar starts on one rank (the other holds no particle until it crosses x = 25),
     then flies across.
     """
-    overrides = translating_overrides("ugimp", "musl", 2.0, 16.0, "consistent")
+    overrides = translating_overrides("ugimp", "musl", 2.0, t_end=16.0, smoothing_kind="consistent")
     one = simulate(load_scene(TRANSLATING_SCENE, overrides), MPI.COMM_SELF, verbose=False)
     two = simulate(load_scene(TRANSLATING_SCENE, overrides), MPI.COMM_WORLD, verbose=False)
     assert two["energy_budget_closure"] < 1e-12

@@ -10,7 +10,7 @@ from geofrac.mpm.fixedpoint import accumulate, exact_sums, scales, to_float
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
 from geofrac.mpm.schemes import MASS_FLOOR
-from geofrac.mpm.shapes import weights
+from geofrac.mpm.shapes import HAT, REGISTRY, Shape, compiled_weights, get, weights
 
 
 def test_sum_is_exact_where_floats_cancel():
@@ -47,16 +47,16 @@ def test_non_finite_column_turns_nan():
 def _nodal(dim, shape, order):
     """Nodal mass and momentum pairs of a jittered block, the particles in ``order``."""
     rng = np.random.default_rng(dim)
-    p = lattice([1.0] * dim, [6] * dim, 0.25, 2.0)
+    p = lattice([1.0] * dim, [6] * dim, 0.25, density=2.0)
     p.x += rng.uniform(-0.05, 0.05, p.x.shape)
     p.v = rng.normal(size=p.x.shape)
     p.x, p.v, p.mass, p.lp = p.x[order], p.v[order], p.mass[order], p.lp[order]
     g = grid(np.zeros(dim), 0.5, [6] * dim)
-    w = weights(g, p.x, None if shape == "mpm" else p.lp, bspline=shape == "bspline2")
+    w = weights(g, p.x, get(shape), lp=p.lp)
     return g, p, w
 
 
-@pytest.mark.parametrize("shape", ["mpm", "ugimp", "bspline2"])
+@pytest.mark.parametrize("shape", REGISTRY)
 @pytest.mark.parametrize("dim", [1, 2, 3])
 def test_compiled_nodal_sums_are_the_reference_integers_in_any_order(dim, shape):
     from geofrac.mpm import kernels
@@ -71,7 +71,7 @@ def test_compiled_nodal_sums_are_the_reference_integers_in_any_order(dim, shape)
         axis=2,
     )
     bound = np.abs(terms).max(axis=(0, 1))
-    ref = accumulate(w.nodes, terms, scales(bound), g.num_nodes)
+    ref = accumulate(w.nodes, terms, scales(bound), num=g.num_nodes)
     for seed in range(3):
         order = np.random.default_rng(seed).permutation(n)
         _, q, wq = _nodal(dim, shape, order)
@@ -86,14 +86,14 @@ def test_compiled_nodal_sums_are_the_reference_integers_in_any_order(dim, shape)
 def test_light_nodes_keep_their_digits():
     """Nodes 1e-13 of the heaviest (below the mass floor): relative error 1e-16."""
     rng = np.random.default_rng(5)
-    heavy = lattice([1.0, 1.0], [8, 8], 0.25, 2.0)
+    heavy = lattice([1.0, 1.0], [8, 8], 0.25, density=2.0)
     x = np.concatenate([heavy.x, [[4.3, 3.1], [4.6, 3.35]]])  # two far from the block
     mass = np.concatenate([heavy.mass * rng.uniform(0.5, 2.0, heavy.n), [1e-13, 3e-14]])
     g = grid(np.zeros(2), 0.5, [10, 10])
-    w = weights(g, x, None)
+    w = weights(g, x, HAT)
     terms = (w.phi * mass[:, None])[:, :, None]
     bound = np.abs(terms).max(axis=(0, 1))
-    got = to_float(accumulate(w.nodes, terms, scales(bound), g.num_nodes), bound)[:, 0]
+    got = to_float(accumulate(w.nodes, terms, scales(bound), num=g.num_nodes), bound)[:, 0]
     exact = [Fraction(0)] * g.num_nodes
     for i in range(len(x)):
         for c in range(w.nodes.shape[1]):
@@ -104,23 +104,23 @@ def test_light_nodes_keep_their_digits():
         assert abs(Fraction(got[j]) - exact[j]) <= Fraction(1e-16) * exact[j]
 
 
-@pytest.mark.parametrize("shape", ["mpm", "ugimp", "bspline2"])
+@pytest.mark.parametrize("shape", REGISTRY.values(), ids=str)
 @pytest.mark.parametrize("dim", [1, 2, 3])
-def test_weights_stay_within_the_bounds_the_step_scales_by(dim, shape):
-    """0 <= φ <= 1 and |∂φ/∂x| <= 1/L (eqs. 4.29, 4.31) for half-widths up to L/2.
+def test_weights_stay_within_the_bounds_the_step_scales_by(dim, shape: Shape):
+    """0 <= φ <= phi_bound and |∂φ/∂x| <= grad_bound/L, the bounds the step scales by.
 
-    The quadratic B-spline too: N <= 3/4 and |N'| <= 1/L (its largest slope, at |r| =
-    L/2), so a tensor product's gradient is at most 1/L; numpy and compiled weights.
+    Every registered shape, numpy and compiled weights: the hat and GIMP (eqs. 4.29,
+    4.31, half-widths up to L/2) have 1 and 1/L; the quadratic B-spline N <= 3/4 and
+    |N'| <= 1/L (its largest slope, at |r| = L/2), so a tensor product's gradient is at
+    most 1/L.
     """
-    from geofrac.mpm import kernels
-
     rng = np.random.default_rng(dim)
     g = grid(np.zeros(dim), 0.5, [8] * dim)
     x = rng.uniform(1.0, 3.0, size=(3000, dim))
-    lp = rng.uniform(0.01, 0.25, size=x.shape) if shape == "ugimp" else None
-    spline = shape == "bspline2"
-    for w in (weights(g, x, lp, bspline=spline), kernels.grid_weights(g, x, lp, bspline=spline)):
-        assert w.phi.min() >= 0.0 and w.phi.max() <= 1.0
-        assert np.abs(w.grad).max() <= 1.0 / g.spacing * (1 + 1e-15)
+    lp = rng.uniform(0.01, 0.25, size=x.shape) if shape.boxes else None
+    spline = shape.name == "bspline2"
+    for w in (weights(g, x, shape, lp=lp), compiled_weights(g, x, shape, lp=lp)):
+        assert w.phi.min() >= 0.0 and w.phi.max() <= shape.phi_bound
+        assert np.abs(w.grad).max() <= shape.grad_bound / g.spacing * (1 + 1e-15)
         if spline:  # nearly reached: N'(L/2) = 1/L times N = 3/4 across, per other axis
             assert np.abs(w.grad).max() > 0.9 * 0.75 ** (dim - 1) / g.spacing

@@ -67,9 +67,14 @@ def test_a_corner_node_stops_both_approaches_and_sums_the_friction():
 
 
 def test_a_roller_wall_keeps_the_frictional_floor_at_the_corner():
-    g = scene_grid((0.0, 0.0), (1.0, 1.0), 0.25, 2)
+    g = scene_grid((0.0, 0.0), (1.0, 1.0), 0.25, padding=2)
     fixed, ids, normals, planes, which = boundary_rows(
-        g, (0.0, 0.0), (1.0, 1.0), {"x_min": "roller", "y_min": "fixed"}, (), ("y_min",)
+        g,
+        (0.0, 0.0),
+        (1.0, 1.0),
+        walls={"x_min": "roller", "y_min": "fixed"},
+        bed=(),
+        frictional=("y_min",),
     )
     X = g.nodes()
     corner = np.flatnonzero((X[:, 0] <= 0) & (X[:, 1] <= 0))
@@ -89,7 +94,7 @@ def _block(theta_deg: float, prestress: bool, v0: float = 0.0):
     σ_xy = ρ g sin θ d at depth d, which balances the body force in the interior.
     """
     th = np.radians(theta_deg)
-    p = lattice([1.0, 0.0], [20, 10], CELL / 2, RHO)
+    p = lattice([1.0, 0.0], [20, 10], CELL / 2, density=RHO)
     p.v[:, 0] = v0
     if prestress:
         depth = 0.5 - p.x[:, 1]
@@ -104,22 +109,24 @@ def _block(theta_deg: float, prestress: bool, v0: float = 0.0):
 def _settings(g, gravity, mu, scheme, shape, walls=None, frictional=("y_min",), domain=None):
     walls = walls or {"y_min": "fixed"}
     lo, up = (0.0, 0.0), (4.0, 1.5)
-    fixed, ids, nrm, planes, _ = boundary_rows(g, lo, up, walls, (), frictional)
-    fr = friction(ids, nrm, mu, planes)
-    dt = time_step(0.2, CELL, MAT, RHO, 2)
+    fixed, ids, nrm, planes, _ = boundary_rows(
+        g, lo, up, walls=walls, bed=(), frictional=frictional
+    )
+    fr = friction(ids, nrm, mu, offsets=planes)
+    dt = time_step(0.2, CELL, MAT, density=RHO, dim=2)
     return StepSettings(scheme, shape, dt, gravity, fixed, friction=fr, domain=domain)
 
 
 def _run(p, gravity, mu, scheme, shape, t_end, **kw):
     """Step to t_end: (mean x displacement, mean x velocity, rise of the bottom layer)."""
-    g = scene_grid((0.0, 0.0), (4.0, 1.5), CELL, 2)
+    g = scene_grid((0.0, 0.0), (4.0, 1.5), CELL, padding=2)
     s = _settings(g, gravity, mu, scheme, shape, **kw)
     m = p.mass.sum()
     x0 = p.mass @ p.x[:, 0] / m
     bottom = p.x[:, 1] < CELL / 2
     y0 = p.x[bottom, 1].mean()
     for _ in range(round(t_end / s.dt)):
-        step(g, p, MAT, s)
+        step(g, p, MAT, settings=s)
     return (
         p.mass @ p.x[:, 0] / m - x0,
         p.mass @ p.v[:, 0] / m,
@@ -243,14 +250,14 @@ def test_a_block_on_a_30_degree_slope_sticks_on_two_ranks(scheme):
     """The sticking block decomposed over the ranks (its nodes shared by both)."""
     comm = MPI.COMM_WORLD
     p, gravity = _block(30.0, prestress=True)
-    g = scene_grid((0.0, 0.0), (4.0, 1.5), CELL, 2)
+    g = scene_grid((0.0, 0.0), (4.0, 1.5), CELL, padding=2)
     dom = decompose(g, comm)
     mine = dom.distribute(p)
     s = _settings(dom.local, gravity, 0.7, scheme, "cpgimp", domain=dom)
     m = dom.allsum(float(mine.mass.sum()))
     x0 = dom.allsum(float(mine.mass @ mine.x[:, 0])) / m
     for _ in range(round(0.3 / s.dt)):
-        step(dom.local, mine, MAT, s)
+        step(dom.local, mine, MAT, settings=s)
     moved = dom.allsum(float(mine.mass @ mine.x[:, 0])) / m - x0
     v = dom.allsum(float(mine.mass @ mine.v[:, 0])) / m
     assert abs(moved) < 0.005 and abs(v) < 0.01
@@ -317,11 +324,13 @@ def _bed_block(mu: float, theta_deg: float = 30.0):
     p.x[:] = origin + s_[:, None] * down + h_[:, None] * up
     R = np.column_stack([down, up])  # slope frame -> global
     p.stress[:] = R @ p.stress @ R.T
-    g = scene_grid(BED_LO, BED_UP, CELL, 2)
+    g = scene_grid(BED_LO, BED_UP, CELL, padding=2)
     bed = ((0.0, BED_TOP), (4.0, BED_TOP - 4.0 * np.tan(th)))
-    fixed, ids, nrm, planes, _ = boundary_rows(g, BED_LO, BED_UP, {}, bed, ("bed",))
-    fr = friction(ids, nrm, mu, planes)
-    dt = time_step(0.2, CELL, MAT, RHO, 2)
+    fixed, ids, nrm, planes, _ = boundary_rows(
+        g, BED_LO, BED_UP, walls={}, bed=bed, frictional=("bed",)
+    )
+    fr = friction(ids, nrm, mu, offsets=planes)
+    dt = time_step(0.2, CELL, MAT, density=RHO, dim=2)
     return p, g, fixed, fr, dt, down, up
 
 
@@ -331,14 +340,16 @@ def _run_bed(mu, scheme, shape, t_end, dom=None):
         p = dom.distribute(p)
         g = dom.local
         bed = ((0.0, BED_TOP), (4.0, BED_TOP - 4.0 * np.tan(np.radians(30.0))))
-        fixed, ids, nrm, planes, _ = boundary_rows(g, BED_LO, BED_UP, {}, bed, ("bed",))
-        fr = friction(ids, nrm, mu, planes)
+        fixed, ids, nrm, planes, _ = boundary_rows(
+            g, BED_LO, BED_UP, walls={}, bed=bed, frictional=("bed",)
+        )
+        fr = friction(ids, nrm, mu, offsets=planes)
     s = StepSettings(scheme, shape, dt, np.array([0.0, -G0]), fixed, friction=fr, domain=dom)
     total = dom.allsum if dom is not None else float
     m = total(float(p.mass.sum()))
     x0 = np.array([total(float(p.mass @ p.x[:, a])) for a in range(2)]) / m
     for _ in range(round(t_end / dt)):
-        step(g, p, MAT, s)
+        step(g, p, MAT, settings=s)
     x1 = np.array([total(float(p.mass @ p.x[:, a])) for a in range(2)]) / m
     v1 = np.array([total(float(p.mass @ p.v[:, a])) for a in range(2)]) / m
     return (x1 - x0) @ down, v1 @ down, (x1 - x0) @ up
@@ -375,7 +386,7 @@ def test_a_block_on_a_30_degree_bed_with_mu_03_slides_at_coulombs_rate(shape, sc
 @pytest.mark.mpi(min_size=2)
 def test_a_block_on_a_30_degree_bed_slides_at_coulombs_rate_on_two_ranks():
     """The bed block (μ = 0.3) decomposed over the ranks, its base on both."""
-    dom = decompose(scene_grid(BED_LO, BED_UP, CELL, 2), MPI.COMM_WORLD)
+    dom = decompose(scene_grid(BED_LO, BED_UP, CELL, padding=2), MPI.COMM_WORLD)
     t = 0.3
     moved, v, lift = _run_bed(0.3, "usf", "cpgimp", t, dom)
     assert moved == pytest.approx(
@@ -395,12 +406,14 @@ def _run_walled(p, walls, frictional, gravity, scheme, shape, t_end, up, dom=Non
     Energies per step (kinetic + gravity potential + strain), summed over the ranks.
     """
     lo = (0.0, 0.0)
-    g = scene_grid(lo, up, CELL, 2)
+    g = scene_grid(lo, up, CELL, padding=2)
     if dom is not None:
         p, g = dom.distribute(p), dom.local
-    fixed, ids, nrm, planes, _ = boundary_rows(g, lo, up, walls, (), frictional)
-    fr = friction(ids, nrm, 0.5, planes)
-    dt = time_step(0.2, CELL, MAT, RHO, 2)
+    fixed, ids, nrm, planes, _ = boundary_rows(
+        g, lo, up, walls=walls, bed=(), frictional=frictional
+    )
+    fr = friction(ids, nrm, 0.5, offsets=planes)
+    dt = time_step(0.2, CELL, MAT, density=RHO, dim=2)
     s = StepSettings(scheme, shape, dt, gravity, fixed, friction=fr, domain=dom)
     total = dom.allsum if dom is not None else float
 
@@ -410,7 +423,7 @@ def _run_walled(p, walls, frictional, gravity, scheme, shape, t_end, up, dom=Non
 
     energies = [energy()]
     for _ in range(round(t_end / dt)):
-        step(g, p, MAT, s)
+        step(g, p, MAT, settings=s)
         energies.append(energy())
     return p, np.array(energies)
 
@@ -429,7 +442,7 @@ ALL_SIDES = {"x_min": "fixed", "x_max": "fixed", "y_min": "fixed", "y_max": "fix
 
 def _thrown(shape, scheme, dom=None):
     """A 0.5 m block thrown at (3, 2) m/s inside a 1.5 m box, μ = 0.5 on every wall."""
-    p = lattice([0.5, 0.2], [10, 10], CELL / 2, RHO)
+    p = lattice([0.5, 0.2], [10, 10], CELL / 2, density=RHO)
     p.v[:] = [3.0, 2.0]
     return _run_walled(
         p, ALL_SIDES, tuple(ALL_SIDES), np.array([0.0, -G0]), scheme, shape, 0.8, BOX, dom
@@ -455,7 +468,7 @@ def test_nothing_leaves_a_closed_frictional_box(shape, scheme):
 
 @pytest.mark.mpi(min_size=2)
 def test_nothing_leaves_a_closed_frictional_box_on_two_ranks():
-    dom = decompose(scene_grid((0.0, 0.0), BOX, CELL, 2), MPI.COMM_WORLD)
+    dom = decompose(scene_grid((0.0, 0.0), BOX, CELL, padding=2), MPI.COMM_WORLD)
     p, energies = _thrown("ugimp", "usf", dom)
     x, _ = _gathered(p, dom)
     assert len(x) == 100 and np.all((x > 0) & (x < BOX))
@@ -495,7 +508,7 @@ def test_a_block_pressed_into_a_roller_wall_and_frictional_floor_corner_stays_in
 
 @pytest.mark.mpi(min_size=2)
 def test_a_block_pressed_into_the_corner_stays_in_on_two_ranks():
-    dom = decompose(scene_grid((0.0, 0.0), (2.0, 1.5), CELL, 2), MPI.COMM_WORLD)
+    dom = decompose(scene_grid((0.0, 0.0), (2.0, 1.5), CELL, padding=2), MPI.COMM_WORLD)
     p, _ = _cornered("cpgimp", "musl", dom)
     x, lp = _gathered(p, dom)
     assert len(x) == 200 and np.all(x > 0)

@@ -28,7 +28,7 @@ from geofrac.mpm.schemes import (
     step,
     time_step,
 )
-from geofrac.mpm.shapes import SHAPES
+from geofrac.mpm.shapes import REGISTRY
 
 
 def _settings(g, scheme, shape, smoothing, dt, backend="numba", domain=None, kind="standard"):
@@ -47,10 +47,10 @@ def _settings(g, scheme, shape, smoothing, dt, backend="numba", domain=None, kin
 def _scene(material):
     """A 2 m × 1 m block sliding at 2 m/s on a floor, across the middle of a 24-cell grid."""
     g = grid([0.0, 0.0], 0.25, [24, 12])
-    p = lattice([1.5, 0.5], [16, 8], 0.125, 1000.0)
+    p = lattice([1.5, 0.5], [16, 8], 0.125, density=1000.0)
     p.v[:, 0] = 2.0
     p.v[:, 1] = 0.3 * np.sin(3.0 * p.x[:, 0])  # some shear, so stresses vary
-    dt = time_step(0.2, g.spacing, material, 1000.0, 2)
+    dt = time_step(0.2, g.spacing, material, density=1000.0, dim=2)
     return g, p, dt
 
 
@@ -85,8 +85,8 @@ def _run(comm, scheme, shape, smoothing, material_name, steps, backend="numba", 
     crossed = set()
     start_owner = dom.owner(whole.x)
     for _ in range(steps):
-        step(g, serial, mat, s)
-        step(dom.local, mine, mat, sd)
+        step(g, serial, mat, settings=s)
+        step(dom.local, mine, mat, settings=sd)
         crossed.update(mine.ids[start_owner[mine.ids] != comm.rank].tolist())
     totals = (dom.allsum(float(mine.mass.sum())), dom.allsum(mine.momentum()))
     crossed = dom.allsum(len(crossed))
@@ -124,7 +124,7 @@ def test_decomposed_run_equals_the_serial_one(scheme, shape, smoothing, material
 
 @pytest.mark.mpi(min_size=2)
 @pytest.mark.parametrize("material", ["elastic", "drucker-prager"])
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", REGISTRY)
 @pytest.mark.parametrize("scheme", SCHEMES)
 def test_decomposed_run_without_smoothing_is_bitwise_the_serial_one(scheme, shape, material):
     """Exact nodal sums: 300 steps of the sliding block across the slabs, no bit differs.
@@ -177,7 +177,7 @@ def test_translating_bar_stays_rank_invariant():
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    d = compare_ranks(comm, "translating", "mpm", "musl", steps=6800, samples=30)
+    d = compare_ranks(comm, "translating", "mpm", scheme="musl", steps=6800, samples=30)
     if comm.rank == 0:
         assert d.t[-1] > 15.0 and d.crossed >= 10  # one half crossed to the other rank
         assert d.worst == 0.0, f"1 and 2 ranks part at t = {d.first_above(0.0)}"
@@ -192,7 +192,7 @@ def test_sliding_block_stays_rank_invariant():
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    d = compare_ranks(comm, "sliding", "cpgimp", "musl", steps=SLIDING_STEPS, samples=30)
+    d = compare_ranks(comm, "sliding", "cpgimp", scheme="musl", steps=SLIDING_STEPS, samples=30)
     if comm.rank == 0:
         assert d.crossed > 10
         assert d.worst == 0.0, f"1 and 2 ranks part at t = {d.first_above(0.0)}"
@@ -223,7 +223,7 @@ def test_particle_leaving_the_grid_raises_on_every_rank():
     sd = _settings(dom.local, "musl", "mpm", None, dt, domain=dom)
     with pytest.raises(ParticlesLeftGrid) as info:
         for _ in range(100):
-            step(dom.local, mine, mat, sd)
+            step(dom.local, mine, mat, settings=sd)
     assert info.value.ids.tolist() == [5]
     flags = comm.allgather(True)
     assert all(flags)
@@ -241,7 +241,7 @@ def test_unstable_step_raises_on_every_rank():
     sd = _settings(dom.local, "musl", "mpm", None, 40 * dt, domain=dom)  # Courant 8
     with pytest.raises(RunError):
         for _ in range(50):
-            step(dom.local, mine, mat, sd)
+            step(dom.local, mine, mat, settings=sd)
     assert all(comm.allgather(True))
 
 
@@ -276,7 +276,7 @@ def test_throughput_block_runs_decomposed():
     from geofrac.mpm.block import gravity_block
 
     comm = MPI.COMM_WORLD
-    tp = gravity_block(1600, "musl", "cpgimp", 2.0, steps=3, comm=comm)
+    tp = gravity_block(1600, "musl", "cpgimp", smoothing=2.0, steps=3, comm=comm)
     assert tp.ranks == comm.size and len(tp.per_rank) == comm.size
     assert tp.particles == 1600
     assert all(r > 0 for r in tp.per_rank)

@@ -100,15 +100,15 @@ def _column(material, t_end: float = 0.6):
     from geofrac.mpm.schemes import StepSettings, step, time_step
 
     cell, h = 0.25, 0.125
-    p = lattice([2.0, 1.0], [16, 16], h, 2000.0)
+    p = lattice([2.0, 1.0], [16, 16], h, density=2000.0)
     g = grid([0.0, 0.0], cell, [48, 16])
     fixed = np.zeros((g.num_nodes, 2), dtype=bool)
     fixed[g.nodes()[:, 1] <= 1.0] = True
-    dt = time_step(0.2, cell, material, 2000.0, 2)
+    dt = time_step(0.2, cell, material, density=2000.0, dim=2)
     s = StepSettings("musl", "cpgimp", dt, np.array([0.0, -9.81]), fixed)
     top = p.x[:, 1].max()
     for _ in range(round(t_end / dt)):
-        step(g, p, material, s)
+        step(g, p, material, settings=s)
     return p, top - p.x[:, 1].max()
 
 
@@ -139,11 +139,11 @@ def test_plasticity_is_refused_in_1d():
     from geofrac.mpm.particles import particles
     from geofrac.mpm.schemes import StepSettings, step
 
-    p = particles(np.array([[1.0]]), np.ones(1), 1.0, np.full((1, 1), 0.25))
+    p = particles(np.array([[1.0]]), np.ones(1), 1.0, lp0=np.full((1, 1), 0.25))
     g = grid([0.0], 1.0, [4])
     s = StepSettings("musl", "mpm", 1e-3, np.zeros(1), np.zeros((g.num_nodes, 1), bool))
     with pytest.raises(ValueError, match="2D or 3D"):
-        step(g, p, DruckerPrager(1.0, 0.3, 20.0), s)
+        step(g, p, DruckerPrager(1.0, 0.3, 20.0), settings=s)
 
 
 # --- pure shear beyond the cone: the closed-form return (Edo (2016), eqs. 4.39-4.43) ----
@@ -217,7 +217,7 @@ def _pure_shear_step(scheme: str, psi: float):
     from geofrac.mpm.schemes import StepSettings, step
 
     centre = np.array([8.0, 8.0])
-    p = lattice(centre - 4.0, [16, 16], 0.5, 1.0e4)
+    p = lattice(centre - 4.0, [16, 16], 0.5, density=1.0e4)
     p.stress[:] = -20.0 * np.eye(2)
     p.stress_zz[:] = -20.0
     rate, dt = 37.5, 1e-3  # Δε_xy = 0.0375: τ* = 2G Δε_xy = 30 (USAVG: twice 15)
@@ -228,7 +228,7 @@ def _pure_shear_step(scheme: str, psi: float):
         scheme, "ugimp", dt, np.zeros(2), np.zeros((g.num_nodes, 2), bool), backend="numpy"
     )
     m = DruckerPrager(E_DP, NU_DP, friction_angle=PHI, cohesion=COHESION, dilatancy_angle=psi)
-    step(g, p, m, s)
+    step(g, p, m, settings=s)
     full = np.zeros((int(inner.sum()), 3, 3))
     full[:, :2, :2] = p.stress[inner]
     full[:, 2, 2] = p.stress_zz[inner]

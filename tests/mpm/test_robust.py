@@ -146,7 +146,7 @@ def _moved(theta_deg: float, v0: float = 0.0) -> Callable[[], tuple[Particles, n
 
 def _thrown() -> tuple[Particles, np.ndarray]:
     """The 0.5 m block of test_friction's closed box, thrown at (3, 2) m/s; gravity."""
-    p = lattice([0.5, 0.2], [10, 10], CELL / 2, RHO)
+    p = lattice([0.5, 0.2], [10, 10], CELL / 2, density=RHO)
     p.v[:] = [3.0, 2.0]
     return p, np.array([0.0, -G0])
 
@@ -168,7 +168,7 @@ def _in_pocket() -> tuple[Particles, np.ndarray]:
     The particles of a lattice (0.05 m) over x in [3, 4] whose boxes lie on or above
     the bed (their gaps >= 0, some of them touching it); the vertical gravity.
     """
-    p = lattice([3.0, 0.0], [20, 20], CELL / 2, RHO)
+    p = lattice([3.0, 0.0], [20, 20], CELL / 2, density=RHO)
     (x0, y0), (x1, y1) = POCKET_BED
     normal = np.array([(y1 - y0) / (x1 - x0), -1.0])
     normal /= np.linalg.norm(normal)  # into the bed
@@ -240,12 +240,13 @@ class _Spy:
         v: np.ndarray,
         fr: contact.Friction,
         allow: np.ndarray | None = None,
+        *,
         sliding_only: bool = False,
         tol: float = 0.0,
     ) -> np.ndarray:
         self.fr = fr
-        self.calls.append(contact.contact_states(v, fr, allow, sliding_only, tol))
-        return APPLY(v, fr, allow, sliding_only, tol)
+        self.calls.append(contact.contact_states(v, fr, allow, sliding_only=sliding_only, tol=tol))
+        return APPLY(v, fr, allow, sliding_only=sliding_only, tol=tol)
 
 
 def _perturbed(scene: Scene, q: Perturbation) -> tuple[Particles, np.ndarray, Elastic, float]:
@@ -270,10 +271,10 @@ def _settings(
 ) -> StepSettings:
     """The step's settings on grid ``g`` (this rank's sub-grid with a domain)."""
     fixed, ids, normals, planes, _ = boundary_rows(
-        g, (0.0, 0.0), scene.upper, scene.walls, scene.bed, scene.frictional
+        g, (0.0, 0.0), scene.upper, walls=scene.walls, bed=scene.bed, frictional=scene.frictional
     )
-    fr = contact.friction(ids, normals, mu, planes)
-    dt = time_step(0.2, CELL, material, RHO * q.material, 2)
+    fr = contact.friction(ids, normals, mu, offsets=planes)
+    dt = time_step(0.2, CELL, material, density=RHO * q.material, dim=2)
     return StepSettings(
         scene.scheme, scene.shape, dt, gravity, fixed, friction=fr, backend=q.backend,
         domain=dom, damping=scene.damping,
@@ -312,7 +313,7 @@ def _outcome(name: str, q: Perturbation | None = None, dom: Domain | None = None
     q = q or Perturbation()
     p, gravity, material, mu = _perturbed(scene, q)
     x0 = p.x[np.argsort(p.ids)].copy()
-    g = scene_grid((0.0, 0.0), scene.upper, CELL, 2)
+    g = scene_grid((0.0, 0.0), scene.upper, CELL, padding=2)
     if dom is not None:
         p, g = dom.distribute(p), dom.local
     s = _settings(scene, g, material, mu, gravity, q, dom)
@@ -320,7 +321,7 @@ def _outcome(name: str, q: Perturbation | None = None, dom: Domain | None = None
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(contact, "apply_friction", spy)
         for _ in range(round(scene.t_end / s.dt)):
-            step(g, p, material, s)
+            step(g, p, material, settings=s)
     keys, states, agree = _rows(spy, g, dom)
     x, v = _gathered(p, dom)
     return Outcome(keys, states, agree, x0, x, v, scene.t_end)
@@ -414,7 +415,7 @@ def test_contact_states_and_end_state_do_not_depend_on_round_off(name, perturbat
 def test_two_ranks_decide_as_one(name):
     """Every rank holding a row records its serial states; the end state agrees."""
     scene = SCENES[name]
-    dom = decompose(scene_grid((0.0, 0.0), scene.upper, CELL, 2), MPI.COMM_WORLD)
+    dom = decompose(scene_grid((0.0, 0.0), scene.upper, CELL, padding=2), MPI.COMM_WORLD)
     decomposed = _outcome(name, dom=dom)
     assert decomposed.agree
     _assert_same(_baseline(name), decomposed)
@@ -432,14 +433,14 @@ def test_geostatic_stress_does_not_depend_on_the_last_bit_of_the_positions():
     """
     from geofrac.mpm.seeding import geostatic
 
-    p = lattice([-0.25, 0.0], [8, 10], 0.5, 2000.0)  # x = 0, 0.5, ..., 3.5
+    p = lattice([-0.25, 0.0], [8, 10], 0.5, density=2000.0)  # x = 0, 0.5, ..., 3.5
     p = take(p, (p.x[:, 0] < 1.9) | (p.x[:, 1] < 2.5))
     q = take(p, np.arange(p.n))
     ulp = np.random.default_rng(3).choice([-np.inf, np.inf], size=p.x.shape)
     q.x = np.nextafter(p.x, ulp)
     gravity = np.array([0.0, -G0])
-    geostatic(p, gravity, 0.25, 1.0)
-    geostatic(q, gravity, 0.25, 1.0)
+    geostatic(p, gravity, 0.25, width=1.0)
+    geostatic(q, gravity, 0.25, width=1.0)
     np.testing.assert_allclose(q.stress, p.stress, rtol=0, atol=EPS * 2000.0 * G0 * 5.0)
     assert np.min(p.stress[:, 1, 1]) == pytest.approx(-2000.0 * G0 * 4.75)  # its depth
 
@@ -452,7 +453,7 @@ def test_the_beds_last_nodes_keep_their_rows_when_their_x_carries_round_off():
     """
     from geofrac.mpm.boundaries import bed_nodes
 
-    g = scene_grid((0.0, 0.0), (1.5, 1.5), CELL, 2)
+    g = scene_grid((0.0, 0.0), (1.5, 1.5), CELL, padding=2)
     X = g.nodes()
     end = np.flatnonzero(np.isclose(X[:, 0], 1.5) & (X[:, 1] < 0.2 + CELL / 2))
     assert X[end[0], 0] != 1.5 and len(end) == 5  # the round-off this is about

@@ -16,15 +16,15 @@ from geofrac.mpm.schemes import (
     strain_energy,
     time_step,
 )
-from geofrac.mpm.shapes import SHAPES, weights
+from geofrac.mpm.shapes import REGISTRY, get, weights
 
 
 def _block(dim: int, n_side: int = 6, h: float = 0.25):
     """Particles filling a cube of side n_side·h at 1.0, two per cell of size 2h."""
-    return lattice([1.0] * dim, [n_side] * dim, h, 2.0)
+    return lattice([1.0] * dim, [n_side] * dim, h, density=2.0)
 
 
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", REGISTRY)
 @pytest.mark.parametrize("dim", [1, 2, 3])
 def test_transfers_conserve_mass_and_momentum(dim, shape):
     rng = np.random.default_rng(dim)
@@ -32,7 +32,7 @@ def test_transfers_conserve_mass_and_momentum(dim, shape):
     p.x += rng.uniform(-0.05, 0.05, p.x.shape)
     p.v = rng.normal(size=p.x.shape)
     g = grid(np.zeros(dim), 0.5, [6] * dim)
-    w = weights(g, p.x, None if shape == "mpm" else p.lp)
+    w = weights(g, p.x, get(shape), lp=p.lp)
     mass = _to_grid(w, p.mass[:, None], g.num_nodes)[:, 0]
     assert mass.sum() == pytest.approx(p.mass.sum(), rel=1e-14)
     active = mass > 0
@@ -41,7 +41,7 @@ def test_transfers_conserve_mass_and_momentum(dim, shape):
 
 
 @pytest.mark.parametrize("scheme", SCHEMES)
-@pytest.mark.parametrize("shape", SHAPES)
+@pytest.mark.parametrize("shape", REGISTRY)
 @pytest.mark.parametrize("dim", [2, 3])
 def test_uniformly_moving_block_stays_stress_free(dim, shape, scheme):
     """A block translating through cells: no stress, no change of velocity, 400 steps."""
@@ -50,11 +50,11 @@ def test_uniformly_moving_block_stays_stress_free(dim, shape, scheme):
     p.v[:] = v0
     mat = Elastic(E=1000.0, nu=0.3)
     g = grid(np.zeros(dim), 0.5, [8] * dim)
-    dt = time_step(0.2, g.spacing, mat, 2.0, dim)
+    dt = time_step(0.2, g.spacing, mat, density=2.0, dim=dim)
     s = StepSettings(scheme, shape, dt, np.zeros(dim), np.zeros((g.num_nodes, dim), bool))
     x0 = p.x.copy()
     for _ in range(400):
-        step(g, p, mat, s)
+        step(g, p, mat, settings=s)
     assert np.abs(p.stress).max() < 1e-9 * mat.E
     np.testing.assert_allclose(p.v, np.broadcast_to(v0, p.v.shape), atol=1e-12)
     np.testing.assert_allclose(p.x, x0 + 400 * dt * v0, atol=1e-10)
@@ -63,13 +63,13 @@ def test_uniformly_moving_block_stays_stress_free(dim, shape, scheme):
 
 
 def test_particle_leaving_the_grid_is_reported_and_nothing_changes():
-    p = particles(np.array([[0.5], [3.8]]), np.ones(2), 1.0, np.full((2, 1), 0.25))
+    p = particles(np.array([[0.5], [3.8]]), np.ones(2), 1.0, lp0=np.full((2, 1), 0.25))
     p.v[1] = 5.0
     g = grid([0.0], 1.0, [4])
     mat = Elastic(100.0)
     s = StepSettings("musl", "ugimp", 0.01, np.zeros(1), np.zeros((g.num_nodes, 1), bool))
     with pytest.raises(ParticlesLeftGrid, match="1 particle") as info:
-        step(g, p, mat, s)
+        step(g, p, mat, settings=s)
     assert info.value.ids.tolist() == [1]
     np.testing.assert_array_equal(p.x[:, 0], [0.5, 3.8])
 
@@ -87,7 +87,7 @@ def test_strain_energy_matches_half_sigma_epsilon():
     q = _block(2)
     q.v[:, 0] = 0.1 * (q.x[:, 0] - 1.75)  # a uniform stretching in x
     fixed = np.zeros((g.num_nodes, 2), bool)
-    step(g, q, mat, StepSettings("usf", "mpm", 1e-3, np.zeros(2), fixed))
+    step(g, q, mat, settings=StepSettings("usf", "mpm", 1e-3, np.zeros(2), fixed))
     np.testing.assert_allclose(q.stress_zz, mat.nu * np.trace(q.stress, axis1=1, axis2=2))
     bar = _block(1, n_side=1)
     bar.stress[0, 0, 0] = 3.0
@@ -101,7 +101,7 @@ def test_bad_settings_are_refused():
     with pytest.raises(ValueError, match="shape 'gimp'"):
         StepSettings("musl", "gimp", 0.1, np.zeros(1), fixed)
     with pytest.raises(ValueError, match="Courant"):
-        time_step(1.2, 1.0, Elastic(1.0), 1.0, 1)
+        time_step(1.2, 1.0, Elastic(1.0), density=1.0, dim=1)
 
 
 def test_smoothing_code_is_not_loaded_unless_asked():
@@ -111,7 +111,7 @@ def test_smoothing_code_is_not_loaded_unless_asked():
 
     probe = (
         "import sys, numpy as np\n"
-        "from geofrac.mpm.bar import translating_bar\n"
+        "from geofrac.bench.mpm import translating_bar\n"
         "translating_bar('mpm', steps=5)\n"
         "print('geofrac.mpm.smoothing' in sys.modules)\n"
         "translating_bar('mpm', smoothing=2.0, steps=5)\n"
@@ -127,7 +127,7 @@ def test_unstable_step_raises_instead_of_carrying_nan():
 
     h = 0.25
     p = particles(
-        (1000.0 + (np.arange(8) + 0.5) * h)[:, None], np.full(8, h), 2.0, np.full((8, 1), h / 2)
+        (1000.0 + (np.arange(8) + 0.5) * h)[:, None], np.full(8, h), 2.0, lp0=np.full((8, 1), h / 2)
     )
     p.v[:, 0] = np.linspace(-1.0, 1.0, p.n)
     mat = Elastic(E=1e4)
@@ -136,5 +136,5 @@ def test_unstable_step_raises_instead_of_carrying_nan():
     s = StepSettings("musl", "mpm", dt, np.zeros(1), np.zeros((g.num_nodes, 1), bool))
     with pytest.raises(RunError, match="non-positive volume") as info:
         for _ in range(20):
-            step(g, p, mat, s)
+            step(g, p, mat, settings=s)
     assert not isinstance(info.value, ParticlesLeftGrid)

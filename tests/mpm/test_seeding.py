@@ -29,10 +29,10 @@ def test_a_degenerate_cell_is_refused():
 @pytest.mark.parametrize("dim", [2, 3])
 def test_geostatic_stress_is_the_weight_above(dim):
     counts = [4, 10] if dim == 2 else [4, 2, 6]
-    p = lattice([0.0] * dim, counts, 0.5, 2000.0)
+    p = lattice([0.0] * dim, counts, 0.5, density=2000.0)
     g = np.zeros(dim)
     g[-1] = -10.0
-    geostatic(p, g, 0.25, 1.0)
+    geostatic(p, g, 0.25, width=1.0)
     top = counts[-1] * 0.5
     sigma_v = -2000.0 * 10.0 * (top - p.x[:, -1])
     np.testing.assert_allclose(p.stress[:, -1, -1], sigma_v, rtol=1e-12)
@@ -42,24 +42,26 @@ def test_geostatic_stress_is_the_weight_above(dim):
 
 
 def test_gravity_must_be_vertical_for_geostatic():
-    p = lattice([0.0, 0.0], [2, 2], 0.5, 1.0)
+    p = lattice([0.0, 0.0], [2, 2], 0.5, density=1.0)
     with pytest.raises(ValueError, match="gravity along"):
-        geostatic(p, np.array([1.0, -10.0]), 0.25, 1.0)
+        geostatic(p, np.array([1.0, -10.0]), 0.25, width=1.0)
 
 
 def _settle(initial: bool) -> float:
     """Largest particle speed of elastic ground in a box (rollers, fixed floor), 200 steps."""
-    g = scene_grid((0.0, 0.0), (8.0, 8.0), 1.0, 2)
-    p = lattice([0.0, 0.0], [16, 8], 0.5, 1000.0)
+    g = scene_grid((0.0, 0.0), (8.0, 8.0), 1.0, padding=2)
+    p = lattice([0.0, 0.0], [16, 8], 0.5, density=1000.0)
     mat = Elastic(1e6, 0.3)
     gravity = np.array([0.0, -10.0])
     if initial:
-        geostatic(p, gravity, mat.nu, 1.0)
+        geostatic(p, gravity, mat.nu, width=1.0)
     walls = {"x_min": "roller", "x_max": "roller", "y_min": "fixed"}
-    fixed = boundary_rows(g, (0.0, 0.0), (8.0, 8.0), walls, ())[0]
-    s = StepSettings("musl", "ugimp", time_step(0.2, 1.0, mat, 1000.0, 2), gravity, fixed)
+    fixed = boundary_rows(g, (0.0, 0.0), (8.0, 8.0), walls=walls, bed=())[0]
+    s = StepSettings(
+        "musl", "ugimp", time_step(0.2, 1.0, mat, density=1000.0, dim=2), gravity, fixed
+    )
     for _ in range(200):
-        step(g, p, mat, s)
+        step(g, p, mat, settings=s)
     return float(np.max(np.linalg.norm(p.v, axis=1)))
 
 

@@ -46,19 +46,19 @@ def test_too_few_neighbours_or_a_singular_fit_keep_their_own_value(backend):
     # 1D cubic needs 4 neighbours (self included): three particles are not smoothed
     x = np.array([[0.0], [0.3], [0.6]])
     v = np.array([[1.0], [5.0], [2.0]])
-    out, done = smooth(x, v, 1.0, backend)
+    out, done = smooth(x, v, 1.0, backend=backend)
     assert not done.any()
     np.testing.assert_array_equal(out, v)
     # 2D particles on a line: the cubic moment matrix is singular
     t = np.linspace(0.0, 1.0, 30)
     x2 = np.stack([t, 2 * t], axis=1)
     values = np.stack([t**2, t, 1 + t], axis=1)
-    out, done = smooth(x2, values, 0.5, backend)
+    out, done = smooth(x2, values, 0.5, backend=backend)
     assert not done.any()
     np.testing.assert_array_equal(out, values)
     # almost on a line (1e-7 off it): A is regular but κ₂ is ~1e20, far beyond 1e12
     x3 = x2 + 1e-7 * np.random.default_rng(3).normal(size=x2.shape)
-    out, done = smooth(x3, values, 0.5, backend)
+    out, done = smooth(x3, values, 0.5, backend=backend)
     assert not done.any()
 
 
@@ -79,7 +79,7 @@ def test_conditioning_bound_accepts_a_spread_cloud_and_brackets_cond2(backend):
     m = A.shape[0]
     assert lam[-1] / lam[0] <= kappa_T <= m * m * lam[-1] / lam[0]
     assert kappa_T < smoothing.COND_MAX
-    done = smooth(x, rng.normal(size=(60, 3)), h, backend)[1]
+    done = smooth(x, rng.normal(size=(60, 3)), h, backend=backend)[1]
     assert done[0]
 
 
@@ -98,12 +98,12 @@ def test_fits_do_not_depend_on_storage_order():
     """Neighbours are summed by global id: a permuted storage gives the same bits."""
     x, values, ids = _cloud()
     h = 0.6
-    out, done = smooth(x, values, h, "numba", ids)
+    out, done = smooth(x, values, h, backend="numba", ids=ids)
     perm = np.random.default_rng(9).permutation(len(x))
-    out2, done2 = smooth(x[perm], values[perm], h, "numba", ids[perm])
+    out2, done2 = smooth(x[perm], values[perm], h, backend="numba", ids=ids[perm])
     np.testing.assert_array_equal(done2, done[perm])
     np.testing.assert_array_equal(out2, out[perm])
-    ref, ref_done = smooth(x, values, h, "numpy", ids)
+    ref, ref_done = smooth(x, values, h, backend="numpy", ids=ids)
     np.testing.assert_array_equal(done, ref_done)
     np.testing.assert_allclose(out, ref, rtol=1e-10, atol=1e-12 * np.abs(ref).max())
 
@@ -117,16 +117,16 @@ def test_reused_neighbour_lists_give_the_fresh_fits(move):
     x, values, ids = _cloud()
     h = 0.6
     smoothing._SERIAL[0] = None
-    smooth_particles(x, ids, values, h)
+    smooth_particles(x, ids, values, h=h)
     before = neighbour_stats()["builds"]
     rng = np.random.default_rng(5)
     step = rng.normal(size=x.shape)
     step *= move * 0.5 * MARGIN * h / np.linalg.norm(step, axis=1).max()
     moved = x + step
-    got = smooth_particles(moved, ids, values, h)
+    got = smooth_particles(moved, ids, values, h=h)
     rebuilt = neighbour_stats()["builds"] - before
     assert rebuilt == (1 if move > 1 else 0)
-    fresh, _ = smooth(moved, values, h, "numba", ids)
+    fresh, _ = smooth(moved, values, h, backend="numba", ids=ids)
     np.testing.assert_array_equal(got, fresh)
     # some pairs crossed r = h (else the test could not tell a stale list)
     r0 = np.linalg.norm(x[:, None] - x[None], axis=2)
@@ -155,7 +155,7 @@ def test_fits_on_two_ranks_equal_the_serial_ones_bit_for_bit():
     x, values, ids = _cloud()
     h = 0.6
     g = grid([0.0, 0.0], 0.25, [26, 26])
-    p = particles(x, np.full(len(x), 0.0625), 1.0, np.full(x.shape, 0.125))
+    p = particles(x, np.full(len(x), 0.0625), 1.0, lp0=np.full(x.shape, 0.125))
     p.ids = ids
     dom = decompose(g, comm, halo=3)
     mine = dom.distribute(p)
@@ -164,8 +164,8 @@ def test_fits_on_two_ranks_equal_the_serial_ones_bit_for_bit():
     for rep in range(2):  # a build, then a reuse after a small move
         shift = rep * 0.2 * MARGIN * h
         serial = np.empty_like(values)
-        serial[ids] = smooth(x + shift, values, h, "numba", ids)[0]
-        got = smooth_particles(mine.x + shift, mine.ids, by_id[mine.ids], h, domain=dom)
+        serial[ids] = smooth(x + shift, values, h, backend="numba", ids=ids)[0]
+        got = smooth_particles(mine.x + shift, mine.ids, by_id[mine.ids], h=h, domain=dom)
         all_ids, all_fits = dom.allgather_rows(mine.ids, got)
         assert comm.allreduce(len(mine.ids), op=MPI.MIN) > 50  # both ranks hold particles
         np.testing.assert_array_equal(np.sort(all_ids), np.arange(len(x)))
