@@ -55,7 +55,7 @@ JsonValue = int | float | str | bool | None | list["JsonValue"] | dict[str, "Jso
 Say = Callable[[str], None]
 
 if TYPE_CHECKING:
-    from petsc4py import PETSc
+    from geofrac.solvers import Vector
 
 _T = TypeVar("_T")
 
@@ -256,7 +256,7 @@ class CrackContext:
         return out
 
 
-def _gather_vector(v: PETSc.Vec, comm: MPI.Comm) -> np.ndarray:
+def _gather_vector(v: Vector, comm: MPI.Comm) -> np.ndarray:
     """The owned entries of every rank in global order, shape=(size_global,) (collective)."""
     return np.concatenate(comm.allgather(np.array(v.getArray(readonly=True), dtype=float)))
 

@@ -49,12 +49,10 @@ def versions(fem: bool = True) -> dict[str, str]:
             import dolfinx_solver  # noqa: F401
 
             import dolfinx
-            from petsc4py import PETSc
 
-            out |= {
-                "dolfinx": dolfinx.__version__,
-                "petsc": ".".join(map(str, PETSc.Sys.getVersion())),
-            }
+            from geofrac.solvers import petsc_version
+
+            out |= {"dolfinx": dolfinx.__version__, "petsc": petsc_version()}
     except ImportError as exc:  # pragma: no cover - the stack is a hard dependency
         out["error"] = str(exc)
     return out
