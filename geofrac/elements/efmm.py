@@ -130,7 +130,7 @@ def domain_data(mesh: dolfinx.mesh.Mesh, q_rand: float, seed: int) -> DomainData
     shared = arr[c2f, 4] + arr[c2f, 5] > 1.5  # shape=(nc, 3)
     cross = 0.5 * (x_lo + x_hi)  # boundary edges: the midpoint
     xs, clamped = edge_crossings(
-        x_lo[shared], x_hi[shared], arr[c2f[shared], 0:2], arr[c2f[shared], 2:4]
+        x_lo[shared], x_hi[shared], left=arr[c2f[shared], 0:2], right=arr[c2f[shared], 2:4]
     )
     cross[shared] = xs
     flags = np.zeros(fmap.size_local + fmap.num_ghosts)

@@ -121,6 +121,7 @@ class ElasticProblem:
         tagged: TaggedMesh,
         element: Element,
         scene: Scene,
+        *,
         terms: Sequence[LinearTerm] = (),
     ) -> None:
         self.tagged, self.element, self.scene = tagged, element, scene
@@ -149,7 +150,9 @@ class ElasticProblem:
         u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
         self._a = forms.stiffness_form(u, v, self.lam, self.mu, self.thickness, self.dx)
         self._L = self._linear_form(v)
-        self.point_forces = loads.point_forces(tagged, V, scene.loads, float(self.thickness.value))
+        self.point_forces = loads.point_forces(
+            tagged, V, scene.loads, thickness=float(self.thickness.value)
+        )
         self.bcs = self._boundary_conditions()
         self.uh = dolfinx.fem.Function(V, name="displacement")
         self.a: dolfinx.fem.Form | None = None
@@ -180,7 +183,9 @@ class ElasticProblem:
                 value = sig * ufl.FacetNormal(self.mesh)
             else:  # the body force that makes u_exact an equilibrium state
                 value = -ufl.div(forms.sigma(u_ex, self.lam, self.mu))
-        return loads.load_form(load, v, self.tagged, self.ds, self.dx, self.thickness, value)
+        return loads.load_form(
+            load, v, self.tagged, ds=self.ds, dx=self.dx, thickness=self.thickness, value=value
+        )
 
     #: whether the unknowns are in a changed basis (:class:`GradientDofProblem`).
     changes_basis = False
@@ -270,7 +275,7 @@ class ElasticProblem:
         from geofrac.fem.post import tensor_fields
 
         plane = self.scene.material.plane
-        return tensor_fields(self.uh, self.lam, self.mu, plane, names)
+        return tensor_fields(self.uh, self.lam, self.mu, plane=plane, names=names)
 
     def point_tensors(
         self, names: Sequence[str], points: np.ndarray, cells: np.ndarray
@@ -288,7 +293,9 @@ class ElasticProblem:
         from geofrac.fem.post import point_tensors
 
         plane = self.scene.material.plane
-        return point_tensors(self.uh, self.lam, self.mu, plane, names, points, cells)
+        return point_tensors(
+            self.uh, self.lam, self.mu, plane=plane, names=names, points=points, cells=cells
+        )
 
     def write_extra(self, directory: Path) -> list[Path]:
         """Write the discretisation's own output files (collective); none here."""
@@ -304,7 +311,7 @@ class ElasticProblem:
 
         assert self.exact is not None
         u_exact, _ = exact_ufl(self.exact, self.mesh)
-        return error_norms(self.uh, u_exact, self.lam, self.mu)
+        return error_norms(self.uh, u_exact, self.lam, mu=self.mu)
 
     def load_vector(self) -> Vector:
         """The assembled load vector on the unknowns, without Dirichlet conditions.
@@ -329,10 +336,10 @@ class ElasticProblem:
         if load.type == "point":
             zero = dolfinx.fem.Constant(self.mesh, np.zeros(self.mesh.geometry.dim))
             form = ufl.inner(zero, ufl.TestFunction(V)) * self.dx
-            points = loads.point_forces(self.tagged, V, (load,), t)
+            points = loads.point_forces(self.tagged, V, (load,), thickness=t)
         else:
             form = self._load_term(load, ufl.TestFunction(V))
-            points = loads.point_forces(self.tagged, V, (), t)
+            points = loads.point_forces(self.tagged, V, (), thickness=t)
         b = assemble_vector(dolfinx.fem.form(form))
         points.add_to(b)
         return self._on_unknowns(b)
@@ -433,9 +440,10 @@ class GradientDofProblem(ElasticProblem):
         tagged: TaggedMesh,
         element: Element,
         scene: Scene,
+        *,
         terms: Sequence[LinearTerm] = (),
     ) -> None:
-        super().__init__(tagged, element, scene, terms)
+        super().__init__(tagged, element, scene, terms=terms)
         W = element.unknowns
         self.wh = dolfinx.fem.Function(W, name="vertex_dofs")
         g, h = ufl.TrialFunction(W), ufl.TestFunction(W)
@@ -614,7 +622,7 @@ class GradientDofProblem(ElasticProblem):
 
 
 def make_problem(
-    tagged: TaggedMesh, element: Element, scene: Scene, terms: Sequence[LinearTerm] = ()
+    tagged: TaggedMesh, element: Element, scene: Scene, *, terms: Sequence[LinearTerm] = ()
 ) -> ElasticProblem:
     """The elastic problem of ``element`` with the right-hand-side ``terms``.
 
@@ -622,4 +630,4 @@ def make_problem(
     (``problem``); no element is named here.
     """
     problem: type[ElasticProblem] = elements.get(element.name).problem_class()
-    return problem(tagged, element, scene, terms)
+    return problem(tagged, element, scene, terms=terms)

@@ -106,6 +106,7 @@ def load_form(
     load: Load,
     v: Any,
     tagged: TaggedMesh,
+    *,
     ds: ufl.Measure,
     dx: ufl.Measure,
     thickness: Any,
@@ -152,7 +153,7 @@ class PointForces:
 
 
 def point_forces(
-    tagged: TaggedMesh, V: dolfinx.fem.FunctionSpace, loads: Sequence[Load], thickness: float
+    tagged: TaggedMesh, V: dolfinx.fem.FunctionSpace, loads: Sequence[Load], *, thickness: float
 ) -> PointForces:
     """The scene's point loads on the displacement space ``V`` (collective).
 

@@ -29,7 +29,7 @@ _UMASK = os.umask(0o022)
 os.umask(_UMASK)
 
 
-def versions(fem: bool = True) -> dict[str, str]:
+def versions(*, fem: bool = True) -> dict[str, str]:
     """Versions of geofrac and the stack it runs on.
 
     ``fem=False`` (MPM runs) leaves out DOLFINx and PETSc, which such a run never imports.
@@ -72,7 +72,7 @@ def write_json(path: Path, data: dict[str, Any]) -> None:
         raise
 
 
-def start_summary(scene: Any, comm: Any, fem: bool = True, **details: Any) -> dict[str, Any]:
+def start_summary(scene: Any, comm: Any, *, fem: bool = True, **details: Any) -> dict[str, Any]:
     """The head of a run's ``summary.json``: the scene, warnings, versions, ranks, start.
 
     Args:
@@ -99,7 +99,7 @@ def start_summary(scene: Any, comm: Any, fem: bool = True, **details: Any) -> di
     }
 
 
-def finish_summary(summary: dict[str, Any], path: Path, comm: Any, timings: Any) -> None:
+def finish_summary(summary: dict[str, Any], path: Path, comm: Any, *, timings: Any) -> None:
     """Add the reduced phase timings and the finish time; rank 0 writes ``path`` (collective)."""
     summary["timings_s"] = timings.reduced(comm)
     summary["finished"] = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
