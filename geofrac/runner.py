@@ -96,7 +96,9 @@ def solve_scene(
         element = make_element(scene.discretization.element, mesh)
         cells = locate_points(mesh, points, [f"output.probes.{n}" for n in names])
         line_cells = {n: locate_line(mesh, n, ln) for n, ln in scene.output.lines.items()}
-        problem = make_problem(tagged, element, scene, effect_registry.linear_terms(scene.effects))
+        problem = make_problem(
+            tagged, element, scene, terms=effect_registry.linear_terms(scene.effects)
+        )
     solution = Solution(scene, tagged, problem, timings=timings, control=control)
     counts = solution.mesh_counts()
     say(
@@ -123,7 +125,7 @@ def solve_scene(
             fields += [f for f in line.fields if f not in fields]
         xyz = np.vstack([points, *(x for _, x, _ in line_cells.values())])
         where = np.concatenate([cells, *(w for _, _, w in line_cells.values())])
-        values = probe_fields(problem, fields, xyz, where) if len(xyz) else {}
+        values = probe_fields(problem, fields, xyz, cells=where) if len(xyz) else {}
         start = len(points)
         results = _probe_results(scene, {f: v[:start] for f, v in values.items()})
         for name, (s, x, _) in line_cells.items():

@@ -1,9 +1,13 @@
 """The import graph of geofrac goes one way: a module imports only its own layer or lower.
 
-Every module under ``geofrac/`` is parsed with :mod:`ast`; every ``import`` counts, at
-module level and inside functions (a function-level import is still a dependency, only
-a later one). An import of ``geofrac.x.y`` also runs ``geofrac/x/__init__.py``, so a
-package's ``__init__`` is checked like any module. See docs/architecture.md.
+Every module under ``geofrac/`` and ``forms/`` (the UFL forms, imported as
+``geofrac_forms``) is parsed with :mod:`ast`; every ``import`` counts, at module level and
+inside functions (a function-level import is still a dependency, only a later one). An
+import of ``geofrac.x.y`` also runs ``geofrac/x/__init__.py``, so a package's ``__init__``
+is checked like any module. See docs/architecture.md.
+
+PETSc is reached through :mod:`geofrac.solvers` only: no other module imports
+``petsc4py`` or ``dolfinx.fem.petsc``.
 """
 
 from __future__ import annotations
@@ -16,6 +20,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "geofrac"
+
+#: Source folders and the package each holds.
+PACKAGES = {"geofrac": ROOT, "geofrac_forms": ROOT.parent / "forms"}
 
 #: The layers, lowest first: (layer name, module prefixes). A module belongs to the entry
 #: with its longest matching prefix; it may import modules of its own layer and lower.
@@ -35,6 +42,9 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "geofrac.kernels",
         ),
     ),
+    # the UFL forms (geofrac_forms, folder forms/): pure symbolic definitions that
+    # DOLFINx compiles; they import ufl and numpy, no geofrac module above the leaves
+    ("forms", ("geofrac_forms",)),
     # the validated scene as data (dataclasses, table checks, expressions): what every
     # layer above reads; importing it imports no loader, no effect, no mesher
     ("scene model", ("geofrac.model",)),
@@ -53,8 +63,11 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ),
     # meshes and the geometry they are made of (DFN networks, gmsh, distribution)
     ("mesh", ("geofrac.meshing", "geofrac.dfn", "geofrac.geometry")),
-    # discretisation: elements, elastic problems, MLS shape functions, linear solvers
-    ("discretisation", ("geofrac.elements", "geofrac.fem", "geofrac.mls", "geofrac.solvers")),
+    # linear algebra: the one adapter to PETSc (matrices, vectors, KSP, MUMPS, assembly of
+    # compiled forms); it imports the leaves only (test_linear_algebra_imports_only_leaves)
+    ("linear algebra", ("geofrac.solvers",)),
+    # discretisation: elements, elastic problems, MLS shape functions
+    ("discretisation", ("geofrac.elements", "geofrac.fem", "geofrac.mls")),
     # drivers: the engines that run a discretised problem (crack event loop, MPM time
     # loop, block building and checks)
     ("driver", ("geofrac.fracture", "geofrac.mpm", "geofrac.blocks")),
@@ -89,12 +102,18 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 
 def _modules() -> dict[str, Path]:
     out = {}
-    for path in ROOT.rglob("*.py"):
-        parts = list(path.relative_to(ROOT.parent).with_suffix("").parts)
-        if parts[-1] == "__init__":
-            parts.pop()
-        out[".".join(parts)] = path
+    for package, folder in PACKAGES.items():
+        for path in folder.rglob("*.py"):
+            parts = [package, *path.relative_to(folder).with_suffix("").parts]
+            if parts[-1] == "__init__":
+                parts.pop()
+            out[".".join(parts)] = path
     return out
+
+
+def _ours(module: str) -> bool:
+    """Whether ``module`` is one of geofrac's packages or inside one."""
+    return any(module == p or module.startswith(p + ".") for p in PACKAGES)
 
 
 MODULES = _modules()
@@ -112,14 +131,14 @@ def _imports(name: str, path: Path) -> list[tuple[str, int]]:
                 module = ".".join(base + ([node.module] if node.module else []))
             else:
                 module = node.module or ""
-            if module != "geofrac" and not module.startswith("geofrac."):
+            if not _ours(module):
                 continue
             for alias in node.names:  # `from geofrac.x import y` may import module x.y
                 sub = f"{module}.{alias.name}"
                 found.append((sub if sub in MODULES else module, node.lineno))
         elif isinstance(node, ast.Import):
             for alias in node.names:
-                if alias.name == "geofrac" or alias.name.startswith("geofrac."):
+                if _ours(alias.name):
                     found.append((alias.name, node.lineno))
     return found
 
@@ -145,7 +164,7 @@ def edges() -> list[tuple[str, str, int]]:
         for target, line in _imports(name, path):
             out.append((name, target, line))
             parts = target.split(".")
-            for k in range(2, len(parts)):  # the parents' __init__ run first
+            for k in range(1, len(parts)):  # the parents' __init__ run first
                 parent = ".".join(parts[:k])
                 if parent in MODULES and not name.startswith(parent):
                     out.append((name, parent, line))
@@ -160,7 +179,12 @@ def unit(module: str) -> str:
     """
     named = [p for _, prefixes in LAYERS for p in prefixes if p.count(".") > 1]
     own = [p for p in named if module == p or module.startswith(p + ".")]
-    return max(own, key=len) if own else ".".join(module.split(".")[:2])
+    if own:
+        return max(own, key=len)
+    top = module.partition(".")[0]
+    if top != "geofrac":  # geofrac_forms: one unit
+        return top
+    return ".".join(module.split(".")[:2])
 
 
 def test_every_module_has_a_layer():
@@ -245,8 +269,83 @@ def test_the_layer_check_sees_an_upward_import():
     """The checks themselves: an import of the loader from the scene model is upward."""
     assert layer("geofrac.scene.load") > layer("geofrac.model.scene")
     assert layer("geofrac.io.outdir") > layer("geofrac.mpm.driver") > layer("geofrac.io.points")
+    assert layer("geofrac.fem.elastic") > layer("geofrac.solvers.linear") > layer("geofrac.meshing")
+    assert (
+        layer("geofrac.model.scene") > layer("geofrac_forms.elasticity") > layer("geofrac.errors")
+    )
+    assert unit("geofrac_forms.gradient_dofs") == "geofrac_forms"
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
     assert _cycles(graph) == [["a", "b", "c"]]
+
+
+def test_linear_algebra_imports_only_leaves():
+    """The PETSc adapter sits low so that every engine can use it: leaves only below it."""
+    bad = [
+        f"{a}:{line} imports {b}"
+        for a, b, line in edges()
+        if a.startswith("geofrac.solvers") and not b.startswith("geofrac.solvers")
+        if layer(b) != 0
+    ]
+    assert not bad, "geofrac.solvers imports above the leaves:\n" + "\n".join(bad)
+
+
+#: The modules that bind PETSc: only the solver adapter may import them.
+PETSC_MODULES = ("petsc4py", "dolfinx.fem.petsc")
+
+
+def petsc_imports(source: str, filename: str = "<source>") -> list[tuple[str, int]]:
+    """(imported PETSc module, line) of every import of :data:`PETSC_MODULES` in ``source``.
+
+    At any depth: in functions and in ``if TYPE_CHECKING:`` blocks too. ``from dolfinx.fem
+    import petsc`` counts as an import of ``dolfinx.fem.petsc``.
+    """
+
+    def binds(module: str) -> bool:
+        return any(module == m or module.startswith(m + ".") for m in PETSC_MODULES)
+
+    found = []
+    for node in ast.walk(ast.parse(source, filename)):
+        if isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            found += [(n, node.lineno) for n in names if binds(n)][:1]
+        elif isinstance(node, ast.Import):
+            found += [(a.name, node.lineno) for a in node.names if binds(a.name)]
+    return found
+
+
+def test_only_the_solvers_import_petsc():
+    """PETSc objects are made and configured in geofrac.solvers alone (issue 44)."""
+    bad = [
+        f"{name}:{line} imports {module}"
+        for name, path in sorted(MODULES.items())
+        if not (name == "geofrac.solvers" or name.startswith("geofrac.solvers."))
+        for module, line in petsc_imports(path.read_text(), str(path))
+    ]
+    assert not bad, "import PETSc through geofrac.solvers:\n" + "\n".join(bad)
+
+
+def test_the_petsc_check_sees_every_kind_of_import():
+    """The check itself: module level, function level, TYPE_CHECKING, ``from`` forms."""
+    source = (
+        "from typing import TYPE_CHECKING\n"
+        "import dolfinx.fem\n"
+        "from dolfinx import fem\n"
+        "if TYPE_CHECKING:\n"
+        "    from petsc4py import PETSc\n"
+        "def f():\n"
+        "    import dolfinx.fem.petsc as p\n"
+        "    from dolfinx.fem import petsc\n"
+        "    from dolfinx.fem.petsc import assemble_matrix\n"
+        "    import petsc4py.PETSc\n"
+    )
+    assert petsc_imports(source) == [
+        ("petsc4py", 5),
+        ("dolfinx.fem.petsc", 7),
+        ("dolfinx.fem.petsc", 8),
+        ("dolfinx.fem.petsc", 9),
+        ("petsc4py.PETSc", 10),
+    ]
+    assert petsc_imports("import dolfinx\nfrom dolfinx.fem import Function\n") == []
 
 
 @pytest.mark.parametrize(
@@ -256,6 +355,11 @@ def test_the_layer_check_sees_an_upward_import():
         ("geofrac.model.table", ("geofrac.scene", "geofrac.effects", "geofrac.mpm")),
         ("geofrac.fem.elastic", ("geofrac.effects", "geofrac.scene", "geofrac.fracture")),
         ("geofrac.elements.efmm_numpy", ("geofrac.blocks",)),
+        (
+            "geofrac.solvers",
+            ("geofrac.elements", "geofrac.fem", "geofrac.meshing", "geofrac.model"),
+        ),
+        ("geofrac_forms.gradient_dofs", ("geofrac.",)),
     ],
 )
 def test_a_lower_module_imports_alone(module, absent):

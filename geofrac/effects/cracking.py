@@ -608,6 +608,6 @@ def scene_driver(
         raise ValueError(f"scene {scene.name!r} does not declare the effect 'cracking'")
     tagged = build_mesh(scene.geometry, comm)
     element = make_element(scene.discretization.element, tagged.mesh)
-    problem = make_problem(tagged, element, scene, linear_terms(scene.effects))
+    problem = make_problem(tagged, element, scene, terms=linear_terms(scene.effects))
     problem.compile()
     return make_driver(config, Solution(scene, tagged, problem), say or (lambda msg: None))

@@ -29,17 +29,15 @@ from typing import Any
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import dolfinx
-import dolfinx.fem.petsc
 import numpy as np
 from mpi4py import MPI
-from petsc4py import PETSc
 
 from geofrac import kernels
 from geofrac.elements.base import Element
 from geofrac.elements.efmm_numpy import edge_crossings
 from geofrac.errors import RunError
 from geofrac.geometry.triangles import inner_points
-from geofrac.solvers import block_diagonal
+from geofrac.solvers import Matrix, assemble_matrix, block_diagonal, function_vector
 
 __all__ = ["DomainData", "EfmmElement", "domain_data", "efmm"]
 
@@ -132,7 +130,7 @@ def domain_data(mesh: dolfinx.mesh.Mesh, q_rand: float, seed: int) -> DomainData
     shared = arr[c2f, 4] + arr[c2f, 5] > 1.5  # shape=(nc, 3)
     cross = 0.5 * (x_lo + x_hi)  # boundary edges: the midpoint
     xs, clamped = edge_crossings(
-        x_lo[shared], x_hi[shared], arr[c2f[shared], 0:2], arr[c2f[shared], 2:4]
+        x_lo[shared], x_hi[shared], left=arr[c2f[shared], 0:2], right=arr[c2f[shared], 2:4]
     )
     cross[shared] = xs
     flags = np.zeros(fmap.size_local + fmap.num_ghosts)
@@ -185,8 +183,8 @@ class EfmmElement(Element):
     stress_space: Any = None
     domains: DomainData | None = None
     D: np.ndarray | None = None
-    _Ainv: PETSc.Mat | None = field(default=None, repr=False)
-    _C: PETSc.Mat | None = field(default=None, repr=False)
+    _Ainv: Matrix | None = field(default=None, repr=False)
+    _C: Matrix | None = field(default=None, repr=False)
 
     def setup(self, D: np.ndarray, q_rand: float = 0.0, seed: int = 0) -> None:
         """Build the domains, compile the kernels, assemble C and A⁻¹ (collective)."""
@@ -206,8 +204,7 @@ class EfmmElement(Element):
         mass = dolfinx.fem.assemble_vector(_form([S], "efmm_stress_mass", w, c))
         mass.scatter_reverse(dolfinx.la.InsertMode.add)
         coupling = _form([E, self.space], "efmm_coupling", w, c)
-        self._C = dolfinx.fem.petsc.assemble_matrix(coupling)
-        self._C.assemble()
+        self._C = assemble_matrix(coupling)
         # S and E number vertices alike in practice; map through the cell dofmaps anyway
         n = E.dofmap.index_map.size_local
         to_e = np.empty(S.dofmap.index_map.size_local + S.dofmap.index_map.num_ghosts, np.int64)
@@ -217,7 +214,7 @@ class EfmmElement(Element):
         blocks[to_e[owned]] = mass.array.reshape(-1, 9, 9)[owned]
         self._Ainv = block_diagonal(np.linalg.inv(blocks), E)
 
-    def stiffness(self) -> PETSc.Mat:
+    def stiffness(self) -> Matrix:
         """K = Cᵀ A⁻¹ C on the displacement DOFs (a new matrix; the caller destroys it)."""
         if self._C is None or self._Ainv is None:
             raise RuntimeError("EfmmElement.setup() must be called before stiffness()")
@@ -232,8 +229,8 @@ class EfmmElement(Element):
         e = dolfinx.fem.Function(self.stress_space, name="stress_coefficients")
         y = self._C.createVecLeft()
         try:
-            self._C.mult(u.x.petsc_vec, y)
-            self._Ainv.mult(y, e.x.petsc_vec)
+            self._C.mult(function_vector(u), y)
+            self._Ainv.mult(y, function_vector(e))
         finally:
             y.destroy()
         e.x.scatter_forward()

@@ -87,7 +87,7 @@ class Domains:
 
 
 def edge_crossings(
-    xa: np.ndarray, xb: np.ndarray, left: np.ndarray, right: np.ndarray
+    xa: np.ndarray, xb: np.ndarray, *, left: np.ndarray, right: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Where the segment between two triangles' inner points crosses their shared edge.
 
@@ -119,6 +119,7 @@ def integration_domains(
     points: np.ndarray,
     triangles: np.ndarray,
     q_rand: float = 0.0,
+    *,
     seed: int = 0,
     keys: np.ndarray | None = None,
     ids: np.ndarray | None = None,
@@ -162,7 +163,7 @@ def integration_domains(
     left = np.where(on_left[first], first, second)
     right = np.where(on_left[first], second, first)
     x, was_clamped = edge_crossings(
-        points[lo[first]], points[hi[first]], inner[cell_of[left]], inner[cell_of[right]]
+        points[lo[first]], points[hi[first]], left=inner[cell_of[left]], right=inner[cell_of[right]]
     )
     cross[first] = x
     cross[second] = x  # the same point, bit for bit, on both sides
@@ -235,6 +236,7 @@ def node_operator(
     points: np.ndarray,
     triangles: np.ndarray,
     D: np.ndarray,
+    *,
     domains: Domains,
     node: int,
     mine: np.ndarray | None = None,
@@ -277,27 +279,27 @@ def node_operator(
 
 
 def node_stiffness(
-    points: np.ndarray, triangles: np.ndarray, D: np.ndarray, domains: Domains, node: int
+    points: np.ndarray, triangles: np.ndarray, D: np.ndarray, *, domains: Domains, node: int
 ) -> tuple[np.ndarray, np.ndarray]:
     """K_i = C_iᵀ A_i⁻¹ C_i of one node (eqs. 3.4, 3.6) and the global DOFs it acts on.
 
     Returns:
         ``K`` shape=(2m, 2m) and ``dofs`` shape=(2m,), m the nodes of the node's patch.
     """
-    op = node_operator(points, triangles, D, domains, node)
+    op = node_operator(points, triangles, D, domains=domains, node=node)
     patch = op.patch
     return op.K, np.stack([2 * patch, 2 * patch + 1], axis=1).ravel()
 
 
 def stiffness(
-    points: np.ndarray, triangles: np.ndarray, D: np.ndarray, q_rand: float = 0.0, seed: int = 0
+    points: np.ndarray, triangles: np.ndarray, D: np.ndarray, *, q_rand: float = 0.0, seed: int = 0
 ) -> np.ndarray:
     """The global EFMM stiffness, dense, shape=(2 num_nodes, 2 num_nodes) (small meshes)."""
-    domains = integration_domains(points, triangles, q_rand, seed)
+    domains = integration_domains(points, triangles, q_rand, seed=seed)
     n = len(points)
     K = np.zeros((2 * n, 2 * n))
     for i in np.unique(domains.node):
-        Ki, dofs = node_stiffness(points, triangles, D, domains, int(i))
+        Ki, dofs = node_stiffness(points, triangles, D, domains=domains, node=int(i))
         K[np.ix_(dofs, dofs)] += Ki
     return K
 
@@ -335,6 +337,7 @@ def stress_error(
     x: np.ndarray,
     domain: np.ndarray,
     e: np.ndarray,
+    *,
     Dinv: np.ndarray,
     length: float,
     exact_stress: Callable[[np.ndarray, np.ndarray], np.ndarray],

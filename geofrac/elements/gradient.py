@@ -19,7 +19,6 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 import basix
 import dolfinx
 import numpy as np
-from petsc4py import PETSc
 
 from geofrac.elements.base import Element
 from geofrac.elements.kinematics import (
@@ -30,7 +29,15 @@ from geofrac.elements.kinematics import (
     symmetry_functionals,
 )
 from geofrac.elements.kinematics import local_prolongation as _local_prolongation
-from geofrac.solvers import block_diagonal, orthonormal_nullspace
+from geofrac.solvers import (
+    Matrix,
+    NullSpace,
+    add_matrix,
+    block_diagonal,
+    csr_matrix,
+    orthonormal_nullspace,
+    transposed,
+)
 
 __all__ = ["GradientDofElement", "gnt", "rgnq", "rgnt"]
 
@@ -51,14 +58,14 @@ class GradientDofElement(Element):
 
     kind: GradientDofKind = field(default=KINDS["rgnt"])
     dof_space: Any = None
-    _T: PETSc.Mat | None = field(default=None, repr=False)
+    _T: Matrix | None = field(default=None, repr=False)
 
     @property
     def unknowns(self) -> Any:
         """The space of the unknowns, W."""
         return self.dof_space
 
-    def prolongation(self) -> PETSc.Mat:
+    def prolongation(self) -> Matrix:
         """T: W → V (P2), shape=(num P2 DOFs, num vertex DOFs); built on first use.
 
         Each owned P2 node row is filled from a cell that contains it; an edge shared by
@@ -93,17 +100,16 @@ class GradientDofElement(Element):
         rows, cols, vals = rows[first], cols[first], vals[first]  # sorted by (row, col)
         row0 = vimap.local_range[0] * gdim
         n_rows = vimap.size_local * gdim
-        indptr = np.searchsorted(rows - row0, np.arange(n_rows + 1)).astype(PETSc.IntType)
-        T = PETSc.Mat().createAIJ(
-            size=((n_rows, vimap.size_global * gdim), (wimap.size_local * bs, n_cols_global)),
-            csr=(indptr, cols.astype(PETSc.IntType), vals),
-            comm=mesh.comm,
+        indptr = np.searchsorted(rows - row0, np.arange(n_rows + 1))
+        T = csr_matrix(
+            mesh.comm,
+            ((n_rows, vimap.size_global * gdim), (wimap.size_local * bs, n_cols_global)),
+            (indptr, cols, vals),
         )
-        T.assemble()
         self._T = T
         return T
 
-    def reduce(self, A_vv: PETSc.Mat, A_wv: PETSc.Mat, A_ww: PETSc.Mat) -> PETSc.Mat:
+    def reduce(self, A_vv: Matrix, A_wv: Matrix, A_ww: Matrix) -> Matrix:
         """K = Tᵀ A_vv T + A_wv T + (A_wv T)ᵀ + A_ww (a new matrix on W).
 
         Args:
@@ -114,10 +120,10 @@ class GradientDofElement(Element):
         T = self.prolongation()
         K = A_vv.ptap(T)
         C = A_wv.matMult(T)
-        Ct = C.transpose(PETSc.Mat())  # without an output matrix petsc4py works in place
+        Ct = transposed(C)
         try:
             for M in (C, Ct, A_ww):
-                K.axpy(1.0, M, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+                add_matrix(K, M)
         finally:
             C.destroy()
             Ct.destroy()
@@ -129,6 +135,7 @@ class GradientDofElement(Element):
         dim: int,
         entities: np.ndarray,
         values: Callable[[np.ndarray], np.ndarray],
+        *,
         components: tuple[int, ...],
     ) -> tuple[np.ndarray, np.ndarray]:
         """Owned constrained DOFs on the vertices of mesh entities and their values.
@@ -220,7 +227,7 @@ class GradientDofElement(Element):
         acc.scatter_reverse(dolfinx.la.InsertMode.add)
         return local[: imap.size_local].copy()
 
-    def basis_change(self, Q: np.ndarray) -> PETSc.Mat:
+    def basis_change(self, Q: np.ndarray) -> Matrix:
         """The block-diagonal orthogonal map w = Q h on W (identity on the translations).
 
         Args:
@@ -236,7 +243,7 @@ class GradientDofElement(Element):
         block[:, gdim:, gdim:] = Q
         return block_diagonal(block, W)
 
-    def rigid_body_modes(self, Q: np.ndarray | None = None) -> PETSc.NullSpace:
+    def rigid_body_modes(self, Q: np.ndarray | None = None) -> NullSpace:
         """Orthonormal rigid body modes on W: translations, and rotations with g = ½ Π ω.
 
         With ``Q`` (per owned vertex, shape=(num_owned, k, k)) the modes are given in the

@@ -151,7 +151,7 @@ def local_prolongation(kind: GradientDofKind, coords: np.ndarray, edges: np.ndar
 
 
 def vertex_field(
-    kind: GradientDofKind, coords: np.ndarray, dofs: np.ndarray, points: np.ndarray
+    kind: GradientDofKind, coords: np.ndarray, dofs: np.ndarray, *, points: np.ndarray
 ) -> np.ndarray:
     """Evaluate the field (*) on one cell directly (a reference for tests).
 

@@ -71,9 +71,10 @@ class EfmmProblem(ElasticProblem):
         tagged: TaggedMesh,
         element: EfmmElement,
         scene: Scene,
+        *,
         terms: Sequence[LinearTerm] = (),
     ) -> None:
-        super().__init__(tagged, element, scene, terms)
+        super().__init__(tagged, element, scene, terms=terms)
         mat = scene.material
         self.D = d_matrix(mat.E, mat.nu, 2, mat.plane)
         self.e: dolfinx.fem.Function | None = None
@@ -141,10 +142,10 @@ class EfmmProblem(ElasticProblem):
             data["x"],
             data["domain"],
             data["e"],
-            np.linalg.inv(self.D),
-            self.element.domains.length,
-            stress,
-            (pts, wts),
+            Dinv=np.linalg.inv(self.D),
+            length=self.element.domains.length,
+            exact_stress=stress,
+            rule=(pts, wts),
         )
         err, norm = self.comm.allreduce(np.array([err, norm]), op=MPI.SUM)
         out["energy_cst"] = out["energy"]

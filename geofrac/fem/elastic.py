@@ -10,11 +10,9 @@ from typing import Any
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import dolfinx
-import dolfinx.fem.petsc
 import numpy as np
 import ufl
 from mpi4py import MPI
-from petsc4py import PETSc
 
 from geofrac import elements
 from geofrac.analytic import ExactSolution, displacement_gradient, make_exact
@@ -25,7 +23,19 @@ from geofrac.fem import loads
 from geofrac.materials import lame
 from geofrac.meshing.distribute import TaggedMesh
 from geofrac.model.scene import Load, Scene
-from geofrac.solvers import LinearSolver, rigid_body_modes
+from geofrac.solvers import (
+    SCALAR,
+    LinearSolver,
+    Matrix,
+    NullSpace,
+    Vector,
+    assemble_matrix,
+    assemble_vector,
+    function_vector,
+    rigid_body_modes,
+    set_bc,
+    zero_rows_columns,
+)
 from geofrac_forms import elasticity as forms
 from geofrac_forms.gradient_dofs import penalty_forms
 
@@ -60,11 +70,11 @@ class FormContext:
 
     def constant(self, value: float) -> dolfinx.fem.Constant:
         """A scalar DOLFINx constant on the mesh."""
-        return dolfinx.fem.Constant(self.mesh, PETSc.ScalarType(value))
+        return dolfinx.fem.Constant(self.mesh, SCALAR(value))
 
     def vector(self, values: tuple[float, ...]) -> dolfinx.fem.Constant:
         """A vector DOLFINx constant on the mesh, shape=(gdim,)."""
-        return dolfinx.fem.Constant(self.mesh, np.asarray(values, dtype=PETSc.ScalarType))
+        return dolfinx.fem.Constant(self.mesh, np.asarray(values, dtype=SCALAR))
 
 
 #: A right-hand-side term added to the loads (an effect's ``linear_form`` bound to its
@@ -111,6 +121,7 @@ class ElasticProblem:
         tagged: TaggedMesh,
         element: Element,
         scene: Scene,
+        *,
         terms: Sequence[LinearTerm] = (),
     ) -> None:
         self.tagged, self.element, self.scene = tagged, element, scene
@@ -122,11 +133,9 @@ class ElasticProblem:
         mat = scene.material
         gdim = mesh.geometry.dim
         lam, mu = lame(mat.E, mat.nu, gdim, mat.plane)
-        self.lam = dolfinx.fem.Constant(mesh, PETSc.ScalarType(lam))
-        self.mu = dolfinx.fem.Constant(mesh, PETSc.ScalarType(mu))
-        self.thickness = dolfinx.fem.Constant(
-            mesh, PETSc.ScalarType(mat.thickness if gdim == 2 else 1.0)
-        )
+        self.lam = dolfinx.fem.Constant(mesh, SCALAR(lam))
+        self.mu = dolfinx.fem.Constant(mesh, SCALAR(mu))
+        self.thickness = dolfinx.fem.Constant(mesh, SCALAR(mat.thickness if gdim == 2 else 1.0))
         q = scene.discretization.quadrature_degree
         self.dx = ufl.Measure(
             "dx", domain=mesh, metadata={} if q is None else {"quadrature_degree": q}
@@ -141,13 +150,15 @@ class ElasticProblem:
         u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
         self._a = forms.stiffness_form(u, v, self.lam, self.mu, self.thickness, self.dx)
         self._L = self._linear_form(v)
-        self.point_forces = loads.point_forces(tagged, V, scene.loads, float(self.thickness.value))
+        self.point_forces = loads.point_forces(
+            tagged, V, scene.loads, thickness=float(self.thickness.value)
+        )
         self.bcs = self._boundary_conditions()
         self.uh = dolfinx.fem.Function(V, name="displacement")
         self.a: dolfinx.fem.Form | None = None
         self.L: dolfinx.fem.Form | None = None
-        self.A: PETSc.Mat | None = None
-        self.b: PETSc.Vec | None = None
+        self.A: Matrix | None = None
+        self.b: Vector | None = None
         self.solver: LinearSolver | None = None
         self.iterations = 0
 
@@ -158,7 +169,7 @@ class ElasticProblem:
         ctx = FormContext(mesh, v, self.dx, self.thickness)
         terms += [term(ctx) for term in self.terms]
         if not terms:
-            zero = dolfinx.fem.Constant(mesh, np.zeros(gdim, dtype=PETSc.ScalarType))
+            zero = dolfinx.fem.Constant(mesh, np.zeros(gdim, dtype=SCALAR))
             terms.append(ufl.inner(zero, v) * self.dx)
         return sum(terms[1:], terms[0])
 
@@ -172,12 +183,14 @@ class ElasticProblem:
                 value = sig * ufl.FacetNormal(self.mesh)
             else:  # the body force that makes u_exact an equilibrium state
                 value = -ufl.div(forms.sigma(u_ex, self.lam, self.mu))
-        return loads.load_form(load, v, self.tagged, self.ds, self.dx, self.thickness, value)
+        return loads.load_form(
+            load, v, self.tagged, ds=self.ds, dx=self.dx, thickness=self.thickness, value=value
+        )
 
     #: whether the unknowns are in a changed basis (:class:`GradientDofProblem`).
     changes_basis = False
 
-    def _add_point_forces(self, b: PETSc.Vec) -> None:
+    def _add_point_forces(self, b: Vector) -> None:
         """Add the point loads to an assembled vector on ``element.space``.
 
         When a load is an expression, a vector with inf or NaN entries is refused.
@@ -228,7 +241,7 @@ class ElasticProblem:
             for comp, value in zip(bc.components, bc.value, strict=True):
                 Vc = V.sub(comp)
                 dofs = dolfinx.fem.locate_dofs_topological(Vc, dim, entities)
-                bcs.append(dolfinx.fem.dirichletbc(PETSc.ScalarType(value), dofs, Vc))
+                bcs.append(dolfinx.fem.dirichletbc(SCALAR(value), dofs, Vc))
         return bcs
 
     def compile(self) -> None:
@@ -242,13 +255,10 @@ class ElasticProblem:
             self.compile()
         assert self.a is not None and self.L is not None
         self._free_operators()  # a new operator needs a new factorisation/preconditioner
-        self.A = dolfinx.fem.petsc.assemble_matrix(self.a, bcs=self.bcs)
-        self.A.assemble()
-        self.b = dolfinx.fem.petsc.assemble_vector(self.L)
-        dolfinx.fem.petsc.apply_lifting(self.b, [self.a], bcs=[self.bcs])
-        self.b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self.A = assemble_matrix(self.a, self.bcs)
+        self.b = assemble_vector(self.L, (self.a, self.bcs))
         self._add_point_forces(self.b)
-        dolfinx.fem.petsc.set_bc(self.b, self.bcs)
+        set_bc(self.b, self.bcs)
 
     def _constrain(self) -> None:
         """Impose :meth:`dirichlet` on an assembled ``A`` and ``b`` by elimination.
@@ -258,21 +268,14 @@ class ElasticProblem:
         """
         assert self.A is not None and self.b is not None
         rows, vals = self.dirichlet()
-        rows = rows.astype(PETSc.IntType)
-        g = self.A.createVecRight()
-        try:
-            g.setValues(rows, vals)
-            g.assemble()
-            self.A.zeroRowsColumns(rows, 1.0, g, self.b)
-        finally:
-            g.destroy()
+        zero_rows_columns(self.A, rows, vals, b=self.b)
 
     def tensor_fields(self, names: list[str]) -> dict[str, dolfinx.fem.Function]:
         """Stress/strain fields of the solution for XDMF (see :func:`post.tensor_fields`)."""
         from geofrac.fem.post import tensor_fields
 
         plane = self.scene.material.plane
-        return tensor_fields(self.uh, self.lam, self.mu, plane, names)
+        return tensor_fields(self.uh, self.lam, self.mu, plane=plane, names=names)
 
     def point_tensors(
         self, names: Sequence[str], points: np.ndarray, cells: np.ndarray
@@ -290,7 +293,9 @@ class ElasticProblem:
         from geofrac.fem.post import point_tensors
 
         plane = self.scene.material.plane
-        return point_tensors(self.uh, self.lam, self.mu, plane, names, points, cells)
+        return point_tensors(
+            self.uh, self.lam, self.mu, plane=plane, names=names, points=points, cells=cells
+        )
 
     def write_extra(self, directory: Path) -> list[Path]:
         """Write the discretisation's own output files (collective); none here."""
@@ -306,21 +311,20 @@ class ElasticProblem:
 
         assert self.exact is not None
         u_exact, _ = exact_ufl(self.exact, self.mesh)
-        return error_norms(self.uh, u_exact, self.lam, self.mu)
+        return error_norms(self.uh, u_exact, self.lam, mu=self.mu)
 
-    def load_vector(self) -> PETSc.Vec:
+    def load_vector(self) -> Vector:
         """The assembled load vector on the unknowns, without Dirichlet conditions.
 
         Point loads are included.
         """
         if self.L is None:
             self.compile()
-        b = dolfinx.fem.petsc.assemble_vector(self.L)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        b = assemble_vector(self.L)
         self._add_point_forces(b)
         return b
 
-    def load_part(self, index: int) -> PETSc.Vec:
+    def load_part(self, index: int) -> Vector:
         """The load vector on the unknowns of the scene's load ``index`` alone (collective).
 
         Without Dirichlet conditions and without the other loads and the effects' terms
@@ -332,16 +336,15 @@ class ElasticProblem:
         if load.type == "point":
             zero = dolfinx.fem.Constant(self.mesh, np.zeros(self.mesh.geometry.dim))
             form = ufl.inner(zero, ufl.TestFunction(V)) * self.dx
-            points = loads.point_forces(self.tagged, V, (load,), t)
+            points = loads.point_forces(self.tagged, V, (load,), thickness=t)
         else:
             form = self._load_term(load, ufl.TestFunction(V))
-            points = loads.point_forces(self.tagged, V, (), t)
-        b = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(form))
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            points = loads.point_forces(self.tagged, V, (), thickness=t)
+        b = assemble_vector(dolfinx.fem.form(form))
         points.add_to(b)
         return self._on_unknowns(b)
 
-    def _on_unknowns(self, b: PETSc.Vec) -> PETSc.Vec:
+    def _on_unknowns(self, b: Vector) -> Vector:
         """A load vector of the displacement space on the unknowns: itself here."""
         return b
 
@@ -369,10 +372,15 @@ class ElasticProblem:
         if self.solver is None:
             s = self.scene.solver
             self.solver = LinearSolver(
-                self.A, PREFIX, s.preset, s.options, self.element.num_dofs, self._near_nullspace
+                self.A,
+                PREFIX,
+                s.preset,
+                options=s.options,
+                num_dofs=self.element.num_dofs,
+                near_nullspace=self._near_nullspace,
             )
         unknown = self.unknown()
-        self.iterations = self.solver.solve(self.b, unknown.x.petsc_vec)
+        self.iterations = self.solver.solve(self.b, function_vector(unknown))
         unknown.x.scatter_forward()
         self.to_field()
         return self.uh
@@ -384,7 +392,7 @@ class ElasticProblem:
     def to_field(self) -> None:
         """Set the displacement ``uh`` from the solved unknowns (nothing to do here)."""
 
-    def _near_nullspace(self) -> PETSc.NullSpace:
+    def _near_nullspace(self) -> NullSpace:
         return rigid_body_modes(self.element.space)
 
     def destroy(self) -> None:
@@ -432,24 +440,23 @@ class GradientDofProblem(ElasticProblem):
         tagged: TaggedMesh,
         element: Element,
         scene: Scene,
+        *,
         terms: Sequence[LinearTerm] = (),
     ) -> None:
-        super().__init__(tagged, element, scene, terms)
+        super().__init__(tagged, element, scene, terms=terms)
         W = element.unknowns
         self.wh = dolfinx.fem.Function(W, name="vertex_dofs")
         g, h = ufl.TrialFunction(W), ufl.TestFunction(W)
         u, v = ufl.TrialFunction(element.space), ufl.TestFunction(element.space)
         alpha = scene.discretization.zero_mode_penalty
-        self.penalty_scale = dolfinx.fem.Constant(
-            self.mesh, PETSc.ScalarType(alpha * float(self.mu.value))
-        )
+        self.penalty_scale = dolfinx.fem.Constant(self.mesh, SCALAR(alpha * float(self.mu.value)))
         pen_vv, self._a_wv, self._a_ww = penalty_forms(
             u, v, g, h, element.kind.basis, self.penalty_scale * self.thickness, self.dx
         )
         self._a = self._a + pen_vv
         self.a_wv: dolfinx.fem.Form | None = None
         self.a_ww: dolfinx.fem.Form | None = None
-        self._Q: PETSc.Mat | None = None
+        self._Q: Matrix | None = None
         self.hh: dolfinx.fem.Function | None = None
         if self.basis is not None:
             self._Q = element.basis_change(self.basis)
@@ -500,7 +507,7 @@ class GradientDofProblem(ElasticProblem):
                 elif mode == "consistent":
                     axis = bc.components[0] if bc.symmetry else None
                     conditions.append((dim, entities, bc.components, axis))
-            out.append(element.vertex_constraints(dim, entities, values, comps))
+            out.append(element.vertex_constraints(dim, entities, values, components=comps))
         if mode == "consistent":
             out.append(self._implied_constraints(conditions, out))
         return out  # type: ignore[return-value]
@@ -550,10 +557,8 @@ class GradientDofProblem(ElasticProblem):
             self.compile()
         assert self.a is not None and self.L is not None
         self._free_operators()
-        mats = [dolfinx.fem.petsc.assemble_matrix(f) for f in (self.a, self.a_wv, self.a_ww)]
+        mats = [assemble_matrix(f) for f in (self.a, self.a_wv, self.a_ww)]
         try:
-            for M in mats:
-                M.assemble()
             self.A = self.element.reduce(*mats)
         finally:
             for M in mats:
@@ -565,11 +570,11 @@ class GradientDofProblem(ElasticProblem):
         self.b = self.load_vector()
         self._constrain()
 
-    def load_vector(self) -> PETSc.Vec:
+    def load_vector(self) -> Vector:
         """Qᵀ Tᵀ b_P2: the load vector on the unknowns, without Dirichlet conditions."""
         return self._on_unknowns(super().load_vector())
 
-    def _on_unknowns(self, b_v: PETSc.Vec) -> PETSc.Vec:
+    def _on_unknowns(self, b_v: Vector) -> Vector:
         """Qᵀ Tᵀ b_v of a load vector b_v on the displacement space (destroys b_v)."""
         try:
             b = self.element.prolongation().createVecRight()
@@ -602,10 +607,10 @@ class GradientDofProblem(ElasticProblem):
             w[:, :gdim] = h[:, :gdim]
             w[:, gdim:] = np.einsum("nkj,nj->nk", self.basis, h[:, gdim:])
             self.wh.x.scatter_forward()
-        self.element.prolongation().mult(self.wh.x.petsc_vec, self.uh.x.petsc_vec)
+        self.element.prolongation().mult(function_vector(self.wh), function_vector(self.uh))
         self.uh.x.scatter_forward()
 
-    def _near_nullspace(self) -> PETSc.NullSpace:
+    def _near_nullspace(self) -> NullSpace:
         return self.element.rigid_body_modes(self.basis)
 
     def destroy(self) -> None:
@@ -617,7 +622,7 @@ class GradientDofProblem(ElasticProblem):
 
 
 def make_problem(
-    tagged: TaggedMesh, element: Element, scene: Scene, terms: Sequence[LinearTerm] = ()
+    tagged: TaggedMesh, element: Element, scene: Scene, *, terms: Sequence[LinearTerm] = ()
 ) -> ElasticProblem:
     """The elastic problem of ``element`` with the right-hand-side ``terms``.
 
@@ -625,4 +630,4 @@ def make_problem(
     (``problem``); no element is named here.
     """
     problem: type[ElasticProblem] = elements.get(element.name).problem_class()
-    return problem(tagged, element, scene, terms)
+    return problem(tagged, element, scene, terms=terms)

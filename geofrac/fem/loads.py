@@ -38,12 +38,12 @@ import dolfinx
 import numpy as np
 import ufl
 from mpi4py import MPI
-from petsc4py import PETSc
 
 from geofrac.errors import RunError
 from geofrac.meshing.distribute import TaggedMesh
 from geofrac.model import expr
 from geofrac.model.scene import Load
+from geofrac.solvers import SCALAR, Vector
 from geofrac_forms import elasticity as forms
 
 __all__ = [
@@ -96,7 +96,7 @@ def value_ufl(value: Sequence[float | str], mesh: dolfinx.mesh.Mesh) -> Any:
         a vector of shape=(len(value),), or a scalar for one entry.
     """
     if all(not isinstance(c, str) for c in value):
-        array = np.asarray(value, dtype=PETSc.ScalarType)
+        array = np.asarray(value, dtype=SCALAR)
         return dolfinx.fem.Constant(mesh, array[0] if len(array) == 1 else array)
     parts = [expression_ufl(c, mesh) if isinstance(c, str) else ufl.as_ufl(c) for c in value]
     return parts[0] if len(parts) == 1 else ufl.as_vector(parts)
@@ -106,6 +106,7 @@ def load_form(
     load: Load,
     v: Any,
     tagged: TaggedMesh,
+    *,
     ds: ufl.Measure,
     dx: ufl.Measure,
     thickness: Any,
@@ -144,7 +145,7 @@ class PointForces:
     rows: np.ndarray
     values: np.ndarray
 
-    def add_to(self, b: PETSc.Vec) -> None:
+    def add_to(self, b: Vector) -> None:
         """Add the forces to the owned entries of an assembled load vector ``b``."""
         if len(self.rows):
             with b.localForm() as local:
@@ -152,7 +153,7 @@ class PointForces:
 
 
 def point_forces(
-    tagged: TaggedMesh, V: dolfinx.fem.FunctionSpace, loads: Sequence[Load], thickness: float
+    tagged: TaggedMesh, V: dolfinx.fem.FunctionSpace, loads: Sequence[Load], *, thickness: float
 ) -> PointForces:
     """The scene's point loads on the displacement space ``V`` (collective).
 
@@ -195,7 +196,7 @@ def has_expressions(loads: Sequence[Load]) -> bool:
     )
 
 
-def require_finite(b: PETSc.Vec, comm: MPI.Comm) -> None:
+def require_finite(b: Vector, comm: MPI.Comm) -> None:
     """Refuse a load vector with an inf or NaN entry (collective).
 
     Raises:

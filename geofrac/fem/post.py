@@ -145,7 +145,7 @@ def principal_of(stress: np.ndarray) -> np.ndarray:
 
 
 def probe_fields(
-    problem: Any, fields: Sequence[str], points: np.ndarray, cells: np.ndarray
+    problem: Any, fields: Sequence[str], points: np.ndarray, *, cells: np.ndarray
 ) -> dict[str, np.ndarray]:
     """The probe fields at points, each evaluated in the cell :func:`locate_points` chose.
 
@@ -185,6 +185,7 @@ def point_tensors(
     uh: dolfinx.fem.Function,
     lam: Any,
     mu: Any,
+    *,
     plane: str,
     names: Sequence[str],
     points: np.ndarray,
@@ -212,7 +213,7 @@ def point_tensors(
 
 
 def error_norms(
-    uh: dolfinx.fem.Function, u_exact: Any, lam: Any, mu: Any, extra_degree: int = 4
+    uh: dolfinx.fem.Function, u_exact: Any, lam: Any, *, mu: Any, extra_degree: int = 4
 ) -> dict[str, float]:
     """Displacement L2 error and energy error (Edo (2016), eqs. 2.22 and 3.30b), plus norms.
 
@@ -306,7 +307,7 @@ def _nodal_average(expr: Any, mesh: dolfinx.mesh.Mesh, shape: tuple[int, ...], n
 
 
 def tensor_fields(
-    uh: dolfinx.fem.Function, lam: Any, mu: Any, plane: str, names: Sequence[str]
+    uh: dolfinx.fem.Function, lam: Any, mu: Any, *, plane: str, names: Sequence[str]
 ) -> dict[str, dolfinx.fem.Function]:
     """Stress, strain and von Mises fields of ``uh`` for XDMF output.
 

@@ -14,11 +14,18 @@ from typing import TYPE_CHECKING
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import numpy as np
-from petsc4py import PETSc
 
 from geofrac.fracture.context import CrackContext
 from geofrac.fracture.topology import components, motion_pins, motion_rows, zero_energy_rows
 from geofrac.fracture.units import Units
+from geofrac.solvers import (
+    Matrix,
+    Vector,
+    coo_matrix,
+    dense_submatrix,
+    diagonal_norm1,
+    zero_rows_columns,
+)
 
 if TYPE_CHECKING:
     from geofrac.fracture.faces import Faces
@@ -45,11 +52,11 @@ class Assembler:
         self.fragment_nodes = np.zeros(0, dtype=np.int64)
         self.pinned_dofs = np.zeros(0, dtype=np.int64)
         self.pinned_nodes = np.zeros(0, dtype=np.int64)
-        self._b0: PETSc.Vec | None = None
+        self._b0: Vector | None = None
         #: crack-face contact (:class:`~geofrac.fracture.faces.Faces`), or None.
         self.contact: Faces | None = None
 
-    def assemble(self, held_values: np.ndarray) -> tuple[PETSc.Mat, PETSc.Vec, np.ndarray]:
+    def assemble(self, held_values: np.ndarray) -> tuple[Matrix, Vector, np.ndarray]:
         """Stiffness and load vector of the current crack state; returns (A, b, held DOFs).
 
         Dirichlet DOFs and held DOFs (no stiffness, or in a cut-free fragment) are
@@ -75,14 +82,8 @@ class Assembler:
         rows.append(diag)
         cols.append(diag)
         vals.append(np.zeros(len(diag)))
-        A = PETSc.Mat().create(ctx.comm)
-        A.setSizes(((ctx.n_local, ctx.n_global), (ctx.n_local, ctx.n_global)))
-        A.setType(PETSc.Mat.Type.AIJ)
-        A.setPreallocationCOO(
-            np.concatenate(rows).astype(PETSc.IntType), np.concatenate(cols).astype(PETSc.IntType)
-        )
-        A.setValuesCOO(np.concatenate(vals), addv=PETSc.InsertMode.ADD_VALUES)
-        A.assemble()
+        entries = (np.concatenate(rows), np.concatenate(cols), np.concatenate(vals))
+        A = coo_matrix(ctx.comm, (ctx.n_local, ctx.n_global), entries)
         used = units.use_counts(is_mls) > 0
         used[ctx.node_dofs(self.fragment_nodes)] = False
         used[self.pinned_dofs] = False
@@ -94,11 +95,7 @@ class Assembler:
         if self._b0 is None:
             self._b0 = ctx.problem.load_vector()
         b = self._b0.copy()
-        g = A.createVecRight()
-        g.setValues(fixed[mine].astype(PETSc.IntType), values[mine])
-        g.assemble()
-        A.zeroRowsColumns(fixed[mine].astype(PETSc.IntType), 1.0, g, b)
-        g.destroy()
+        zero_rows_columns(A, fixed[mine], values[mine], b=b)
         return A, b, held
 
     def find_fragments(self) -> bool:
@@ -219,17 +216,12 @@ class Assembler:
             A.destroy()
             b.destroy()
             return False
-        index = PETSc.IS().createGeneral(dofs.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
-        diag = A.createVecLeft()
         try:
-            A.getDiagonal(diag)
-            scale = diag.norm(PETSc.NormType.NORM_1) / ctx.n_global
-            (sub,) = A.createSubMatrices(index)
-            K = sub.convert(PETSc.Mat.Type.DENSE).getDenseArray().copy()
-            sub.destroy()
+            scale = diagonal_norm1(A) / ctx.n_global
+            K = dense_submatrix(A, dofs)
         finally:
-            for obj in (A, b, index, diag):
-                obj.destroy()
+            A.destroy()
+            b.destroy()
         free = dofs[zero_energy_rows(K, 1e-10 * scale)]
         if not len(free):
             return False

@@ -55,7 +55,7 @@ JsonValue = int | float | str | bool | None | list["JsonValue"] | dict[str, "Jso
 Say = Callable[[str], None]
 
 if TYPE_CHECKING:
-    from petsc4py import PETSc
+    from geofrac.solvers import Vector
 
 _T = TypeVar("_T")
 
@@ -256,7 +256,7 @@ class CrackContext:
         return out
 
 
-def _gather_vector(v: PETSc.Vec, comm: MPI.Comm) -> np.ndarray:
+def _gather_vector(v: Vector, comm: MPI.Comm) -> np.ndarray:
     """The owned entries of every rank in global order, shape=(size_global,) (collective)."""
     return np.concatenate(comm.allgather(np.array(v.getArray(readonly=True), dtype=float)))
 
@@ -306,6 +306,24 @@ def _force(
     return control
 
 
+def _dirichlet_rows(
+    problem: ElasticProblem, gm: GlobalMesh, *, bs: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The Dirichlet DOFs of every rank (collective).
+
+    Returns:
+        global DOF indices, shape=(p,); their prescribed values, shape=(p,); the node
+        of each, shape=(p,).
+    """
+    rows, vals = problem.dirichlet()
+    parts = problem.comm.allgather((rows, vals))
+    bc_rows = np.concatenate([p[0] for p in parts]).astype(np.int64)
+    bc_vals = np.concatenate([p[1] for p in parts])
+    order = np.argsort(gm.node_block)
+    bc_row_nodes = order[np.searchsorted(gm.node_block[order], bc_rows // bs)]
+    return bc_rows, bc_vals, bc_row_nodes
+
+
 def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> CrackContext:
     """The shared data of a set-up problem (collective)."""
     scene, problem, tagged = solution.scene, solution.problem, solution.tagged
@@ -325,16 +343,11 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
     _, mu = lame(mat.E, mat.nu, 2, mat.plane)
     imap = space.dofmap.index_map
     n_global = imap.size_global * bs
-    rows, vals = problem.dirichlet()
-    parts = comm.allgather((rows, vals))
-    bc_rows = np.concatenate([p[0] for p in parts]).astype(np.int64)
-    bc_vals = np.concatenate([p[1] for p in parts])
+    bc_rows, bc_vals, bc_row_nodes = _dirichlet_rows(problem, gm, bs=bs)
     bc_mask = np.zeros(n_global, dtype=bool)
     bc_mask[bc_rows] = True
     bc_full = np.zeros(n_global)
     bc_full[bc_rows] = bc_vals
-    order = np.argsort(gm.node_block)
-    bc_row_nodes = order[np.searchsorted(gm.node_block[order], bc_rows // bs)]
     # the control group: its prescribed, non-zero DOFs (none under force control)
     control_nodes = np.unique(facet_nodes(tagged, gm, config.control))
     on = np.isin(bc_row_nodes, control_nodes) & (bc_vals != 0)

@@ -33,7 +33,6 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import dolfinx
 import numpy as np
-from petsc4py import PETSc
 
 from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem
@@ -56,6 +55,7 @@ from geofrac.fracture.loop import EventLoop
 from geofrac.fracture.output import EdgeDrawing, EventOutput, Row, SiteDrawing
 from geofrac.fracture.topology import random_sites
 from geofrac.fracture.units import EdgeUnits, SiteState, Units
+from geofrac.solvers import Matrix, Vector
 
 __all__ = ["EDGES", "CrackDriver", "EdgeVariant", "Variant"]
 
@@ -214,11 +214,11 @@ class CrackDriver:
         return self.loop.rows
 
     # -- one state, for tests and diagnostics -------------------------------------------
-    def assemble(self, held_values: np.ndarray) -> tuple[PETSc.Mat, PETSc.Vec, np.ndarray]:
+    def assemble(self, held_values: np.ndarray) -> tuple[Matrix, Vector, np.ndarray]:
         """Stiffness, load vector and held DOFs of the current state (see the assembler)."""
         return self.assembler.assemble(held_values)
 
-    def solve(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> int:
+    def solve(self, A: Matrix, b: Vector, x: Vector) -> int:
         """Solve an assembled system with the strategy's factorisation; CG iterations."""
         return self.strategy.solve_system(A, b, x)
 

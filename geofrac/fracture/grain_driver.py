@@ -83,7 +83,7 @@ class GrainUnits:
         mesh_e = edge_mesh(gm.coords, gm.cells)
         frozen, forced_nodes = unit_masks(ctx, mesh_e, gm.coords)
         settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
-        self.domains = integration_domains(gm.coords, gm.cells, d.q_rand, d.domain_seed)
+        self.domains = integration_domains(gm.coords, gm.cells, d.q_rand, seed=d.domain_seed)
         self.faces = interfaces(mesh_e, self.domains)
         frozen_nodes = np.zeros(len(gm.coords), dtype=bool)
         frozen_nodes[ctx.bc_nodes] = True
@@ -103,7 +103,9 @@ class GrainUnits:
         if op is None:
             f, gm = self.faces, self.ctx.gm
             mine = f.grain_order[f.grain_offsets[node] : f.grain_offsets[node + 1]]
-            op = node_operator(gm.coords, gm.cells, self.ctx.D, self.domains, node, mine)
+            op = node_operator(
+                gm.coords, gm.cells, self.ctx.D, domains=self.domains, node=node, mine=mine
+            )
             self._ops[node] = op
         return op
 

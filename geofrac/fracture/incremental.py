@@ -26,11 +26,19 @@ from collections.abc import Callable
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import numpy as np
-from petsc4py import PETSc
 
 from geofrac.errors import RunError
 from geofrac.fracture.woodbury import LocalUpdate
-from geofrac.solvers import LinearSolver, mumps_inverse_entries, mumps_sparse_solve
+from geofrac.solvers import (
+    Gather,
+    LinearSolver,
+    Matrix,
+    Vector,
+    add_values,
+    mumps_inverse_entries,
+    mumps_sparse_solve,
+    update_ghosts,
+)
 
 __all__ = [
     "MAX_RESIDUAL",
@@ -71,29 +79,6 @@ class Stale(Exception):
         self.kind = kind
 
 
-class Gather:
-    """Copies of distributed vectors of one layout on every rank (a cached scatter).
-
-    Args:
-        x: a vector of the layout.
-    """
-
-    def __init__(self, x: PETSc.Vec) -> None:
-        self.scatter, self.full = PETSc.Scatter.toAll(x)
-
-    def __call__(self, x: PETSc.Vec) -> np.ndarray:
-        """The whole of ``x``, shape=(n_global,)."""
-        self.scatter.scatter(
-            x, self.full, addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD
-        )
-        return self.full.getArray().copy()
-
-    def destroy(self) -> None:
-        """Free the scatter and the copy."""
-        self.scatter.destroy()
-        self.full.destroy()
-
-
 class IncrementalSolver:
     """A reference factorisation and the exact correction for later local changes.
 
@@ -119,13 +104,14 @@ class IncrementalSolver:
 
     def __init__(
         self,
-        A: PETSc.Mat,
-        b: PETSc.Vec,
+        A: Matrix,
+        b: Vector,
+        *,
         fixed: np.ndarray,
         bc_mask: np.ndarray,
         bc_values: np.ndarray,
         solver: LinearSolver,
-        x: PETSc.Vec,
+        x: Vector,
         gather: Gather,
         capacity: int,
         transposed: Callable[[], LinearSolver] | None = None,
@@ -144,8 +130,8 @@ class IncrementalSolver:
         self.y = self.gather(x)
         self.b_full = self.gather(b)
         self._b_norm2 = float(self.b_full @ self.b_full)
-        self.factor = solver.ksp.getPC().getFactorMatrix()
-        self.factor_t: PETSc.Mat | None = None
+        self.factor = solver.factor()
+        self.factor_t: Matrix | None = None
         #: refinement steps with solves by A₀ taken so far (after the refinement on T)
         self.refinements = 0
         e = b.duplicate()
@@ -187,7 +173,7 @@ class IncrementalSolver:
                         self.solver_t = self._transposed()
                     except RunError as exc:
                         raise Stale("singular", f"the transposed system: {exc}") from None
-                    self.factor_t = self.solver_t.ksp.getPC().getFactorMatrix()
+                    self.factor_t = self.solver_t.factor()
                 transposed = mumps_inverse_entries(self.factor_t, lu.dofs, new).T
             lu.grow(new, mumps_inverse_entries(self.factor, rows, new), transposed)
         for dofs, k in blocks:
@@ -203,7 +189,7 @@ class IncrementalSolver:
             lu.add_rhs(np.array([j]), np.array([v - self.b_full[j] - lu.db[p]]))
             self.held[j] = True
 
-    def solve(self, x: PETSc.Vec) -> np.ndarray:
+    def solve(self, x: Vector) -> np.ndarray:
         """Solve the current system into ``x``; return the solution on every rank.
 
         The corrected solution is refined (at most :data:`REFINEMENTS` steps of iterative
@@ -237,14 +223,14 @@ class IncrementalSolver:
             x.axpy(1.0, self.y_vec)
             r2_last, u_last = math.inf, None
             for step in range(REFINEMENTS + 1):
-                x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+                update_ghosts(x)
                 u = self.gather(x)
                 if not np.all(np.isfinite(u)):
                     raise Stale("singular", "non-finite corrected solution")
                 r2 = self._residual(x, u, e)
                 if r2 >= r2_last:  # the step did not help: keep the solution before it
                     last.copy(x)
-                    x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+                    update_ghosts(x)
                     r2, u = r2_last, u_last
                     break
                 if r2 <= target2 or step == REFINEMENTS:
@@ -253,7 +239,7 @@ class IncrementalSolver:
                 x.copy(last)
                 self.refinements += 1
                 # x += A⁻¹ r = A₀⁻¹ (r + E g_r), g_r = −ΔC N⁻¹ (A₀⁻¹ r)_T
-                self.solver.ksp.solve(e, w)
+                self.solver.apply(e, w)
                 g_r = lu.homogeneous_correction(self.gather(w)[lu.dofs])
                 x.axpy(1.0, w)
                 self._solve_with(g_r, w)
@@ -265,21 +251,18 @@ class IncrementalSolver:
             raise Stale("residual", f"relative residual {np.sqrt(r2 / b2):.1e}")
         return u
 
-    def _solve_with(self, g: np.ndarray, out: PETSc.Vec) -> None:
+    def _solve_with(self, g: np.ndarray, out: Vector) -> None:
         """Solve A₀ out = E g; E g has nonzeros on T only (a sparse right-hand side)."""
-        mumps_sparse_solve(self.factor, self.update.dofs, g, out)
+        mumps_sparse_solve(self.factor, self.update.dofs, g, out=out)
 
-    def _residual(self, x: PETSc.Vec, u: np.ndarray, e: PETSc.Vec) -> float:
+    def _residual(self, x: Vector, u: np.ndarray, e: Vector) -> float:
         """Residual b₀ + E Δb − A₀ x − E ΔC x_T of the current system into e; ‖e‖²."""
         lu = self.update
         mine = (lu.dofs >= self.row0) & (lu.dofs < self.row1)
         self.A.mult(x, e)
         e.aypx(-1.0, self.b)
         corr = lu.db - lu.dC @ u[lu.dofs]
-        e.setValues(
-            lu.dofs[mine].astype(PETSc.IntType), corr[mine], addv=PETSc.InsertMode.ADD_VALUES
-        )
-        e.assemble()
+        add_values(e, lu.dofs[mine], corr[mine])
         return float(e.norm() ** 2)
 
     def destroy(self) -> None:

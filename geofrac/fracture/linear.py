@@ -27,14 +27,13 @@ from typing import Protocol
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import numpy as np
-from petsc4py import PETSc
 
 from geofrac.errors import RunError
 from geofrac.fracture.assembly import Assembler
 from geofrac.fracture.context import CrackContext
 from geofrac.fracture.incremental import Gather, IncrementalSolver, Stale
 from geofrac.fracture.units import Block, Fit
-from geofrac.solvers import LinearSolver
+from geofrac.solvers import LinearSolver, Matrix, PreconditionedCG, Vector, transposed
 
 __all__ = [
     "PREFIX",
@@ -76,7 +75,7 @@ class SolverStrategy(Protocol):
 
     timing: Timing
 
-    def solve(self, u_prev: np.ndarray, x: PETSc.Vec, gather: Gather) -> tuple[np.ndarray, int]:
+    def solve(self, u_prev: np.ndarray, x: Vector, gather: Gather) -> tuple[np.ndarray, int]:
         """Unit-load solution on every rank, shape=(n_global,), and CG iterations.
 
         ``u_prev``: the previous solution (held DOFs keep it), shape=(n_global,); ``x``
@@ -84,7 +83,7 @@ class SolverStrategy(Protocol):
         """
         ...
 
-    def solve_system(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> int:
+    def solve_system(self, A: Matrix, b: Vector, x: Vector) -> int:
         """Solve one assembled system A x = b; returns CG iterations (0: direct)."""
         ...
 
@@ -109,16 +108,6 @@ class SolverStrategy(Protocol):
         ...
 
 
-class _ReferencePC:
-    """PCSHELL context: apply a reference factorisation (a :class:`LinearSolver`)."""
-
-    def __init__(self, solver: LinearSolver) -> None:
-        self.solver = solver
-
-    def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
-        self.solver.ksp.solve(x, y)
-
-
 class RefactorSolver:
     """Assemble and factorise every event (``"refactor"``).
 
@@ -132,20 +121,22 @@ class RefactorSolver:
         self.ctx, self.assembler, self.timing = ctx, assembler, timing
         self.solver: LinearSolver | None = None
 
-    def _refactor(self, A: PETSc.Mat) -> LinearSolver:
+    def _refactor(self, A: Matrix) -> LinearSolver:
         """A new direct factorisation of A (the previous one freed)."""
         self._free()
         s = self.ctx.scene.solver
-        self.solver = LinearSolver(A, PREFIX, "direct", dict(s.options), self.ctx.n_global)
+        self.solver = LinearSolver(
+            A, PREFIX, "direct", options=dict(s.options), num_dofs=self.ctx.n_global
+        )
         self.timing.factorizations += 1
         return self.solver
 
-    def solve_system(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> int:
+    def solve_system(self, A: Matrix, b: Vector, x: Vector) -> int:
         """Factorise A and solve; returns 0."""
         self._refactor(A).solve(b, x)
         return 0
 
-    def solve(self, u_prev: np.ndarray, x: PETSc.Vec, gather: Gather) -> tuple[np.ndarray, int]:
+    def solve(self, u_prev: np.ndarray, x: Vector, gather: Gather) -> tuple[np.ndarray, int]:
         """Assemble and solve; hold cut-free pieces once when the system is singular."""
         t = time.perf_counter()
         assembler = self.assembler
@@ -201,35 +192,29 @@ class ReuseSolver(RefactorSolver):
 
     def __init__(self, ctx: CrackContext, assembler: Assembler, timing: Timing) -> None:
         super().__init__(ctx, assembler, timing)
-        self.ksp: PETSc.KSP | None = None
+        self.cg: PreconditionedCG | None = None
 
-    def solve_system(self, A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec) -> int:
+    def solve_system(self, A: Matrix, b: Vector, x: Vector) -> int:
         """CG preconditioned by the last factorisation, else factorise; CG iterations."""
         if self.solver is not None:
-            if self.ksp is None:
-                self.ksp = PETSc.KSP().create(self.ctx.comm)
-                self.ksp.setOptionsPrefix(PREFIX + "cg_")
-                self.ksp.setType("cg")
-                pc = self.ksp.getPC()
-                pc.setType("python")
-                pc.setPythonContext(_ReferencePC(self.solver))
-                self.ksp.setTolerances(
-                    rtol=1e-10, atol=0.0, max_it=self.ctx.config.reuse_iterations
+            if self.cg is None:
+                self.cg = PreconditionedCG(
+                    self.ctx.comm,
+                    PREFIX + "cg_",
+                    self.solver,
+                    max_it=self.ctx.config.reuse_iterations,
                 )
-                self.ksp.setInitialGuessNonzero(True)
-                self.ksp.setFromOptions()
-            self.ksp.setOperators(A)
-            self.ksp.solve(b, x)
-            if self.ksp.getConvergedReason() > 0 and np.isfinite(x.norm()):
-                return int(self.ksp.getIterationNumber())
+            iterations = self.cg.solve(A, b, x)
+            if iterations is not None:
+                return iterations
         return super().solve_system(A, b, x)
 
     def _free(self) -> None:
         """Free the factorisation and the CG solver."""
         super()._free()
-        if self.ksp is not None:
-            self.ksp.destroy()
-        self.ksp = None
+        if self.cg is not None:
+            self.cg.destroy()
+        self.cg = None
 
 
 #: Marks a unit that uses its element's field (absent from the fits).
@@ -271,7 +256,7 @@ class UpdateSolver(RefactorSolver):
         self._pending = np.zeros(0, dtype=np.int64)
         self._contact = []
 
-    def solve(self, u_prev: np.ndarray, x: PETSc.Vec, gather: Gather) -> tuple[np.ndarray, int]:
+    def solve(self, u_prev: np.ndarray, x: Vector, gather: Gather) -> tuple[np.ndarray, int]:
         """Correct the reference solution, or start a new reference; 0 iterations."""
         timing = self.timing
         t = time.perf_counter()
@@ -292,7 +277,7 @@ class UpdateSolver(RefactorSolver):
                 self._drop_reference(exc)
         return self._new_reference(u_prev, x, gather), 0
 
-    def _new_reference(self, u_prev: np.ndarray, x: PETSc.Vec, gather: Gather) -> np.ndarray:
+    def _new_reference(self, u_prev: np.ndarray, x: Vector, gather: Gather) -> np.ndarray:
         """Assemble, factorise and solve the current state; it becomes the reference."""
         ctx, assembler = self.ctx, self.assembler
         bc = ctx.bc_mask
@@ -309,14 +294,14 @@ class UpdateSolver(RefactorSolver):
                 self.inc = IncrementalSolver(
                     A,
                     b,
-                    fixed,
-                    bc,
-                    ctx.bc_full,
-                    solver,
-                    x,
-                    gather,
-                    ctx.config.update_dofs,
-                    partial(self._transposed, A) if unsymmetric else None,
+                    fixed=fixed,
+                    bc_mask=bc,
+                    bc_values=ctx.bc_full,
+                    solver=solver,
+                    x=x,
+                    gather=gather,
+                    capacity=ctx.config.update_dofs,
+                    transposed=partial(self._transposed, A) if unsymmetric else None,
                 )
                 self.solver = None  # the reference owns it now
                 break
@@ -335,12 +320,14 @@ class UpdateSolver(RefactorSolver):
         assert self.inc is not None
         return self.inc.y.copy()
 
-    def _transposed(self, A: PETSc.Mat) -> LinearSolver:
+    def _transposed(self, A: Matrix) -> LinearSolver:
         """A factorisation of Aᵀ (the rows of A⁻¹ when friction makes A unsymmetric)."""
-        At = A.transpose(PETSc.Mat())  # a new matrix (no argument: in place)
+        At = transposed(A)
         try:
             s = self.ctx.scene.solver
-            return LinearSolver(At, PREFIX + "t_", "direct", dict(s.options), self.ctx.n_global)
+            return LinearSolver(
+                At, PREFIX + "t_", "direct", options=dict(s.options), num_dofs=self.ctx.n_global
+            )
         finally:
             At.destroy()  # the solver keeps its own reference
 

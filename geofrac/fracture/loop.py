@@ -39,9 +39,8 @@ from geofrac.io.checkpoint import Checkpoint, RunControl
 from geofrac.log import format_seconds
 
 if TYPE_CHECKING:
-    from petsc4py import PETSc
-
     from geofrac.fracture.faces import Faces
+    from geofrac.solvers import Vector
 
 __all__ = ["END_REASONS", "MODES", "ContactUnsettled", "EventLoop"]
 
@@ -358,7 +357,7 @@ class EventLoop:
         }
 
     def _settle(
-        self, u: np.ndarray, x: PETSc.Vec, gather: Gather
+        self, u: np.ndarray, x: Vector, gather: Gather
     ) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
         """Active-set iteration on the crack faces from the solution u (collective).
 

@@ -414,7 +414,7 @@ class EdgeUnits:
             if int(c) not in state.fits:
                 d = u[ctx.node_dofs(gm.cells[c])].reshape(3, bs)
                 kind = None if kinematics is None else KINDS[kinematics]
-                uh = bary @ d if kind is None else vertex_field(kind, x, d, pts)
+                uh = bary @ d if kind is None else vertex_field(kind, x, d, points=pts)
             elif fit is None:
                 uh = np.zeros((len(pts), 2))
             else:

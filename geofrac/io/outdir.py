@@ -80,7 +80,7 @@ class OutputDir:
 
     def keep(self, summary: dict[str, Any], timings: Any) -> None:
         """Finish ``summary`` into the staging directory and leave ``final`` as it is."""
-        finish_summary(summary, self.stage / "summary.json", self.comm, timings)
+        finish_summary(summary, self.stage / "summary.json", self.comm, timings=timings)
 
     def publish(self, summary: dict[str, Any], timings: Any, legacy: Sequence[str]) -> None:
         """Move the staged files into ``final``, replacing the previous run's (collective).
@@ -112,7 +112,7 @@ class OutputDir:
         error = self.comm.bcast(error, root=0)
         if error is not None:
             raise RunError(error)
-        finish_summary(summary, self.final / "summary.json", self.comm, timings)
+        finish_summary(summary, self.final / "summary.json", self.comm, timings=timings)
         if self.comm.rank == 0:
             shutil.rmtree(self.stage, ignore_errors=True)
 

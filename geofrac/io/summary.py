@@ -29,7 +29,7 @@ _UMASK = os.umask(0o022)
 os.umask(_UMASK)
 
 
-def versions(fem: bool = True) -> dict[str, str]:
+def versions(*, fem: bool = True) -> dict[str, str]:
     """Versions of geofrac and the stack it runs on.
 
     ``fem=False`` (MPM runs) leaves out DOLFINx and PETSc, which such a run never imports.
@@ -49,12 +49,10 @@ def versions(fem: bool = True) -> dict[str, str]:
             import dolfinx_solver  # noqa: F401
 
             import dolfinx
-            from petsc4py import PETSc
 
-            out |= {
-                "dolfinx": dolfinx.__version__,
-                "petsc": ".".join(map(str, PETSc.Sys.getVersion())),
-            }
+            from geofrac.solvers import petsc_version
+
+            out |= {"dolfinx": dolfinx.__version__, "petsc": petsc_version()}
     except ImportError as exc:  # pragma: no cover - the stack is a hard dependency
         out["error"] = str(exc)
     return out
@@ -74,7 +72,7 @@ def write_json(path: Path, data: dict[str, Any]) -> None:
         raise
 
 
-def start_summary(scene: Any, comm: Any, fem: bool = True, **details: Any) -> dict[str, Any]:
+def start_summary(scene: Any, comm: Any, *, fem: bool = True, **details: Any) -> dict[str, Any]:
     """The head of a run's ``summary.json``: the scene, warnings, versions, ranks, start.
 
     Args:
@@ -101,7 +99,7 @@ def start_summary(scene: Any, comm: Any, fem: bool = True, **details: Any) -> di
     }
 
 
-def finish_summary(summary: dict[str, Any], path: Path, comm: Any, timings: Any) -> None:
+def finish_summary(summary: dict[str, Any], path: Path, comm: Any, *, timings: Any) -> None:
     """Add the reduced phase timings and the finish time; rank 0 writes ``path`` (collective)."""
     summary["timings_s"] = timings.reduced(comm)
     summary["finished"] = dt.datetime.now(dt.UTC).isoformat(timespec="seconds")

@@ -3,7 +3,6 @@
 import dolfinx_solver  # noqa: F401
 
 import dolfinx
-import dolfinx.fem.petsc
 import numpy as np
 import ufl
 from mpi4py import MPI
@@ -11,6 +10,7 @@ from mpi4py import MPI
 from geofrac import elements
 from geofrac.elements.base import Element
 from geofrac.materials import d_matrix, lame
+from geofrac.solvers import assemble_matrix
 from geofrac_forms.elasticity import stiffness_form
 from geofrac_forms.gradient_dofs import penalty_forms
 
@@ -64,8 +64,7 @@ def free_stiffness(
     u, v = ufl.TrialFunction(element.space), ufl.TestFunction(element.space)
     a = stiffness_form(u, v, lam, mu, 1.0, ufl.dx)
     if spec.kinematics is None:
-        A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(a))
-        A.assemble()
+        A = assemble_matrix(dolfinx.fem.form(a))
         out = _dense(A)
         A.destroy()
         return out, element
@@ -73,9 +72,7 @@ def free_stiffness(
     W = element.unknowns
     g, h = ufl.TrialFunction(W), ufl.TestFunction(W)
     pvv, pwv, pww = penalty_forms(u, v, g, h, element.kind.basis, alpha * mu, ufl.dx)
-    mats = [dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(f)) for f in (a + pvv, pwv, pww)]
-    for M in mats:
-        M.assemble()
+    mats = [assemble_matrix(dolfinx.fem.form(f)) for f in (a + pvv, pwv, pww)]
     Kp = element.reduce(*mats)
     out = _dense(Kp)
     for M in (*mats, Kp):

@@ -51,10 +51,10 @@ def _reference(mesh, q_rand, seed):
     points[dofs.ravel()] = mesh.geometry.x[nodes.ravel(), :2]
     ids = np.zeros(n, dtype=np.int64)
     ids[dofs.ravel()] = np.asarray(mesh.geometry.input_global_indices)[nodes.ravel()]
-    domains = ref.integration_domains(points, dofs, q_rand, seed, ids=ids)
+    domains = ref.integration_domains(points, dofs, q_rand, seed=seed, ids=ids)
     K = np.zeros((2 * n, 2 * n))
     for i in range(n):
-        Ki, d = ref.node_stiffness(points, dofs, D, domains, i)
+        Ki, d = ref.node_stiffness(points, dofs, D, domains=domains, node=i)
         K[np.ix_(d, d)] += Ki
     return K
 

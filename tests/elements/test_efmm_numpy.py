@@ -37,7 +37,7 @@ def test_domains_tile_the_mesh(q_rand):
 @pytest.mark.parametrize("q_rand", [0.0, 0.5])
 def test_constant_strain_patch_test_is_exact_on_a_distorted_mesh(q_rand):
     points, tris, inside = _distorted()
-    K = stiffness(points, tris, D, q_rand, seed=3)
+    K = stiffness(points, tris, D, q_rand=q_rand, seed=3)
     exact = np.zeros(2 * len(points))
     exact[0::2] = 0.002 * points[:, 0] + 0.0005 * points[:, 1]
     exact[1::2] = -0.0006 * points[:, 1] + 0.0002 * points[:, 0]
@@ -50,7 +50,7 @@ def test_constant_strain_patch_test_is_exact_on_a_distorted_mesh(q_rand):
 
 def test_a_free_mesh_has_exactly_three_rigid_modes():
     points, tris, _ = _distorted(5, seed=2)
-    K = stiffness(points, tris, D, 0.5, seed=4)
+    K = stiffness(points, tris, D, q_rand=0.5, seed=4)
     assert np.abs(K - K.T).max() < 1e-10 * np.abs(K).max()
     eig = np.linalg.eigvalsh(0.5 * (K + K.T))
     assert np.count_nonzero(np.abs(eig) < 1e-9 * eig.max()) == 3
@@ -67,7 +67,7 @@ def test_a_node_stiffness_acts_on_its_patch_only():
     points, tris, inside = _distorted(4, seed=5)
     domains = integration_domains(points, tris)
     node = int(np.flatnonzero(inside)[0])
-    K, dofs = node_stiffness(points, tris, D, domains, node)
+    K, dofs = node_stiffness(points, tris, D, domains=domains, node=node)
     patch = np.unique(tris[np.any(tris == node, axis=1)])
     np.testing.assert_array_equal(np.unique(dofs // 2), patch)
     assert K.shape == (len(dofs), len(dofs))

@@ -38,7 +38,7 @@ def test_local_map_equals_the_seed_field_at_the_p2_nodes(name):
     dofs = np.random.default_rng(2).standard_normal((gdim + 1, kind.block_size))
     T = local_prolongation(kind, coords[None], edges)[0]
     mapped = np.einsum("nrid,id->nr", T, dofs)
-    direct = vertex_field(kind, coords, dofs, _p2_nodes(coords, edges))
+    direct = vertex_field(kind, coords, dofs, points=_p2_nodes(coords, edges))
     np.testing.assert_allclose(mapped, direct, atol=1e-13)
 
 
@@ -68,10 +68,12 @@ def test_gnt_reproduces_every_quadratic_with_half_gradients():
     coords = _cell(2, 6)
     dofs = np.hstack([u(coords), dofs_from_gradient(kind, grad(coords))])
     points = _p2_nodes(coords, EDGES[2])
-    np.testing.assert_allclose(vertex_field(kind, coords, dofs, points), u(points), atol=1e-13)
+    np.testing.assert_allclose(
+        vertex_field(kind, coords, dofs, points=points), u(points), atol=1e-13
+    )
     # whereas the full nodal gradient (not halved) does not reproduce it
     full = np.hstack([u(coords), 2.0 * dofs_from_gradient(kind, grad(coords))])
-    assert np.abs(vertex_field(kind, coords, full, points) - u(points)).max() > 1e-3
+    assert np.abs(vertex_field(kind, coords, full, points=points) - u(points)).max() > 1e-3
 
 
 @pytest.mark.parametrize("name", ["rgnt", "rgnq"])
@@ -92,7 +94,9 @@ def test_rotational_elements_reproduce_their_quadratic_family(name):
         dofs = np.zeros((gdim + 1, kind.block_size))
         dofs[:, :gdim] = u(coords)
         dofs[:, gdim + a] = coords @ k
-        np.testing.assert_allclose(vertex_field(kind, coords, dofs, points), u(points), atol=1e-13)
+        np.testing.assert_allclose(
+            vertex_field(kind, coords, dofs, points=points), u(points), atol=1e-13
+        )
 
 
 def test_dofs_of_a_rigid_rotation_are_half_the_rotation():

@@ -93,7 +93,7 @@ def test_patch_test_on_a_distorted_mesh(element, extra):
     problem.assemble()
     uh = problem.solve()
     u_exact, _ = exact_ufl(problem.exact, mesh)
-    errors = error_norms(uh, u_exact, problem.lam, problem.mu)
+    errors = error_norms(uh, u_exact, problem.lam, mu=problem.mu)
     own = problem.error_norms()  # EFMM: the energy of its patch stresses
     problem.destroy()
     assert errors["u_relative"] < 1e-10

@@ -5,10 +5,9 @@ import dolfinx_solver  # noqa: F401
 import numpy as np
 import pytest
 from mpi4py import MPI
-from petsc4py import PETSc
 
 from geofrac.fracture.incremental import MAX_RESIDUAL, Gather, IncrementalSolver, Stale
-from geofrac.solvers import LinearSolver
+from geofrac.solvers import LinearSolver, Vector, ghosted_vector
 from tests.petsc_matrices import aij_from_dense
 
 N = 40
@@ -19,16 +18,26 @@ def _spd(n: int = N) -> np.ndarray:
     return np.diag(np.full(n, 2.2)) - np.diag(np.ones(n - 1), 1) - np.diag(np.ones(n - 1), -1)
 
 
-def _solver(comm: MPI.Comm, A: np.ndarray, b: np.ndarray) -> tuple[IncrementalSolver, PETSc.Vec]:
+def _solver(comm: MPI.Comm, A: np.ndarray, b: np.ndarray) -> tuple[IncrementalSolver, Vector]:
     n = len(A)
     M = aij_from_dense(comm, A)
     r0, r1 = M.getOwnershipRange()
     bv = M.createVecLeft()
     bv.array[:] = b[r0:r1]
-    x = PETSc.Vec().createGhost([], (r1 - r0, n), comm=comm)
+    x = ghosted_vector(comm, (r1 - r0, n))
     none = np.zeros(n, dtype=bool)
-    solver = LinearSolver(M, "test_update_", "direct", {}, n)
-    inc = IncrementalSolver(M, bv, none, none, np.zeros(n), solver, x, Gather(x), capacity=20)
+    solver = LinearSolver(M, "test_update_", "direct", options={}, num_dofs=n)
+    inc = IncrementalSolver(
+        M,
+        bv,
+        fixed=none,
+        bc_mask=none,
+        bc_values=np.zeros(n),
+        solver=solver,
+        x=x,
+        gather=Gather(x),
+        capacity=20,
+    )
     return inc, x
 
 
