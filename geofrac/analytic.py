@@ -7,9 +7,8 @@ on UFL expressions of ``ufl.SpatialCoordinate`` (exact fields inside error integ
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 __all__ = [
     "EXACT_SOLUTIONS",
@@ -311,28 +310,42 @@ def displacement_gradient(exact: ExactSolution, x: Any) -> Any:
     return grad
 
 
-def _timoshenko(params: dict[str, float], E: float, nu: float, plane: str) -> TimoshenkoCantilever:
+class ExactFactory(Protocol):
+    """Builds an exact solution from its parameters and the material."""
+
+    def __call__(
+        self, params: dict[str, float], E: float, nu: float, *, plane: str
+    ) -> ExactSolution:
+        """The solution for ``params`` (names of :data:`EXACT_SOLUTIONS`), E, nu, plane."""
+        ...
+
+
+def _timoshenko(
+    params: dict[str, float], E: float, nu: float, *, plane: str
+) -> TimoshenkoCantilever:
     if plane == "strain":
         E, nu = E / (1.0 - nu * nu), nu / (1.0 - nu)
     return TimoshenkoCantilever(P=params["P"], L=params["L"], D=params["D"], E=E, nu=nu)
 
 
-def _uniform_strain(params: dict[str, float], E: float, nu: float, plane: str) -> UniformStrain:
+def _uniform_strain(params: dict[str, float], E: float, nu: float, *, plane: str) -> UniformStrain:
     from geofrac.materials import lame
 
-    lam, mu = lame(E, nu, 2, plane)
+    lam, mu = lame(E, nu, 2, plane=plane)
     return UniformStrain(params["exx"], params["eyy"], params["gxy"], lam, mu)
 
 
-def _manufactured_box(params: dict[str, float], E: float, nu: float, plane: str) -> ManufacturedBox:
+def _manufactured_box(
+    params: dict[str, float], E: float, nu: float, *, plane: str
+) -> ManufacturedBox:
     from geofrac.materials import lame
 
     lam, mu = lame(E, nu, 3)
     return ManufacturedBox(params["a"], lam, mu)
 
 
-def _lame(dim: int) -> Callable[[dict[str, float], float, float, str], LameCylinder]:
-    def factory(params: dict[str, float], E: float, nu: float, plane: str) -> LameCylinder:
+def _lame(dim: int) -> ExactFactory:
+    def factory(params: dict[str, float], E: float, nu: float, *, plane: str) -> LameCylinder:
         a, b = params["a"], params["b"]
         p_outer = params.get("p_outer", 0.0)
         return LameCylinder(a, b, params["p"], p_outer, E, nu, plane if dim == 2 else "strain", dim)
@@ -340,10 +353,8 @@ def _lame(dim: int) -> Callable[[dict[str, float], float, float, str], LameCylin
     return factory
 
 
-#: name -> (dimension, required parameter names, factory(params, E, nu, plane)).
-EXACT_SOLUTIONS: dict[
-    str, tuple[int, tuple[str, ...], Callable[[dict[str, float], float, float, str], ExactSolution]]
-] = {
+#: name -> (dimension, required parameter names, factory(params, E, nu, plane=...)).
+EXACT_SOLUTIONS: dict[str, tuple[int, tuple[str, ...], ExactFactory]] = {
     "timoshenko_cantilever": (2, ("P", "L", "D"), _timoshenko),
     "uniform_strain": (2, ("exx", "eyy", "gxy"), _uniform_strain),
     "manufactured_box": (3, ("a",), _manufactured_box),
@@ -358,8 +369,8 @@ OPTIONAL_PARAMETERS: dict[str, dict[str, float]] = {
 
 
 def make_exact(
-    name: str, params: dict[str, float], E: float, nu: float, plane: str
+    name: str, params: dict[str, float], *, E: float, nu: float, plane: str
 ) -> ExactSolution:
     """Build the exact solution ``name`` for a material (E, nu) in plane ``stress``/``strain``."""
     _, _, factory = EXACT_SOLUTIONS[name]
-    return factory(params, E, nu, plane)
+    return factory(params, E, nu, plane=plane)

@@ -112,7 +112,7 @@ def _parser() -> argparse.ArgumentParser:
 def _load(args: argparse.Namespace, comm: Any, out: str | None = None) -> Scene:
     """Validate the scene on every rank and print its warnings (rank 0)."""
     scene = load_scene_collective(
-        comm, args.scene, args.overrides, out, allow_large=args.allow_large
+        comm, args.scene, args.overrides, out=out, allow_large=args.allow_large
     )
     for warning in scene.warnings:
         echo(comm, f"warning: {warning}", err=True)
@@ -164,7 +164,7 @@ def _run(args: argparse.Namespace, comm: Any) -> int:
     # aborts), and the handlers installed last are the ones that act
     interrupt.install()
     try:
-        summary = pipeline.run_scene(scene, comm, timings, not quiet, args.resume)
+        summary = pipeline.run_scene(scene, comm, timings, verbose=not quiet, resume=args.resume)
     except interrupt.Interrupted as exc:
         stage = scene.output.dir / "incomplete"
         echo(comm, f"interrupted: {exc}; partial results in {stage}", err=True)
@@ -236,7 +236,7 @@ def _validate(args: argparse.Namespace, comm: Any) -> int:
             cases,
             args.out,
             comm,
-            root,
+            root=root,
             say=lambda text: echo(comm, text),
             figures=page.parent / "img" / "validation",
         )
@@ -250,7 +250,7 @@ def _validate(args: argparse.Namespace, comm: Any) -> int:
         stored = json.loads(data_path.read_text()) if data_path.exists() else None
         stamp = datetime.date.today().isoformat()
         full = not args.quick and not names
-        data = merge(stored, results, command, seconds, full, stamp)
+        data = merge(stored, results, command, seconds=seconds, full=full, stamp=stamp)
         data_path.write_text(json.dumps(data, indent=1) + "\n")
         write_page(data, page)
     bad = [r for r in results if r.status.startswith(("failed", "differs: not explained"))]

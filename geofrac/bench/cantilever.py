@@ -59,7 +59,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of this bench."""
     from geofrac.bench.study import add_common_arguments
 
-    add_common_arguments(p, "cantilever", "cst,p2", None)
+    add_common_arguments(p, "cantilever", "cst,p2", default_scene=None)
     p.add_argument(
         "--setup",
         choices=tuple(SETUPS),
@@ -103,8 +103,8 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         args,
         comm,
         "cantilever",
-        f"Timoshenko cantilever (Edo (2016), §{setup}): accuracy vs cost",
-        cases,
+        title=f"Timoshenko cantilever (Edo (2016), §{setup}): accuracy vs cost",
+        cases=cases,
         dim=2,
         extra={"setup": setup, "thesis_reference": reference},
     )

@@ -86,14 +86,18 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
         if case not in CASES:
             raise SystemExit(f"unknown case '{case}'; choose from {', '.join([*CASES, 'patch'])}")
         name, extra = CASES[case]
-        records.append(event_case(case, name, (*extra, *user), args.events, args.solver, comm))
+        records.append(
+            event_case(
+                case, name, (*extra, *user), events=args.events, solver=args.solver, comm=comm
+            )
+        )
     if args.json is not None and comm.rank == 0:
         write_json(args.json, records)
     return records
 
 
 def event_case(
-    case: str, name: str, extra: tuple[str, ...], events: int, solver: str, comm: Any
+    case: str, name: str, extra: tuple[str, ...], *, events: int, solver: str, comm: Any
 ) -> dict[str, Any]:
     """Run ``events`` events of scene ``jobs/<name>.toml``; print and return its record.
 

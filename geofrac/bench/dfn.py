@@ -92,7 +92,7 @@ def network_statistics(network: Any, sets: Any) -> list[dict[str, Any]]:
         row: dict[str, Any] = {"set": fset.name, "count": int(mask.sum())}
         if len(lengths):
             d = ks_statistic(
-                lengths, lambda x, s=fset: power_law_cdf(x, s.lmin, s.lmax, s.exponent)
+                lengths, lambda x, s=fset: power_law_cdf(x, s.lmin, s.lmax, exponent=s.exponent)
             )
             row |= {"ks_d": d, "ks_p": ks_pvalue(d, len(lengths))}
         if len(lengths) > 1:

@@ -220,6 +220,6 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
         fig,
         axes,
         path,
-        "EFMM with random integration domains (Edo (2016), §3.4.2, Table 3.1)",
-        "mean ± std over q_rand 0-0.8 and seeds",
+        title="EFMM with random integration domains (Edo (2016), §3.4.2, Table 3.1)",
+        ylabel="mean ± std over q_rand 0-0.8 and seeds",
     )

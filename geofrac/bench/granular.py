@@ -63,7 +63,7 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
             with open(_JOBS / f"{name}.toml", "rb") as f:
                 events = int(tomllib.load(f)["cracking"]["max_events"])
         extra = tuple(getattr(args, "overrides", None) or ())
-        rec = event_case(case, name, extra, events, args.solver, comm)
+        rec = event_case(case, name, extra, events=events, solver=args.solver, comm=comm)
         res = rec.pop("results")
         rec |= {
             k: res[k]

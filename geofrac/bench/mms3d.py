@@ -26,7 +26,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from geofrac.bench.cantilever import int_list
     from geofrac.bench.study import add_common_arguments
 
-    add_common_arguments(p, "mms3d", "p1,p2,rgnq", _DEFAULT_SCENE)
+    add_common_arguments(p, "mms3d", "p1,p2,rgnq", default_scene=_DEFAULT_SCENE)
     p.add_argument(
         "--meshes",
         type=int_list,
@@ -52,7 +52,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         args,
         comm,
         "mms3d",
-        "Manufactured 3D displacement on the unit cube: accuracy vs cost",
-        cases,
+        title="Manufactured 3D displacement on the unit cube: accuracy vs cost",
+        cases=cases,
         dim=3,
     )

@@ -55,6 +55,7 @@ def plot_accuracy_cost(
     records: Sequence[dict[str, Any]],
     path: Path,
     title: str,
+    *,
     group: str = "element",
     time_key: str = "time_total_s",
     errors: Sequence[tuple[str, str]] = (
@@ -83,10 +84,10 @@ def plot_accuracy_cost(
             )
     axes[0].set_xlabel("wall time, assemble + solve [s]")
     axes[1].set_xlabel("degrees of freedom")
-    save_figure(fig, axes, path, title, "error norm")
+    save_figure(fig, axes, path, title=title, ylabel="error norm")
 
 
-def save_figure(fig: Any, axes: Sequence[Any], path: Path, title: str, ylabel: str) -> None:
+def save_figure(fig: Any, axes: Sequence[Any], path: Path, *, title: str, ylabel: str) -> None:
     """Label, grid and legend every panel, set the title, write ``path`` and close.
 
     Each legend sits below its panel, so it hides no curve; the figure should use

@@ -99,7 +99,9 @@ def _build_meshes(
         for target in targets:
             path = (directory / f"cantilever-ny{ny}-angle{target:g}-seed{seed}.msh").resolve()
             try:
-                m = build_distorted_cantilever(path, ny, target, LENGTH, DEPTH, seed)
+                m = build_distorted_cantilever(
+                    path, ny, target, length=LENGTH, depth=DEPTH, seed=seed
+                )
             except Exception as exc:  # reported as the status of every case on this mesh
                 meshes[target] = {"target": target, "error": f"mesh {target:g}°: {exc}"}
                 continue
@@ -242,13 +244,13 @@ def _plot(records: list[dict[str, Any]], path: Path, title: str) -> None:
     axes[1].set_xscale("function", functions=(forward, inverse))
     axes[1].set_xticks(nus, [f"{nu:g}" for nu in nus])
     axes[1].set_xlabel("Poisson's ratio ν (plane strain; axis: -log10(0.5 - ν))")
-    save_figure(fig, axes, path, title, "relative displacement L2 error")
+    save_figure(fig, axes, path, title=title, ylabel="relative displacement L2 error")
 
 
 def _summary_lines(records: list[dict[str, Any]], worst_angle: float, nu_max: float) -> list[str]:
     """One line per element: its degradation at the smallest angle and at the largest ν."""
 
-    def find(element: str, sweep: str, angle: float, nu: float) -> str:
+    def find(element: str, sweep: str, angle: float, *, nu: float) -> str:
         r = next(
             (
                 r
@@ -266,12 +268,11 @@ def _summary_lines(records: list[dict[str, Any]], worst_angle: float, nu_max: fl
 
     lines = []
     for element in dict.fromkeys(r["element"] for r in records):
-        stress = find(element, "angle", worst_angle, ANGLE_SWEEP_NU)
+        stress = find(element, "angle", worst_angle, nu=ANGLE_SWEEP_NU)
         parts = [f"{worst_angle:g}° (plane stress): {stress}"]
         for angle in dict.fromkeys((UNDISTORTED, worst_angle)):
-            parts.append(
-                f"ν={nu_max:g} plane strain, {angle:g}° mesh: {find(element, 'nu', angle, nu_max)}"
-            )
+            strain = find(element, "nu", angle, nu=nu_max)
+            parts.append(f"ν={nu_max:g} plane strain, {angle:g}° mesh: {strain}")
         lines.append(f"degradation of ||e||_u, {element}: " + "; ".join(parts))
     return lines
 

@@ -59,7 +59,7 @@ class Case:
 
 
 def add_common_arguments(
-    p: argparse.ArgumentParser, name: str, default_elements: str, default_scene: Path | None
+    p: argparse.ArgumentParser, name: str, default_elements: str, *, default_scene: Path | None
 ) -> None:
     """Options every convergence bench has: elements, scene, output, repeat, target."""
     from geofrac.elements import available
@@ -193,6 +193,7 @@ def run_study(
     args: argparse.Namespace,
     comm: Any,
     name: str,
+    *,
     title: str,
     cases: Sequence[Case],
     dim: int,

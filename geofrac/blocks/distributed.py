@@ -117,7 +117,7 @@ def gather_blocks(blocks: Blocks, comm: MPI.Comm) -> Blocks | None:
     return weld(whole)
 
 
-def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, comm: MPI.Comm) -> Corners:
+def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, *, comm: MPI.Comm) -> Corners:
     """Send each face and piece to the rank owning its block; merge what arrives.
 
     Args:
@@ -198,6 +198,7 @@ def build_blocks(
     mesh: Mesh,
     inner: str = "incentre",
     radius: float = 1.0,
+    *,
     convex: bool = False,
     seed: int = 0,
 ) -> Blocks:
@@ -214,22 +215,26 @@ def build_blocks(
     tdim = mesh.topology.dim
     if tdim == 3:
         corners = tet_corners(
-            cells["x"], cells["gid"], cells["cell_key"], cells["boundary"], cells["num_vertices"]
+            cells["x"],
+            cells["gid"],
+            cells["cell_key"],
+            boundary=cells["boundary"],
+            num_vertices=cells["num_vertices"],
         )
     else:
         corners = tri_corners(
             cells["x"],
             cells["gid"],
             cells["boundary"],
-            cells["num_vertices"],
-            inner,
-            radius,
-            convex,
-            seed,
+            num_vertices=cells["num_vertices"],
+            inner=inner,
+            radius=radius,
+            convex=convex,
+            seed=seed,
         )
     if mesh.comm.size > 1:
         ids, first = np.unique(cells["gid"].ravel(), return_index=True)
-        corners = exchange(corners, ids, cells["owner"].ravel()[first], mesh.comm)
+        corners = exchange(corners, ids, cells["owner"].ravel()[first], comm=mesh.comm)
     if tdim == 3:
         return assemble(corners, cells["owned_ids"], 3)
     return rings(corners, cells["owned_ids"])

@@ -57,7 +57,7 @@ def _wall(comm: MPI.Comm, start: float) -> float:
 
 
 def build(
-    scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool = True
+    scene: Scene, comm: MPI.Comm, timings: Timings, *, verbose: bool = True
 ) -> tuple[Blocks, dict[str, Any]]:
     """Mesh and build the blocks of this rank (rank 0 also holds the immobile block).
 
@@ -83,7 +83,9 @@ def build(
     start = time.perf_counter()
     with timings.phase("blocks"):
         try:  # the builder's errors come after its last collective: agree, then raise
-            blocks = build_blocks(mesh, spec.inner_point, spec.radius, spec.convex, spec.seed)
+            blocks = build_blocks(
+                mesh, spec.inner_point, spec.radius, convex=spec.convex, seed=spec.seed
+            )
             message = None
         except ValueError as exc:
             message = str(exc)
@@ -129,10 +131,10 @@ class BlocksMethod:
         return {"method": "blocks"}
 
     def run(
-        self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
+        self, scene: Scene, comm: MPI.Comm, timings: Timings, *, verbose: bool, control: RunControl
     ) -> dict[str, Any]:
         """Mesh, blocks, checks, files; the summary entries."""
-        blocks, record = build(scene, comm, timings, verbose)
+        blocks, record = build(scene, comm, timings, verbose=verbose)
         with timings.phase("warm-up"):  # compiled checks: numba's compilation or cache load
             from geofrac.blocks.kernels import warm_up
 

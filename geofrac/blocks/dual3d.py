@@ -156,6 +156,7 @@ def tet_corners(
     x: np.ndarray,
     gid: np.ndarray,
     cell_key: np.ndarray,
+    *,
     boundary: np.ndarray | None,
     num_vertices: int,
 ) -> Corners:
@@ -178,7 +179,7 @@ def tet_corners(
     n = num_vertices
     ekey = edge_keys(gid[:, EDGES[:, 0]], gid[:, EDGES[:, 1]], n)
     emid = (x[:, EDGES[:, 0]] + x[:, EDGES[:, 1]]) * 0.5
-    fkey = face_keys(gid[:, FACES[:, 0]], gid[:, FACES[:, 1]], gid[:, FACES[:, 2]], n)
+    fkey = face_keys(gid[:, FACES[:, 0]], gid[:, FACES[:, 1]], gid[:, FACES[:, 2]], n=n)
     fmid = centroids(x[:, FACES])
     centre = ((x[:, 0] + x[:, 1]) + (x[:, 2] + x[:, 3])) * 0.25  # one cell computes it
     boundary = on_boundary(fkey, boundary, order)
@@ -239,7 +240,7 @@ def tet_corners(
             return eref[rows, _EDGE_INDEX[p, q]]
 
         def f(
-            p: int, q: np.ndarray | int, r: np.ndarray | int, rows: np.ndarray = rows
+            p: int, q: np.ndarray | int, r: np.ndarray | int, *, rows: np.ndarray = rows
         ) -> np.ndarray:
             return fref[rows, 6 - (p + q + r)]  # face pqr is opposite the fourth vertex
 
@@ -312,6 +313,10 @@ def blocks_3d(points: np.ndarray, tets: np.ndarray) -> Blocks:
     tets = np.asarray(tets, dtype=np.int64)
     points = np.asarray(points, dtype=float)
     corners = tet_corners(
-        points[tets], tets, np.arange(len(tets), dtype=np.int64), None, len(points)
+        points[tets],
+        tets,
+        np.arange(len(tets), dtype=np.int64),
+        boundary=None,
+        num_vertices=len(points),
     )
     return assemble(corners, np.unique(tets), 3)

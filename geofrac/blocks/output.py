@@ -112,7 +112,7 @@ def _cell_arrays(
 class _Appended:
     """Collects appended arrays: UInt64 byte count + little-endian data, or zlib blocks."""
 
-    def __init__(self, compress: bool) -> None:
+    def __init__(self, *, compress: bool) -> None:
         self.compress = compress
         self.chunks: list[bytes | np.ndarray] = []
         self.offset = 0
@@ -224,6 +224,7 @@ def write_vtu(
     path: str | os.PathLike,
     blocks: Blocks,
     cell_data: Mapping[str, np.ndarray] | None = None,
+    *,
     compress: bool = True,
 ) -> Path:
     """Write the blocks as one VTU piece (format in the module docstring).
@@ -255,7 +256,7 @@ def write_vtu(
         NumberOfPoints=str(len(streams["points"])),
         NumberOfCells=str(blocks.num_blocks),
     )
-    app = _Appended(compress)
+    app = _Appended(compress=compress)
     ET.SubElement(piece, "PointData")
     cells_data = ET.SubElement(piece, "CellData")
     for name, values in arrays:
@@ -459,6 +460,7 @@ def write_histogram(
     path_png: str | os.PathLike,
     path_csv: str | os.PathLike,
     volumes: np.ndarray,
+    *,
     bins: int | Sequence[float] | str = 30,
     unit: str = "m³",
     name: str = "",

@@ -52,7 +52,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
     """Validate ``[plasticity]``."""
     if ctx.gdim == 1:
         raise SceneError(ctx.file, "effects", "'plasticity' needs a 2D or 3D scene")
-    t = Table(ctx.file, "plasticity", table, KEYS)
+    t = Table(ctx.file, "plasticity", table, allowed=KEYS)
     phi = float(t.number("friction_angle", required=True))  # type: ignore[arg-type]
     if not 0 <= phi < 90:
         raise t.error("friction_angle", f"must lie in [0, 90) degrees, got {phi}")

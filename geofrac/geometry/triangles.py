@@ -66,6 +66,7 @@ def inner_points(
     x: np.ndarray,
     keys: np.ndarray | None,
     inner: str = "incentre",
+    *,
     radius: float = 1.0,
     convex: bool = False,
     seed: int = 0,

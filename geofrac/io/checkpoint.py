@@ -170,6 +170,7 @@ class RunControl:
         k: int,
         data: dict[str, Any],
         shared: dict[str, np.ndarray] | None = None,
+        *,
         local: dict[str, np.ndarray] | None = None,
     ) -> Path:
         """Write checkpoint ``k`` (collective).
@@ -198,9 +199,10 @@ class RunControl:
         if error is None:
             try:
                 if comm.rank == 0 and shared:
-                    np.savez(tmp / "shared.npz", **shared)
+                    # numpy's stub: a ** dict could hold the flag allow_pickle
+                    np.savez(tmp / "shared.npz", **shared)  # type: ignore[arg-type]
                 if local:
-                    np.savez(tmp / f"rank-{comm.rank}.npz", **local)
+                    np.savez(tmp / f"rank-{comm.rank}.npz", **local)  # type: ignore[arg-type]
             except OSError as exc:
                 error = f"cannot write checkpoint {tmp}: {exc.strerror}"
             errors = comm.allgather(error)
@@ -245,7 +247,7 @@ class RunControl:
         """Raise :class:`~geofrac.interrupt.Interrupted` (after :meth:`poll` said stop)."""
         raise interrupt.Interrupted(self._signum, where)
 
-    def check_resume(self, ranks_must_match: bool = True, check_kind: bool = True) -> None:
+    def check_resume(self, *, ranks_must_match: bool = True, check_kind: bool = True) -> None:
         """Refuse a resume checkpoint of another scene, loop or (optionally) rank count."""
         ck = self.resume
         if ck is None:

@@ -239,7 +239,7 @@ def _previous_status(stage: Path) -> str | None:
         return None
 
 
-def claim(final: Path, comm: Any, resume: bool = False) -> OutputDir:
+def claim(final: Path, comm: Any, *, resume: bool = False) -> OutputDir:
     """Lock ``final`` for this run and prepare ``final/incomplete`` (collective).
 
     Without ``resume`` an earlier unfinished run's staging directory is removed (with a
@@ -267,6 +267,7 @@ def owned_run(
     scene: Any,
     comm: Any,
     timings: Any,
+    *,
     start: dict[str, Any],
     body: Callable[[Any, RunControl], dict[str, Any]],
     legacy: Sequence[str],
@@ -295,9 +296,9 @@ def owned_run(
         RunError: collectively; :class:`~geofrac.interrupt.Interrupted` after a signal,
             with ``incomplete/summary.json`` saying ``status = "interrupted"``.
     """
-    out = claim(scene.output.dir, comm, resume)
+    out = claim(scene.output.dir, comm, resume=resume)
     try:
-        say = sayer(comm, verbose)
+        say = sayer(comm, verbose=verbose)
         for note in out.notes:
             say(f"note: {note}")
         output = scene.output

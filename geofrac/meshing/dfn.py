@@ -81,6 +81,7 @@ def mesh_network(
     gmsh: Any,
     clean: CleanNetwork,
     sides: Sequence[str],
+    *,
     corners: Sequence[str],
     spec: MeshSpec,
 ) -> dict[str, Any]:

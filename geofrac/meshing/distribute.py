@@ -39,6 +39,7 @@ class TaggedMesh:
         data: gmshio.MeshData,
         report: dict[str, Any] | None = None,
         fractures: Any = None,
+        *,
         tags: dict[int, Any] | None = None,
     ) -> None:
         self.mesh = data.mesh
@@ -250,7 +251,7 @@ def renumber_model(gmsh: Any, seed: int) -> None:
                 gmsh.model.mesh.reorderElements(kind, tag, rng.permutation(len(ids)))
 
 
-def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> TaggedMesh:
+def build_mesh(geometry: Geometry, comm: MPI.Comm, *, verbose: bool = False) -> TaggedMesh:
     """Mesh ``geometry`` with gmsh on rank 0 and distribute the mesh over ``comm``.
 
     A ``.geo`` file is checked and meshed in a child process under the geometry's time
@@ -270,7 +271,7 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
         if message is not None:
             raise RunError(message)
         data = gmshio.model_to_mesh(None, comm, 0, gdim=geometry.dim)
-        return TaggedMesh(data, report, payload, _group_tags(None, data, dims))
+        return TaggedMesh(data, report, payload, tags=_group_tags(None, data, dims))
     builder = geometry.builder
     with ExitStack() as stack:
         message, report, payload, dims = None, None, None, {}
@@ -278,7 +279,7 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
         try:
             if builder is not None:
                 gmsh = stack.enter_context(
-                    gmsh_session(None, geometry.parameters, geometry.mesh_size, verbose)
+                    gmsh_session(None, geometry.parameters, geometry.mesh_size, verbose=verbose)
                 )
                 report, payload = builder.build(gmsh)
             else:
@@ -288,7 +289,7 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
                         geometry.file,
                         geometry.parameters,
                         geometry.mesh_size,
-                        geometry.dim,
+                        dim=geometry.dim,
                         time_limit=geometry.time_limit,
                         trusted=geometry.trusted,
                         verbose=verbose,
@@ -311,7 +312,7 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
         if message is not None:
             raise RunError(message)
         data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=geometry.dim)
-        return TaggedMesh(data, report, payload, _group_tags(gmsh.model, data, dims))
+        return TaggedMesh(data, report, payload, tags=_group_tags(gmsh.model, data, dims))
 
 
 def check_fracture_cover(tagged: TaggedMesh, group: str = "fractures") -> dict[str, Any]:

@@ -123,6 +123,7 @@ def gmsh_session(
     path: Path | None,
     parameters: dict[str, float],
     mesh_size: float | None = None,
+    *,
     verbose: bool = False,
 ) -> Iterator[Any]:
     """Initialise gmsh, open ``path`` with ``parameters`` set, yield the gmsh module, finalise.
@@ -261,6 +262,7 @@ def inspect_geometry(
     path: Path,
     parameters: dict[str, float],
     time_limit: float | None = None,
+    *,
     trusted: bool = False,
 ) -> GeoInfo:
     """Open a geometry file (no meshing) and report its dimension and physical groups.
@@ -295,8 +297,8 @@ def meshed_model(
     path: Path,
     parameters: dict[str, float],
     mesh_size: float | None,
-    dim: int,
     *,
+    dim: int,
     time_limit: float | None = None,
     trusted: bool = False,
     verbose: bool = False,
@@ -317,7 +319,7 @@ def meshed_model(
         RuntimeError: gmsh failed (its message, or what was being done when it gave none).
     """
     if path.suffix != ".geo":
-        with gmsh_session(path, {}, None, verbose) as gmsh:
+        with gmsh_session(path, {}, None, verbose=verbose) as gmsh:
             yield gmsh
         return
     if not trusted:

@@ -269,6 +269,7 @@ def node_fit(
     centre: np.ndarray,
     h: float,
     centre_id: int,
+    *,
     ids: np.ndarray,
     xy: np.ndarray,
     order: int | None = None,
@@ -328,7 +329,7 @@ def _gauss_points(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def node_stiffness(
-    fit: NodeFit, D: np.ndarray, thickness: float, triangles: np.ndarray
+    fit: NodeFit, D: np.ndarray, thickness: float, *, triangles: np.ndarray
 ) -> np.ndarray:
     """Node stiffness (3.27)-(3.28): K = t Σ_T ∫_T Bᵀ D B dΩ over the grain's sub-triangles.
 
@@ -351,6 +352,7 @@ def compiled_node(
     centre: np.ndarray,
     h: float,
     xy: np.ndarray,
+    *,
     order: int | None,
     triangles: np.ndarray,
     D: np.ndarray,

@@ -94,7 +94,7 @@ def is_name(text: str) -> bool:
     return len(text) <= MAX_NAME_LENGTH and _NAME.fullmatch(text) is not None
 
 
-def check_name(file: Path, name: str, given: bool) -> str:
+def check_name(file: Path, name: str, *, given: bool) -> str:
     """A scene name is a name, not a path: letters, digits, ``-``, ``_``, ``.``.
 
     No leading dot (so neither ``.`` nor ``..``), no ``/``, 1 to 100 characters.
@@ -111,7 +111,7 @@ def check_name(file: Path, name: str, given: bool) -> str:
     )
 
 
-def output_directory(t: Table, name: str, out: Path | None, trusted: bool = False) -> Path:
+def output_directory(t: Table, name: str, out: Path | None, *, trusted: bool = False) -> Path:
     """The absolute output directory: ``out``, else ``[output] dir``, else ``results/<name>``.
 
     ``out`` is ``--out``. A ``dir`` from the scene file must be relative without ``..``
@@ -142,7 +142,7 @@ def is_number(value: Any) -> bool:
 class Table:
     """One TOML table under validation: typed getters that name ``file`` and ``key``."""
 
-    def __init__(self, file: Path, key: str, data: Any, allowed: Sequence[str]) -> None:
+    def __init__(self, file: str | Path, key: str, data: Any, *, allowed: Sequence[str]) -> None:
         if not isinstance(data, dict):
             raise SceneError(file, key, f"must be a table, got {type(data).__name__}")
         self.file, self.key, self.data = file, key, data
@@ -225,6 +225,7 @@ class Table:
         name: str,
         choices: Sequence[str],
         default: Sequence[str],
+        *,
         kind: str = "field",
         empty: bool = True,
     ) -> tuple[str, ...]:
@@ -246,7 +247,7 @@ class Table:
                 raise self.error(name, f"unknown {kind} {f!r}" + did_you_mean(f, choices))
         return tuple(value)
 
-    def boolean(self, name: str, default: bool) -> bool:
+    def boolean(self, name: str, *, default: bool) -> bool:
         """True or false, ``default`` when absent."""
         value = self.data.get(name, default)
         if not isinstance(value, bool):

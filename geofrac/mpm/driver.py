@@ -441,7 +441,7 @@ def simulate(
             checkpoint is written.
     """
     timings = timings or Timings()
-    say = sayer(comm, verbose)
+    say = sayer(comm, verbose=verbose)
     spec = scene.mpm
     assert spec is not None
     with timings.phase("setup"):
@@ -731,7 +731,7 @@ class MpmMethod:
         return {"fem": False, "method": "mpm"}
 
     def run(
-        self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
+        self, scene: Scene, comm: MPI.Comm, timings: Timings, *, verbose: bool, control: RunControl
     ) -> dict[str, Any]:
         """:func:`simulate` with its output; the summary entries."""
         return {"results": simulate(scene, comm, timings, verbose, write=True, control=control)}

@@ -23,8 +23,8 @@ def load_scene_collective(
     comm: Any,
     path: str | Path,
     overrides: Sequence[str] = (),
-    out: str | Path | None = None,
     *,
+    out: str | Path | None = None,
     allow_large: bool = False,
 ) -> Scene:
     """Validate on rank 0 and broadcast; every rank returns the scene or raises the error.

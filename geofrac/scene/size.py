@@ -317,7 +317,11 @@ def estimate(scene: Any, extent: Extent | None) -> SizeEstimate:
             keys["blocks"] = keys["cells"]
     else:
         cells = _fem_cells(scene, extent)
-        dfn = next((e.config for e in scene.effects if e.name == "dfn"), None)
+        dfn = None
+        if "dfn" in scene.effect_names:  # then its module is already imported
+            from geofrac.effects.dfn import DfnConfig
+
+            dfn = scene.effect_config("dfn", DfnConfig)
         where = _cells_key(scene, extent)
         q["cells"], keys["cells"] = cells, where
         q["dofs"] = _dofs(cells, scene.geometry.dim, scene.discretization.element)
@@ -325,7 +329,11 @@ def estimate(scene: Any, extent: Extent | None) -> SizeEstimate:
         if dfn is not None:
             q["fractures"] = _fractures(dfn)
             keys["fractures"] = "dfn.file" if dfn.network is not None else "dfn.sets"
-        crack = next((e.config for e in scene.effects if e.name == "cracking"), None)
+        crack = None
+        if "cracking" in scene.effect_names:
+            from geofrac.fracture.config import CrackingConfig
+
+            crack = scene.effect_config("cracking", CrackingConfig)
         if crack is not None:
             q["events"] = float(crack.max_events)
             keys["events"] = "cracking.max_events"
@@ -351,7 +359,9 @@ def _cap(name: str, ranks: int) -> float:
     return min(cap, MAX_CELLS_TOTAL) if name == "cells" else cap
 
 
-def check_size(file: str | Path, size: SizeEstimate, ranks: int = 1, allow: bool = False) -> None:
+def check_size(
+    file: str | Path, size: SizeEstimate, ranks: int = 1, *, allow: bool = False
+) -> None:
     """Refuse a scene beyond a cap (unless ``allow``) or beyond a hard limit (always).
 
     Args:

@@ -64,7 +64,7 @@ def _run_scene(case: Case, root: Path, out: Path, comm: Any) -> dict[str, Any]:
     from geofrac.pipeline import get, run_scene
     from geofrac.scene import load_scene_collective
 
-    scene = load_scene_collective(comm, root / str(case.scene), list(case.overrides), str(out))
+    scene = load_scene_collective(comm, root / str(case.scene), list(case.overrides), out=str(out))
     get(scene.method)  # the imports: PETSc's initialisation installs its own SIGTERM handler
     interrupt.install()
     interrupt.reassert()
@@ -94,6 +94,7 @@ def run_cases(
     cases: list[Case],
     out: Path,
     comm: Any,
+    *,
     root: Path,
     say: Callable[[str], None] = print,
     figures: Path | None = None,
@@ -195,6 +196,7 @@ def merge(
     stored: dict[str, Any] | None,
     results: list[Result],
     command: str,
+    *,
     seconds: float,
     full: bool,
     stamp: str,
