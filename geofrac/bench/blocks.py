@@ -26,9 +26,13 @@ import argparse
 import resource
 import time
 from pathlib import Path
-from typing import Any
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import number_list
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["COLUMNS", "add_arguments", "run"]
 
@@ -78,7 +82,7 @@ class _CubeBuilder:
     def __init__(self, h: float) -> None:
         self.h = h
 
-    def build(self, gmsh: Any) -> tuple[dict[str, Any], None]:
+    def build(self, gmsh: ModuleType) -> tuple[dict[str, Any], None]:
         gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
         gmsh.model.occ.synchronize()
         gmsh.model.addPhysicalGroup(3, [1], name="domain")
@@ -110,7 +114,7 @@ def _voronoi(points: Any, threads: int) -> float:
     return time.perf_counter() - start
 
 
-def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
     """Build the block sets; print the table (rank 0); return the JSON report."""
     import dolfinx_solver  # noqa: F401
 
@@ -178,7 +182,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     return report
 
 
-def _check(blocks: Any, mesh: Any, validate: int, comm: Any) -> dict[str, Any]:
+def _check(blocks: Any, mesh: Any, validate: int, comm: MPI.Comm) -> dict[str, Any]:
     """Volume error and invalid blocks of the gathered set (collective)."""
     from mpi4py import MPI
 

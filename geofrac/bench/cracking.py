@@ -12,9 +12,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.fracture import SOLVERS
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["CASES", "PATCH_H", "add_arguments", "event_case", "run"]
 
@@ -46,7 +49,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", type=Path, help="write the JSON records to this file")
 
 
-def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> list[dict[str, Any]]:
     """Run the cases; print a table (rank 0); return the records."""
     from geofrac.io.summary import write_json
     from geofrac.log import echo
@@ -97,7 +100,7 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
 
 
 def event_case(
-    case: str, name: str, extra: tuple[str, ...], *, events: int, solver: str, comm: Any
+    case: str, name: str, extra: tuple[str, ...], *, events: int, solver: str, comm: MPI.Comm
 ) -> dict[str, Any]:
     """Run ``events`` events of scene ``jobs/<name>.toml``; print and return its record.
 

@@ -17,9 +17,12 @@ import argparse
 import math
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import name_list, number_list
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["add_arguments", "network_statistics", "run"]
 
@@ -105,7 +108,7 @@ def network_statistics(network: Any, sets: Any) -> list[dict[str, Any]]:
     return out
 
 
-def _case(comm: Any, model: str, scale: float) -> tuple[dict[str, Any], Any]:
+def _case(comm: MPI.Comm, model: str, scale: float) -> tuple[dict[str, Any], Any]:
     """Mesh one model at one scale; return (record, tagged mesh)."""
     from geofrac.meshing.distribute import build_mesh, check_fracture_cover
     from geofrac.scene import load_scene_collective
@@ -195,7 +198,7 @@ def _plot(tagged: Any, path: Path, title: str) -> None:
     plt.close(fig)
 
 
-def run(args: argparse.Namespace, comm: Any) -> None:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> None:
     """Mesh every model at every scale, print the table, write the JSON and pictures."""
     from geofrac.bench.report import format_table, save_report
     from geofrac.io.summary import versions

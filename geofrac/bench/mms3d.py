@@ -12,7 +12,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["DEFAULT_MESHES", "add_arguments", "run"]
 
@@ -35,7 +38,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
     from geofrac.bench.study import Case, parse_elements, run_study
 

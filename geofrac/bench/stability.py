@@ -18,9 +18,12 @@ import argparse
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import number_list
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["add_arguments", "run"]
 
@@ -85,7 +88,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _build_meshes(
-    comm: Any, targets: list[float], ny: int, seed: int, directory: Path
+    comm: MPI.Comm, targets: list[float], ny: int, seed: int, directory: Path
 ) -> dict[float, dict[str, Any]]:
     """Build one mesh per target angle on rank 0; every rank gets the same descriptions.
 
@@ -118,7 +121,7 @@ def _build_meshes(
 
 
 def _solve_case(
-    comm: Any, element: str, mesh: dict[str, Any], nu: float, plane: str, overrides: list[str]
+    comm: MPI.Comm, element: str, mesh: dict[str, Any], nu: float, plane: str, overrides: list[str]
 ) -> dict[str, Any]:
     """Solve one case; failures and non-finite errors become ``status`` = ``"error: ..."``."""
     from geofrac.errors import RunError
@@ -277,7 +280,7 @@ def _summary_lines(records: list[dict[str, Any]], worst_angle: float, nu_max: fl
     return lines
 
 
-def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
     from geofrac.bench.report import format_table, save_report
     from geofrac.bench.study import parse_elements

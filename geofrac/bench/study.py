@@ -15,7 +15,10 @@ import argparse
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = [
     "COLUMNS",
@@ -191,7 +194,7 @@ def equal_time(by_element: dict[str, list[dict[str, Any]]]) -> dict[str, Any]:
 
 def run_study(
     args: argparse.Namespace,
-    comm: Any,
+    comm: MPI.Comm,
     name: str,
     *,
     title: str,

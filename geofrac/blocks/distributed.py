@@ -111,6 +111,7 @@ def gather_blocks(blocks: Blocks, comm: MPI.Comm) -> Blocks | None:
     parts = comm.gather(blocks, root=0)
     if comm.rank != 0:
         return None
+    assert parts is not None  # rank 0
     whole = parts[0]
     for part in parts[1:]:
         whole = join(whole, part)
@@ -138,7 +139,7 @@ def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, *, comm: MPI.
 
     table = corners.table
     face_dest, piece_dest = dest(corners.face_block), dest(corners.piece_block)
-    outgoing = []
+    outgoing: list[tuple[object, ...] | None] = []
     for r in range(comm.size):
         if r == comm.rank:
             outgoing.append(None)
@@ -169,7 +170,7 @@ def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, *, comm: MPI.
     refs = table.append(kinds, keys, xs)
     face_block = [corners.face_block[keep_f]]
     faces = [corners.faces[keep_f]]
-    extra = [] if corners.extra is None else [corners.extra[keep_f]]
+    extras = [] if corners.extra is None else [corners.extra[keep_f]]
     piece_block = [corners.piece_block[keep_p]]
     pieces = [corners.pieces[keep_p]]
     start = 0
@@ -183,14 +184,14 @@ def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, *, comm: MPI.
         face_block.append(fb)
         piece_block.append(pb)
         if fx is not None:
-            extra.append(fx)
+            extras.append(fx)
     return Corners(
         table=table,
         face_block=np.concatenate(face_block),
         faces=np.concatenate(faces),
         piece_block=np.concatenate(piece_block),
         pieces=np.concatenate(pieces),
-        extra=np.concatenate(extra) if extra else None,
+        extra=np.concatenate(extras) if extras else None,
     )
 
 

@@ -48,6 +48,7 @@ def _geometry(scene: Scene) -> Geometry:
     from geofrac.meshing.terrain import TerrainBuilder, TerrainSpec
 
     groups = {"layer": 3, "top": 2, "slip": 2, "side": 2}
+    assert spec.terrain is not None  # the loader sets it with source = "terrain"
     return Geometry(None, {}, None, 3, groups, TerrainBuilder(TerrainSpec(**spec.terrain)))
 
 
@@ -260,7 +261,7 @@ def _checks(
     """
     from geofrac.blocks import quality
 
-    report = None
+    report: dict[str, Any] | None = None
     if comm.rank == 0:
         assert whole is not None
         report = quality.summarize(
@@ -275,11 +276,11 @@ def _checks(
         report["validator"] = validator
         if validator is not None:
             report["invalid_blocks"] += validator["failed"]
-    report = comm.bcast(report, root=0)
-    problems = _problems(report)
+    agreed: dict[str, Any] = comm.bcast(report, root=0)
+    problems = _problems(agreed)
     if problems:
         raise RunError("block quality checks failed: " + "; ".join(problems))
-    return report
+    return agreed
 
 
 def _everywhere(points: np.ndarray) -> np.ndarray:

@@ -120,6 +120,7 @@ def rings(corners: Corners, block_ids: np.ndarray) -> Blocks:
     """
     block_ids = np.asarray(block_ids, dtype=np.int64)
     b = np.searchsorted(block_ids, corners.face_block)
+    assert corners.extra is not None  # the 2D builders keep their columns
     first_edge, last_edge = corners.extra[:, 0], corners.extra[:, 1]
     first_on = corners.extra[:, 2].astype(bool)
     nb, nc = len(block_ids), len(b)

@@ -236,17 +236,26 @@ def tet_corners(
         bb, cc = np.where(swap, c, b), np.where(swap, b, c)
         rows = np.arange(len(gid))
 
-        def e(p: int, q: np.ndarray | int, rows: np.ndarray = rows) -> np.ndarray:
+        def edge(p: int, q: np.ndarray | int, rows: np.ndarray = rows) -> np.ndarray:
             return eref[rows, _EDGE_INDEX[p, q]]
 
-        def f(
+        def face(
             p: int, q: np.ndarray | int, r: np.ndarray | int, *, rows: np.ndarray = rows
         ) -> np.ndarray:
             return fref[rows, 6 - (p + q + r)]  # face pqr is opposite the fourth vertex
 
         # VTK order: bottom (a, m_ab, f_abc, m_ac), then above it (m_ad, f_abd, c, f_acd)
         hexa = np.stack(
-            [vref[:, a], e(a, bb), f(a, bb, cc), e(a, cc), e(a, d), f(a, bb, d), cref, f(a, cc, d)],
+            [
+                vref[:, a],
+                edge(a, bb),
+                face(a, bb, cc),
+                edge(a, cc),
+                edge(a, d),
+                face(a, bb, d),
+                cref,
+                face(a, cc, d),
+            ],
             axis=1,
         )
         pieces.append(hexa)

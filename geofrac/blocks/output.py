@@ -126,7 +126,7 @@ class _Appended:
             type=_vtk_type(data),
             format="appended",
             offset=str(self.offset),
-            **attrs,
+            **attrs,  # type: ignore[arg-type]  # the stub fears a key named attrib; none is
         )
         raw = data.reshape(-1).view(np.uint8)
         if not self.compress:
@@ -424,8 +424,8 @@ def read_block_file(path: str | os.PathLike) -> Blocks:
     pos = 0
     for b in range(num_blocks):
         heads[b] = pos
-        nv, nf, npc = int(t[pos + 2]), int(t[pos + 3]), int(t[pos + 4])
-        pos += head_len + nv * dim + nf * (kf + 1) + npc * (kp + 1)
+        n_v, n_f, n_p = int(t[pos + 2]), int(t[pos + 3]), int(t[pos + 4])
+        pos += head_len + n_v * dim + n_f * (kf + 1) + n_p * (kp + 1)
     if pos != len(t):
         raise ValueError(f"{path}: {len(t) - pos} numbers left over")
     h = t[heads[:, None] + np.arange(head_len)] if num_blocks else np.zeros((0, head_len))

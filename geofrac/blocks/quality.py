@@ -238,7 +238,9 @@ def block_centroids(blocks: Blocks) -> np.ndarray:
 
     A block of zero volume gets NaN.
     """
-    return _integrate(blocks, moments=True)[1]
+    centroids = _integrate(blocks, moments=True)[1]
+    assert centroids is not None  # asked for
+    return centroids
 
 
 def piece_volumes(blocks: Blocks) -> np.ndarray:
@@ -945,6 +947,7 @@ def block_checks(
     """
     say = progress or (lambda what: None)
     vol, centroids = _integrate(blocks, moments=True)
+    assert centroids is not None  # asked for
     say("volumes and centroids")
     with np.errstate(divide="ignore", invalid="ignore"):
         aspect = _circum_diameters(blocks, np.nan_to_num(centroids)) / equivalent_diameters(

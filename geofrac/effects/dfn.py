@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -143,7 +144,7 @@ class DfnGeometry:
             f"{report['shortest_edge']:.3g} ({report['time_mesh_s']:.1f} s)"
         )
 
-    def build(self, gmsh: Any) -> tuple[dict[str, Any], Any]:
+    def build(self, gmsh: ModuleType) -> tuple[dict[str, Any], Any]:
         """Generate, clean and mesh the network in an initialised gmsh session.
 
         Returns:

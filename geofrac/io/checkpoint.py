@@ -28,13 +28,16 @@ import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import geofrac
 from geofrac import interrupt
 from geofrac.errors import RunError
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["KEEP", "Checkpoint", "CheckpointPolicy", "RunControl", "latest"]
 
@@ -131,7 +134,7 @@ class RunControl:
         resume: the checkpoint to continue from, or None.
     """
 
-    comm: Any
+    comm: MPI.Comm
     directory: Path | None
     sha256: str
     kind: str

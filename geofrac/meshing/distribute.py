@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from contextlib import ExitStack
+from types import ModuleType
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -206,7 +207,7 @@ def _idle_until_rank0(comm: MPI.Comm, poll: float = 0.005) -> None:
         time.sleep(poll)
 
 
-def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: Any) -> str:
+def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: ModuleType) -> str:
     """One line saying what failed, never an empty message."""
     from geofrac.meshing.geo import GmshTimeout, MeshingFailed
 
@@ -223,7 +224,7 @@ def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: Any) -> 
     )
 
 
-def renumber_model(gmsh: Any, seed: int) -> None:
+def renumber_model(gmsh: ModuleType, seed: int) -> None:
     """Number the meshed model's nodes and order each entity's elements at random (seeded).
 
     The same mesh, numbered otherwise: DOLFINx takes the nodes in tag order and the
@@ -275,7 +276,7 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, *, verbose: bool = False) -> 
     builder = geometry.builder
     with ExitStack() as stack:
         message, report, payload, dims = None, None, None, {}
-        gmsh: Any = None
+        gmsh: ModuleType | None = None
         try:
             if builder is not None:
                 gmsh = stack.enter_context(

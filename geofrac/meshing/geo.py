@@ -28,6 +28,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from geofrac import interrupt
@@ -157,7 +158,7 @@ def gmsh_session(
         interrupt.reassert()
 
 
-def failure_message(exc: BaseException, gmsh: Any = None) -> str:
+def failure_message(exc: BaseException, gmsh: ModuleType | None = None) -> str:
     """The message of gmsh error ``exc``; if it is empty, the last error gmsh logged, or ``""``."""
     text = str(exc).strip()
     if text or gmsh is None:
@@ -287,7 +288,7 @@ def inspect_geometry(
     return GeoInfo(
         dim=result["dim"],
         groups=dict(result["groups"]),
-        overlaps=tuple(tuple(o) for o in result["overlaps"]),  # type: ignore[misc]
+        overlaps=tuple(tuple(o) for o in result["overlaps"]),
         order=int(result["order"]),
     )
 

@@ -50,11 +50,14 @@ B is linear in x for order 2 (constant for order 1, zero for orders 0 and -1).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from geofrac.mls.shape import quartic_spline
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = [
     "MIN_PIVOT_RATIO",
@@ -357,7 +360,7 @@ def compiled_node(
     triangles: np.ndarray,
     D: np.ndarray,
     thickness: float,
-    comm: Any = None,
+    comm: MPI.Comm | None = None,
 ) -> tuple[int, np.ndarray, np.ndarray]:
     """Fit and node stiffness of one node with the C kernel ``cmulti``.
 

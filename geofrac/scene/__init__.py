@@ -10,17 +10,20 @@ from __future__ import annotations
 import pickle
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.model.errors import SceneError
 from geofrac.model.scene import Scene
 from geofrac.scene.load import load_scene
 
+if TYPE_CHECKING:
+    from mpi4py import MPI
+
 __all__ = ["Scene", "SceneError", "load_scene", "load_scene_collective"]
 
 
 def load_scene_collective(
-    comm: Any,
+    comm: MPI.Comm,
     path: str | Path,
     overrides: Sequence[str] = (),
     *,

@@ -35,10 +35,14 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac import elements
 from geofrac.model.errors import SceneError
+from geofrac.model.scene import Material, Scene
+
+if TYPE_CHECKING:
+    from geofrac.effects.dfn import DfnConfig
 
 __all__ = [
     "CAPS",
@@ -159,7 +163,7 @@ def format_count(value: float) -> str:
     return f"{mantissa}e{int(exponent)}"
 
 
-def _mesh_size(scene: Any, extent: Extent) -> tuple[float | None, str]:
+def _mesh_size(scene: Scene, extent: Extent) -> tuple[float | None, str]:
     """The smallest element size the geometry asks for (or None), and the key setting it."""
     geometry = scene.geometry
     candidates = [
@@ -178,7 +182,7 @@ def _mesh_size(scene: Any, extent: Extent) -> tuple[float | None, str]:
     return h * extent.size_factor, key
 
 
-def _cells_key(scene: Any, extent: Extent | None) -> str:
+def _cells_key(scene: Scene, extent: Extent | None) -> str:
     """The scene key that sets the cell count."""
     if getattr(scene.geometry, "builder", None) is not None:
         return "dfn.mesh_size"
@@ -189,7 +193,7 @@ def _cells_key(scene: Any, extent: Extent | None) -> str:
     return "geometry.parameters" if counts and h_key == "geometry.file" else h_key
 
 
-def _fem_cells(scene: Any, extent: Extent | None) -> float:
+def _fem_cells(scene: Scene, extent: Extent | None) -> float:
     """Cells of the mesh of ``scene.geometry`` (see the module docstring)."""
     geometry = scene.geometry
     dim = geometry.dim
@@ -232,7 +236,7 @@ def _mean_length(lmin: float, lmax: float, n: float) -> float:
     return lmin * n / (n - 1.0) * (1.0 - (lmax / lmin) ** (1.0 - n)) / (1.0 - r)
 
 
-def _fractures(config: Any) -> float:
+def _fractures(config: DfnConfig) -> float:
     from geofrac.dfn.polygon import polygon_area  # numpy only
 
     if config.network is not None:
@@ -247,13 +251,13 @@ def _fractures(config: Any) -> float:
     return total
 
 
-def _wave_speed(material: Any, dim: int) -> float:
+def _wave_speed(material: Material, dim: int) -> float:
     from geofrac.materials import p_wave_modulus
 
     return math.sqrt(p_wave_modulus(material.E, material.nu, dim) / material.density)
 
 
-def _mpm(scene: Any, extent: Extent | None, q: dict[str, float], keys: dict[str, str]) -> None:
+def _mpm(scene: Scene, extent: Extent | None, q: dict[str, float], keys: dict[str, str]) -> None:
     m = scene.mpm
     lattices = [b for b in m.bodies if b.kind == "lattice"]
     if m.particles.kind == "lattice":
@@ -295,7 +299,7 @@ def _terrain_blocks(terrain: dict[str, Any]) -> float:
     return blocks
 
 
-def estimate(scene: Any, extent: Extent | None) -> SizeEstimate:
+def estimate(scene: Scene, extent: Extent | None) -> SizeEstimate:
     """Estimate the work of a validated scene (see the module docstring).
 
     Args:
