@@ -32,7 +32,11 @@ from typing import TYPE_CHECKING, Any
 from geofrac.bench.args import number_list
 
 if TYPE_CHECKING:
+    import numpy as np
+    from dolfinx.mesh import Mesh
     from mpi4py import MPI
+
+    from geofrac.blocks.model import Blocks
 
 __all__ = ["COLUMNS", "add_arguments", "run"]
 
@@ -97,7 +101,7 @@ def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _voronoi(points: Any, threads: int) -> float:
+def _voronoi(points: np.ndarray, threads: int) -> float:
     """Seconds freud takes for the Voronoi cells (volumes and polytopes) of ``points``."""
     import freud
 
@@ -182,7 +186,7 @@ def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
     return report
 
 
-def _check(blocks: Any, mesh: Any, validate: int, comm: MPI.Comm) -> dict[str, Any]:
+def _check(blocks: Blocks, mesh: Mesh, validate: int, comm: MPI.Comm) -> dict[str, Any]:
     """Volume error and invalid blocks of the gathered set (collective)."""
     from mpi4py import MPI
 

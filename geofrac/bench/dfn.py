@@ -22,7 +22,12 @@ from typing import TYPE_CHECKING, Any
 from geofrac.bench.args import name_list, number_list
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from mpi4py import MPI
+
+    from geofrac.dfn.sampling import FractureSet, Network
+    from geofrac.meshing.distribute import TaggedMesh
 
 __all__ = ["add_arguments", "network_statistics", "run"]
 
@@ -71,7 +76,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-plot", action="store_true", help="skip the pictures")
 
 
-def network_statistics(network: Any, sets: Any) -> list[dict[str, Any]]:
+def network_statistics(network: Network, sets: Sequence[FractureSet]) -> list[dict[str, Any]]:
     """Per set: count, KS test of the lengths, orientation mean and spread.
 
     Args:
@@ -153,7 +158,7 @@ def _max() -> Any:
     return MPI.MAX
 
 
-def _plot(tagged: Any, path: Path, title: str) -> None:
+def _plot(tagged: TaggedMesh, path: Path, title: str) -> None:
     """The network coloured by set (left) and a close-up of the mesh around it (right)."""
     import matplotlib
 

@@ -17,7 +17,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -35,6 +35,9 @@ from geofrac.dfn.sampling import FractureSet, Network, generate_network
 from geofrac.meshing.dfn import ALGORITHMS, DOMAIN_GROUP, FRACTURE_GROUP, MeshSpec
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import MAX_INTEGER, finite, short
+
+if TYPE_CHECKING:
+    from geofrac.effects import ConfigureContext
 
 __all__ = [
     "RECTANGLE_CORNERS",
@@ -420,6 +423,6 @@ def geometry(table: dict[str, Any], file: str) -> tuple[DfnConfig, Any]:
     )
 
 
-def configure(table: dict[str, Any], ctx: Any) -> DfnConfig:
+def configure(table: dict[str, Any], ctx: ConfigureContext) -> DfnConfig:
     """Validate ``[dfn]`` (the scene loader calls :func:`geometry` instead)."""
     return _configure(table, ctx.file)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import pickle
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from geofrac.model.errors import SceneError
 from geofrac.model.scene import Scene
@@ -48,7 +48,9 @@ def load_scene_collective(
     failure: BaseException | None = None
     if comm.rank == 0:
         try:
-            result: Any = load_scene(path, overrides, out, allow_large=allow_large, ranks=comm.size)
+            result: Scene | Exception = load_scene(
+                path, overrides, out, allow_large=allow_large, ranks=comm.size
+            )
         except SceneError as exc:
             result = exc
         except Exception as exc:  # a bug must not leave the other ranks waiting in bcast
