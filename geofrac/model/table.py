@@ -6,7 +6,7 @@ import math
 import re
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, overload
 
 from geofrac.model.errors import SceneError, did_you_mean
 
@@ -86,7 +86,7 @@ def checkpoint_keys(t: Table) -> tuple[int, float]:
     minutes = t.number(
         "checkpoint_minutes", default=10.0, minimum=0.0, maximum=MAX_CHECKPOINT_MINUTES
     )
-    return int(every), float(minutes)  # type: ignore[arg-type]
+    return int(every), float(minutes)
 
 
 def is_name(text: str) -> bool:
@@ -162,6 +162,30 @@ class Table:
         """Whether the table has entry ``name``."""
         return name in self.data
 
+    @overload
+    def number(
+        self,
+        name: str,
+        *,
+        default: float,
+        required: bool = ...,
+        positive: bool = ...,
+        integer: bool = ...,
+        minimum: float | None = ...,
+        maximum: float | None = ...,
+    ) -> float: ...
+    @overload
+    def number(
+        self,
+        name: str,
+        *,
+        default: None = ...,
+        required: bool = ...,
+        positive: bool = ...,
+        integer: bool = ...,
+        minimum: float | None = ...,
+        maximum: float | None = ...,
+    ) -> float | None: ...
     def number(
         self,
         name: str,

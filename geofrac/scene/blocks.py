@@ -120,7 +120,7 @@ def blocks_spec(
             raise t.error("terrain", "applies to source = 'terrain' only")
         dim = geometry.dim
     inner = t.string("inner_point", default="incentre", choices=("incentre", "random"))
-    radius = float(t.number("radius", default=1.0))  # type: ignore[arg-type]
+    radius = float(t.number("radius", default=1.0))
     if not 0 <= radius <= 1:
         raise t.error(
             "radius", f"the movable region's relative radius must be in [0, 1], got {radius}"
@@ -154,14 +154,14 @@ def blocks_spec(
             f"got {short(validate)}",
         )
     bins = t.number("histogram_bins", default=40, integer=True, positive=True, maximum=MAX_BINS)
-    bins = int(bins)  # type: ignore[arg-type]
+    bins = int(bins)
     return BlocksSpec(
         source=source,
         dim=dim,
         inner_point=inner,
         radius=radius,
         convex=convex,
-        seed=int(t.number("seed", default=0, integer=True, minimum=0, maximum=2**32 - 1)),  # type: ignore[arg-type]
+        seed=int(t.number("seed", default=0, integer=True, minimum=0, maximum=2**32 - 1)),
         immobile=immobile,
         validate=validate,
         histogram_bins=bins,

@@ -321,14 +321,14 @@ def _material(file: Path, raw: Any, dim: int) -> Material:
     if dim == 3 and t.has("plane"):
         raise t.error("plane", "applies to 2D geometries only")
     cohesion = t.number("cohesion", positive=True, maximum=MAX_MODULUS)
-    friction_angle = float(t.number("friction_angle", default=0.0, minimum=0.0, maximum=89.0))  # type: ignore[arg-type]
+    friction_angle = float(t.number("friction_angle", default=0.0, minimum=0.0, maximum=89.0))
     if t.has("friction_angle") and cohesion is None:
         raise t.error("friction_angle", "needs material.cohesion (the Mohr-Coulomb shear strength)")
     return Material(
         E=float(E),
         nu=float(nu),
         plane=plane,  # type: ignore[arg-type]
-        thickness=float(t.number("thickness", default=1.0, positive=True, maximum=MAX_LENGTH)),  # type: ignore[arg-type]
+        thickness=float(t.number("thickness", default=1.0, positive=True, maximum=MAX_LENGTH)),
         density=t.number("density", positive=True, maximum=MAX_DENSITY),
         tensile_strength=t.number("tensile_strength", positive=True, maximum=MAX_MODULUS),
         cohesion=cohesion,
@@ -351,13 +351,13 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
             raise t.error(key, f"applies only to elements {', '.join(takers)}, not '{element}'")
     q = t.number("quadrature_degree", positive=True, integer=True, maximum=MAX_QUADRATURE_DEGREE)
     q_rand = t.number("q_rand", default=0.0)
-    if not 0.0 <= q_rand <= 1.0:  # type: ignore[operator]
+    if not 0.0 <= q_rand <= 1.0:
         raise t.error("q_rand", f"must lie in [0, 1], got {q_rand!r}")
     domain_seed = t.number("domain_seed", default=0, integer=True, maximum=2**32 - 1)
-    if domain_seed < 0:  # type: ignore[operator]
+    if domain_seed < 0:
         raise t.error("domain_seed", f"must be >= 0, got {domain_seed!r}")
     renumber = t.number("renumber", integer=True, maximum=2**32 - 1)
-    if renumber is not None and renumber < 0:  # type: ignore[operator]
+    if renumber is not None and renumber < 0:
         raise t.error("renumber", f"must be >= 0, got {renumber!r}")
     alpha_default = 0.0 if spec.zero_mode_penalty is None else spec.zero_mode_penalty
     alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True, maximum=1e6)
@@ -369,8 +369,8 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
         None if q is None else int(q),
         float(alpha),
         gradient_bc,  # type: ignore[arg-type]
-        float(q_rand),  # type: ignore[arg-type]
-        int(domain_seed),  # type: ignore[arg-type]
+        float(q_rand),
+        int(domain_seed),
         None if renumber is None else int(renumber),
     )
 
@@ -460,7 +460,8 @@ def _groups(file: Path, key: str, group: str, geometry: Geometry, dims: Sequence
         raise SceneError(
             file,
             key,
-            f"unknown physical group '{group}' in {geometry.file.name}"
+            # a builder's geometry has no file: this line would fail (AttributeError)
+            f"unknown physical group '{group}' in {geometry.file.name}"  # type: ignore[union-attr]
             + did_you_mean(group, geometry.groups),
         )
     if geometry.groups[group] not in dims:
@@ -541,6 +542,7 @@ def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) ->
             group = t.string("group")
             dims = (0,) if kind == "point" else (dim - 1,)
             _groups(file, t.path("group"), group, geometry, dims)
+        value: tuple[float | str, ...] | str
         if kind == "pressure":
             value = _pressure(t, names)
         elif kind == "point":
@@ -642,7 +644,7 @@ def _line(lines: _Table, name: str, dim: int, driver: str | None) -> Line:
     if start == end:
         raise t.error("end", f"must differ from start, both are {list(start)}")
     points = t.number("points", default=101, integer=True, minimum=2, maximum=MAX_LINE_POINTS)
-    return Line(start, end, int(points), _probe_fields(t, "fields", driver))  # type: ignore[arg-type]
+    return Line(start, end, int(points), _probe_fields(t, "fields", driver))
 
 
 def _declared(file: Path, data: dict[str, Any]) -> list[str]:
@@ -954,15 +956,15 @@ def _extent(geometry: Geometry | None) -> Extent | None:
 
     try:
         with gmsh_session(geometry.file, geometry.parameters) as gmsh:
-            model, option = gmsh.model, gmsh.option  # type: ignore[attr-defined]
+            model, option = gmsh.model, gmsh.option
             box = model.getBoundingBox(-1, -1)
             points = model.getEntities(0)
             sizes = [float(v) for v in model.mesh.getSizes(points)] if points else []
             size_max = float(option.getNumber("Mesh.MeshSizeMax"))
             factor = float(option.getNumber("Mesh.MeshSizeFactor"))
             variables = {}
-            for name in gmsh.parser.getNames():  # type: ignore[attr-defined]
-                value = gmsh.parser.getNumber(name)  # type: ignore[attr-defined]
+            for name in gmsh.parser.getNames():
+                value = gmsh.parser.getNumber(name)
                 if len(value) == 1 and math.isfinite(value[0]):
                     variables[name] = float(value[0])
             cells = None

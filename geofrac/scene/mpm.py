@@ -145,7 +145,7 @@ def _grid(file: Path, raw: Any) -> tuple[tuple[float, ...], tuple[float, ...], f
     if any(u <= lo for lo, u in zip(lower, upper, strict=True)):
         raise t.error("upper", f"must exceed lower {list(lower)} in every direction")
     spacing = float(t.number("spacing", positive=True))  # type: ignore[arg-type]
-    padding = int(t.number("padding", default=2, integer=True, minimum=0, maximum=MAX_PADDING))  # type: ignore[arg-type]
+    padding = int(t.number("padding", default=2, integer=True, minimum=0, maximum=MAX_PADDING))
     for a, (lo, u) in enumerate(zip(lower, upper, strict=True)):
         if not (u - lo) / spacing <= MAX_AXIS_CELLS:  # also an overflow to inf
             raise t.error("spacing", f"gives over {MAX_AXIS_CELLS:.0e} cells along axis {a}")
@@ -431,12 +431,12 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     dt = t.number("dt", positive=True)
     courant = None
     if dt is None:
-        courant = float(t.number("courant", default=DEFAULT_COURANT))  # type: ignore[arg-type]
+        courant = float(t.number("courant", default=DEFAULT_COURANT))
         if not 0 < courant < 1:
             raise t.error("courant", f"must lie in (0, 1) (eq. 4.72), got {courant}")
     t_end = float(t.number("t_end", required=True, positive=True))  # type: ignore[arg-type]
     frames = int(
-        t.number("frames", default=DEFAULT_FRAMES, positive=True, integer=True, maximum=MAX_FRAMES)  # type: ignore[arg-type]
+        t.number("frames", default=DEFAULT_FRAMES, positive=True, integer=True, maximum=MAX_FRAMES)
     )
     points = np.concatenate(
         [box, *(_corners(b.lower, _upper(b)) for b in bodies if b.kind == "lattice")]

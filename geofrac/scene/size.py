@@ -166,6 +166,7 @@ def format_count(value: float) -> str:
 def _mesh_size(scene: Scene, extent: Extent) -> tuple[float | None, str]:
     """The smallest element size the geometry asks for (or None), and the key setting it."""
     geometry = scene.geometry
+    assert geometry is not None  # a scene meshed from a geometry
     candidates = [
         (geometry.mesh_size, "geometry.mesh_size"),
         (extent.size_max, "geometry.file"),
@@ -189,6 +190,7 @@ def _cells_key(scene: Scene, extent: Extent | None) -> str:
     if extent is None or extent.cells is not None:
         return "geometry.file"
     h_key = _mesh_size(scene, extent)[1]
+    assert scene.geometry is not None  # the extent is its file's
     counts = [k for k in scene.geometry.parameters if _COUNT_NAME.match(k)]
     return "geometry.parameters" if counts and h_key == "geometry.file" else h_key
 
@@ -196,6 +198,7 @@ def _cells_key(scene: Scene, extent: Extent | None) -> str:
 def _fem_cells(scene: Scene, extent: Extent | None) -> float:
     """Cells of the mesh of ``scene.geometry`` (see the module docstring)."""
     geometry = scene.geometry
+    assert geometry is not None  # a scene meshed from a geometry
     dim = geometry.dim
     builder = getattr(geometry, "builder", None)
     if builder is not None and hasattr(builder, "config"):  # dfn
@@ -247,18 +250,22 @@ def _fractures(config: DfnConfig) -> float:
         if s.count is not None:
             total += s.count
         else:
+            assert s.p21 is not None  # a set gives its count or its p21
             total += s.p21 * area / _mean_length(s.lmin, s.lmax, s.exponent)
     return total
 
 
-def _wave_speed(material: Material, dim: int) -> float:
+def _wave_speed(material: Material | None, dim: int) -> float:
     from geofrac.materials import p_wave_modulus
+
+    assert material is not None and material.density is not None  # an MPM material
 
     return math.sqrt(p_wave_modulus(material.E, material.nu, dim) / material.density)
 
 
 def _mpm(scene: Scene, extent: Extent | None, q: dict[str, float], keys: dict[str, str]) -> None:
     m = scene.mpm
+    assert m is not None  # method = "mpm"
     lattices = [b for b in m.bodies if b.kind == "lattice"]
     if m.particles.kind == "lattice":
         q["particles"] = float(math.prod(m.particles.counts))
@@ -277,7 +284,11 @@ def _mpm(scene: Scene, extent: Extent | None, q: dict[str, float], keys: dict[st
         )
     )
     keys["grid_nodes"] = "mpm.grid.spacing"
-    dt = m.dt if m.dt is not None else m.courant * m.spacing / _wave_speed(scene.material, m.dim)
+    if m.dt is not None:
+        dt = m.dt
+    else:
+        assert m.courant is not None  # the loader sets dt or courant
+        dt = m.courant * m.spacing / _wave_speed(scene.material, m.dim)
     steps = m.t_end / dt if dt > 0 else math.inf
     q["steps"] = float(math.ceil(steps)) if math.isfinite(steps) else math.inf
     keys["steps"] = "mpm.dt" if m.dt is not None else "mpm.t_end"
@@ -311,12 +322,14 @@ def estimate(scene: Scene, extent: Extent | None) -> SizeEstimate:
     if scene.method == "mpm":
         _mpm(scene, extent, q, keys)
     elif scene.method == "blocks":
+        assert scene.blocks is not None
         if scene.blocks.terrain is not None:
             q["blocks"] = _terrain_blocks(scene.blocks.terrain)
             keys["blocks"] = "blocks.terrain.h"
         else:
             cells = _fem_cells(scene, extent)
             q["cells"], keys["cells"] = cells, _cells_key(scene, extent)
+            assert scene.geometry is not None  # _fem_cells has read it
             q["blocks"] = cells * _VERTICES_PER_CELL[scene.geometry.dim]
             keys["blocks"] = keys["cells"]
     else:
@@ -328,6 +341,7 @@ def estimate(scene: Scene, extent: Extent | None) -> SizeEstimate:
             dfn = scene.effect_config("dfn", DfnConfig)
         where = _cells_key(scene, extent)
         q["cells"], keys["cells"] = cells, where
+        assert scene.geometry is not None and scene.discretization is not None  # FEM
         q["dofs"] = _dofs(cells, scene.geometry.dim, scene.discretization.element)
         keys["dofs"] = where
         if dfn is not None:
