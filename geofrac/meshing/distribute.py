@@ -207,7 +207,7 @@ def _idle_until_rank0(comm: MPI.Comm, poll: float = 0.005) -> None:
         time.sleep(poll)
 
 
-def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: ModuleType) -> str:
+def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: ModuleType | None) -> str:
     """One line saying what failed, never an empty message."""
     from geofrac.meshing.geo import GmshTimeout, MeshingFailed
 
@@ -297,6 +297,7 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, *, verbose: bool = False) -> 
                         algorithm=geometry.algorithm,
                     )
                 )
+            assert gmsh is not None  # one of the two sessions is open
             if len(gmsh.model.mesh.getNodes()[0]) == 0:
                 raise RuntimeError("gmsh produced no nodes")
             if geometry.renumber is not None:
@@ -312,6 +313,7 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, *, verbose: bool = False) -> 
         comm.bcast((message, report, payload, dims), root=0)
         if message is not None:
             raise RunError(message)
+        assert gmsh is not None  # no message: the model was made
         data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=geometry.dim)
         return TaggedMesh(data, report, payload, tags=_group_tags(gmsh.model, data, dims))
 

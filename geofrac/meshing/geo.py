@@ -126,7 +126,7 @@ def gmsh_session(
     mesh_size: float | None = None,
     *,
     verbose: bool = False,
-) -> Iterator[Any]:
+) -> Iterator[ModuleType]:
     """Initialise gmsh, open ``path`` with ``parameters`` set, yield the gmsh module, finalise.
 
     In-process and unchecked: production code opens scene ``.geo`` files through
@@ -304,7 +304,7 @@ def meshed_model(
     trusted: bool = False,
     verbose: bool = False,
     algorithm: str | None = None,
-) -> Iterator[Any]:
+) -> Iterator[ModuleType]:
     """A gmsh session holding the meshed model of ``path``; yields the gmsh module.
 
     A ``.msh`` file is read as it is. A ``.geo`` file is checked (unless ``trusted``),
