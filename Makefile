@@ -1,7 +1,7 @@
 # geofrac developer entry points. Each target creates the virtual environment on first use,
 # with the locked versions of scripts/constraints.txt.
 #   make quickstart   run jobs/quickstart.toml (1 rank), results in results/quickstart
-#   make test         ruff, the test suite on 1 rank, then the MPI tests on 2 ranks
+#   make test         ruff, mypy, the test suite on 1 rank, then the MPI tests on 2 ranks
 #   make test-robust  the runs under a different machine's round-off (perturbed input, a
 #                     renumbered mesh, 2 ranks): the tests marked robust
 #   make test-latest  make test in a fresh .venv-latest with the newest releases
@@ -12,16 +12,20 @@ STAMP := $(VENV)/.geofrac-installed
 NP ?= 2
 LATEST := .venv-latest
 
-.PHONY: quickstart test lint test-serial test-mpi test-robust test-latest lock bench clean
+.PHONY: quickstart test lint typecheck test-serial test-mpi test-robust test-latest lock bench clean
 
 quickstart: $(STAMP)
 	$(VENV)/bin/geofrac run jobs/quickstart.toml
 
-test: lint test-serial test-mpi
+test: lint typecheck test-serial test-mpi
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
+
+# the files of pyproject.toml's [tool.mypy] files
+typecheck: $(STAMP)
+	$(VENV)/bin/mypy
 
 test-serial: $(STAMP)
 	$(PY) -m pytest --with-mpi -m "not robust"

@@ -7,14 +7,18 @@ on UFL expressions of ``ufl.SpatialCoordinate`` (exact fields inside error integ
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol, cast
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import ArrayLike
 
 __all__ = [
     "EXACT_SOLUTIONS",
     "OPTIONAL_PARAMETERS",
     "ExactSolution",
+    "Field",
     "LameCylinder",
     "ManufacturedBox",
     "TimoshenkoCantilever",
@@ -24,16 +28,36 @@ __all__ = [
 ]
 
 
+class Field(Protocol):
+    """What the formulas compute with: a float, a numpy array or a UFL expression.
+
+    Arrays may be complex (:func:`displacement_gradient`) and of any shape; the formulas
+    use only ``+ - * / **`` with numbers and each other.
+    """
+
+    def __add__(self, other: Any, /) -> Field: ...
+    def __radd__(self, other: Any, /) -> Field: ...
+    def __sub__(self, other: Any, /) -> Field: ...
+    def __rsub__(self, other: Any, /) -> Field: ...
+    def __mul__(self, other: Any, /) -> Field: ...
+    def __rmul__(self, other: Any, /) -> Field: ...
+    def __truediv__(self, other: Any, /) -> Field: ...
+    def __rtruediv__(self, other: Any, /) -> Field: ...
+    def __pow__(self, other: Any, /) -> Field: ...
+    def __neg__(self) -> Field: ...
+    def __float__(self) -> float: ...
+
+
 class ExactSolution:
     """Interface of an analytical elasticity solution in ``dim`` dimensions."""
 
     dim: int
 
-    def displacement(self, x: Any, y: Any, z: Any = None) -> tuple[Any, ...]:
+    def displacement(self, x: Field, y: Field, z: Field | None = None) -> tuple[Field, ...]:
         """Displacement components at (x, y[, z]); arrays of any shape or UFL."""
         raise NotImplementedError
 
-    def stress(self, x: Any, y: Any, z: Any = None) -> tuple[tuple[Any, ...], ...]:
+    def stress(self, x: Field, y: Field, z: Field | None = None) -> tuple[tuple[Field, ...], ...]:
         """Cauchy stress tensor rows at (x, y[, z]); shape=(dim, dim) of components."""
         raise NotImplementedError
 
@@ -70,7 +94,7 @@ class TimoshenkoCantilever(ExactSolution):
         """Second moment of area per unit thickness, D³/12."""
         return self.D**3 / 12.0
 
-    def displacement(self, x: Any, y: Any, z: Any = None) -> tuple[Any, Any]:
+    def displacement(self, x: Field, y: Field, z: Field | None = None) -> tuple[Field, Field]:
         """Edo (2016), eqs. (2.24)-(2.25): (u, v) at (x, y)."""
         P, L, D, E, nu, I = self.P, self.L, self.D, self.E, self.nu, self.I
         u = -P * y / (6.0 * E * I) * ((6.0 * L - 3.0 * x) * x + (2.0 + nu) * (y * y - D * D / 4.0))
@@ -85,7 +109,9 @@ class TimoshenkoCantilever(ExactSolution):
         )
         return (u, v)
 
-    def stress(self, x: Any, y: Any, z: Any = None) -> tuple[tuple[Any, Any], tuple[Any, Any]]:
+    def stress(
+        self, x: Field, y: Field, z: Field | None = None
+    ) -> tuple[tuple[Field, Field], tuple[Field, Field]]:
         """Edo (2016), eqs. (3.31c)-(3.31e): ((σx, τxy), (τxy, σy)) at (x, y)."""
         P, L, D, I = self.P, self.L, self.D, self.I
         sxx = -P * (L - x) * y / I
@@ -117,11 +143,13 @@ class UniformStrain(ExactSolution):
     mu: float
     dim: int = 2
 
-    def displacement(self, x: Any, y: Any, z: Any = None) -> tuple[Any, Any]:
+    def displacement(self, x: Field, y: Field, z: Field | None = None) -> tuple[Field, Field]:
         """(u, v) at (x, y)."""
         return (self.exx * x + 0.5 * self.gxy * y, self.eyy * y + 0.5 * self.gxy * x)
 
-    def stress(self, x: Any, y: Any, z: Any = None) -> tuple[tuple[Any, Any], tuple[Any, Any]]:
+    def stress(
+        self, x: Field, y: Field, z: Field | None = None
+    ) -> tuple[tuple[Field, Field], tuple[Field, Field]]:
         """Constant stress σ = 2μ ε + λ tr(ε) I, broadcast to the shape of x."""
         tr = self.exx + self.eyy
         one = 0.0 * x + 1.0
@@ -150,8 +178,11 @@ class ManufacturedBox(ExactSolution):
     mu: float
     dim: int = 3
 
-    def displacement(self, x: Any, y: Any, z: Any = None) -> tuple[Any, Any, Any]:
+    def displacement(
+        self, x: Field, y: Field, z: Field | None = None
+    ) -> tuple[Field, Field, Field]:
         """(u, v, w) at (x, y, z)."""
+        assert z is not None  # a 3D solution
         a = self.a
         return (
             a * (x**3 + y * z * (1.0 + x * x)),
@@ -159,7 +190,7 @@ class ManufacturedBox(ExactSolution):
             a * (z**4 + x * y * (1.0 + z * z)),
         )
 
-    def gradient(self, x: Any, y: Any, z: Any) -> tuple[tuple[Any, Any, Any], ...]:
+    def gradient(self, x: Field, y: Field, z: Field) -> tuple[tuple[Field, Field, Field], ...]:
         """Rows ∂u_r/∂(x, y, z), written out by hand."""
         a = self.a
         return (
@@ -172,8 +203,9 @@ class ManufacturedBox(ExactSolution):
             (a * y * (1.0 + z * z), a * x * (1.0 + z * z), a * (4.0 * z**3 + 2.0 * x * y * z)),
         )
 
-    def stress(self, x: Any, y: Any, z: Any = None) -> tuple[tuple[Any, Any, Any], ...]:
+    def stress(self, x: Field, y: Field, z: Field | None = None) -> tuple[tuple[Field, ...], ...]:
         """σ = λ tr(∇u) I + μ (∇u + ∇uᵀ)."""
+        assert z is not None  # a 3D solution
         g = self.gradient(x, y, z)
         tr = g[0][0] + g[1][1] + g[2][2]
         return tuple(
@@ -247,20 +279,20 @@ class LameCylinder(ExactSolution):
             return (1.0 - nu) * A / E, (1.0 + nu) * B / E
         return (1.0 + nu) * (1.0 - 2.0 * nu) * A / E, (1.0 + nu) * B / E
 
-    def radial_displacement(self, r: Any) -> Any:
+    def radial_displacement(self, r: Field) -> Field:
         """u_r at radius r."""
         c1, c2 = self._coefficients()
         return c1 * r + c2 / r
 
-    def radial_stress(self, r: Any) -> Any:
+    def radial_stress(self, r: Field) -> Field:
         """σ_rr at radius r."""
         return self.A - self.B / (r * r)
 
-    def hoop_stress(self, r: Any) -> Any:
+    def hoop_stress(self, r: Field) -> Field:
         """σ_θθ at radius r."""
         return self.A + self.B / (r * r)
 
-    def displacement(self, x: Any, y: Any, z: Any = None) -> tuple[Any, ...]:
+    def displacement(self, x: Field, y: Field, z: Field | None = None) -> tuple[Field, ...]:
         """(u_x, u_y) in 2D, (u_x, u_y, 0) in 3D."""
         c1, c2 = self._coefficients()
         r2 = x * x + y * y
@@ -268,7 +300,7 @@ class LameCylinder(ExactSolution):
         out = (scale * x, scale * y)
         return out if self.dim == 2 else (*out, 0.0 * x)
 
-    def stress(self, x: Any, y: Any, z: Any = None) -> tuple[tuple[Any, ...], ...]:
+    def stress(self, x: Field, y: Field, z: Field | None = None) -> tuple[tuple[Field, ...], ...]:
         """In-plane stress rows; in 3D with σ_zz = 2ν A (plane strain)."""
         A, B = self.A, self.B
         r2 = x * x + y * y
@@ -283,7 +315,7 @@ class LameCylinder(ExactSolution):
         return ((sxx, sxy, zero), (sxy, syy, zero), (zero, zero, szz))
 
 
-def displacement_gradient(exact: ExactSolution, x: Any) -> Any:
+def displacement_gradient(exact: ExactSolution, x: ArrayLike) -> np.ndarray:
     """∂u_r/∂x_s of an exact solution by complex-step differentiation (exact to round-off).
 
     The formulas use only ``+ - * / **``, so they accept complex arrays; with a step
@@ -307,32 +339,47 @@ def displacement_gradient(exact: ExactSolution, x: Any) -> Any:
         z[:, s] += 1j * h
         u = exact.displacement(*z.T)
         for r in range(dim):
-            grad[:, r, s] = np.imag(np.broadcast_to(u[r], (len(pts),))) / h
+            ur = cast("np.ndarray", u[r])  # a complex array, or a number
+            grad[:, r, s] = np.imag(np.broadcast_to(ur, (len(pts),))) / h
     return grad
 
 
-def _timoshenko(params: dict[str, float], E: float, nu: float, plane: str) -> TimoshenkoCantilever:
+class ExactFactory(Protocol):
+    """Builds an exact solution from its parameters and the material."""
+
+    def __call__(
+        self, params: dict[str, float], E: float, nu: float, *, plane: str
+    ) -> ExactSolution:
+        """The solution for ``params`` (names of :data:`EXACT_SOLUTIONS`), E, nu, plane."""
+        ...
+
+
+def _timoshenko(
+    params: dict[str, float], E: float, nu: float, *, plane: str
+) -> TimoshenkoCantilever:
     if plane == "strain":
         E, nu = E / (1.0 - nu * nu), nu / (1.0 - nu)
     return TimoshenkoCantilever(P=params["P"], L=params["L"], D=params["D"], E=E, nu=nu)
 
 
-def _uniform_strain(params: dict[str, float], E: float, nu: float, plane: str) -> UniformStrain:
+def _uniform_strain(params: dict[str, float], E: float, nu: float, *, plane: str) -> UniformStrain:
     from geofrac.materials import lame
 
-    lam, mu = lame(E, nu, 2, plane)
+    lam, mu = lame(E, nu, 2, plane=plane)
     return UniformStrain(params["exx"], params["eyy"], params["gxy"], lam, mu)
 
 
-def _manufactured_box(params: dict[str, float], E: float, nu: float, plane: str) -> ManufacturedBox:
+def _manufactured_box(
+    params: dict[str, float], E: float, nu: float, *, plane: str
+) -> ManufacturedBox:
     from geofrac.materials import lame
 
     lam, mu = lame(E, nu, 3)
     return ManufacturedBox(params["a"], lam, mu)
 
 
-def _lame(dim: int) -> Callable[[dict[str, float], float, float, str], LameCylinder]:
-    def factory(params: dict[str, float], E: float, nu: float, plane: str) -> LameCylinder:
+def _lame(dim: int) -> ExactFactory:
+    def factory(params: dict[str, float], E: float, nu: float, *, plane: str) -> LameCylinder:
         a, b = params["a"], params["b"]
         p_outer = params.get("p_outer", 0.0)
         return LameCylinder(a, b, params["p"], p_outer, E, nu, plane if dim == 2 else "strain", dim)
@@ -340,10 +387,8 @@ def _lame(dim: int) -> Callable[[dict[str, float], float, float, str], LameCylin
     return factory
 
 
-#: name -> (dimension, required parameter names, factory(params, E, nu, plane)).
-EXACT_SOLUTIONS: dict[
-    str, tuple[int, tuple[str, ...], Callable[[dict[str, float], float, float, str], ExactSolution]]
-] = {
+#: name -> (dimension, required parameter names, factory(params, E, nu, plane=...)).
+EXACT_SOLUTIONS: dict[str, tuple[int, tuple[str, ...], ExactFactory]] = {
     "timoshenko_cantilever": (2, ("P", "L", "D"), _timoshenko),
     "uniform_strain": (2, ("exx", "eyy", "gxy"), _uniform_strain),
     "manufactured_box": (3, ("a",), _manufactured_box),
@@ -358,8 +403,8 @@ OPTIONAL_PARAMETERS: dict[str, dict[str, float]] = {
 
 
 def make_exact(
-    name: str, params: dict[str, float], E: float, nu: float, plane: str
+    name: str, params: dict[str, float], *, E: float, nu: float, plane: str
 ) -> ExactSolution:
     """Build the exact solution ``name`` for a material (E, nu) in plane ``stress``/``strain``."""
     _, _, factory = EXACT_SOLUTIONS[name]
-    return factory(params, E, nu, plane)
+    return factory(params, E, nu, plane=plane)

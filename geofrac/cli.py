@@ -14,13 +14,16 @@ import time
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from geofrac import __version__
 from geofrac.bench import BENCHES, load_bench
 from geofrac.errors import RunError
 from geofrac.log import echo, format_seconds
 from geofrac.scene import Scene, SceneError, load_scene_collective
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["main"]
 
@@ -109,17 +112,17 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _load(args: argparse.Namespace, comm: Any, out: str | None = None) -> Scene:
+def _load(args: argparse.Namespace, comm: MPI.Comm, out: str | None = None) -> Scene:
     """Validate the scene on every rank and print its warnings (rank 0)."""
     scene = load_scene_collective(
-        comm, args.scene, args.overrides, out, allow_large=args.allow_large
+        comm, args.scene, args.overrides, out=out, allow_large=args.allow_large
     )
     for warning in scene.warnings:
         echo(comm, f"warning: {warning}", err=True)
     return scene
 
 
-def _check(args: argparse.Namespace, comm: Any) -> int:
+def _check(args: argparse.Namespace, comm: MPI.Comm) -> int:
     scene = _load(args, comm)
     echo(comm, f"ok: {args.scene}: {_describe(scene)}")
     if scene.size is not None:
@@ -148,7 +151,7 @@ def _describe(scene: Scene) -> str:
     )
 
 
-def _run(args: argparse.Namespace, comm: Any) -> int:
+def _run(args: argparse.Namespace, comm: MPI.Comm) -> int:
     from geofrac import interrupt
     from geofrac.timing import Timings
 
@@ -164,7 +167,7 @@ def _run(args: argparse.Namespace, comm: Any) -> int:
     # aborts), and the handlers installed last are the ones that act
     interrupt.install()
     try:
-        summary = pipeline.run_scene(scene, comm, timings, not quiet, args.resume)
+        summary = pipeline.run_scene(scene, comm, timings, verbose=not quiet, resume=args.resume)
     except interrupt.Interrupted as exc:
         stage = scene.output.dir / "incomplete"
         echo(comm, f"interrupted: {exc}; partial results in {stage}", err=True)
@@ -191,14 +194,14 @@ def _run(args: argparse.Namespace, comm: Any) -> int:
     return 0
 
 
-def _bench(args: argparse.Namespace, comm: Any) -> int:
+def _bench(args: argparse.Namespace, comm: MPI.Comm) -> int:
     start = time.perf_counter()
     load_bench(args.bench).run(args, comm)
     echo(comm, f"bench {args.bench} done in {format_seconds(time.perf_counter() - start)}")
     return 0
 
 
-def _validate(args: argparse.Namespace, comm: Any) -> int:
+def _validate(args: argparse.Namespace, comm: MPI.Comm) -> int:
     import datetime
     import json
 
@@ -236,7 +239,7 @@ def _validate(args: argparse.Namespace, comm: Any) -> int:
             cases,
             args.out,
             comm,
-            root,
+            root=root,
             say=lambda text: echo(comm, text),
             figures=page.parent / "img" / "validation",
         )
@@ -250,12 +253,12 @@ def _validate(args: argparse.Namespace, comm: Any) -> int:
         stored = json.loads(data_path.read_text()) if data_path.exists() else None
         stamp = datetime.date.today().isoformat()
         full = not args.quick and not names
-        data = merge(stored, results, command, seconds, full, stamp)
+        data = merge(stored, results, command, seconds=seconds, full=full, stamp=stamp)
         data_path.write_text(json.dumps(data, indent=1) + "\n")
         write_page(data, page)
     bad = [r for r in results if r.status.startswith(("failed", "differs: not explained"))]
-    cases = f"{len(results)} case{'' if len(results) == 1 else 's'}"
-    echo(comm, f"validate: {cases} in {format_seconds(seconds)}; wrote {page}")
+    count = f"{len(results)} case{'' if len(results) == 1 else 's'}"
+    echo(comm, f"validate: {count} in {format_seconds(seconds)}; wrote {page}")
     for r in bad:
         echo(comm, f"  {r.case.name}: {r.status}", err=True)
     return 1 if bad else 0

@@ -27,7 +27,7 @@ def echo(comm: _Comm | None, message: str, *, err: bool = False) -> None:
     print(message, file=stream, flush=True)
 
 
-def sayer(comm: _Comm | None, verbose: bool = True) -> Callable[[str], None]:
+def sayer(comm: _Comm | None, *, verbose: bool = True) -> Callable[[str], None]:
     """A progress printer: :func:`echo` on ``comm``'s rank 0, or silence when not ``verbose``."""
     if not verbose:
         return lambda message: None
@@ -55,7 +55,7 @@ class Progress:
         unit: what a step is, for the rate (``cases`` gives "cases/s").
     """
 
-    def __init__(self, comm: _Comm | None, total: int, label: str, unit: str = "steps") -> None:
+    def __init__(self, comm: _Comm | None, total: int, label: str, *, unit: str = "steps") -> None:
         self.comm = comm
         self.total = total
         self.label = label

@@ -13,7 +13,7 @@ import numpy as np
 __all__ = ["bulk_shear", "d_matrix", "lame", "p_wave_modulus"]
 
 
-def lame(E: float, nu: float, dim: int, plane: str = "stress") -> tuple[float, float]:
+def lame(E: float, nu: float, dim: int, *, plane: str = "stress") -> tuple[float, float]:
     """Return (λ, μ) such that σ = 2μ ε + λ tr(ε) I holds in the analysis plane.
 
     For 2D plane stress λ is the effective λ* = 2λμ/(λ + 2μ) = Eν/(1-ν²).
@@ -41,13 +41,13 @@ def p_wave_modulus(E: float, nu: float, dim: int) -> float:
     return lam + 2 * mu
 
 
-def d_matrix(E: float, nu: float, dim: int, plane: str = "stress") -> np.ndarray:
+def d_matrix(E: float, nu: float, dim: int, *, plane: str = "stress") -> np.ndarray:
     """Stress-strain matrix D in Voigt notation.
 
     Returns:
         D, shape=(3, 3) in 2D or (6, 6) in 3D.
     """
-    lam, mu = lame(E, nu, dim, plane)
+    lam, mu = lame(E, nu, dim, plane=plane)
     n = 3 if dim == 2 else 6
     D = np.zeros((n, n))
     D[:dim, :dim] = lam

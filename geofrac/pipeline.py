@@ -10,7 +10,7 @@ A method gives only what is its own, through :class:`Method`:
 - ``name``: ``"fem"``, ``"mpm"`` or ``"blocks"`` (the checkpoint kind);
 - ``output_files``: the files a run of it writes (removed before a new run);
 - ``head(scene)``: its entries of the summary's head;
-- ``run(scene, comm, timings, verbose, control)``: build and run in ``scene.output.dir``
+- ``run(scene, comm, timings, *, verbose, control)``: build and run in ``scene.output.dir``
   (the staged directory) and return its summary entries (``results``...);
 - ``report(summary)``: its lines for the terminal.
 
@@ -55,7 +55,7 @@ class Method(Protocol):
         ...
 
     def run(
-        self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
+        self, scene: Scene, comm: MPI.Comm, timings: Timings, *, verbose: bool, control: RunControl
     ) -> dict[str, Any]:
         """Build and run ``scene`` in its (staged) output directory; the summary entries."""
         ...
@@ -76,6 +76,7 @@ def run_scene(
     scene: Scene,
     comm: MPI.Comm,
     timings: Timings | None = None,
+    *,
     verbose: bool = True,
     resume: bool = False,
 ) -> dict[str, Any]:
@@ -95,10 +96,18 @@ def run_scene(
     start = start_summary(scene, comm, **method.head(scene))
 
     def body(staged: Scene, control: RunControl) -> dict[str, Any]:
-        return method.run(staged, comm, timings, verbose, control)
+        return method.run(staged, comm, timings, verbose=verbose, control=control)
 
     return owned_run(
-        scene, comm, timings, start, body, method.output_files, method.name, resume, verbose
+        scene,
+        comm,
+        timings,
+        start=start,
+        body=body,
+        legacy=method.output_files,
+        kind=method.name,
+        resume=resume,
+        verbose=verbose,
     )
 
 

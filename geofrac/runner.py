@@ -65,6 +65,7 @@ def solve_scene(
     scene: Scene,
     comm: MPI.Comm,
     timings: Timings | None = None,
+    *,
     verbose: bool = True,
     write: bool = False,
     control: RunControl | None = None,
@@ -79,7 +80,7 @@ def solve_scene(
         RunError: collectively, when the run cannot continue.
     """
     timings = timings or Timings()
-    say = sayer(comm, verbose)
+    say = sayer(comm, verbose=verbose)
     with timings.phase("mesh"):
         tagged = build_mesh(scene.geometry, comm)
         geometry_report = dict(tagged.report)
@@ -310,12 +311,12 @@ def _write_lines(solution: Solution, comm: MPI.Comm) -> dict[str, Any]:
             scene.output.dir,
             scene.name,
             name,
-            scene.output.lines[name],
-            s,
-            xyz,
-            values,
-            comm,
-            scene.units,
+            line=scene.output.lines[name],
+            s=s,
+            xyz=xyz,
+            values=values,
+            comm=comm,
+            units=scene.units,
         )
         for name, (s, xyz, values) in solution.lines.items()
     }
@@ -332,10 +333,10 @@ class FemMethod:
         return {"element": scene.discretization.element}
 
     def run(
-        self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
+        self, scene: Scene, comm: MPI.Comm, timings: Timings, *, verbose: bool, control: RunControl
     ) -> dict[str, Any]:
         """Solve (or run the effect's loop), write the fields; the summary entries."""
-        solution = solve_scene(scene, comm, timings, verbose, write=True, control=control)
+        solution = solve_scene(scene, comm, timings, verbose=verbose, write=True, control=control)
         try:
             if scene.output.xdmf:
                 with timings.phase("output"):

@@ -5,7 +5,10 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["Timings"]
 
@@ -25,7 +28,7 @@ class Timings:
         finally:
             self.local[name] = self.local.get(name, 0.0) + time.perf_counter() - start
 
-    def reduced(self, comm: Any) -> dict[str, float]:
+    def reduced(self, comm: MPI.Comm) -> dict[str, float]:
         """Per-phase maximum over the ranks of ``comm`` (collective), plus ``total``."""
         names = list(self.local)
         gathered = comm.allgather([self.local[n] for n in names])

@@ -24,8 +24,10 @@ def _strain_fd(sol, x, y):
 
 @pytest.mark.parametrize("plane", ["stress", "strain"])
 def test_timoshenko_satisfies_hooke_and_equilibrium(plane):
-    sol = make_exact("timoshenko_cantilever", {"P": 1.0, "L": 10.0, "D": 1.0}, E, NU, plane)
-    D = d_matrix(E, NU, 2, plane)
+    sol = make_exact(
+        "timoshenko_cantilever", {"P": 1.0, "L": 10.0, "D": 1.0}, E=E, nu=NU, plane=plane
+    )
+    D = d_matrix(E, NU, 2, plane=plane)
     rng = np.random.default_rng(0)
     for x, y in zip(rng.uniform(0, 10, 20), rng.uniform(-0.5, 0.5, 20), strict=True):
         s = sol.stress(x, y)
@@ -43,7 +45,9 @@ def test_timoshenko_satisfies_hooke_and_equilibrium(plane):
 
 
 def test_timoshenko_boundary_conditions_and_tip():
-    sol = make_exact("timoshenko_cantilever", {"P": 2.0, "L": 8.0, "D": 2.0}, 1000.0, 0.2, "stress")
+    sol = make_exact(
+        "timoshenko_cantilever", {"P": 2.0, "L": 8.0, "D": 2.0}, E=1000.0, nu=0.2, plane="stress"
+    )
     y = np.linspace(-1.0, 1.0, 2001)
     # free top and bottom faces: σy = τxy = 0 at y = ±D/2
     for yy in (-1.0, 1.0):
@@ -65,10 +69,10 @@ def test_timoshenko_boundary_conditions_and_tip():
 
 def test_uniform_strain_stress_is_hooke():
     sol = make_exact(
-        "uniform_strain", {"exx": 0.002, "eyy": -0.0006, "gxy": 0.001}, E, NU, "stress"
+        "uniform_strain", {"exx": 0.002, "eyy": -0.0006, "gxy": 0.001}, E=E, nu=NU, plane="stress"
     )
     s = sol.stress(np.array([1.0, 2.0]), np.array([0.0, 3.0]))
     voigt = np.array([s[0][0], s[1][1], s[0][1]])
-    expected = d_matrix(E, NU, 2, "stress") @ np.array([0.002, -0.0006, 0.001])
+    expected = d_matrix(E, NU, 2, plane="stress") @ np.array([0.002, -0.0006, 0.001])
     np.testing.assert_allclose(voigt, np.repeat(expected[:, None], 2, axis=1), rtol=1e-14)
     np.testing.assert_allclose(_strain_fd(sol, 1.3, 0.4), [0.002, -0.0006, 0.001], atol=1e-10)

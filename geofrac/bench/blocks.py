@@ -26,9 +26,17 @@ import argparse
 import resource
 import time
 from pathlib import Path
-from typing import Any
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import number_list
+
+if TYPE_CHECKING:
+    import numpy as np
+    from dolfinx.mesh import Mesh
+    from mpi4py import MPI
+
+    from geofrac.blocks.model import Blocks
 
 __all__ = ["COLUMNS", "add_arguments", "run"]
 
@@ -78,7 +86,7 @@ class _CubeBuilder:
     def __init__(self, h: float) -> None:
         self.h = h
 
-    def build(self, gmsh: Any) -> tuple[dict[str, Any], None]:
+    def build(self, gmsh: ModuleType) -> tuple[dict[str, Any], None]:
         gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
         gmsh.model.occ.synchronize()
         gmsh.model.addPhysicalGroup(3, [1], name="domain")
@@ -93,7 +101,7 @@ def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _voronoi(points: Any, threads: int) -> float:
+def _voronoi(points: np.ndarray, threads: int) -> float:
     """Seconds freud takes for the Voronoi cells (volumes and polytopes) of ``points``."""
     import freud
 
@@ -110,7 +118,7 @@ def _voronoi(points: Any, threads: int) -> float:
     return time.perf_counter() - start
 
 
-def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
     """Build the block sets; print the table (rank 0); return the JSON report."""
     import dolfinx_solver  # noqa: F401
 
@@ -178,7 +186,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     return report
 
 
-def _check(blocks: Any, mesh: Any, validate: int, comm: Any) -> dict[str, Any]:
+def _check(blocks: Blocks, mesh: Mesh, validate: int, comm: MPI.Comm) -> dict[str, Any]:
     """Volume error and invalid blocks of the gathered set (collective)."""
     from mpi4py import MPI
 

@@ -21,9 +21,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import number_list
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["SEED_MESHES", "SETUPS", "add_arguments", "int_list", "run"]
 
@@ -59,7 +62,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of this bench."""
     from geofrac.bench.study import add_common_arguments
 
-    add_common_arguments(p, "cantilever", "cst,p2", None)
+    add_common_arguments(p, "cantilever", "cst,p2", default_scene=None)
     p.add_argument(
         "--setup",
         choices=tuple(SETUPS),
@@ -74,7 +77,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
     from geofrac.bench.study import Case, parse_elements, run_study
     from geofrac.log import echo
@@ -103,8 +106,8 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         args,
         comm,
         "cantilever",
-        f"Timoshenko cantilever (Edo (2016), §{setup}): accuracy vs cost",
-        cases,
+        title=f"Timoshenko cantilever (Edo (2016), §{setup}): accuracy vs cost",
+        cases=cases,
         dim=2,
         extra={"setup": setup, "thesis_reference": reference},
     )

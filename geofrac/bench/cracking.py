@@ -12,9 +12,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.fracture import SOLVERS
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["CASES", "PATCH_H", "add_arguments", "event_case", "run"]
 
@@ -46,7 +49,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", type=Path, help="write the JSON records to this file")
 
 
-def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> list[dict[str, Any]]:
     """Run the cases; print a table (rank 0); return the records."""
     from geofrac.io.summary import write_json
     from geofrac.log import echo
@@ -86,14 +89,18 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
         if case not in CASES:
             raise SystemExit(f"unknown case '{case}'; choose from {', '.join([*CASES, 'patch'])}")
         name, extra = CASES[case]
-        records.append(event_case(case, name, (*extra, *user), args.events, args.solver, comm))
+        records.append(
+            event_case(
+                case, name, (*extra, *user), events=args.events, solver=args.solver, comm=comm
+            )
+        )
     if args.json is not None and comm.rank == 0:
         write_json(args.json, records)
     return records
 
 
 def event_case(
-    case: str, name: str, extra: tuple[str, ...], events: int, solver: str, comm: Any
+    case: str, name: str, extra: tuple[str, ...], *, events: int, solver: str, comm: MPI.Comm
 ) -> dict[str, Any]:
     """Run ``events`` events of scene ``jobs/<name>.toml``; print and return its record.
 

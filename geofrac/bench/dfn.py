@@ -17,9 +17,17 @@ import argparse
 import math
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import name_list, number_list
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from mpi4py import MPI
+
+    from geofrac.dfn.sampling import FractureSet, Network
+    from geofrac.meshing.distribute import TaggedMesh
 
 __all__ = ["add_arguments", "network_statistics", "run"]
 
@@ -68,7 +76,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-plot", action="store_true", help="skip the pictures")
 
 
-def network_statistics(network: Any, sets: Any) -> list[dict[str, Any]]:
+def network_statistics(network: Network, sets: Sequence[FractureSet]) -> list[dict[str, Any]]:
     """Per set: count, KS test of the lengths, orientation mean and spread.
 
     Args:
@@ -92,7 +100,7 @@ def network_statistics(network: Any, sets: Any) -> list[dict[str, Any]]:
         row: dict[str, Any] = {"set": fset.name, "count": int(mask.sum())}
         if len(lengths):
             d = ks_statistic(
-                lengths, lambda x, s=fset: power_law_cdf(x, s.lmin, s.lmax, s.exponent)
+                lengths, lambda x, s=fset: power_law_cdf(x, s.lmin, s.lmax, exponent=s.exponent)
             )
             row |= {"ks_d": d, "ks_p": ks_pvalue(d, len(lengths))}
         if len(lengths) > 1:
@@ -105,7 +113,7 @@ def network_statistics(network: Any, sets: Any) -> list[dict[str, Any]]:
     return out
 
 
-def _case(comm: Any, model: str, scale: float) -> tuple[dict[str, Any], Any]:
+def _case(comm: MPI.Comm, model: str, scale: float) -> tuple[dict[str, Any], Any]:
     """Mesh one model at one scale; return (record, tagged mesh)."""
     from geofrac.meshing.distribute import build_mesh, check_fracture_cover
     from geofrac.scene import load_scene_collective
@@ -150,7 +158,7 @@ def _max() -> Any:
     return MPI.MAX
 
 
-def _plot(tagged: Any, path: Path, title: str) -> None:
+def _plot(tagged: TaggedMesh, path: Path, title: str) -> None:
     """The network coloured by set (left) and a close-up of the mesh around it (right)."""
     import matplotlib
 
@@ -195,7 +203,7 @@ def _plot(tagged: Any, path: Path, title: str) -> None:
     plt.close(fig)
 
 
-def run(args: argparse.Namespace, comm: Any) -> None:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> None:
     """Mesh every model at every scale, print the table, write the JSON and pictures."""
     from geofrac.bench.report import format_table, save_report
     from geofrac.io.summary import versions

@@ -12,9 +12,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import number_list
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["SEED_TABLE", "add_arguments", "run"]
 
@@ -98,7 +101,7 @@ def _rows(records: list[dict[str, Any]], depths: list[int]) -> list[dict[str, An
     return rows
 
 
-def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
     from geofrac.bench.report import format_table, save_report
     from geofrac.io.summary import versions
@@ -220,6 +223,6 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
         fig,
         axes,
         path,
-        "EFMM with random integration domains (Edo (2016), §3.4.2, Table 3.1)",
-        "mean ± std over q_rand 0-0.8 and seeds",
+        title="EFMM with random integration domains (Edo (2016), §3.4.2, Table 3.1)",
+        ylabel="mean ± std over q_rand 0-0.8 and seeds",
     )

@@ -16,10 +16,13 @@ from __future__ import annotations
 import argparse
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.cracking import event_case
 from geofrac.fracture import SOLVERS
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["CASES", "add_arguments", "run"]
 
@@ -45,7 +48,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", type=Path, help="write the JSON records to this file")
 
 
-def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> list[dict[str, Any]]:
     """Run the cases; print one line per case (rank 0); return the records."""
     from geofrac.io.summary import write_json
 
@@ -63,7 +66,7 @@ def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
             with open(_JOBS / f"{name}.toml", "rb") as f:
                 events = int(tomllib.load(f)["cracking"]["max_events"])
         extra = tuple(getattr(args, "overrides", None) or ())
-        rec = event_case(case, name, extra, events, args.solver, comm)
+        rec = event_case(case, name, extra, events=events, solver=args.solver, comm=comm)
         res = rec.pop("results")
         rec |= {
             k: res[k]

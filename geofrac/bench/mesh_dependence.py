@@ -19,12 +19,15 @@ from __future__ import annotations
 import argparse
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from geofrac.bench.args import name_list
 from geofrac.meshing.geo import ALGORITHMS
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["BAND", "SCENE", "add_arguments", "band_h", "draw_paths", "run"]
 
@@ -62,7 +65,7 @@ def band_h(coords: np.ndarray, cells: np.ndarray, *, band: float = BAND) -> floa
     return float(lengths.mean())
 
 
-def run(args: argparse.Namespace, comm: Any) -> list[dict[str, Any]]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> list[dict[str, Any]]:
     """Run the specimen on each mesher; print the table (rank 0); return the records."""
     from geofrac.effects.cracking import scene_driver
     from geofrac.io.summary import write_json

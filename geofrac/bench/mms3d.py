@@ -12,7 +12,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["DEFAULT_MESHES", "add_arguments", "run"]
 
@@ -26,7 +29,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from geofrac.bench.cantilever import int_list
     from geofrac.bench.study import add_common_arguments
 
-    add_common_arguments(p, "mms3d", "p1,p2,rgnq", _DEFAULT_SCENE)
+    add_common_arguments(p, "mms3d", "p1,p2,rgnq", default_scene=_DEFAULT_SCENE)
     p.add_argument(
         "--meshes",
         type=int_list,
@@ -35,7 +38,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
     from geofrac.bench.study import Case, parse_elements, run_study
 
@@ -52,7 +55,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
         args,
         comm,
         "mms3d",
-        "Manufactured 3D displacement on the unit cube: accuracy vs cost",
-        cases,
+        title="Manufactured 3D displacement on the unit cube: accuracy vs cost",
+        cases=cases,
         dim=3,
     )

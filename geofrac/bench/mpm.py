@@ -338,7 +338,11 @@ def _plot(runs: dict[tuple[str, str, float], Any], Ws: list[float], path: Path) 
         ax.set_xlabel("x / Δ")
         ax.set_title(f"W = {W:g}")
     save_figure(
-        fig, axes, path, "Quasi-static bar at t = L0/c (Edo (2016), Fig. 4.13-4.15)", "σ / ρ0|b|L0"
+        fig,
+        axes,
+        path,
+        title="Quasi-static bar at t = L0/c (Edo (2016), Fig. 4.13-4.15)",
+        ylabel="σ / ρ0|b|L0",
     )
 
 
@@ -375,7 +379,7 @@ def _smoothing_panels(
         reference(ax)
         ax.set_xlabel(xlabel)
         ax.set_title(f"smoothing: {label}")
-    save_figure(fig, axes, path, title, ylabel)
+    save_figure(fig, axes, path, title=title, ylabel=ylabel)
 
 
 def _plot_energy(histories: dict[tuple[str, str, str], Any], path: Path) -> None:

@@ -7,9 +7,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = ["fit_rate", "format_table", "plot_accuracy_cost", "save_figure", "save_report"]
 
@@ -55,6 +59,7 @@ def plot_accuracy_cost(
     records: Sequence[dict[str, Any]],
     path: Path,
     title: str,
+    *,
     group: str = "element",
     time_key: str = "time_total_s",
     errors: Sequence[tuple[str, str]] = (
@@ -83,10 +88,10 @@ def plot_accuracy_cost(
             )
     axes[0].set_xlabel("wall time, assemble + solve [s]")
     axes[1].set_xlabel("degrees of freedom")
-    save_figure(fig, axes, path, title, "error norm")
+    save_figure(fig, axes, path, title=title, ylabel="error norm")
 
 
-def save_figure(fig: Any, axes: Sequence[Any], path: Path, title: str, ylabel: str) -> None:
+def save_figure(fig: Figure, axes: Sequence[Axes], path: Path, *, title: str, ylabel: str) -> None:
     """Label, grid and legend every panel, set the title, write ``path`` and close.
 
     Each legend sits below its panel, so it hides no curve; the figure should use

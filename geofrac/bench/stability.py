@@ -18,9 +18,12 @@ import argparse
 import json
 import math
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import number_list
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["add_arguments", "run"]
 
@@ -85,7 +88,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _build_meshes(
-    comm: Any, targets: list[float], ny: int, seed: int, directory: Path
+    comm: MPI.Comm, targets: list[float], ny: int, seed: int, directory: Path
 ) -> dict[float, dict[str, Any]]:
     """Build one mesh per target angle on rank 0; every rank gets the same descriptions.
 
@@ -99,7 +102,9 @@ def _build_meshes(
         for target in targets:
             path = (directory / f"cantilever-ny{ny}-angle{target:g}-seed{seed}.msh").resolve()
             try:
-                m = build_distorted_cantilever(path, ny, target, LENGTH, DEPTH, seed)
+                m = build_distorted_cantilever(
+                    path, ny, target, length=LENGTH, depth=DEPTH, seed=seed
+                )
             except Exception as exc:  # reported as the status of every case on this mesh
                 meshes[target] = {"target": target, "error": f"mesh {target:g}°: {exc}"}
                 continue
@@ -116,7 +121,7 @@ def _build_meshes(
 
 
 def _solve_case(
-    comm: Any, element: str, mesh: dict[str, Any], nu: float, plane: str, overrides: list[str]
+    comm: MPI.Comm, element: str, mesh: dict[str, Any], nu: float, plane: str, overrides: list[str]
 ) -> dict[str, Any]:
     """Solve one case; failures and non-finite errors become ``status`` = ``"error: ..."``."""
     from geofrac.errors import RunError
@@ -242,13 +247,13 @@ def _plot(records: list[dict[str, Any]], path: Path, title: str) -> None:
     axes[1].set_xscale("function", functions=(forward, inverse))
     axes[1].set_xticks(nus, [f"{nu:g}" for nu in nus])
     axes[1].set_xlabel("Poisson's ratio ν (plane strain; axis: -log10(0.5 - ν))")
-    save_figure(fig, axes, path, title, "relative displacement L2 error")
+    save_figure(fig, axes, path, title=title, ylabel="relative displacement L2 error")
 
 
 def _summary_lines(records: list[dict[str, Any]], worst_angle: float, nu_max: float) -> list[str]:
     """One line per element: its degradation at the smallest angle and at the largest ν."""
 
-    def find(element: str, sweep: str, angle: float, nu: float) -> str:
+    def find(element: str, sweep: str, angle: float, *, nu: float) -> str:
         r = next(
             (
                 r
@@ -266,17 +271,16 @@ def _summary_lines(records: list[dict[str, Any]], worst_angle: float, nu_max: fl
 
     lines = []
     for element in dict.fromkeys(r["element"] for r in records):
-        stress = find(element, "angle", worst_angle, ANGLE_SWEEP_NU)
+        stress = find(element, "angle", worst_angle, nu=ANGLE_SWEEP_NU)
         parts = [f"{worst_angle:g}° (plane stress): {stress}"]
         for angle in dict.fromkeys((UNDISTORTED, worst_angle)):
-            parts.append(
-                f"ν={nu_max:g} plane strain, {angle:g}° mesh: {find(element, 'nu', angle, nu_max)}"
-            )
+            strain = find(element, "nu", angle, nu=nu_max)
+            parts.append(f"ν={nu_max:g} plane strain, {angle:g}° mesh: {strain}")
         lines.append(f"degradation of ||e||_u, {element}: " + "; ".join(parts))
     return lines
 
 
-def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
+def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
     """Run the study; return the JSON report (identical on every rank)."""
     from geofrac.bench.report import format_table, save_report
     from geofrac.bench.study import parse_elements

@@ -15,7 +15,10 @@ import argparse
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = [
     "COLUMNS",
@@ -59,7 +62,7 @@ class Case:
 
 
 def add_common_arguments(
-    p: argparse.ArgumentParser, name: str, default_elements: str, default_scene: Path | None
+    p: argparse.ArgumentParser, name: str, default_elements: str, *, default_scene: Path | None
 ) -> None:
     """Options every convergence bench has: elements, scene, output, repeat, target."""
     from geofrac.elements import available
@@ -191,8 +194,9 @@ def equal_time(by_element: dict[str, list[dict[str, Any]]]) -> dict[str, Any]:
 
 def run_study(
     args: argparse.Namespace,
-    comm: Any,
+    comm: MPI.Comm,
     name: str,
+    *,
     title: str,
     cases: Sequence[Case],
     dim: int,

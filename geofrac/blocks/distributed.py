@@ -111,13 +111,14 @@ def gather_blocks(blocks: Blocks, comm: MPI.Comm) -> Blocks | None:
     parts = comm.gather(blocks, root=0)
     if comm.rank != 0:
         return None
+    assert parts is not None  # rank 0
     whole = parts[0]
     for part in parts[1:]:
         whole = join(whole, part)
     return weld(whole)
 
 
-def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, comm: MPI.Comm) -> Corners:
+def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, *, comm: MPI.Comm) -> Corners:
     """Send each face and piece to the rank owning its block; merge what arrives.
 
     Args:
@@ -138,7 +139,7 @@ def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, comm: MPI.Com
 
     table = corners.table
     face_dest, piece_dest = dest(corners.face_block), dest(corners.piece_block)
-    outgoing = []
+    outgoing: list[tuple[object, ...] | None] = []
     for r in range(comm.size):
         if r == comm.rank:
             outgoing.append(None)
@@ -169,7 +170,7 @@ def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, comm: MPI.Com
     refs = table.append(kinds, keys, xs)
     face_block = [corners.face_block[keep_f]]
     faces = [corners.faces[keep_f]]
-    extra = [] if corners.extra is None else [corners.extra[keep_f]]
+    extras = [] if corners.extra is None else [corners.extra[keep_f]]
     piece_block = [corners.piece_block[keep_p]]
     pieces = [corners.pieces[keep_p]]
     start = 0
@@ -183,14 +184,14 @@ def exchange(corners: Corners, ids: np.ndarray, ranks: np.ndarray, comm: MPI.Com
         face_block.append(fb)
         piece_block.append(pb)
         if fx is not None:
-            extra.append(fx)
+            extras.append(fx)
     return Corners(
         table=table,
         face_block=np.concatenate(face_block),
         faces=np.concatenate(faces),
         piece_block=np.concatenate(piece_block),
         pieces=np.concatenate(pieces),
-        extra=np.concatenate(extra) if extra else None,
+        extra=np.concatenate(extras) if extras else None,
     )
 
 
@@ -198,6 +199,7 @@ def build_blocks(
     mesh: Mesh,
     inner: str = "incentre",
     radius: float = 1.0,
+    *,
     convex: bool = False,
     seed: int = 0,
 ) -> Blocks:
@@ -214,22 +216,26 @@ def build_blocks(
     tdim = mesh.topology.dim
     if tdim == 3:
         corners = tet_corners(
-            cells["x"], cells["gid"], cells["cell_key"], cells["boundary"], cells["num_vertices"]
+            cells["x"],
+            cells["gid"],
+            cells["cell_key"],
+            boundary=cells["boundary"],
+            num_vertices=cells["num_vertices"],
         )
     else:
         corners = tri_corners(
             cells["x"],
             cells["gid"],
             cells["boundary"],
-            cells["num_vertices"],
-            inner,
-            radius,
-            convex,
-            seed,
+            num_vertices=cells["num_vertices"],
+            inner=inner,
+            radius=radius,
+            convex=convex,
+            seed=seed,
         )
     if mesh.comm.size > 1:
         ids, first = np.unique(cells["gid"].ravel(), return_index=True)
-        corners = exchange(corners, ids, cells["owner"].ravel()[first], mesh.comm)
+        corners = exchange(corners, ids, cells["owner"].ravel()[first], comm=mesh.comm)
     if tdim == 3:
         return assemble(corners, cells["owned_ids"], 3)
     return rings(corners, cells["owned_ids"])

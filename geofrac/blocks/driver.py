@@ -48,6 +48,7 @@ def _geometry(scene: Scene) -> Geometry:
     from geofrac.meshing.terrain import TerrainBuilder, TerrainSpec
 
     groups = {"layer": 3, "top": 2, "slip": 2, "side": 2}
+    assert spec.terrain is not None  # the loader sets it with source = "terrain"
     return Geometry(None, {}, None, 3, groups, TerrainBuilder(TerrainSpec(**spec.terrain)))
 
 
@@ -57,7 +58,7 @@ def _wall(comm: MPI.Comm, start: float) -> float:
 
 
 def build(
-    scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool = True
+    scene: Scene, comm: MPI.Comm, timings: Timings, *, verbose: bool = True
 ) -> tuple[Blocks, dict[str, Any]]:
     """Mesh and build the blocks of this rank (rank 0 also holds the immobile block).
 
@@ -83,7 +84,9 @@ def build(
     start = time.perf_counter()
     with timings.phase("blocks"):
         try:  # the builder's errors come after its last collective: agree, then raise
-            blocks = build_blocks(mesh, spec.inner_point, spec.radius, spec.convex, spec.seed)
+            blocks = build_blocks(
+                mesh, spec.inner_point, spec.radius, convex=spec.convex, seed=spec.seed
+            )
             message = None
         except ValueError as exc:
             message = str(exc)
@@ -129,10 +132,10 @@ class BlocksMethod:
         return {"method": "blocks"}
 
     def run(
-        self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
+        self, scene: Scene, comm: MPI.Comm, timings: Timings, *, verbose: bool, control: RunControl
     ) -> dict[str, Any]:
         """Mesh, blocks, checks, files; the summary entries."""
-        blocks, record = build(scene, comm, timings, verbose)
+        blocks, record = build(scene, comm, timings, verbose=verbose)
         with timings.phase("warm-up"):  # compiled checks: numba's compilation or cache load
             from geofrac.blocks.kernels import warm_up
 
@@ -258,7 +261,7 @@ def _checks(
     """
     from geofrac.blocks import quality
 
-    report = None
+    report: dict[str, Any] | None = None
     if comm.rank == 0:
         assert whole is not None
         report = quality.summarize(
@@ -273,11 +276,11 @@ def _checks(
         report["validator"] = validator
         if validator is not None:
             report["invalid_blocks"] += validator["failed"]
-    report = comm.bcast(report, root=0)
-    problems = _problems(report)
+    agreed: dict[str, Any] = comm.bcast(report, root=0)
+    problems = _problems(agreed)
     if problems:
         raise RunError("block quality checks failed: " + "; ".join(problems))
-    return report
+    return agreed
 
 
 def _everywhere(points: np.ndarray) -> np.ndarray:

@@ -42,6 +42,7 @@ def tri_corners(
     x: np.ndarray,
     gid: np.ndarray,
     boundary: np.ndarray | None,
+    *,
     num_vertices: int,
     inner: str = "incentre",
     radius: float = 1.0,
@@ -70,8 +71,8 @@ def tri_corners(
     n = num_vertices
     ekey = edge_keys(gid[:, EDGES[:, 0]], gid[:, EDGES[:, 1]], n)
     emid = (x[:, EDGES[:, 0]] + x[:, EDGES[:, 1]]) * 0.5
-    tkey = face_keys(gid[:, 0], gid[:, 1], gid[:, 2], n)
-    p = inner_points(x, tkey, inner, radius, convex, seed)
+    tkey = face_keys(gid[:, 0], gid[:, 1], gid[:, 2], n=n)
+    p = inner_points(x, tkey, inner, radius=radius, convex=convex, seed=seed)
     boundary = on_boundary(ekey, boundary, order)
     table = PointTable(
         [gid.ravel(), ekey.ravel(), tkey], [x.reshape(-1, 2), emid.reshape(-1, 2), p]
@@ -119,6 +120,7 @@ def rings(corners: Corners, block_ids: np.ndarray) -> Blocks:
     """
     block_ids = np.asarray(block_ids, dtype=np.int64)
     b = np.searchsorted(block_ids, corners.face_block)
+    assert corners.extra is not None  # the 2D builders keep their columns
     first_edge, last_edge = corners.extra[:, 0], corners.extra[:, 1]
     first_on = corners.extra[:, 2].astype(bool)
     nb, nc = len(block_ids), len(b)
@@ -207,6 +209,7 @@ def blocks_2d(
     points: np.ndarray,
     triangles: np.ndarray,
     inner: str = "incentre",
+    *,
     radius: float = 1.0,
     convex: bool = False,
     seed: int = 0,
@@ -224,6 +227,13 @@ def blocks_2d(
     triangles = np.asarray(triangles, dtype=np.int64)
     points = np.asarray(points, dtype=float)[:, :2]
     corners = tri_corners(
-        points[triangles], triangles, None, len(points), inner, radius, convex, seed
+        points[triangles],
+        triangles,
+        None,
+        num_vertices=len(points),
+        inner=inner,
+        radius=radius,
+        convex=convex,
+        seed=seed,
     )
     return rings(corners, np.unique(triangles))

@@ -156,6 +156,7 @@ def tet_corners(
     x: np.ndarray,
     gid: np.ndarray,
     cell_key: np.ndarray,
+    *,
     boundary: np.ndarray | None,
     num_vertices: int,
 ) -> Corners:
@@ -178,7 +179,7 @@ def tet_corners(
     n = num_vertices
     ekey = edge_keys(gid[:, EDGES[:, 0]], gid[:, EDGES[:, 1]], n)
     emid = (x[:, EDGES[:, 0]] + x[:, EDGES[:, 1]]) * 0.5
-    fkey = face_keys(gid[:, FACES[:, 0]], gid[:, FACES[:, 1]], gid[:, FACES[:, 2]], n)
+    fkey = face_keys(gid[:, FACES[:, 0]], gid[:, FACES[:, 1]], gid[:, FACES[:, 2]], n=n)
     fmid = centroids(x[:, FACES])
     centre = ((x[:, 0] + x[:, 1]) + (x[:, 2] + x[:, 3])) * 0.25  # one cell computes it
     boundary = on_boundary(fkey, boundary, order)
@@ -235,17 +236,26 @@ def tet_corners(
         bb, cc = np.where(swap, c, b), np.where(swap, b, c)
         rows = np.arange(len(gid))
 
-        def e(p: int, q: np.ndarray | int, rows: np.ndarray = rows) -> np.ndarray:
+        def edge(p: int, q: np.ndarray | int, rows: np.ndarray = rows) -> np.ndarray:
             return eref[rows, _EDGE_INDEX[p, q]]
 
-        def f(
-            p: int, q: np.ndarray | int, r: np.ndarray | int, rows: np.ndarray = rows
+        def face(
+            p: int, q: np.ndarray | int, r: np.ndarray | int, *, rows: np.ndarray = rows
         ) -> np.ndarray:
             return fref[rows, 6 - (p + q + r)]  # face pqr is opposite the fourth vertex
 
         # VTK order: bottom (a, m_ab, f_abc, m_ac), then above it (m_ad, f_abd, c, f_acd)
         hexa = np.stack(
-            [vref[:, a], e(a, bb), f(a, bb, cc), e(a, cc), e(a, d), f(a, bb, d), cref, f(a, cc, d)],
+            [
+                vref[:, a],
+                edge(a, bb),
+                face(a, bb, cc),
+                edge(a, cc),
+                edge(a, d),
+                face(a, bb, d),
+                cref,
+                face(a, cc, d),
+            ],
             axis=1,
         )
         pieces.append(hexa)
@@ -312,6 +322,10 @@ def blocks_3d(points: np.ndarray, tets: np.ndarray) -> Blocks:
     tets = np.asarray(tets, dtype=np.int64)
     points = np.asarray(points, dtype=float)
     corners = tet_corners(
-        points[tets], tets, np.arange(len(tets), dtype=np.int64), None, len(points)
+        points[tets],
+        tets,
+        np.arange(len(tets), dtype=np.int64),
+        boundary=None,
+        num_vertices=len(points),
     )
     return assemble(corners, np.unique(tets), 3)

@@ -303,7 +303,7 @@ def _reach(
 
 
 def reach(
-    points: np.ndarray, faces: np.ndarray, offsets: np.ndarray, centres: np.ndarray
+    points: np.ndarray, faces: np.ndarray, offsets: np.ndarray, *, centres: np.ndarray
 ) -> np.ndarray:
     """Largest distance from each block's centre to the points of its faces.
 
@@ -521,18 +521,18 @@ def warm_up(progress: Callable[[str, float], None] | None = None) -> float:
     faces = HEX_FACES.astype(np.int32)
     off = np.array([0, 6], dtype=np.int64)
     centre = x.mean(axis=0, keepdims=True)
-    calls: list[tuple[Callable[..., Any], tuple[Any, ...]]] = [
-        (unique_segments, (faces.ravel(), off * 4)),
-        (edge_groups, (faces, off, len(x))),
-        (block_integrals, (x, faces, off)),
-        (reach, (x, faces, off, centre)),
-        (face_planarity, (x, faces)),
-        (face_status, (faces, np.zeros(6, dtype=np.int64), len(x))),
-        (face_stream, (faces, off)),
+    calls: list[tuple[Callable[..., Any], tuple[Any, ...], dict[str, Any]]] = [
+        (unique_segments, (faces.ravel(), off * 4), {}),
+        (edge_groups, (faces, off, len(x)), {}),
+        (block_integrals, (x, faces, off), {}),
+        (reach, (x, faces, off), {"centres": centre}),
+        (face_planarity, (x, faces), {}),
+        (face_status, (faces, np.zeros(6, dtype=np.int64), len(x)), {}),
+        (face_stream, (faces, off), {}),
     ]
-    for kernel, args in calls:
+    for kernel, args, kwargs in calls:
         start = time.perf_counter()
-        kernel(*args)
+        kernel(*args, **kwargs)
         if progress is not None:
             progress(kernel.__name__, time.perf_counter() - start)
     return time.perf_counter() - t0

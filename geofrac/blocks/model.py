@@ -60,7 +60,7 @@ class Blocks:
     piece_block: np.ndarray
     ids: np.ndarray
     seeds: np.ndarray
-    kind: np.ndarray = field(default=None)  # type: ignore[assignment]
+    kind: np.ndarray = field(default=None)  # type: ignore[arg-type]  # None: set by __post_init__
 
     def __post_init__(self) -> None:
         """Default ``kind``: every block of the moving layer."""

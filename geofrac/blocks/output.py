@@ -112,7 +112,7 @@ def _cell_arrays(
 class _Appended:
     """Collects appended arrays: UInt64 byte count + little-endian data, or zlib blocks."""
 
-    def __init__(self, compress: bool) -> None:
+    def __init__(self, *, compress: bool) -> None:
         self.compress = compress
         self.chunks: list[bytes | np.ndarray] = []
         self.offset = 0
@@ -126,7 +126,7 @@ class _Appended:
             type=_vtk_type(data),
             format="appended",
             offset=str(self.offset),
-            **attrs,
+            **attrs,  # type: ignore[arg-type]  # the stub fears a key named attrib; none is
         )
         raw = data.reshape(-1).view(np.uint8)
         if not self.compress:
@@ -224,6 +224,7 @@ def write_vtu(
     path: str | os.PathLike,
     blocks: Blocks,
     cell_data: Mapping[str, np.ndarray] | None = None,
+    *,
     compress: bool = True,
 ) -> Path:
     """Write the blocks as one VTU piece (format in the module docstring).
@@ -255,7 +256,7 @@ def write_vtu(
         NumberOfPoints=str(len(streams["points"])),
         NumberOfCells=str(blocks.num_blocks),
     )
-    app = _Appended(compress)
+    app = _Appended(compress=compress)
     ET.SubElement(piece, "PointData")
     cells_data = ET.SubElement(piece, "CellData")
     for name, values in arrays:
@@ -423,8 +424,8 @@ def read_block_file(path: str | os.PathLike) -> Blocks:
     pos = 0
     for b in range(num_blocks):
         heads[b] = pos
-        nv, nf, npc = int(t[pos + 2]), int(t[pos + 3]), int(t[pos + 4])
-        pos += head_len + nv * dim + nf * (kf + 1) + npc * (kp + 1)
+        n_v, n_f, n_p = int(t[pos + 2]), int(t[pos + 3]), int(t[pos + 4])
+        pos += head_len + n_v * dim + n_f * (kf + 1) + n_p * (kp + 1)
     if pos != len(t):
         raise ValueError(f"{path}: {len(t) - pos} numbers left over")
     h = t[heads[:, None] + np.arange(head_len)] if num_blocks else np.zeros((0, head_len))
@@ -459,6 +460,7 @@ def write_histogram(
     path_png: str | os.PathLike,
     path_csv: str | os.PathLike,
     volumes: np.ndarray,
+    *,
     bins: int | Sequence[float] | str = 30,
     unit: str = "m³",
     name: str = "",

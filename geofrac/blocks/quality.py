@@ -128,7 +128,7 @@ def _count_unique_per_block(owner: np.ndarray, key: np.ndarray, num_blocks: int)
     return np.bincount(owner[order][new], minlength=num_blocks)
 
 
-def block_points(blocks: Blocks, with_pieces: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def block_points(blocks: Blocks, *, with_pieces: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The distinct points of each block, in increasing index order (CSR).
 
     Args:
@@ -238,7 +238,9 @@ def block_centroids(blocks: Blocks) -> np.ndarray:
 
     A block of zero volume gets NaN.
     """
-    return _integrate(blocks, moments=True)[1]
+    centroids = _integrate(blocks, moments=True)[1]
+    assert centroids is not None  # asked for
+    return centroids
 
 
 def piece_volumes(blocks: Blocks) -> np.ndarray:
@@ -708,6 +710,7 @@ def validate_cells(
     blocks: Blocks,
     sample: int | None = None,
     seed: int = 0,
+    *,
     planarity_tolerance: float = 0.1,
     progress: Callable[[int, int], None] | None = None,
 ) -> dict:
@@ -901,7 +904,7 @@ def _circum_diameters(blocks: Blocks, centroids: np.ndarray) -> np.ndarray:
     """Twice the largest distance from each centroid to the block's points, shape=(n,)."""
     from geofrac.blocks.kernels import reach
 
-    return 2.0 * reach(blocks.points, blocks.faces, blocks.face_offsets, centroids)
+    return 2.0 * reach(blocks.points, blocks.faces, blocks.face_offsets, centres=centroids)
 
 
 def _stats(values: np.ndarray) -> dict:
@@ -944,6 +947,7 @@ def block_checks(
     """
     say = progress or (lambda what: None)
     vol, centroids = _integrate(blocks, moments=True)
+    assert centroids is not None  # asked for
     say("volumes and centroids")
     with np.errstate(divide="ignore", invalid="ignore"):
         aspect = _circum_diameters(blocks, np.nan_to_num(centroids)) / equivalent_diameters(
@@ -975,6 +979,7 @@ def block_checks(
 def summarize(
     blocks: Blocks,
     domain_volume: float,
+    *,
     validate: bool = True,
     sample: int | None = 2000,
     on_boundary: Callable[[np.ndarray], np.ndarray] | None = None,

@@ -25,7 +25,7 @@ def edge_keys(a: np.ndarray, b: np.ndarray, n: int) -> np.ndarray:
     return a.astype(np.int64) * n + b
 
 
-def face_keys(a: np.ndarray, b: np.ndarray, c: np.ndarray, n: int) -> np.ndarray:
+def face_keys(a: np.ndarray, b: np.ndarray, c: np.ndarray, *, n: int) -> np.ndarray:
     """Key of the triangles (a, b, c) with a < b < c, shape like ``a``.
 
     Raises:

@@ -102,7 +102,14 @@ class CleanReport:
     tees: int = 0
     passes: int = 0
 
-    def add(self, rule: str, fracture: int, other: int = -1, amount: float = 0.0) -> None:
+    def add(
+        self,
+        rule: str,
+        fracture: int | np.integer,
+        other: int | np.integer = -1,
+        *,
+        amount: float = 0.0,
+    ) -> None:
         """Record one event of ``rule``."""
         self.events[rule].append((int(fracture), int(other), float(amount)))
 
@@ -314,7 +321,7 @@ def _drop_duplicates(
             continue
         keep, drop = (a, b) if (parent[a], a) < (parent[b], b) else (b, a)
         dropped[drop] = True
-        report.add("duplicate", parent[drop], parent[keep], float(d))
+        report.add("duplicate", parent[drop], parent[keep], amount=float(d))
     return pieces[~dropped], parent[~dropped]
 
 
@@ -346,7 +353,10 @@ def _merge_parallel(
             pieces[long] = [p0 + lo * direction, p0 + hi * direction]
             alive[short] = False
             report.add(
-                "merged", parent[short], parent[long], float(np.abs(_cross(direction, rel)).max())
+                "merged",
+                parent[short],
+                parent[long],
+                amount=float(np.abs(_cross(direction, rel)).max()),
             )
             changed = True
     return pieces[alive], parent[alive]
@@ -406,6 +416,7 @@ class _Pass:
         segs: np.ndarray,
         fid: np.ndarray,
         domain: np.ndarray,
+        *,
         tol: float,
         report: CleanReport,
         moved: np.ndarray,
@@ -433,9 +444,9 @@ class _Pass:
         vertices, edges, fids = self.build()
         return vertices, edges, fids, self.changed
 
-    def move(self, f: int, distance: float, rule: str, other: int = -1) -> None:
+    def move(self, f: int, distance: float, rule: str, *, other: int = -1) -> None:
         if distance > self.exact:
-            self.report.add(rule, f, other, distance)
+            self.report.add(rule, f, other, amount=distance)
             self.moved[f] = max(self.moved[f], distance)
             self.changed = True
 
@@ -474,7 +485,7 @@ class _Pass:
                         best[int(kk)] = (float(dd), int(s), float(tt))
         for kk, (dd, s, tt) in sorted(best.items()):
             target = segs[s, 0] + tt * (segs[s, 1] - segs[s, 0])
-            self.move(self.fid[kk // 2], dd, "tee_snap", int(self.fid[s]))
+            self.move(self.fid[kk // 2], dd, "tee_snap", other=int(self.fid[s]))
             self.ends[kk] = target
             self.on_seg[s].append(("end", kk))
             self.tee_pairs.add((kk // 2, s))
@@ -590,7 +601,7 @@ class _Pass:
 
 
 def clean_network(
-    network: Network, domain: np.ndarray, tol: float, max_passes: int = 8
+    network: Network, domain: np.ndarray, tol: float, *, max_passes: int = 8
 ) -> CleanNetwork:
     """Apply the rules of this module and return the planar graph.
 
@@ -633,7 +644,13 @@ def clean_network(
                 f"with tolerance {tol:g}; try a larger tolerance"
             )
         vertices, edges, fids, changed = _Pass(
-            segs, fid, domain, tol, report, moved, report.passes == 0
+            segs,
+            fid,
+            domain,
+            tol=tol,
+            report=report,
+            moved=moved,
+            count_junctions=report.passes == 0,
         ).run()
         report.passes += 1
         segs, fid = vertices[edges], fids

@@ -53,7 +53,7 @@ def save_network(network: Network, path: str | Path) -> None:
     """
     path = Path(path)
     suffix = _suffix(path)
-    rows = [
+    rows: list[tuple[int, *tuple[float, ...]]] = [
         (int(i), *(float(v) for v in seg.ravel()))
         for i, seg in zip(network.set_index, network.segments, strict=True)
     ]

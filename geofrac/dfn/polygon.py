@@ -138,11 +138,11 @@ def as_polygon(points: ArrayLike) -> np.ndarray:
         raise DfnError(f"polygon: zero area (vertices {poly.tolist()})")
     tol = BOUNDARY_RTOL * size
     a, b = poly, nxt
-    i, j = np.triu_indices(m, k=1)
-    adjacent = (j == i + 1) | ((i == 0) & (j == m - 1))
+    first, second = np.triu_indices(m, k=1)  # edge pairs first < second
+    adjacent = (second == first + 1) | ((first == 0) & (second == m - 1))
     # non-adjacent edges must not meet at all: a proper crossing, or an endpoint of one
     # edge on the other (touching, a repeated vertex, a collinear overlap)
-    ni, nj = i[~adjacent], j[~adjacent]
+    ni, nj = first[~adjacent], second[~adjacent]
     if len(ni):
         ai, bi, aj, bj = a[ni], b[ni], a[nj], b[nj]
 
@@ -178,8 +178,12 @@ def as_polygon(points: ArrayLike) -> np.ndarray:
     return poly if area > 0 else poly[::-1].copy()
 
 
-def rectangle(x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
+def rectangle(lower: tuple[float, float], upper: tuple[float, float]) -> np.ndarray:
     """Axis-aligned rectangle ``[x0, x1] × [y0, y1]``.
+
+    Args:
+        lower: the corner ``(x0, y0)``.
+        upper: the corner ``(x1, y1)``.
 
     Returns:
         Vertices counter-clockwise from ``(x0, y0)``, shape=(4, 2).
@@ -187,6 +191,7 @@ def rectangle(x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
     Raises:
         DfnError: ``x1 <= x0`` or ``y1 <= y0``, or a coordinate is not finite.
     """
+    (x0, y0), (x1, y1) = lower, upper
     vals = np.array([x0, y0, x1, y1], dtype=float)
     if not np.all(np.isfinite(vals)):
         raise DfnError(f"rectangle: coordinates must be finite, got {vals.tolist()}")

@@ -154,7 +154,7 @@ class FractureSet:
 # ---------------------------------------------------------------------------- samplers
 
 
-def power_law_ccdf(l: ArrayLike, lmin: float, lmax: float, exponent: float) -> np.ndarray:  # noqa: E741
+def power_law_ccdf(l: ArrayLike, lmin: float, lmax: float, *, exponent: float) -> np.ndarray:  # noqa: E741
     """P(L > l) of the power law F_N = 1/L^n (Edo (2016), eq. (2.28)) truncated to [lmin, lmax].
 
     ``(l^-n − lmax^-n) / (lmin^-n − lmax^-n)`` on [lmin, lmax], 1 below and 0 above; for
@@ -178,7 +178,7 @@ def power_law_ccdf(l: ArrayLike, lmin: float, lmax: float, exponent: float) -> n
     return np.clip((xr**-exponent - rmax) / (1.0 - rmax), 0.0, 1.0)
 
 
-def power_law_cdf(l: ArrayLike, lmin: float, lmax: float, exponent: float) -> np.ndarray:  # noqa: E741
+def power_law_cdf(l: ArrayLike, lmin: float, lmax: float, *, exponent: float) -> np.ndarray:  # noqa: E741
     """P(L <= l) of the truncated power law: 1 − :func:`power_law_ccdf`.
 
     Args:
@@ -190,11 +190,11 @@ def power_law_cdf(l: ArrayLike, lmin: float, lmax: float, exponent: float) -> np
     Returns:
         Probabilities, same shape as ``l``.
     """
-    return 1.0 - power_law_ccdf(l, lmin, lmax, exponent)
+    return 1.0 - power_law_ccdf(l, lmin, lmax, exponent=exponent)
 
 
 def power_law_lengths(
-    rng: np.random.Generator, n: int, lmin: float, lmax: float, exponent: float
+    rng: np.random.Generator, n: int, lmin: float, *, lmax: float, exponent: float
 ) -> np.ndarray:
     """Lengths from the truncated power law by inverse transform.
 
@@ -368,7 +368,7 @@ def _draw_batch(rng: np.random.Generator, fset: FractureSet, region: np.ndarray)
     """BATCH fractures of a set: centres, then angles, then lengths; shape=(BATCH, 2, 2)."""
     centres = uniform_points(rng, BATCH, region)
     theta = np.radians(sample_angles(rng, BATCH, fset))
-    lengths = power_law_lengths(rng, BATCH, fset.lmin, fset.lmax, fset.exponent)
+    lengths = power_law_lengths(rng, BATCH, fset.lmin, lmax=fset.lmax, exponent=fset.exponent)
     half = 0.5 * lengths[:, None] * np.stack([np.cos(theta), np.sin(theta)], axis=1)
     return np.stack([centres - half, centres + half], axis=1)
 
@@ -413,6 +413,7 @@ def generate_network(
     sets: Sequence[FractureSet],
     region: ArrayLike,
     seed: int,
+    *,
     domain: ArrayLike | None = None,
 ) -> Network:
     """Draw a fracture network, set after set.

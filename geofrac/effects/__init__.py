@@ -37,9 +37,9 @@ import importlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from types import ModuleType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from geofrac.model.scene import EffectSpec
+from geofrac.model.scene import BoundaryCondition, EffectSpec, Load, Material
 
 if TYPE_CHECKING:
     from geofrac.fem.elastic import LinearTerm
@@ -81,14 +81,14 @@ class ConfigureContext:
 
     file: str
     gdim: int
-    material: object
+    material: Material
     element: str = ""
     groups: dict[str, int] = field(default_factory=dict)
-    bcs: tuple = ()
+    bcs: tuple[BoundaryCondition, ...] = ()
     method: str = "fem"
     gradient_bc: str = "consistent"
-    previous: dict[str, Any] = field(default_factory=dict)
-    loads: tuple = ()
+    previous: dict[str, object] = field(default_factory=dict)
+    loads: tuple[Load, ...] = ()
 
 
 def available() -> tuple[str, ...]:
@@ -106,7 +106,7 @@ def drives(name: str) -> bool:
     return hasattr(load(name), "driver")
 
 
-def driven(effects: Sequence[EffectSpec]) -> EffectSpec | None:
+def driven(effects: Sequence[EffectSpec[object]]) -> EffectSpec[object] | None:
     """The declared effect that brings its own ``driver`` loop, or None.
 
     The loader has checked that there is at most one.
@@ -116,9 +116,9 @@ def driven(effects: Sequence[EffectSpec]) -> EffectSpec | None:
     return owners[0] if owners else None
 
 
-def linear_terms(effects: Sequence[EffectSpec]) -> list[LinearTerm]:
+def linear_terms(effects: Sequence[EffectSpec[object]]) -> list[LinearTerm]:
     """The ``linear_form`` hooks of the declared effects, bound to their configs."""
-    terms = []
+    terms: list[LinearTerm] = []
     for spec in effects:
         module = load(spec.name)
         if hasattr(module, "linear_form"):

@@ -603,7 +603,7 @@ def scene_driver(
     from geofrac.fem.solution import Solution
     from geofrac.meshing.distribute import build_mesh
 
-    config = next((s.config for s in scene.effects if s.name == "cracking"), None)
+    config = scene.effect_config("cracking", CrackingConfig)
     if config is None:
         raise ValueError(f"scene {scene.name!r} does not declare the effect 'cracking'")
     tagged = build_mesh(scene.geometry, comm)

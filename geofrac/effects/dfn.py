@@ -16,7 +16,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,6 +35,9 @@ from geofrac.dfn.sampling import FractureSet, Network, generate_network
 from geofrac.meshing.dfn import ALGORITHMS, DOMAIN_GROUP, FRACTURE_GROUP, MeshSpec
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import MAX_INTEGER, finite, short
+
+if TYPE_CHECKING:
+    from geofrac.effects import ConfigureContext
 
 __all__ = [
     "RECTANGLE_CORNERS",
@@ -143,7 +147,7 @@ class DfnGeometry:
             f"{report['shortest_edge']:.3g} ({report['time_mesh_s']:.1f} s)"
         )
 
-    def build(self, gmsh: Any) -> tuple[dict[str, Any], Any]:
+    def build(self, gmsh: ModuleType) -> tuple[dict[str, Any], Any]:
         """Generate, clean and mesh the network in an initialised gmsh session.
 
         Returns:
@@ -171,7 +175,7 @@ class DfnGeometry:
                 f"domain after cleaning ({clean.report.summary()}); check the domain, region "
                 "and density"
             )
-        quality = mesh_network(gmsh, clean, cfg.sides, cfg.corners, cfg.mesh)
+        quality = mesh_network(gmsh, clean, cfg.sides, corners=cfg.corners, spec=cfg.mesh)
         t3 = time.perf_counter()
         area = polygon_area(cfg.domain)
         report = {
@@ -225,7 +229,8 @@ def _polygon(file: str, key: str, value: Any, kinds: tuple[str, ...]) -> np.ndar
     )
     try:
         if four_numbers and "rectangle" in kinds:
-            return rectangle(*(float(v) for v in value))
+            x0, y0, x1, y1 = (float(v) for v in value)
+            return rectangle((x0, y0), (x1, y1))
         if "polygon" in kinds and not four_numbers:
             return as_polygon(np.asarray(value, dtype=float))
     except (DfnError, ValueError, TypeError, OverflowError) as exc:
@@ -310,7 +315,8 @@ def _configure(table: dict[str, Any], file: str) -> DfnConfig:
         raise _error(file, "domain", "give exactly one of 'domain' (rectangle) or 'polygon'")
     if shapes[0] == "domain":
         domain = _polygon(file, "domain", t["domain"], ("rectangle",))
-        sides, corners = RECTANGLE_SIDES, RECTANGLE_CORNERS
+        sides: tuple[str, ...] = RECTANGLE_SIDES
+        corners: tuple[str, ...] = RECTANGLE_CORNERS
     else:
         domain = _polygon(file, "polygon", t["polygon"], ("polygon",))
         m = len(domain)
@@ -348,7 +354,8 @@ def _configure(table: dict[str, Any], file: str) -> DfnConfig:
         raise _error(
             file, "mesh_size", f"{size} gives over 5000 elements across the domain; too fine"
         )
-    network, path, sets = None, None, ()
+    network, path = None, None
+    sets: tuple[FractureSet, ...] = ()
     if "file" in t:
         if "sets" in t:
             raise _error(file, "file", "give either 'file' (a saved network) or 'sets', not both")
@@ -416,6 +423,6 @@ def geometry(table: dict[str, Any], file: str) -> tuple[DfnConfig, Any]:
     )
 
 
-def configure(table: dict[str, Any], ctx: Any) -> DfnConfig:
+def configure(table: dict[str, Any], ctx: ConfigureContext) -> DfnConfig:
     """Validate ``[dfn]`` (the scene loader calls :func:`geometry` instead)."""
     return _configure(table, ctx.file)

@@ -53,11 +53,11 @@ class FrictionConfig:
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> FrictionConfig:
     """Validate ``[friction]``; the boundaries must exist (``ctx.groups``)."""
-    t = Table(ctx.file, "friction", table, KEYS)
+    t = Table(ctx.file, "friction", table, allowed=KEYS)
     names = t.data.get("boundaries", ["bed"])
     own: dict[str, float] = {}
     if isinstance(names, dict):
-        b = Table(ctx.file, "friction.boundaries", names, list(names))
+        b = Table(ctx.file, "friction.boundaries", names, allowed=list(names))
         if not names:
             raise t.error("boundaries", "must name at least one boundary")
         own = {
@@ -84,5 +84,5 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> FrictionConfig:
                 f"no boundary {name!r} (walled sides and bed: {where})"
                 + did_you_mean(str(name), ctx.groups),
             )
-    mus = tuple(own.get(n, mu) for n in names)  # type: ignore[misc]
+    mus = tuple(own.get(n, mu) for n in names)
     return FrictionConfig(None if mu is None else float(mu), tuple(names), mus)  # type: ignore[arg-type]

@@ -10,11 +10,16 @@ Needs ``material.density``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.effects import ConfigureContext
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import finite, short
+
+if TYPE_CHECKING:
+    import ufl
+
+    from geofrac.fem.elastic import FormContext
 
 __all__ = [
     "KEYS",
@@ -102,7 +107,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> GravityConfig:
     )
 
 
-def linear_form(config: GravityConfig, ctx: Any) -> Any:
+def linear_form(config: GravityConfig, ctx: FormContext) -> ufl.Form:
     """Right-hand side t·∫ ρ g·v dx (``ctx`` is a :class:`geofrac.fem.elastic.FormContext`)."""
     from geofrac_forms.elasticity import body_force_form
 

@@ -48,7 +48,7 @@ class SmoothingConfig:
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> SmoothingConfig:
     """Validate ``[mls_smoothing]``."""
-    t = Table(ctx.file, "mls_smoothing", table, KEYS)
-    radius = float(t.number("radius", default=DEFAULT_RADIUS, positive=True, maximum=MAX_RADIUS))  # type: ignore[arg-type]
+    t = Table(ctx.file, "mls_smoothing", table, allowed=KEYS)
+    radius = float(t.number("radius", default=DEFAULT_RADIUS, positive=True, maximum=MAX_RADIUS))
     kind = str(t.string("kind", default="standard", choices=("standard", "consistent")))
     return SmoothingConfig(radius, kind)

@@ -52,12 +52,12 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
     """Validate ``[plasticity]``."""
     if ctx.gdim == 1:
         raise SceneError(ctx.file, "effects", "'plasticity' needs a 2D or 3D scene")
-    t = Table(ctx.file, "plasticity", table, KEYS)
+    t = Table(ctx.file, "plasticity", table, allowed=KEYS)
     phi = float(t.number("friction_angle", required=True))  # type: ignore[arg-type]
     if not 0 <= phi < 90:
         raise t.error("friction_angle", f"must lie in [0, 90) degrees, got {phi}")
-    c = float(t.number("cohesion", default=0.0, minimum=0.0, maximum=MAX_COHESION))  # type: ignore[arg-type]
-    psi = float(t.number("dilatancy_angle", default=0.0))  # type: ignore[arg-type]
+    c = float(t.number("cohesion", default=0.0, minimum=0.0, maximum=MAX_COHESION))
+    psi = float(t.number("dilatancy_angle", default=0.0))
     if not 0 <= psi <= phi:
         raise t.error("dilatancy_angle", f"must lie in [0, friction_angle = {phi}], got {psi}")
     return PlasticityConfig(phi, c, psi)

@@ -92,9 +92,9 @@ def domain_data(mesh: dolfinx.mesh.Mesh, q_rand: float, seed: int) -> DomainData
         np.take_along_axis(x, order[:, :, None], axis=1),
         None,
         "random" if q_rand > 0 else "incentre",
-        q_rand,
-        False,
-        seed,
+        radius=q_rand,
+        convex=False,
+        seed=seed,
     )
     topology.create_entities(1)
     topology.create_connectivity(2, 1)

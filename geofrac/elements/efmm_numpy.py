@@ -146,7 +146,12 @@ def integration_domains(
     tri[flip] = tri[flip][:, [0, 2, 1]]  # counter-clockwise
     by_id = np.take_along_axis(tri, np.argsort(ids[tri], axis=1), axis=1)
     inner = inner_points(
-        points[by_id], keys, "random" if q_rand > 0 else "incentre", q_rand, False, seed
+        points[by_id],
+        keys,
+        "random" if q_rand > 0 else "incentre",
+        radius=q_rand,
+        convex=False,
+        seed=seed,
     )
     # edges: (cell, local edge c from corner c to c + 1); a CCW triangle lies on the left
     a, b = tri.ravel(), np.roll(tri, -1, axis=1).ravel()

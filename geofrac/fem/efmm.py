@@ -76,7 +76,7 @@ class EfmmProblem(ElasticProblem):
     ) -> None:
         super().__init__(tagged, element, scene, terms=terms)
         mat = scene.material
-        self.D = d_matrix(mat.E, mat.nu, 2, mat.plane)
+        self.D = d_matrix(mat.E, mat.nu, 2, plane=mat.plane)
         self.e: dolfinx.fem.Function | None = None
 
     def compile(self) -> None:

@@ -132,7 +132,7 @@ class ElasticProblem:
         V = element.space
         mat = scene.material
         gdim = mesh.geometry.dim
-        lam, mu = lame(mat.E, mat.nu, gdim, mat.plane)
+        lam, mu = lame(mat.E, mat.nu, gdim, plane=mat.plane)
         self.lam = dolfinx.fem.Constant(mesh, SCALAR(lam))
         self.mu = dolfinx.fem.Constant(mesh, SCALAR(mu))
         self.thickness = dolfinx.fem.Constant(mesh, SCALAR(mat.thickness if gdim == 2 else 1.0))
@@ -143,7 +143,9 @@ class ElasticProblem:
         fdim = mesh.topology.dim - 1
         self.ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged.tags.get(fdim))
         self.exact = (
-            make_exact(scene.exact.name, scene.exact.parameters, mat.E, mat.nu, mat.plane)
+            make_exact(
+                scene.exact.name, scene.exact.parameters, E=mat.E, nu=mat.nu, plane=mat.plane
+            )
             if scene.exact is not None
             else None
         )

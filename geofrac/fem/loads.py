@@ -82,7 +82,7 @@ def expression_ufl(text: str, mesh: dolfinx.mesh.Mesh) -> Any:
     tree = expr.parse(text, names).tree
     x = ufl.SpatialCoordinate(mesh)
     coordinates = {name: x[i] for i, name in enumerate(names)}
-    return ufl.as_ufl(expr.fold(tree, coordinates, _UFL_FUNCTIONS, lambda v: v))
+    return ufl.as_ufl(expr.fold(tree, coordinates, _UFL_FUNCTIONS, lift=lambda v: v))
 
 
 def value_ufl(value: Sequence[float | str], mesh: dolfinx.mesh.Mesh) -> Any:

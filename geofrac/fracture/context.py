@@ -340,7 +340,7 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
     space = problem.unknown().function_space
     gm = gather_mesh(tagged.mesh, space)
     mat = scene.material
-    _, mu = lame(mat.E, mat.nu, 2, mat.plane)
+    _, mu = lame(mat.E, mat.nu, 2, plane=mat.plane)
     imap = space.dofmap.index_map
     n_global = imap.size_global * bs
     bc_rows, bc_vals, bc_row_nodes = _dirichlet_rows(problem, gm, bs=bs)
@@ -378,7 +378,7 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
         say=say,
         gm=gm,
         bs=bs,
-        D=d_matrix(mat.E, mat.nu, 2, mat.plane),
+        D=d_matrix(mat.E, mat.nu, 2, plane=mat.plane),
         t=mat.thickness,
         penalty=scene.discretization.zero_mode_penalty * mu,
         n_local=imap.size_local * bs,

@@ -253,10 +253,10 @@ class GrainUnits:
             coords[c],
             fit.h,
             coords[fit.nodes[1:]],
-            fit.order,
-            self.faces.grain(c),
-            self.ctx.D,
-            self.ctx.t,
+            order=fit.order,
+            triangles=self.faces.grain(c),
+            D=self.ctx.D,
+            thickness=self.ctx.t,
             comm=None,
         )
         if order != fit.order:

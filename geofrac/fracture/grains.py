@@ -320,7 +320,7 @@ class GrainState:
             old = self.fits.get(i)
             if old is not None and old.h == h and np.array_equal(old.nodes[1:], ids):
                 continue
-            self.fits[i] = node_fit(coords[i], h, i, ids, coords[ids])
+            self.fits[i] = node_fit(coords[i], h, i, ids=ids, xy=coords[ids])
             changed.append(i)
         return np.array(changed, dtype=np.int64)
 

@@ -256,7 +256,7 @@ class CrackState:
             old = self.fits.get(c)
             if known and old is not None and old.h == h and np.array_equal(old.nodes, ids):
                 continue
-            fit = linear_fit(self.centroids[c], h, ids, coords[ids]) if len(ids) else None
+            fit = linear_fit(self.centroids[c], h, ids, coords=coords[ids]) if len(ids) else None
             if known and old is None and fit is None:
                 continue
             self.fits[c] = fit

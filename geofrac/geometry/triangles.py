@@ -55,10 +55,10 @@ def coordinate_keys(x: np.ndarray) -> np.ndarray:
     x = np.asarray(x, dtype=np.float64)[:, :, :2] + 0.0  # + 0.0: −0.0 and 0.0 alike
     order = np.lexsort((x[:, :, 1], x[:, :, 0]), axis=-1)
     words = np.ascontiguousarray(np.take_along_axis(x, order[:, :, None], axis=1))
-    words = words.reshape(len(x), 6).view(np.uint64)
+    bits = words.reshape(len(x), 6).view(np.uint64)
     z = np.full(len(x), 0x9E3779B97F4A7C15, dtype=np.uint64)
     for j in range(6):
-        z = _mix(z ^ words[:, j])
+        z = _mix(z ^ bits[:, j])
     return z
 
 
@@ -66,6 +66,7 @@ def inner_points(
     x: np.ndarray,
     keys: np.ndarray | None,
     inner: str = "incentre",
+    *,
     radius: float = 1.0,
     convex: bool = False,
     seed: int = 0,

@@ -28,13 +28,16 @@ import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import geofrac
 from geofrac import interrupt
 from geofrac.errors import RunError
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["KEEP", "Checkpoint", "CheckpointPolicy", "RunControl", "latest"]
 
@@ -131,7 +134,7 @@ class RunControl:
         resume: the checkpoint to continue from, or None.
     """
 
-    comm: Any
+    comm: MPI.Comm
     directory: Path | None
     sha256: str
     kind: str
@@ -170,6 +173,7 @@ class RunControl:
         k: int,
         data: dict[str, Any],
         shared: dict[str, np.ndarray] | None = None,
+        *,
         local: dict[str, np.ndarray] | None = None,
     ) -> Path:
         """Write checkpoint ``k`` (collective).
@@ -198,9 +202,10 @@ class RunControl:
         if error is None:
             try:
                 if comm.rank == 0 and shared:
-                    np.savez(tmp / "shared.npz", **shared)
+                    # numpy's stub: a ** dict could hold the flag allow_pickle
+                    np.savez(tmp / "shared.npz", **shared)  # type: ignore[arg-type]
                 if local:
-                    np.savez(tmp / f"rank-{comm.rank}.npz", **local)
+                    np.savez(tmp / f"rank-{comm.rank}.npz", **local)  # type: ignore[arg-type]
             except OSError as exc:
                 error = f"cannot write checkpoint {tmp}: {exc.strerror}"
             errors = comm.allgather(error)
@@ -245,7 +250,7 @@ class RunControl:
         """Raise :class:`~geofrac.interrupt.Interrupted` (after :meth:`poll` said stop)."""
         raise interrupt.Interrupted(self._signum, where)
 
-    def check_resume(self, ranks_must_match: bool = True, check_kind: bool = True) -> None:
+    def check_resume(self, *, ranks_must_match: bool = True, check_kind: bool = True) -> None:
         """Refuse a resume checkpoint of another scene, loop or (optionally) rank count."""
         ck = self.resume
         if ck is None:

@@ -223,7 +223,7 @@ def _attribute_type(values: np.ndarray) -> str:
 def _data_item(parent: ET.Element, values: np.ndarray, h5_path: str) -> None:
     kind, size = values.dtype.kind, values.dtype.itemsize
     number = _XDMF_BYTE[kind] if size == 1 and kind in _XDMF_BYTE else _XDMF_NUMBER[kind]
-    hdf_item(parent, " ".join(str(v) for v in values.shape), number, h5_path, size)
+    hdf_item(parent, " ".join(str(v) for v in values.shape), number, path=h5_path, precision=size)
 
 
 def _write_vtu(path: Path, xyz: np.ndarray, grains: Grains, arrays: dict) -> None:

@@ -49,6 +49,7 @@ def write_line(
     directory: Path,
     title: str,
     name: str,
+    *,
     line: Line,
     s: np.ndarray,
     xyz: np.ndarray,

@@ -32,13 +32,18 @@ import shutil
 import socket
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TextIO
 
 from geofrac import interrupt
 from geofrac.errors import RunError
 from geofrac.io.checkpoint import CheckpointPolicy, RunControl, latest
 from geofrac.io.summary import finish_summary, write_json
 from geofrac.log import sayer
+from geofrac.model.scene import Scene
+from geofrac.timing import Timings
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["INCOMPLETE", "SUBDIRECTORIES", "OutputDir", "claim", "owned_run"]
 
@@ -64,25 +69,25 @@ class OutputDir:
 
     final: Path
     stage: Path
-    comm: Any
+    comm: MPI.Comm
     notes: list[str] = dataclasses.field(default_factory=list)
     resume_from: Path | None = None
-    _lock: Any = None
+    _lock: TextIO | None = None
 
     @property
     def checkpoints(self) -> Path:
         """The checkpoint directory of this run."""
         return self.stage / _CHECKPOINT
 
-    def staged(self, scene: Any) -> Any:
+    def staged(self, scene: Scene) -> Scene:
         """``scene`` with its output directory set to the staging directory."""
         return dataclasses.replace(scene, output=dataclasses.replace(scene.output, dir=self.stage))
 
-    def keep(self, summary: dict[str, Any], timings: Any) -> None:
+    def keep(self, summary: dict[str, Any], timings: Timings) -> None:
         """Finish ``summary`` into the staging directory and leave ``final`` as it is."""
         finish_summary(summary, self.stage / "summary.json", self.comm, timings=timings)
 
-    def publish(self, summary: dict[str, Any], timings: Any, legacy: Sequence[str]) -> None:
+    def publish(self, summary: dict[str, Any], timings: Timings, legacy: Sequence[str]) -> None:
         """Move the staged files into ``final``, replacing the previous run's (collective).
 
         Args:
@@ -175,7 +180,7 @@ def _describe_holder(lock: Path) -> str:
         return ""
 
 
-def _claim_rank0(final: Path, resume: bool) -> tuple[Any, list[str], Path | None]:
+def _claim_rank0(final: Path, resume: bool) -> tuple[TextIO, list[str], Path | None]:
     """Lock ``final`` and prepare its staging directory (rank 0). Raises RunError."""
     try:
         final.mkdir(parents=True, exist_ok=True)
@@ -239,7 +244,7 @@ def _previous_status(stage: Path) -> str | None:
         return None
 
 
-def claim(final: Path, comm: Any, resume: bool = False) -> OutputDir:
+def claim(final: Path, comm: MPI.Comm, *, resume: bool = False) -> OutputDir:
     """Lock ``final`` for this run and prepare ``final/incomplete`` (collective).
 
     Without ``resume`` an earlier unfinished run's staging directory is removed (with a
@@ -264,11 +269,12 @@ def claim(final: Path, comm: Any, resume: bool = False) -> OutputDir:
 
 
 def owned_run(
-    scene: Any,
-    comm: Any,
-    timings: Any,
+    scene: Scene,
+    comm: MPI.Comm,
+    timings: Timings,
+    *,
     start: dict[str, Any],
-    body: Callable[[Any, RunControl], dict[str, Any]],
+    body: Callable[[Scene, RunControl], dict[str, Any]],
     legacy: Sequence[str],
     kind: str,
     resume: bool = False,
@@ -295,9 +301,9 @@ def owned_run(
         RunError: collectively; :class:`~geofrac.interrupt.Interrupted` after a signal,
             with ``incomplete/summary.json`` saying ``status = "interrupted"``.
     """
-    out = claim(scene.output.dir, comm, resume)
+    out = claim(scene.output.dir, comm, resume=resume)
     try:
-        say = sayer(comm, verbose)
+        say = sayer(comm, verbose=verbose)
         for note in out.notes:
             say(f"note: {note}")
         output = scene.output

@@ -105,15 +105,17 @@ class PointSeries:
                 NumberOfElements=str(n),
                 NodesPerElement="1",
             )
-            hdf_item(top, f"{n} 1", "Int", f"{h5}:/topology")
+            hdf_item(top, f"{n} 1", "Int", path=f"{h5}:/topology")
             geo = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-            hdf_item(geo, f"{n} 3", "Float", f"{h5}:/frame_{i}/geometry")
+            hdf_item(geo, f"{n} 3", "Float", path=f"{h5}:/frame_{i}/geometry")
             ET.SubElement(grid, "Time", Value=repr(t))
             for name, k in kinds:
                 attr = ET.SubElement(
                     grid, "Attribute", Name=name, AttributeType=_KIND[k], Center="Node"
                 )
-                hdf_item(attr, f"{n} {k}" if k > 1 else f"{n}", "Float", f"{h5}:/frame_{i}/{name}")
+                hdf_item(
+                    attr, f"{n} {k}" if k > 1 else f"{n}", "Float", path=f"{h5}:/frame_{i}/{name}"
+                )
         write_xml(root, self.path)
 
 

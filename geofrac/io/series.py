@@ -69,6 +69,7 @@ class XdmfSeries:
         path: Path,
         coords: np.ndarray,
         cells: np.ndarray,
+        *,
         keep_until: float | None = None,
     ) -> None:
         self.path = Path(path)
@@ -167,9 +168,9 @@ class XdmfSeries:
                 NumberOfElements=str(self.num_cells),
                 NodesPerElement=str(self.nv),
             )
-            hdf_item(top, f"{self.num_cells} {self.nv}", "Int", f"{h5}:/mesh/topology")
+            hdf_item(top, f"{self.num_cells} {self.nv}", "Int", path=f"{h5}:/mesh/topology")
             geo = ET.SubElement(grid, "Geometry", GeometryType="XYZ")
-            hdf_item(geo, f"{self.num_nodes} 3", "Float", f"{h5}:/mesh/geometry")
+            hdf_item(geo, f"{self.num_nodes} 3", "Float", path=f"{h5}:/mesh/geometry")
             ET.SubElement(grid, "Time", Value=repr(t))
             for name, centre, k in fields:
                 n = self.num_nodes if centre == "Node" else self.num_cells
@@ -181,7 +182,7 @@ class XdmfSeries:
                     Center=centre,
                 )
                 dims = f"{n} {k}" if k > 1 else f"{n}"
-                hdf_item(attr, dims, "Float", f"{h5}:/step_{i}/{name}")
+                hdf_item(attr, dims, "Float", path=f"{h5}:/step_{i}/{name}")
         write_xml(root, self.path)
 
 
@@ -241,7 +242,7 @@ def write_xml(root: ET.Element, path: Path) -> None:
 
 
 def hdf_item(
-    parent: ET.Element, dims: str, number_type: str, path: str, precision: int = 8
+    parent: ET.Element, dims: str, number_type: str, *, path: str, precision: int = 8
 ) -> None:
     """An HDF5 DataItem ``path`` (``file.h5:/dataset``) of shape ``dims``, ``precision`` bytes."""
     ET.SubElement(

@@ -60,7 +60,11 @@ def on_geometry(fn: dolfinx.fem.Function) -> dolfinx.fem.Function:
 
 
 def write_fields(
-    path: Path, mesh: dolfinx.mesh.Mesh, functions: Sequence[dolfinx.fem.Function], t: float = 0.0
+    path: Path,
+    mesh: dolfinx.mesh.Mesh,
+    functions: Sequence[dolfinx.fem.Function],
+    *,
+    t: float = 0.0,
 ) -> Path:
     """Write ``functions`` at time ``t`` to ``path`` (.xdmf) and its sibling ``.h5``.
 
@@ -130,7 +134,7 @@ def _tags_as_collection(path: Path, mesh_name: str, names: Sequence[str]) -> Non
         CollectionType="Temporal",
     )
     grid = ET.SubElement(series, "Grid", Name=f"{names[0]}_step_0", GridType="Uniform")
-    grid.append(topology)  # type: ignore[arg-type]
+    grid.append(topology)
     grid.append(geometry)  # type: ignore[arg-type]
     ET.SubElement(grid, "Time", Value="0")
     for name in names:

@@ -18,6 +18,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any, Literal
 
 import numpy as np
@@ -78,9 +79,10 @@ def _boundary_chains(clean: CleanNetwork) -> list[list[int]]:
 
 
 def mesh_network(
-    gmsh: Any,
+    gmsh: ModuleType,
     clean: CleanNetwork,
     sides: Sequence[str],
+    *,
     corners: Sequence[str],
     spec: MeshSpec,
 ) -> dict[str, Any]:

@@ -152,6 +152,7 @@ def distort_to_angle(
     points: np.ndarray,
     triangles: np.ndarray,
     directions: np.ndarray,
+    *,
     target: float,
     tol: float = 1e-3,
     max_amplitude: float = 1.0,
@@ -206,6 +207,7 @@ def build_distorted_cantilever(
     path: Path,
     ny: int,
     target: float,
+    *,
     length: float = 10.0,
     depth: float = 1.0,
     seed: int = 0,
@@ -259,7 +261,7 @@ def build_distorted_cantilever(
         _, tri_nodes = gmsh.model.mesh.getElementsByType(2)
         triangles = index[tri_nodes.reshape(-1, 3)]
         directions = h * perturbation_field(points, (0.0, length, -depth / 2, depth / 2), seed)
-        moved, amplitude = distort_to_angle(points, triangles, directions, target)
+        moved, amplitude = distort_to_angle(points, triangles, directions, target=target)
         for tag, (x, y) in zip(tags, moved, strict=True):
             gmsh.model.mesh.setNode(int(tag), [float(x), float(y), 0.0], [])
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import time
 from contextlib import ExitStack
+from types import ModuleType
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -39,6 +40,7 @@ class TaggedMesh:
         data: gmshio.MeshData,
         report: dict[str, Any] | None = None,
         fractures: Any = None,
+        *,
         tags: dict[int, Any] | None = None,
     ) -> None:
         self.mesh = data.mesh
@@ -205,7 +207,7 @@ def _idle_until_rank0(comm: MPI.Comm, poll: float = 0.005) -> None:
         time.sleep(poll)
 
 
-def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: Any) -> str:
+def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: ModuleType | None) -> str:
     """One line saying what failed, never an empty message."""
     from geofrac.meshing.geo import GmshTimeout, MeshingFailed
 
@@ -222,7 +224,7 @@ def _failure(source: str, geometry: Geometry, exc: BaseException, gmsh: Any) -> 
     )
 
 
-def renumber_model(gmsh: Any, seed: int) -> None:
+def renumber_model(gmsh: ModuleType, seed: int) -> None:
     """Number the meshed model's nodes and order each entity's elements at random (seeded).
 
     The same mesh, numbered otherwise: DOLFINx takes the nodes in tag order and the
@@ -250,7 +252,7 @@ def renumber_model(gmsh: Any, seed: int) -> None:
                 gmsh.model.mesh.reorderElements(kind, tag, rng.permutation(len(ids)))
 
 
-def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> TaggedMesh:
+def build_mesh(geometry: Geometry, comm: MPI.Comm, *, verbose: bool = False) -> TaggedMesh:
     """Mesh ``geometry`` with gmsh on rank 0 and distribute the mesh over ``comm``.
 
     A ``.geo`` file is checked and meshed in a child process under the geometry's time
@@ -270,15 +272,15 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
         if message is not None:
             raise RunError(message)
         data = gmshio.model_to_mesh(None, comm, 0, gdim=geometry.dim)
-        return TaggedMesh(data, report, payload, _group_tags(None, data, dims))
+        return TaggedMesh(data, report, payload, tags=_group_tags(None, data, dims))
     builder = geometry.builder
     with ExitStack() as stack:
         message, report, payload, dims = None, None, None, {}
-        gmsh: Any = None
+        gmsh: ModuleType | None = None
         try:
             if builder is not None:
                 gmsh = stack.enter_context(
-                    gmsh_session(None, geometry.parameters, geometry.mesh_size, verbose)
+                    gmsh_session(None, geometry.parameters, geometry.mesh_size, verbose=verbose)
                 )
                 report, payload = builder.build(gmsh)
             else:
@@ -288,13 +290,14 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
                         geometry.file,
                         geometry.parameters,
                         geometry.mesh_size,
-                        geometry.dim,
+                        dim=geometry.dim,
                         time_limit=geometry.time_limit,
                         trusted=geometry.trusted,
                         verbose=verbose,
                         algorithm=geometry.algorithm,
                     )
                 )
+            assert gmsh is not None  # one of the two sessions is open
             if len(gmsh.model.mesh.getNodes()[0]) == 0:
                 raise RuntimeError("gmsh produced no nodes")
             if geometry.renumber is not None:
@@ -310,8 +313,9 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, verbose: bool = False) -> Tag
         comm.bcast((message, report, payload, dims), root=0)
         if message is not None:
             raise RunError(message)
+        assert gmsh is not None  # no message: the model was made
         data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=geometry.dim)
-        return TaggedMesh(data, report, payload, _group_tags(gmsh.model, data, dims))
+        return TaggedMesh(data, report, payload, tags=_group_tags(gmsh.model, data, dims))
 
 
 def check_fracture_cover(tagged: TaggedMesh, group: str = "fractures") -> dict[str, Any]:

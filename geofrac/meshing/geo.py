@@ -28,6 +28,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from geofrac import interrupt
@@ -123,8 +124,9 @@ def gmsh_session(
     path: Path | None,
     parameters: dict[str, float],
     mesh_size: float | None = None,
+    *,
     verbose: bool = False,
-) -> Iterator[Any]:
+) -> Iterator[ModuleType]:
     """Initialise gmsh, open ``path`` with ``parameters`` set, yield the gmsh module, finalise.
 
     In-process and unchecked: production code opens scene ``.geo`` files through
@@ -156,7 +158,7 @@ def gmsh_session(
         interrupt.reassert()
 
 
-def failure_message(exc: BaseException, gmsh: Any = None) -> str:
+def failure_message(exc: BaseException, gmsh: ModuleType | None = None) -> str:
     """The message of gmsh error ``exc``; if it is empty, the last error gmsh logged, or ``""``."""
     text = str(exc).strip()
     if text or gmsh is None:
@@ -261,6 +263,7 @@ def inspect_geometry(
     path: Path,
     parameters: dict[str, float],
     time_limit: float | None = None,
+    *,
     trusted: bool = False,
 ) -> GeoInfo:
     """Open a geometry file (no meshing) and report its dimension and physical groups.
@@ -285,7 +288,7 @@ def inspect_geometry(
     return GeoInfo(
         dim=result["dim"],
         groups=dict(result["groups"]),
-        overlaps=tuple(tuple(o) for o in result["overlaps"]),  # type: ignore[misc]
+        overlaps=tuple(tuple(o) for o in result["overlaps"]),
         order=int(result["order"]),
     )
 
@@ -295,13 +298,13 @@ def meshed_model(
     path: Path,
     parameters: dict[str, float],
     mesh_size: float | None,
-    dim: int,
     *,
+    dim: int,
     time_limit: float | None = None,
     trusted: bool = False,
     verbose: bool = False,
     algorithm: str | None = None,
-) -> Iterator[Any]:
+) -> Iterator[ModuleType]:
     """A gmsh session holding the meshed model of ``path``; yields the gmsh module.
 
     A ``.msh`` file is read as it is. A ``.geo`` file is checked (unless ``trusted``),
@@ -317,7 +320,7 @@ def meshed_model(
         RuntimeError: gmsh failed (its message, or what was being done when it gave none).
     """
     if path.suffix != ".geo":
-        with gmsh_session(path, {}, None, verbose) as gmsh:
+        with gmsh_session(path, {}, None, verbose=verbose) as gmsh:
             yield gmsh
         return
     if not trusted:

@@ -30,7 +30,7 @@ def run(request: dict[str, Any]) -> dict[str, Any]:
     verbose = bool(request.get("verbose", False))
     try:
         with gmsh_session(
-            Path(request["path"]), request["parameters"], request.get("mesh_size"), verbose
+            Path(request["path"]), request["parameters"], request.get("mesh_size"), verbose=verbose
         ) as gmsh:
             try:
                 if mode == "inspect":

@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any, Literal
 
 import numpy as np
@@ -328,7 +329,7 @@ def _boundary_loop(tris: np.ndarray) -> np.ndarray:
     return np.asarray(loop, dtype=np.int64)
 
 
-def _mesh_footprint(gmsh: Any, spec: TerrainSpec) -> tuple[np.ndarray, np.ndarray]:
+def _mesh_footprint(gmsh: ModuleType, spec: TerrainSpec) -> tuple[np.ndarray, np.ndarray]:
     """Triangulate the footprint ellipse in x-y with the size of :func:`_column_size`.
 
     Returns:
@@ -352,7 +353,7 @@ def _mesh_footprint(gmsh: Any, spec: TerrainSpec) -> tuple[np.ndarray, np.ndarra
     return _extract_planar(gmsh)
 
 
-def _extract_planar(gmsh: Any) -> tuple[np.ndarray, np.ndarray]:
+def _extract_planar(gmsh: ModuleType) -> tuple[np.ndarray, np.ndarray]:
     """The current model's 2D mesh, renumbered from 0.
 
     Returns:
@@ -371,7 +372,7 @@ def _extract_planar(gmsh: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _mesh_planar(
-    gmsh: Any, loops: list[np.ndarray], sizes: list[np.ndarray]
+    gmsh: ModuleType, loops: list[np.ndarray], sizes: list[np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray]:
     """Triangulate a planar domain whose boundary points are given and kept.
 
@@ -470,7 +471,7 @@ def _edge_nodes(start: float, stop: float, size: float) -> np.ndarray:
 
 
 def _immobile_patch(
-    gmsh: Any,
+    gmsh: ModuleType,
     spec: TerrainSpec,
     pts: _Points,
     rim_top: np.ndarray,
@@ -558,7 +559,7 @@ def _immobile_patch(
     return np.concatenate(tris)
 
 
-def _size_field(gmsh: Any, spec: TerrainSpec) -> int:
+def _size_field(gmsh: ModuleType, spec: TerrainSpec) -> int:
     """Background size field equal to :func:`mesh_size` (``Ball`` fields, ``F + C - h``)."""
     field = gmsh.model.mesh.field
     fine, coarse = [], []
@@ -610,7 +611,7 @@ class TerrainBuilder:
     def __init__(self, spec: TerrainSpec | None = None) -> None:
         self.spec = spec or TerrainSpec()
 
-    def build(self, gmsh: Any) -> tuple[dict[str, Any], tuple[np.ndarray, np.ndarray]]:
+    def build(self, gmsh: ModuleType) -> tuple[dict[str, Any], tuple[np.ndarray, np.ndarray]]:
         """Mesh the moving layer in the current gmsh model; build the immobile patch.
 
         The model gets the volume group ``layer`` (linear tets) and the surface groups

@@ -50,11 +50,14 @@ B is linear in x for order 2 (constant for order 1, zero for orders 0 and -1).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from geofrac.mls.shape import quartic_spline
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = [
     "MIN_PIVOT_RATIO",
@@ -269,6 +272,7 @@ def node_fit(
     centre: np.ndarray,
     h: float,
     centre_id: int,
+    *,
     ids: np.ndarray,
     xy: np.ndarray,
     order: int | None = None,
@@ -328,7 +332,7 @@ def _gauss_points(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def node_stiffness(
-    fit: NodeFit, D: np.ndarray, thickness: float, triangles: np.ndarray
+    fit: NodeFit, D: np.ndarray, thickness: float, *, triangles: np.ndarray
 ) -> np.ndarray:
     """Node stiffness (3.27)-(3.28): K = t Σ_T ∫_T Bᵀ D B dΩ over the grain's sub-triangles.
 
@@ -351,11 +355,12 @@ def compiled_node(
     centre: np.ndarray,
     h: float,
     xy: np.ndarray,
+    *,
     order: int | None,
     triangles: np.ndarray,
     D: np.ndarray,
     thickness: float,
-    comm: Any = None,
+    comm: MPI.Comm | None = None,
 ) -> tuple[int, np.ndarray, np.ndarray]:
     """Fit and node stiffness of one node with the C kernel ``cmulti``.
 

@@ -66,7 +66,7 @@ class LinearFit:
 
 
 def linear_fit(
-    centre: np.ndarray, h: float, nodes: np.ndarray, coords: np.ndarray
+    centre: np.ndarray, h: float, nodes: np.ndarray, *, coords: np.ndarray
 ) -> LinearFit | None:
     """Fit the linear MLS field (2.13)-(2.18) centred at ``centre``.
 

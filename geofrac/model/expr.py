@@ -98,7 +98,7 @@ class Expression:
         with np.errstate(all="ignore"):
             variables = {k: np.asarray(v, dtype=np.float64) for k, v in values.items()}
             numpy = {name: f for name, (f, _) in FUNCTIONS.items()}
-            out = fold(self.tree, variables, numpy, lambda v: np.asarray(v, np.float64))
+            out = fold(self.tree, variables, numpy, lift=lambda v: np.asarray(v, np.float64))
             return np.broadcast_to(np.asarray(out, dtype=np.float64), (n,)).copy()
 
 
@@ -169,6 +169,7 @@ def fold(
     tree: ast.expr,
     variables: Mapping[str, Any],
     functions: Mapping[str, Callable[..., Any]],
+    *,
     lift: Callable[[Any], Any],
 ) -> Any:
     """Evaluate a checked tree in an algebra: numpy arrays, UFL expressions, ...

@@ -6,9 +6,11 @@ has passed; nothing downstream re-validates user input. All paths are absolute.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from types import ModuleType
+from typing import Any, Literal, Protocol
 
 __all__ = [
     "BED_REPRESENTATIONS",
@@ -19,6 +21,7 @@ __all__ = [
     "EffectSpec",
     "ExactSpec",
     "Geometry",
+    "GeometryBuilder",
     "Line",
     "Load",
     "Material",
@@ -28,10 +31,24 @@ __all__ = [
     "Scene",
     "Solver",
     "Units",
+    "effect_config",
 ]
 
 #: Scene schema version this code reads.
 SCHEMA_VERSION = 1
+
+
+class GeometryBuilder(Protocol):
+    """Makes the gmsh model of a scene on one rank (an effect's or the terrain's)."""
+
+    @property
+    def name(self) -> str:
+        """Name used in messages."""
+        ...
+
+    def build(self, gmsh: ModuleType) -> tuple[dict[str, Any], object]:
+        """Create and mesh the model in ``gmsh``; a JSON-ready report and a payload."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -47,8 +64,8 @@ class Geometry:
         dim: topological dimension of the meshed domain (2 or 3), read from the file.
         groups: physical group name -> dimension, read from the file (or declared by the
             builder).
-        builder: None, or an object with ``name`` and ``build(gmsh) -> (report, payload)``
-            that creates and meshes the gmsh model on one rank (the ``dfn`` effect's
+        builder: None, or a :class:`GeometryBuilder` (``name``, ``build(gmsh) -> (report,
+            payload)``) that creates and meshes the gmsh model on one rank (the ``dfn`` effect's
             :class:`~geofrac.effects.dfn.DfnGeometry`): ``report`` is a JSON-ready dict,
             ``payload`` is broadcast to every rank as ``TaggedMesh.fractures``.
         trusted: skip the check that the ``.geo`` file only describes a geometry
@@ -69,7 +86,7 @@ class Geometry:
     mesh_size: float | None
     dim: int
     groups: dict[str, int]
-    builder: Any = None
+    builder: GeometryBuilder | None = None
     trusted: bool = False
     time_limit: float | None = None
     order: int = 1
@@ -397,16 +414,34 @@ class MpmSpec:
 
 
 @dataclass(frozen=True)
-class EffectSpec:
-    """A declared effect and its validated configuration.
+class EffectSpec[C]:
+    """A declared effect and its validated configuration, of type ``C``.
 
     Attributes:
         name: registry name (see :mod:`geofrac.effects`).
-        config: the effect's own validated settings object.
+        config: the effect's own validated settings object (its ``configure``'s result,
+            e.g. :class:`~geofrac.fracture.config.CrackingConfig`).
     """
 
     name: str
-    config: Any
+    config: C
+
+
+def effect_config[C](effects: Sequence[EffectSpec[object]], name: str, kind: type[C]) -> C | None:
+    """The configuration of the declared effect ``name``, of class ``kind``; None if absent.
+
+    ``kind`` is the class its ``configure`` returns: from here on a type checker knows the
+    configuration's type (the registry finds effects by name, so it cannot).
+
+    Raises:
+        TypeError: the effect's configuration is not a ``kind``.
+    """
+    for spec in effects:
+        if spec.name == name:
+            if not isinstance(spec.config, kind):
+                raise TypeError(f"effect {name!r}: configuration {spec.config!r} is not a {kind}")
+            return spec.config
+    return None
 
 
 @dataclass(frozen=True)
@@ -474,7 +509,7 @@ class Scene:
     sha256: str
     name: str
     description: str
-    effects: tuple[EffectSpec, ...]
+    effects: tuple[EffectSpec[object], ...]
     geometry: Geometry | None
     material: Material | None
     discretization: Discretization | None
@@ -492,6 +527,10 @@ class Scene:
     size: Any = None
     overrides: tuple[str, ...] = ()
     units: Units = Units()
+
+    def effect_config[C](self, name: str, kind: type[C]) -> C | None:
+        """The configuration of effect ``name``, a ``kind``, or None (:func:`effect_config`)."""
+        return effect_config(self.effects, name, kind)
 
     @property
     def effect_names(self) -> tuple[str, ...]:

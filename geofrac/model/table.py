@@ -6,7 +6,7 @@ import math
 import re
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, overload
 
 from geofrac.model.errors import SceneError, did_you_mean
 
@@ -86,7 +86,7 @@ def checkpoint_keys(t: Table) -> tuple[int, float]:
     minutes = t.number(
         "checkpoint_minutes", default=10.0, minimum=0.0, maximum=MAX_CHECKPOINT_MINUTES
     )
-    return int(every), float(minutes)  # type: ignore[arg-type]
+    return int(every), float(minutes)
 
 
 def is_name(text: str) -> bool:
@@ -94,7 +94,7 @@ def is_name(text: str) -> bool:
     return len(text) <= MAX_NAME_LENGTH and _NAME.fullmatch(text) is not None
 
 
-def check_name(file: Path, name: str, given: bool) -> str:
+def check_name(file: Path, name: str, *, given: bool) -> str:
     """A scene name is a name, not a path: letters, digits, ``-``, ``_``, ``.``.
 
     No leading dot (so neither ``.`` nor ``..``), no ``/``, 1 to 100 characters.
@@ -111,7 +111,7 @@ def check_name(file: Path, name: str, given: bool) -> str:
     )
 
 
-def output_directory(t: Table, name: str, out: Path | None, trusted: bool = False) -> Path:
+def output_directory(t: Table, name: str, out: Path | None, *, trusted: bool = False) -> Path:
     """The absolute output directory: ``out``, else ``[output] dir``, else ``results/<name>``.
 
     ``out`` is ``--out``. A ``dir`` from the scene file must be relative without ``..``
@@ -142,7 +142,7 @@ def is_number(value: Any) -> bool:
 class Table:
     """One TOML table under validation: typed getters that name ``file`` and ``key``."""
 
-    def __init__(self, file: Path, key: str, data: Any, allowed: Sequence[str]) -> None:
+    def __init__(self, file: str | Path, key: str, data: Any, *, allowed: Sequence[str]) -> None:
         if not isinstance(data, dict):
             raise SceneError(file, key, f"must be a table, got {type(data).__name__}")
         self.file, self.key, self.data = file, key, data
@@ -162,6 +162,30 @@ class Table:
         """Whether the table has entry ``name``."""
         return name in self.data
 
+    @overload
+    def number(
+        self,
+        name: str,
+        *,
+        default: float,
+        required: bool = ...,
+        positive: bool = ...,
+        integer: bool = ...,
+        minimum: float | None = ...,
+        maximum: float | None = ...,
+    ) -> float: ...
+    @overload
+    def number(
+        self,
+        name: str,
+        *,
+        default: None = ...,
+        required: bool = ...,
+        positive: bool = ...,
+        integer: bool = ...,
+        minimum: float | None = ...,
+        maximum: float | None = ...,
+    ) -> float | None: ...
     def number(
         self,
         name: str,
@@ -225,6 +249,7 @@ class Table:
         name: str,
         choices: Sequence[str],
         default: Sequence[str],
+        *,
         kind: str = "field",
         empty: bool = True,
     ) -> tuple[str, ...]:
@@ -246,7 +271,7 @@ class Table:
                 raise self.error(name, f"unknown {kind} {f!r}" + did_you_mean(f, choices))
         return tuple(value)
 
-    def boolean(self, name: str, default: bool) -> bool:
+    def boolean(self, name: str, *, default: bool) -> bool:
         """True or false, ``default`` when absent."""
         value = self.data.get(name, default)
         if not isinstance(value, bool):

@@ -800,7 +800,7 @@ class MpmMethod:
         return {"fem": False, "method": "mpm"}
 
     def run(
-        self, scene: Scene, comm: MPI.Comm, timings: Timings, verbose: bool, control: RunControl
+        self, scene: Scene, comm: MPI.Comm, timings: Timings, *, verbose: bool, control: RunControl
     ) -> dict[str, Any]:
         """:func:`simulate` with its output; the summary entries."""
         return {

@@ -90,7 +90,7 @@ def mesh_cells(
         file,
         parameters,
         mesh_size,
-        dim,
+        dim=dim,
         time_limit=time_limit,
         trusted=trusted,
         algorithm=algorithm,

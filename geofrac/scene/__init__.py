@@ -10,21 +10,24 @@ from __future__ import annotations
 import pickle
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from geofrac.model.errors import SceneError
 from geofrac.model.scene import Scene
 from geofrac.scene.load import load_scene
 
+if TYPE_CHECKING:
+    from mpi4py import MPI
+
 __all__ = ["Scene", "SceneError", "load_scene", "load_scene_collective"]
 
 
 def load_scene_collective(
-    comm: Any,
+    comm: MPI.Comm,
     path: str | Path,
     overrides: Sequence[str] = (),
-    out: str | Path | None = None,
     *,
+    out: str | Path | None = None,
     allow_large: bool = False,
 ) -> Scene:
     """Validate on rank 0 and broadcast; every rank returns the scene or raises the error.
@@ -45,7 +48,9 @@ def load_scene_collective(
     failure: BaseException | None = None
     if comm.rank == 0:
         try:
-            result: Any = load_scene(path, overrides, out, allow_large=allow_large, ranks=comm.size)
+            result: Scene | Exception = load_scene(
+                path, overrides, out, allow_large=allow_large, ranks=comm.size
+            )
         except SceneError as exc:
             result = exc
         except Exception as exc:  # a bug must not leave the other ranks waiting in bcast

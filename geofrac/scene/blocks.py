@@ -49,7 +49,7 @@ def _terrain(file: Path, raw: Any) -> dict[str, Any]:
     from geofrac.meshing.terrain import TerrainSpec  # numpy only; gmsh is imported to build
 
     fields = {f.name: f for f in dataclasses.fields(TerrainSpec)}
-    t = Table(file, "blocks.terrain", raw, tuple(fields))
+    t = Table(file, "blocks.terrain", raw, allowed=tuple(fields))
     values: dict[str, Any] = {}
     for name, value in t.data.items():
         default = fields[name].default
@@ -58,7 +58,7 @@ def _terrain(file: Path, raw: Any) -> dict[str, Any]:
         elif name == "zones":
             values[name] = _zones(t, value)
         elif isinstance(default, bool):
-            values[name] = t.boolean(name, default)
+            values[name] = t.boolean(name, default=default)
         elif name == "threads":
             values[name] = int(t.number(name, integer=True, minimum=1, maximum=MAX_THREADS))  # type: ignore[arg-type]
         elif isinstance(default, int):
@@ -83,7 +83,7 @@ def _zones(t: Table, value: Any) -> tuple[tuple[tuple[float, ...], float, float]
         )
     zones = []
     for i, raw in enumerate(value):
-        z = Table(t.file, f"blocks.terrain.zones[{i}]", raw, ("centre", "radius", "h"))
+        z = Table(t.file, f"blocks.terrain.zones[{i}]", raw, allowed=("centre", "radius", "h"))
         for key in ("centre", "radius", "h"):
             if not z.has(key):
                 raise z.error(key, "missing (required)")
@@ -97,13 +97,15 @@ def _zones(t: Table, value: Any) -> tuple[tuple[tuple[float, ...], float, float]
     return tuple(zones)
 
 
-def blocks_spec(file: Path, raw: Any, geometry: Geometry | None, warnings: list[str]) -> BlocksSpec:
+def blocks_spec(
+    file: Path, raw: Any, geometry: Geometry | None, *, warnings: list[str]
+) -> BlocksSpec:
     """``[blocks]`` of a block scene; valid but ignored keys are added to ``warnings``.
 
     Raises:
         SceneError: naming the file and the key.
     """
-    t = Table(file, "blocks", raw, BLOCKS_KEYS)
+    t = Table(file, "blocks", raw, allowed=BLOCKS_KEYS)
     source = t.string("source", default="geometry", choices=("geometry", "terrain"))
     terrain = None
     if source == "terrain":
@@ -118,12 +120,12 @@ def blocks_spec(file: Path, raw: Any, geometry: Geometry | None, warnings: list[
             raise t.error("terrain", "applies to source = 'terrain' only")
         dim = geometry.dim
     inner = t.string("inner_point", default="incentre", choices=("incentre", "random"))
-    radius = float(t.number("radius", default=1.0))  # type: ignore[arg-type]
+    radius = float(t.number("radius", default=1.0))
     if not 0 <= radius <= 1:
         raise t.error(
             "radius", f"the movable region's relative radius must be in [0, 1], got {radius}"
         )
-    convex = t.boolean("convex", False)
+    convex = t.boolean("convex", default=False)
     if dim == 3:
         for key in ("inner_point", "radius", "convex"):
             if t.has(key):
@@ -134,7 +136,7 @@ def blocks_spec(file: Path, raw: Any, geometry: Geometry | None, warnings: list[
         for key in ("radius", "convex"):
             if t.has(key):
                 warnings.append(f"{file}: blocks.{key}: ignored, applies to inner_point = 'random'")
-    immobile = t.boolean("immobile", source == "terrain")
+    immobile = t.boolean("immobile", default=source == "terrain")
     if immobile and source != "terrain":
         raise t.error("immobile", "applies to source = 'terrain' only")
     validate = t.data.get("validate", "all")
@@ -152,14 +154,14 @@ def blocks_spec(file: Path, raw: Any, geometry: Geometry | None, warnings: list[
             f"got {short(validate)}",
         )
     bins = t.number("histogram_bins", default=40, integer=True, positive=True, maximum=MAX_BINS)
-    bins = int(bins)  # type: ignore[arg-type]
+    bins = int(bins)
     return BlocksSpec(
         source=source,
         dim=dim,
         inner_point=inner,
         radius=radius,
         convex=convex,
-        seed=int(t.number("seed", default=0, integer=True, minimum=0, maximum=2**32 - 1)),  # type: ignore[arg-type]
+        seed=int(t.number("seed", default=0, integer=True, minimum=0, maximum=2**32 - 1)),
         immobile=immobile,
         validate=validate,
         histogram_bins=bins,
@@ -168,16 +170,16 @@ def blocks_spec(file: Path, raw: Any, geometry: Geometry | None, warnings: list[
 
 
 def blocks_output(
-    file: Path, raw: Any, name: str, out: Path | None, trusted: bool = False
+    file: Path, raw: Any, name: str, *, out: Path | None, trusted: bool = False
 ) -> Output:
     """``[output]`` of a block scene: ``vtu``, ``block_file`` and ``histogram`` switches.
 
     ``trusted``: ``output.dir`` was set on the command line (see
     :func:`~geofrac.model.table.output_directory`).
     """
-    t = Table(file, "output", raw, BLOCKS_OUTPUT_KEYS)
-    directory = output_directory(t, name, out, trusted)
+    t = Table(file, "output", raw, allowed=BLOCKS_OUTPUT_KEYS)
+    directory = output_directory(t, name, out, trusted=trusted)
     # the plain block file is for DEM/DDA codes and large (555 MB for 100k blocks): asked for
     defaults = {"vtu": True, "block_file": False, "histogram": True}
-    fields = tuple(k for k, default in defaults.items() if t.boolean(k, default))
+    fields = tuple(k for k, default in defaults.items() if t.boolean(k, default=default))
     return Output(directory, fields, "vtu" in fields, {})

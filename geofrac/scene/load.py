@@ -35,6 +35,7 @@ from geofrac.model.scene import (
     Scene,
     Solver,
     Units,
+    effect_config,
 )
 from geofrac.model.table import (
     MAX_DEPTH,
@@ -196,7 +197,7 @@ _UNIT = re.compile(r"[\w ./^·²³µ%()-]{1,12}")
 
 def _units(file: Path, raw: Any) -> Units:
     """``[units]``: the labels of the scene's units on the pictures' axes (default SI)."""
-    t = _Table(file, "units", raw, SECTION_KEYS["units"])
+    t = _Table(file, "units", raw, allowed=SECTION_KEYS["units"])
     default = Units()
     labels = {}
     for key in SECTION_KEYS["units"]:
@@ -237,17 +238,17 @@ def _geometry(file: Path, raw: Any) -> Geometry:
         parameter_specs,
     )
 
-    t = _Table(file, "geometry", raw, SECTION_KEYS["geometry"])
+    t = _Table(file, "geometry", raw, allowed=SECTION_KEYS["geometry"])
     name = t.string("file")
     path = (file.resolve().parent / name).resolve()  # beside the scene (a link's target)
     if not path.is_file():
         raise t.error("file", f"cannot read mesh file '{name}' (looked for {path})")
     if path.suffix not in (".geo", ".msh"):
         raise t.error("file", f"must be a gmsh .geo or .msh file, got '{path.name}'")
-    trusted = t.boolean("trusted", False)
+    trusted = t.boolean("trusted", default=False)
     time_limit = t.number("time_limit", positive=True, maximum=MAX_TIME_LIMIT)
     params_raw = t.data.get("parameters", {})
-    p = _Table(file, "geometry.parameters", params_raw, list(params_raw))
+    p = _Table(file, "geometry.parameters", params_raw, allowed=list(params_raw))
     parameters = {k: float(p.number(k, required=True)) for k in params_raw}  # type: ignore[arg-type]
     if parameters:
         if path.suffix != ".geo":
@@ -274,7 +275,7 @@ def _geometry(file: Path, raw: Any) -> Geometry:
         if path.suffix != ".geo":
             raise t.error("algorithm", "applies only to .geo files (a .msh file is meshed)")
     try:
-        info = inspect_geometry(path, parameters, time_limit, trusted)
+        info = inspect_geometry(path, parameters, time_limit, trusted=trusted)
     except (GeoRefused, GmshTimeout) as exc:
         raise t.error("file", str(exc)) from None
     except RuntimeError as exc:
@@ -310,7 +311,7 @@ def _geometry(file: Path, raw: Any) -> Geometry:
 
 
 def _material(file: Path, raw: Any, dim: int) -> Material:
-    t = _Table(file, "material", raw, SECTION_KEYS["material"])
+    t = _Table(file, "material", raw, allowed=SECTION_KEYS["material"])
     E = t.number("E", required=True, positive=True, maximum=MAX_MODULUS)
     nu = t.number("nu", required=True)
     assert E is not None and nu is not None
@@ -320,14 +321,14 @@ def _material(file: Path, raw: Any, dim: int) -> Material:
     if dim == 3 and t.has("plane"):
         raise t.error("plane", "applies to 2D geometries only")
     cohesion = t.number("cohesion", positive=True, maximum=MAX_MODULUS)
-    friction_angle = float(t.number("friction_angle", default=0.0, minimum=0.0, maximum=89.0))  # type: ignore[arg-type]
+    friction_angle = float(t.number("friction_angle", default=0.0, minimum=0.0, maximum=89.0))
     if t.has("friction_angle") and cohesion is None:
         raise t.error("friction_angle", "needs material.cohesion (the Mohr-Coulomb shear strength)")
     return Material(
         E=float(E),
         nu=float(nu),
         plane=plane,  # type: ignore[arg-type]
-        thickness=float(t.number("thickness", default=1.0, positive=True, maximum=MAX_LENGTH)),  # type: ignore[arg-type]
+        thickness=float(t.number("thickness", default=1.0, positive=True, maximum=MAX_LENGTH)),
         density=t.number("density", positive=True, maximum=MAX_DENSITY),
         tensile_strength=t.number("tensile_strength", positive=True, maximum=MAX_MODULUS),
         cohesion=cohesion,
@@ -337,7 +338,7 @@ def _material(file: Path, raw: Any, dim: int) -> Material:
 
 
 def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
-    t = _Table(file, "discretization", raw, SECTION_KEYS["discretization"])
+    t = _Table(file, "discretization", raw, allowed=SECTION_KEYS["discretization"])
     element = t.string("element", choices=elements.available())
     spec = elements.get(element)
     if dim not in spec.dims:
@@ -350,13 +351,13 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
             raise t.error(key, f"applies only to elements {', '.join(takers)}, not '{element}'")
     q = t.number("quadrature_degree", positive=True, integer=True, maximum=MAX_QUADRATURE_DEGREE)
     q_rand = t.number("q_rand", default=0.0)
-    if not 0.0 <= q_rand <= 1.0:  # type: ignore[operator]
+    if not 0.0 <= q_rand <= 1.0:
         raise t.error("q_rand", f"must lie in [0, 1], got {q_rand!r}")
     domain_seed = t.number("domain_seed", default=0, integer=True, maximum=2**32 - 1)
-    if domain_seed < 0:  # type: ignore[operator]
+    if domain_seed < 0:
         raise t.error("domain_seed", f"must be >= 0, got {domain_seed!r}")
     renumber = t.number("renumber", integer=True, maximum=2**32 - 1)
-    if renumber is not None and renumber < 0:  # type: ignore[operator]
+    if renumber is not None and renumber < 0:
         raise t.error("renumber", f"must be >= 0, got {renumber!r}")
     alpha_default = 0.0 if spec.zero_mode_penalty is None else spec.zero_mode_penalty
     alpha = t.number("zero_mode_penalty", default=alpha_default, positive=True, maximum=1e6)
@@ -368,19 +369,19 @@ def _discretization(file: Path, raw: Any, dim: int) -> Discretization:
         None if q is None else int(q),
         float(alpha),
         gradient_bc,  # type: ignore[arg-type]
-        float(q_rand),  # type: ignore[arg-type]
-        int(domain_seed),  # type: ignore[arg-type]
+        float(q_rand),
+        int(domain_seed),
         None if renumber is None else int(renumber),
     )
 
 
 def _exact(file: Path, raw: Any, geometry: Geometry) -> ExactSpec:
     """Parameters missing from ``[exact]`` are taken from same-named geometry parameters."""
-    head = _Table(file, "exact", raw, list(raw) if isinstance(raw, dict) else ())
+    head = _Table(file, "exact", raw, allowed=list(raw) if isinstance(raw, dict) else ())
     name = head.string("name", choices=tuple(analytic.EXACT_SOLUTIONS))
     sol_dim, required, _ = analytic.EXACT_SOLUTIONS[name]
     optional = analytic.OPTIONAL_PARAMETERS.get(name, {})
-    t = _Table(file, "exact", raw, ("name", *required, *optional))
+    t = _Table(file, "exact", raw, allowed=("name", *required, *optional))
     if sol_dim != geometry.dim:
         raise t.error("name", f"'{name}' is a {sol_dim}D solution, the geometry is {geometry.dim}D")
     params = {}
@@ -394,7 +395,7 @@ def _exact(file: Path, raw: Any, geometry: Geometry) -> ExactSpec:
         else:
             raise t.error(k, f"missing (required by '{name}'; not in geometry.parameters either)")
     try:  # the solution's own parameter checks (material constants do not enter them)
-        analytic.make_exact(name, params, 1.0, 0.25, "strain")
+        analytic.make_exact(name, params, E=1.0, nu=0.25, plane="strain")
     except ValueError as exc:
         raise t.error("name", f"'{name}' {exc}") from None
     return ExactSpec(name, params)
@@ -459,7 +460,8 @@ def _groups(file: Path, key: str, group: str, geometry: Geometry, dims: Sequence
         raise SceneError(
             file,
             key,
-            f"unknown physical group '{group}' in {geometry.file.name}"
+            # a builder's geometry has no file: this line would fail (AttributeError)
+            f"unknown physical group '{group}' in {geometry.file.name}"  # type: ignore[union-attr]
             + did_you_mean(group, geometry.groups),
         )
     if geometry.groups[group] not in dims:
@@ -478,7 +480,7 @@ def _bcs(
         raise SceneError(file, "bc", "must be an array of tables ([[bc]])")
     out = []
     for i, entry in enumerate(raw):
-        t = _Table(file, f"bc[{i}]", entry, SECTION_KEYS["bc"])
+        t = _Table(file, f"bc[{i}]", entry, allowed=SECTION_KEYS["bc"])
         group = t.string("group")
         _groups(file, t.path("group"), group, geometry, range(geometry.dim))
         axes = _AXES[: geometry.dim]
@@ -495,7 +497,7 @@ def _bcs(
         value = _value(t, len(comps), exact)
         if value == "exact" and len(comps) != geometry.dim:
             raise t.error("components", "value 'exact' constrains all components")
-        symmetry = t.boolean("symmetry", False)
+        symmetry = t.boolean("symmetry", default=False)
         if symmetry and len(comps) != 1:
             raise t.error(
                 "symmetry",
@@ -530,7 +532,7 @@ def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) ->
     dim = geometry.dim
     names = _AXES[:dim]
     for i, entry in enumerate(raw):
-        t = _Table(file, f"load[{i}]", entry, SECTION_KEYS["load"])
+        t = _Table(file, f"load[{i}]", entry, allowed=SECTION_KEYS["load"])
         kind = t.string("type", choices=LOAD_TYPES)
         group = None
         if kind == "body_force":
@@ -540,6 +542,7 @@ def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) ->
             group = t.string("group")
             dims = (0,) if kind == "point" else (dim - 1,)
             _groups(file, t.path("group"), group, geometry, dims)
+        value: tuple[float | str, ...] | str
         if kind == "pressure":
             value = _pressure(t, names)
         elif kind == "point":
@@ -553,10 +556,10 @@ def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) ->
 
 
 def _solver(file: Path, raw: Any) -> Solver:
-    t = _Table(file, "solver", raw, SECTION_KEYS["solver"])
+    t = _Table(file, "solver", raw, allowed=SECTION_KEYS["solver"])
     preset = t.string("preset", default="auto", choices=("auto", "direct", "iterative"))
     opts_raw = t.data.get("options", {})
-    o = _Table(file, "solver.options", opts_raw, list(opts_raw))
+    o = _Table(file, "solver.options", opts_raw, allowed=list(opts_raw))
     options: dict[str, str] = {}
     for k, v in opts_raw.items():
         if k.startswith("-"):
@@ -579,15 +582,15 @@ def _output(
     driver: str | None = None,
 ) -> Output:
     """The ``[output]`` table; ``driver``: the declared effect that drives the run, if any."""
-    t = _Table(file, "output", raw, SECTION_KEYS["output"])
-    directory = _output_directory(t, name, out, trusted)
+    t = _Table(file, "output", raw, allowed=SECTION_KEYS["output"])
+    directory = _output_directory(t, name, out, trusted=trusted)
     fields = t.names("fields", OUTPUT_FIELDS, DEFAULT_OUTPUT_FIELDS)
     probes_raw = t.data.get("probes", {})
-    p = _Table(file, "output.probes", probes_raw, list(probes_raw))
+    p = _Table(file, "output.probes", probes_raw, allowed=list(probes_raw))
     probes = {k: p.vector(k, dim) for k in probes_raw}
     probe_fields = _probe_fields(t, "probe_fields", driver)
     lines_raw = t.data.get("lines", {})
-    lt = _Table(file, "output.lines", lines_raw, list(lines_raw))
+    lt = _Table(file, "output.lines", lines_raw, allowed=list(lines_raw))
     lines = {k: _line(lt, k, dim, driver) for k in lines_raw}
     nominal = t.number("nominal_stress", positive=True)
     if nominal is not None and driver is not None:
@@ -599,7 +602,7 @@ def _output(
     return Output(
         directory,
         tuple(fields),
-        t.boolean("xdmf", True),
+        t.boolean("xdmf", default=True),
         probes,
         every,
         minutes,
@@ -633,7 +636,7 @@ def _line(lines: _Table, name: str, dim: int, driver: str | None) -> Line:
             "is not a line name: use 1 to 100 letters, digits, '-', '_' or '.', not starting "
             "with '.' (the name becomes lines/<name>.csv)",
         )
-    t = _Table(lines.file, lines.path(name), lines.data[name], LINE_KEYS)
+    t = _Table(lines.file, lines.path(name), lines.data[name], allowed=LINE_KEYS)
     for key in ("start", "end"):
         if not t.has(key):
             raise t.error(key, "missing (required)")
@@ -641,7 +644,7 @@ def _line(lines: _Table, name: str, dim: int, driver: str | None) -> Line:
     if start == end:
         raise t.error("end", f"must differ from start, both are {list(start)}")
     points = t.number("points", default=101, integer=True, minimum=2, maximum=MAX_LINE_POINTS)
-    return Line(start, end, int(points), _probe_fields(t, "fields", driver))  # type: ignore[arg-type]
+    return Line(start, end, int(points), _probe_fields(t, "fields", driver))
 
 
 def _declared(file: Path, data: dict[str, Any]) -> list[str]:
@@ -774,7 +777,11 @@ def _mpm_scene(
         for n in declared
     )
     if spec.initial_stress == "geostatic":
-        gravity = next((e.config for e in specs if e.name == "gravity"), None)
+        gravity = None
+        if "gravity" in declared:  # then its module is already imported
+            from geofrac.effects.gravity import GravityConfig
+
+            gravity = effect_config(specs, "gravity", GravityConfig)
         if gravity is None:
             raise SceneError(file, "mpm.initial_stress", "'geostatic' needs the gravity effect")
         g = gravity.acceleration
@@ -826,9 +833,13 @@ def _blocks_scene(
         raise SceneError(file, "blocks", "missing (required table for method 'blocks')")
     geometry = _geometry(file, data["geometry"]) if "geometry" in data else None
     warnings: list[str] = []
-    spec = blocks_spec(file, data["blocks"], geometry, warnings)
+    spec = blocks_spec(file, data["blocks"], geometry, warnings=warnings)
     output = blocks_output(
-        file, data.get("output", {}), common["name"], None if out is None else Path(out), trusted
+        file,
+        data.get("output", {}),
+        common["name"],
+        out=None if out is None else Path(out),
+        trusted=trusted,
     )
     return Scene(
         **common,
@@ -945,15 +956,15 @@ def _extent(geometry: Geometry | None) -> Extent | None:
 
     try:
         with gmsh_session(geometry.file, geometry.parameters) as gmsh:
-            model, option = gmsh.model, gmsh.option  # type: ignore[attr-defined]
+            model, option = gmsh.model, gmsh.option
             box = model.getBoundingBox(-1, -1)
             points = model.getEntities(0)
             sizes = [float(v) for v in model.mesh.getSizes(points)] if points else []
             size_max = float(option.getNumber("Mesh.MeshSizeMax"))
             factor = float(option.getNumber("Mesh.MeshSizeFactor"))
             variables = {}
-            for name in gmsh.parser.getNames():  # type: ignore[attr-defined]
-                value = gmsh.parser.getNumber(name)  # type: ignore[attr-defined]
+            for name in gmsh.parser.getNames():
+                value = gmsh.parser.getNumber(name)
                 if len(value) == 1 and math.isfinite(value[0]):
                     variables[name] = float(value[0])
             cells = None
@@ -1022,7 +1033,7 @@ def load_scene(
             description=marked_description(scene.description, overrides),
             units=_units(file, data.get("units", {})),
         )
-        check_size(file, scene.size, ranks, scene.allow_large)
+        check_size(file, scene.size, ranks, allow=scene.allow_large)
     except SceneError as exc:
         if not exc.file:  # raised without the file (the gmsh extent)
             raise SceneError(file, exc.key, exc.message) from None
@@ -1065,14 +1076,16 @@ def _validate(
                 key,
                 "unknown key" + did_you_mean(key, [*TOP_LEVEL_KEYS, *effects.available()]),
             )
-    top = _Table(file, "", {k: v for k, v in data.items() if k in TOP_LEVEL_KEYS}, TOP_LEVEL_KEYS)
+    top = _Table(
+        file, "", {k: v for k, v in data.items() if k in TOP_LEVEL_KEYS}, allowed=TOP_LEVEL_KEYS
+    )
     schema = top.number("schema", default=SCHEMA_VERSION, integer=True)
     if schema != SCHEMA_VERSION:
         raise top.error("schema", f"this geofrac reads schema {SCHEMA_VERSION}, got {schema}")
-    name = check_name(file, top.string("name", default=file.stem), top.has("name"))
+    name = check_name(file, top.string("name", default=file.stem), given=top.has("name"))
     description = top.string("description", default="")
     method = top.string("method", default="fem", choices=METHODS)
-    allow_large = top.boolean("allow_large", False)
+    allow_large = top.boolean("allow_large", default=False)
     declared = _declared(file, data)
     if method in ("mpm", "blocks"):
         common = {

@@ -118,7 +118,7 @@ MAX_BODY_NAME = 100
 
 def mpm_material(file: Path, raw: Any, dim: int) -> Material:
     """``[material]`` of an MPM scene: E, ν (not in 1D), density; 2D is plane strain."""
-    t = Table(file, "material", raw, ("E", "nu", "plane", "density"))
+    t = Table(file, "material", raw, allowed=("E", "nu", "plane", "density"))
     E = t.number("E", required=True, positive=True, maximum=MAX_MODULUS)
     nu = t.number("nu", required=dim > 1, default=0.0)
     assert E is not None and nu is not None
@@ -133,7 +133,7 @@ def mpm_material(file: Path, raw: Any, dim: int) -> Material:
 
 
 def _grid(file: Path, raw: Any) -> tuple[tuple[float, ...], tuple[float, ...], float, int]:
-    t = Table(file, "mpm.grid", raw, MPM_KEYS["mpm.grid"])
+    t = Table(file, "mpm.grid", raw, allowed=MPM_KEYS["mpm.grid"])
     for key in ("lower", "upper", "spacing"):
         if not t.has(key):
             raise t.error(key, "missing (required)")
@@ -145,7 +145,7 @@ def _grid(file: Path, raw: Any) -> tuple[tuple[float, ...], tuple[float, ...], f
     if any(u <= lo for lo, u in zip(lower, upper, strict=True)):
         raise t.error("upper", f"must exceed lower {list(lower)} in every direction")
     spacing = float(t.number("spacing", positive=True))  # type: ignore[arg-type]
-    padding = int(t.number("padding", default=2, integer=True, minimum=0, maximum=MAX_PADDING))  # type: ignore[arg-type]
+    padding = int(t.number("padding", default=2, integer=True, minimum=0, maximum=MAX_PADDING))
     for a, (lo, u) in enumerate(zip(lower, upper, strict=True)):
         if not (u - lo) / spacing <= MAX_AXIS_CELLS:  # also an overflow to inf
             raise t.error("spacing", f"gives over {MAX_AXIS_CELLS:.0e} cells along axis {a}")
@@ -157,7 +157,7 @@ def _grid(file: Path, raw: Any) -> tuple[tuple[float, ...], tuple[float, ...], f
 def _particles(
     file: Path, raw: Any, dim: int | None, geometry: Geometry | None
 ) -> tuple[ParticleSource, int]:
-    t = Table(file, "mpm.particles", raw, MPM_KEYS["mpm.particles"])
+    t = Table(file, "mpm.particles", raw, allowed=MPM_KEYS["mpm.particles"])
     lattice_keys = [k for k in ("lower", "counts", "spacing") if t.has(k)]
     if geometry is not None:
         if lattice_keys:
@@ -165,7 +165,7 @@ def _particles(
                 lattice_keys[0], "particles come from [geometry]; remove the lattice keys"
             )
         dens = t.data.get("density", {})
-        d = Table(file, "mpm.particles.density", dens, list(dens))
+        d = Table(file, "mpm.particles.density", dens, allowed=list(dens))
         for group in dens:
             if group not in geometry.groups:
                 raise d.error(
@@ -276,7 +276,7 @@ def _bodies(
     bodies: list[Body] = []
     for i, entry in enumerate(raw):
         key = f"mpm.bodies[{i}]"
-        t = Table(file, key, entry, MPM_KEYS["mpm.bodies"])
+        t = Table(file, key, entry, allowed=MPM_KEYS["mpm.bodies"])
         name = t.string("name", default=f"body{i}")
         if not 1 <= len(name) <= MAX_BODY_NAME or not name.isprintable():
             raise t.error("name", f"must be 1 to {MAX_BODY_NAME} printable characters")
@@ -344,7 +344,7 @@ def _bodies(
 
 def _walls(file: Path, raw: Any, dim: int) -> dict[str, str]:
     sides = SIDES[: 2 * dim]
-    t = Table(file, "mpm.walls", raw, sides)
+    t = Table(file, "mpm.walls", raw, allowed=sides)
     return {
         side: t.string(side, choices=("fixed", "roller", "free"))
         for side in sides
@@ -393,7 +393,7 @@ def _bed(
 
 def _damping(file: Path, raw: Any) -> float:
     """``mpm.damping = { kind = "local", alpha = α }``: Cundall's local damping, α in [0, 1)."""
-    t = Table(file, "mpm.damping", raw, MPM_KEYS["mpm.damping"])
+    t = Table(file, "mpm.damping", raw, allowed=MPM_KEYS["mpm.damping"])
     t.string("kind", default="local", choices=DAMPING_KINDS)
     alpha = float(t.number("alpha", required=True, minimum=0.0))  # type: ignore[arg-type]
     if not alpha < 1:
@@ -405,7 +405,7 @@ def _damping(file: Path, raw: Any) -> float:
 
 def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     """Validate ``[mpm]`` (with the geometry, when particles come from one)."""
-    t = Table(file, "mpm", raw, MPM_KEYS["mpm"])
+    t = Table(file, "mpm", raw, allowed=MPM_KEYS["mpm"])
     from geofrac.mpm.schemes import SCHEMES
     from geofrac.mpm.shapes import REGISTRY
 
@@ -431,12 +431,12 @@ def mpm_spec(file: Path, raw: Any, geometry: Geometry | None) -> MpmSpec:
     dt = t.number("dt", positive=True)
     courant = None
     if dt is None:
-        courant = float(t.number("courant", default=DEFAULT_COURANT))  # type: ignore[arg-type]
+        courant = float(t.number("courant", default=DEFAULT_COURANT))
         if not 0 < courant < 1:
             raise t.error("courant", f"must lie in (0, 1) (eq. 4.72), got {courant}")
     t_end = float(t.number("t_end", required=True, positive=True))  # type: ignore[arg-type]
     frames = int(
-        t.number("frames", default=DEFAULT_FRAMES, positive=True, integer=True, maximum=MAX_FRAMES)  # type: ignore[arg-type]
+        t.number("frames", default=DEFAULT_FRAMES, positive=True, integer=True, maximum=MAX_FRAMES)
     )
     points = np.concatenate(
         [box, *(_corners(b.lower, _upper(b)) for b in bodies if b.kind == "lattice")]
@@ -499,12 +499,12 @@ def mpm_output(
         file,
         "output",
         raw,
-        ("dir", "fields", "xdmf", "probes", "checkpoint_every", "checkpoint_minutes"),
+        allowed=("dir", "fields", "xdmf", "probes", "checkpoint_every", "checkpoint_minutes"),
     )
-    directory = output_directory(t, name, out, trusted)
+    directory = output_directory(t, name, out, trusted=trusted)
     fields = t.names("fields", MPM_OUTPUT_FIELDS, MPM_OUTPUT_FIELDS, kind="particle field")
     probes_raw = t.data.get("probes", {})
-    p = Table(file, "output.probes", probes_raw, list(probes_raw))
+    p = Table(file, "output.probes", probes_raw, allowed=list(probes_raw))
     probes = {k: p.vector(k, dim) for k in probes_raw}
     every, minutes = checkpoint_keys(t)
-    return Output(directory, tuple(fields), t.boolean("xdmf", True), probes, every, minutes)
+    return Output(directory, tuple(fields), t.boolean("xdmf", default=True), probes, every, minutes)

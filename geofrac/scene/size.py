@@ -35,10 +35,14 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac import elements
 from geofrac.model.errors import SceneError
+from geofrac.model.scene import Material, Scene
+
+if TYPE_CHECKING:
+    from geofrac.effects.dfn import DfnConfig
 
 __all__ = [
     "CAPS",
@@ -159,9 +163,10 @@ def format_count(value: float) -> str:
     return f"{mantissa}e{int(exponent)}"
 
 
-def _mesh_size(scene: Any, extent: Extent) -> tuple[float | None, str]:
+def _mesh_size(scene: Scene, extent: Extent) -> tuple[float | None, str]:
     """The smallest element size the geometry asks for (or None), and the key setting it."""
     geometry = scene.geometry
+    assert geometry is not None  # a scene meshed from a geometry
     candidates = [
         (geometry.mesh_size, "geometry.mesh_size"),
         (extent.size_max, "geometry.file"),
@@ -178,20 +183,22 @@ def _mesh_size(scene: Any, extent: Extent) -> tuple[float | None, str]:
     return h * extent.size_factor, key
 
 
-def _cells_key(scene: Any, extent: Extent | None) -> str:
+def _cells_key(scene: Scene, extent: Extent | None) -> str:
     """The scene key that sets the cell count."""
     if getattr(scene.geometry, "builder", None) is not None:
         return "dfn.mesh_size"
     if extent is None or extent.cells is not None:
         return "geometry.file"
     h_key = _mesh_size(scene, extent)[1]
+    assert scene.geometry is not None  # the extent is its file's
     counts = [k for k in scene.geometry.parameters if _COUNT_NAME.match(k)]
     return "geometry.parameters" if counts and h_key == "geometry.file" else h_key
 
 
-def _fem_cells(scene: Any, extent: Extent | None) -> float:
+def _fem_cells(scene: Scene, extent: Extent | None) -> float:
     """Cells of the mesh of ``scene.geometry`` (see the module docstring)."""
     geometry = scene.geometry
+    assert geometry is not None  # a scene meshed from a geometry
     dim = geometry.dim
     builder = getattr(geometry, "builder", None)
     if builder is not None and hasattr(builder, "config"):  # dfn
@@ -232,7 +239,7 @@ def _mean_length(lmin: float, lmax: float, n: float) -> float:
     return lmin * n / (n - 1.0) * (1.0 - (lmax / lmin) ** (1.0 - n)) / (1.0 - r)
 
 
-def _fractures(config: Any) -> float:
+def _fractures(config: DfnConfig) -> float:
     from geofrac.dfn.polygon import polygon_area  # numpy only
 
     if config.network is not None:
@@ -243,18 +250,22 @@ def _fractures(config: Any) -> float:
         if s.count is not None:
             total += s.count
         else:
+            assert s.p21 is not None  # a set gives its count or its p21
             total += s.p21 * area / _mean_length(s.lmin, s.lmax, s.exponent)
     return total
 
 
-def _wave_speed(material: Any, dim: int) -> float:
+def _wave_speed(material: Material | None, dim: int) -> float:
     from geofrac.materials import p_wave_modulus
+
+    assert material is not None and material.density is not None  # an MPM material
 
     return math.sqrt(p_wave_modulus(material.E, material.nu, dim) / material.density)
 
 
-def _mpm(scene: Any, extent: Extent | None, q: dict[str, float], keys: dict[str, str]) -> None:
+def _mpm(scene: Scene, extent: Extent | None, q: dict[str, float], keys: dict[str, str]) -> None:
     m = scene.mpm
+    assert m is not None  # method = "mpm"
     lattices = [b for b in m.bodies if b.kind == "lattice"]
     if m.particles.kind == "lattice":
         q["particles"] = float(math.prod(m.particles.counts))
@@ -273,7 +284,11 @@ def _mpm(scene: Any, extent: Extent | None, q: dict[str, float], keys: dict[str,
         )
     )
     keys["grid_nodes"] = "mpm.grid.spacing"
-    dt = m.dt if m.dt is not None else m.courant * m.spacing / _wave_speed(scene.material, m.dim)
+    if m.dt is not None:
+        dt = m.dt
+    else:
+        assert m.courant is not None  # the loader sets dt or courant
+        dt = m.courant * m.spacing / _wave_speed(scene.material, m.dim)
     steps = m.t_end / dt if dt > 0 else math.inf
     q["steps"] = float(math.ceil(steps)) if math.isfinite(steps) else math.inf
     keys["steps"] = "mpm.dt" if m.dt is not None else "mpm.t_end"
@@ -295,7 +310,7 @@ def _terrain_blocks(terrain: dict[str, Any]) -> float:
     return blocks
 
 
-def estimate(scene: Any, extent: Extent | None) -> SizeEstimate:
+def estimate(scene: Scene, extent: Extent | None) -> SizeEstimate:
     """Estimate the work of a validated scene (see the module docstring).
 
     Args:
@@ -307,25 +322,36 @@ def estimate(scene: Any, extent: Extent | None) -> SizeEstimate:
     if scene.method == "mpm":
         _mpm(scene, extent, q, keys)
     elif scene.method == "blocks":
+        assert scene.blocks is not None
         if scene.blocks.terrain is not None:
             q["blocks"] = _terrain_blocks(scene.blocks.terrain)
             keys["blocks"] = "blocks.terrain.h"
         else:
             cells = _fem_cells(scene, extent)
             q["cells"], keys["cells"] = cells, _cells_key(scene, extent)
+            assert scene.geometry is not None  # _fem_cells has read it
             q["blocks"] = cells * _VERTICES_PER_CELL[scene.geometry.dim]
             keys["blocks"] = keys["cells"]
     else:
         cells = _fem_cells(scene, extent)
-        dfn = next((e.config for e in scene.effects if e.name == "dfn"), None)
+        dfn = None
+        if "dfn" in scene.effect_names:  # then its module is already imported
+            from geofrac.effects.dfn import DfnConfig
+
+            dfn = scene.effect_config("dfn", DfnConfig)
         where = _cells_key(scene, extent)
         q["cells"], keys["cells"] = cells, where
+        assert scene.geometry is not None and scene.discretization is not None  # FEM
         q["dofs"] = _dofs(cells, scene.geometry.dim, scene.discretization.element)
         keys["dofs"] = where
         if dfn is not None:
             q["fractures"] = _fractures(dfn)
             keys["fractures"] = "dfn.file" if dfn.network is not None else "dfn.sets"
-        crack = next((e.config for e in scene.effects if e.name == "cracking"), None)
+        crack = None
+        if "cracking" in scene.effect_names:
+            from geofrac.fracture.config import CrackingConfig
+
+            crack = scene.effect_config("cracking", CrackingConfig)
         if crack is not None:
             q["events"] = float(crack.max_events)
             keys["events"] = "cracking.max_events"
@@ -351,7 +377,9 @@ def _cap(name: str, ranks: int) -> float:
     return min(cap, MAX_CELLS_TOTAL) if name == "cells" else cap
 
 
-def check_size(file: str | Path, size: SizeEstimate, ranks: int = 1, allow: bool = False) -> None:
+def check_size(
+    file: str | Path, size: SizeEstimate, ranks: int = 1, *, allow: bool = False
+) -> None:
     """Refuse a scene beyond a cap (unless ``allow``) or beyond a hard limit (always).
 
     Args:

@@ -231,7 +231,7 @@ def _events(out: Path) -> list[dict[str, str]]:
 # -- closed forms ------------------------------------------------------------------------
 
 
-def timoshenko_tip(P: float, L: float, D: float, E: float, nu: float) -> float:
+def timoshenko_tip(P: float, L: float, D: float, *, E: float, nu: float) -> float:
     """Tip deflection of a cantilever under a parabolic end shear, plane stress.
 
     Timoshenko and Goodier, Theory of Elasticity (1970), §21; Edo (2016), eq. 2.24-2.25:
@@ -241,7 +241,7 @@ def timoshenko_tip(P: float, L: float, D: float, E: float, nu: float) -> float:
     return P * L**3 / (3 * E * inertia) + (4 + 5 * nu) * P * D**2 * L / (24 * E * inertia)
 
 
-def lame_inner_displacement(p: float, a: float, b: float, E: float, nu: float) -> float:
+def lame_inner_displacement(p: float, a: float, b: float, *, E: float, nu: float) -> float:
     """Radial displacement at the bore of a thick cylinder under internal pressure p.
 
     Plane strain (Timoshenko and Goodier 1970, §28):
@@ -396,7 +396,9 @@ def _plot_bar(summary: dict[str, Any], out: Path, path: Path) -> None:
     ax.plot(x[order], _self_weight(x[order]), "k-", label="Edo (2016), eq. 4.73")
     ax.plot(x[order], stress[order], "o", ms=3, mfc="none", label="geofrac (MPM, MUSL)")
     ax.set_xlabel("x (m)")
-    save_figure(fig, [ax], path, "mpm_bar_w1000: stress under self-weight at rest", "σxx (Pa)")
+    save_figure(
+        fig, [ax], path, title="mpm_bar_w1000: stress under self-weight at rest", ylabel="σxx (Pa)"
+    )
 
 
 def _plot_rates(report: dict[str, Any], out: Path, path: Path) -> None:
@@ -419,7 +421,7 @@ def _plot_rates(report: dict[str, Any], out: Path, path: Path) -> None:
         )
     ax.set_xlabel("nodes")
     title = "cantilever (Edo (2016), §2.4.1): error against nodes"
-    save_figure(fig, [ax], path, title, "relative displacement error (L2)")
+    save_figure(fig, [ax], path, title=title, ylabel="relative displacement error (L2)")
 
 
 def _impact_stress_ratio(summary: dict[str, Any], out: Path) -> float:
@@ -471,7 +473,7 @@ CASES: tuple[Case, ...] = (
         "Timoshenko cantilever, P2, tip deflection",
         "tip deflection",
         Reference(
-            timoshenko_tip(_P, _L, _D, _E, _NU),
+            timoshenko_tip(_P, _L, _D, E=_E, nu=_NU),
             "closed form: Timoshenko and Goodier (1970), §21; Edo (2016), eq. 2.24-2.25",
             rtol=0.01,
         ),
@@ -531,7 +533,7 @@ CASES: tuple[Case, ...] = (
         "thick cylinder under internal pressure, plane strain, P2",
         "radial displacement at the bore",
         Reference(
-            lame_inner_displacement(10.0, 1.0, 2.0, 1000.0, 0.3),
+            lame_inner_displacement(10.0, 1.0, 2.0, E=1000.0, nu=0.3),
             "closed form: Lamé; Timoshenko and Goodier (1970), §28",
             rtol=0.005,
         ),
@@ -733,7 +735,7 @@ CASES: tuple[Case, ...] = (
 )
 
 
-def select(names: list[str] | None = None, quick: bool = False, ci: bool = False) -> list[Case]:
+def select(names: list[str] | None = None, *, quick: bool = False, ci: bool = False) -> list[Case]:
     """The cases to run: by name, or the quick / CI subsets, in chapter order.
 
     Raises:

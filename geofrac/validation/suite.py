@@ -14,9 +14,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geofrac.validation.cases import CHAPTERS, Case
+
+if TYPE_CHECKING:
+    from mpi4py import MPI
 
 __all__ = ["LONG_CASE_S", "Result", "merge", "run_cases", "status_of", "write_page"]
 
@@ -59,12 +62,12 @@ def status_of(case: Case, value: float, error: str | None = None) -> str:
     return f"differs: {case.known}" if case.known else "differs: not explained (a regression?)"
 
 
-def _run_scene(case: Case, root: Path, out: Path, comm: Any) -> dict[str, Any]:
+def _run_scene(case: Case, root: Path, out: Path, comm: MPI.Comm) -> dict[str, Any]:
     from geofrac import interrupt
     from geofrac.pipeline import get, run_scene
     from geofrac.scene import load_scene_collective
 
-    scene = load_scene_collective(comm, root / str(case.scene), list(case.overrides), str(out))
+    scene = load_scene_collective(comm, root / str(case.scene), list(case.overrides), out=str(out))
     get(scene.method)  # the imports: PETSc's initialisation installs its own SIGTERM handler
     interrupt.install()
     interrupt.reassert()
@@ -72,7 +75,7 @@ def _run_scene(case: Case, root: Path, out: Path, comm: Any) -> dict[str, Any]:
     return run_scene(scene, comm, verbose=case.estimate_s >= LONG_CASE_S)
 
 
-def _run_bench(case: Case, out: Path, comm: Any) -> dict[str, Any]:
+def _run_bench(case: Case, out: Path, comm: MPI.Comm) -> dict[str, Any]:
     from geofrac import interrupt
     from geofrac.bench import load_bench
     from geofrac.pipeline import get
@@ -93,7 +96,8 @@ def _run_bench(case: Case, out: Path, comm: Any) -> dict[str, Any]:
 def run_cases(
     cases: list[Case],
     out: Path,
-    comm: Any,
+    comm: MPI.Comm,
+    *,
     root: Path,
     say: Callable[[str], None] = print,
     figures: Path | None = None,
@@ -195,6 +199,7 @@ def merge(
     stored: dict[str, Any] | None,
     results: list[Result],
     command: str,
+    *,
     seconds: float,
     full: bool,
     stamp: str,

@@ -70,7 +70,7 @@ def test_distortion_meets_the_angle_without_inverting(target):
     points, triangles = structured(40, 4)
     h = D / 4
     moved, amplitude = distort_to_angle(
-        points, triangles, h * perturbation_field(points, BOX), target
+        points, triangles, h * perturbation_field(points, BOX), target=target
     )
     assert 0.0 < amplitude < 1.0
     assert abs(min_angle(moved, triangles) - target) < 0.5
@@ -86,10 +86,10 @@ def test_distortion_meets_the_angle_without_inverting(target):
 def test_distortion_to_45_is_the_identity_and_above_is_an_error():
     points, triangles = structured(20, 2)
     field = perturbation_field(points, BOX)
-    moved, amplitude = distort_to_angle(points, triangles, field, 45.0)
+    moved, amplitude = distort_to_angle(points, triangles, field, target=45.0)
     assert amplitude == 0.0 and np.array_equal(moved, points)
     with pytest.raises(ValueError, match="exceeds"):
-        distort_to_angle(points, triangles, field, 50.0)
+        distort_to_angle(points, triangles, field, target=50.0)
 
 
 def test_gmsh_builder_writes_the_groups_and_the_angle(tmp_path):

@@ -82,12 +82,14 @@ def test_random_points_stay_in_the_movable_region():
     e1, e2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
     r = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]) / side.sum(axis=1)
     for radius in (0.0, 0.3, 1.0):
-        p = inner_points(x, keys, "random", radius, seed=5)
+        p = inner_points(x, keys, "random", radius=radius, seed=5)
         distance = np.linalg.norm(p - centre, axis=1)
         assert np.all(distance <= radius * r * (1 + 1e-12) + 1e-15)
-    spread = np.linalg.norm(inner_points(x, keys, "random", 1.0, seed=5) - centre, axis=1) / r
+    spread = (
+        np.linalg.norm(inner_points(x, keys, "random", radius=1.0, seed=5) - centre, axis=1) / r
+    )
     assert spread.max() > 0.8  # the whole disc is used, not only its middle
-    assert not np.allclose(inner_points(x, keys, "random", 1.0, seed=6), p)  # seed matters
+    assert not np.allclose(inner_points(x, keys, "random", radius=1.0, seed=6), p)  # seed matters
 
 
 def test_blocks_do_not_depend_on_the_order_of_the_triangles():

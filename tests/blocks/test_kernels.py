@@ -104,7 +104,7 @@ def test_integrals_of_a_cube_far_from_the_origin():
     np.testing.assert_allclose(centroid[0], shift + np.array([1.0, 0.5, 0.5]), rtol=0, atol=1e-8)
     np.testing.assert_allclose(centroid[1], [0.5, 0.5, 0.5], atol=1e-12)
     assert np.isnan(centroid[2]).all()
-    reach = kernels.reach(points, faces, np.array([0, 6, 12, 13]), np.nan_to_num(centroid))
+    reach = kernels.reach(points, faces, np.array([0, 6, 12, 13]), centres=np.nan_to_num(centroid))
     np.testing.assert_allclose(reach[:2], [np.sqrt(1.5), np.sqrt(0.75)], rtol=1e-9)
 
 

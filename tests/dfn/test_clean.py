@@ -14,7 +14,7 @@ from geofrac.dfn.polygon import as_polygon, point_segment_distance, rectangle
 from geofrac.dfn.sampling import FractureSet, Network, generate_network
 
 TOL = 0.1
-BOX = rectangle(0.0, 0.0, 10.0, 10.0)
+BOX = rectangle((0.0, 0.0), (10.0, 10.0))
 
 
 def _network(*segments):
@@ -219,7 +219,7 @@ def _table_2_1(count):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_dense_random_networks_satisfy_the_invariants(seed):
-    domain = rectangle(0.0, 0.0, 200.0, 100.0)
+    domain = rectangle((0.0, 0.0), (200.0, 100.0))
     net = generate_network(_table_2_1(120), domain, seed)
     c = clean_network(net, domain, 0.25)
     _check_invariants(c)

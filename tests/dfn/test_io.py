@@ -20,7 +20,7 @@ def network() -> Network:
         FractureSet("set 2", 102.753, 7.56, 10.0, 50.0, 3.1, distribution="normal", count=150),
         FractureSet("set-3", 162.83, 12.0, 10.0, 50.0, 3.1, distribution="von_mises", count=50),
     ]
-    return generate_network(sets, rectangle(0.0, 0.0, 200.0, 100.0), seed=12)
+    return generate_network(sets, rectangle((0.0, 0.0), (200.0, 100.0)), seed=12)
 
 
 def awkward() -> Network:

@@ -12,7 +12,7 @@ from geofrac.dfn.polygon import (
     rectangle,
 )
 
-RECT = rectangle(0.0, 0.0, 2.0, 1.0)
+RECT = rectangle((0.0, 0.0), (2.0, 1.0))
 # L shape: the square [0, 2]² without its upper right quarter; reflex vertex at (1, 1)
 ELL = np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], dtype=float)
 
@@ -24,7 +24,7 @@ def clip_one(a, b, poly):
 
 
 def test_rectangle_is_ccw_from_the_first_corner():
-    r = rectangle(1.0, 2.0, 4.0, 3.0)
+    r = rectangle((1.0, 2.0), (4.0, 3.0))
     assert r.tolist() == [[1, 2], [4, 2], [4, 3], [1, 3]]
     assert polygon_area(r) == pytest.approx(3.0)
 
@@ -35,7 +35,7 @@ def test_rectangle_is_ccw_from_the_first_corner():
 )
 def test_rectangle_rejects_empty(args, match):
     with pytest.raises(DfnError, match=match):
-        rectangle(*args)
+        rectangle(args[:2], args[2:])
 
 
 def test_as_polygon_returns_ccw():

@@ -35,7 +35,7 @@ from geofrac.dfn.stats import (
     variance_ci,
 )
 
-DOMAIN = rectangle(0.0, 0.0, 200.0, 100.0)
+DOMAIN = rectangle((0.0, 0.0), (200.0, 100.0))
 # seed Table 2.1: (name, mean angle in degrees, variance in deg²)
 TABLE_2_1 = [("set1", 47.473, 60.74), ("set2", 102.753, 57.16), ("set3", 162.830, 57.48)]
 LMIN, LMAX, N_EXP = 10.0, 50.0, 3.1
@@ -128,21 +128,21 @@ def test_fracture_set_accepts_valid_fields():
 
 def test_power_law_ccdf_formula_and_limits():
     l = np.array([5.0, 10.0, 20.0, 50.0, 80.0])  # noqa: E741
-    ccdf = power_law_ccdf(l, 10.0, 50.0, 3.1)
+    ccdf = power_law_ccdf(l, 10.0, 50.0, exponent=3.1)
     expected_20 = (20.0**-3.1 - 50.0**-3.1) / (10.0**-3.1 - 50.0**-3.1)
     assert ccdf.tolist() == pytest.approx([1.0, 1.0, expected_20, 0.0, 0.0], abs=1e-15)
     assert np.all(np.diff(ccdf) <= 0)
-    np.testing.assert_allclose(power_law_cdf(l, 10.0, 50.0, 3.1) + ccdf, 1.0, atol=1e-15)
+    np.testing.assert_allclose(power_law_cdf(l, 10.0, 50.0, exponent=3.1) + ccdf, 1.0, atol=1e-15)
 
 
 def test_power_law_with_equal_bounds_is_a_step():
-    assert power_law_ccdf([9.9, 10.0, 10.1], 10.0, 10.0, 3.1).tolist() == [1.0, 0.0, 0.0]
+    assert power_law_ccdf([9.9, 10.0, 10.1], 10.0, 10.0, exponent=3.1).tolist() == [1.0, 0.0, 0.0]
     rng = np.random.default_rng(0)
-    assert power_law_lengths(rng, 4, 10.0, 10.0, 3.1).tolist() == [10.0] * 4
+    assert power_law_lengths(rng, 4, 10.0, lmax=10.0, exponent=3.1).tolist() == [10.0] * 4
 
 
 def test_power_law_lengths_bounds_and_median():
-    x = power_law_lengths(np.random.default_rng(1), 20000, 10.0, 50.0, 3.1)
+    x = power_law_lengths(np.random.default_rng(1), 20000, 10.0, lmax=50.0, exponent=3.1)
     assert x.shape == (20000,)
     assert x.min() >= 10.0 and x.max() <= 50.0
     # the median solves ccdf = 1/2
@@ -153,7 +153,7 @@ def test_power_law_lengths_bounds_and_median():
 
 def test_power_law_rejects_bad_parameters():
     with pytest.raises(DfnError, match="lmin > lmax"):
-        power_law_ccdf(1.0, 5.0, 2.0, 3.1)
+        power_law_ccdf(1.0, 5.0, 2.0, exponent=3.1)
 
 
 # -------------------------------------------------- acceptance: seed Table 2.1 statistics
@@ -163,10 +163,10 @@ def test_power_law_rejects_bad_parameters():
 def test_lengths_pass_ks_against_the_truncated_power_law(table_network, i):
     lengths = table_network.lengths[table_network.set_index == i]
     assert len(lengths) == COUNT
-    d = ks_statistic(lengths, lambda x: power_law_cdf(x, LMIN, LMAX, N_EXP))
+    d = ks_statistic(lengths, lambda x: power_law_cdf(x, LMIN, LMAX, exponent=N_EXP))
     assert ks_pvalue(d, len(lengths)) > 0.01
     # a deliberately wrong law is rejected
-    d_wrong = ks_statistic(lengths, lambda x: power_law_cdf(x, LMIN, LMAX, 2.0))
+    d_wrong = ks_statistic(lengths, lambda x: power_law_cdf(x, LMIN, LMAX, exponent=2.0))
     assert ks_pvalue(d_wrong, len(lengths)) < 1e-6
 
 
@@ -283,7 +283,7 @@ def test_adding_a_set_keeps_the_earlier_sets(table_network):
 
 @pytest.mark.parametrize("p21", [0.02, 0.25])
 def test_p21_target_reached_within_one_fracture(p21):
-    region = rectangle(-40.0, -40.0, 240.0, 140.0)  # centres also outside the domain
+    region = rectangle((-40.0, -40.0), (240.0, 140.0))  # centres also outside the domain
     sets = [
         FractureSet("a", 47.0, 8.0, LMIN, LMAX, N_EXP, p21=p21),
         FractureSet("b", 103.0, 8.0, LMIN, LMAX, N_EXP, p21=p21 / 2.0),
@@ -312,7 +312,7 @@ def test_zero_p21_gives_no_fractures():
 
 def test_unreachable_p21_is_refused(monkeypatch):
     monkeypatch.setattr(sampling, "MAX_P21_FRACTURES", 4 * sampling.BATCH)
-    far = rectangle(1000.0, 1000.0, 1100.0, 1100.0)
+    far = rectangle((1000.0, 1000.0), (1100.0, 1100.0))
     with pytest.raises(DfnError, match=r"fracture set 's': p21 = 0.1 not reached"):
         generate_network([fset(count=None, p21=0.1)], far, seed=0, domain=DOMAIN)
 

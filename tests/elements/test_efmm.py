@@ -12,7 +12,7 @@ from geofrac.elements.efmm import domain_data, efmm
 from geofrac.materials import d_matrix
 from tests.fem.helpers import solve_job
 
-D = d_matrix(1000.0, 0.2, 2, "stress")
+D = d_matrix(1000.0, 0.2, 2, plane="stress")
 
 
 def _distorted_square(comm, n=5, m=4, amount=None):

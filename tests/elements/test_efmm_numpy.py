@@ -15,7 +15,7 @@ def _distorted(n=6, seed=1, amount=0.3):
     return points, tris, inside
 
 
-D = d_matrix(1000.0, 0.2, 2, "stress")
+D = d_matrix(1000.0, 0.2, 2, plane="stress")
 
 
 @pytest.mark.parametrize("q_rand", [0.0, 0.5])

@@ -25,14 +25,14 @@ def test_fe_matrices_match_dolfinx(element):
     p = sol.problem
     try:
         mat = sol.scene.material
-        _, mu = lame(mat.E, mat.nu, 2, mat.plane)
+        _, mu = lame(mat.E, mat.nu, 2, plane=mat.plane)
         space = p.unknown().function_space
         gm = gather_mesh(sol.tagged.mesh, space)
         bs = space.dofmap.index_map_bs
         K = fe_matrices(
             elements.get(element),
             gm.coords[gm.cells],
-            d_matrix(mat.E, mat.nu, 2, mat.plane),
+            d_matrix(mat.E, mat.nu, 2, plane=mat.plane),
             mat.thickness,
             sol.scene.discretization.zero_mode_penalty * mu,
         )

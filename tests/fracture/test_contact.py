@@ -20,7 +20,7 @@ RNG = np.random.default_rng(29)
 ANGLE = np.radians(35.0)
 T = np.array([np.cos(ANGLE), np.sin(ANGLE)])
 N = np.array([-T[1], T[0]])
-D = d_matrix(200.0, 0.3, 2, "strain")
+D = d_matrix(200.0, 0.3, 2, plane="strain")
 #: A displacement gradient (not symmetric: the rotation must not stress the faces).
 GRAD = np.array([[1e-3, -4e-4], [2.5e-3, -2e-3]])
 #: The plus face's rigid shift [u] (opening and slip).
@@ -33,7 +33,7 @@ def _side(sign: float, first: int) -> tuple:
     across = sign * RNG.uniform(0.05, 1.0, 9)
     coords = along[:, None] * T + across[:, None] * N
     nodes = np.arange(first, first + 9)
-    fit = linear_fit(sign * 0.3 * N, 2.5, nodes, coords)
+    fit = linear_fit(sign * 0.3 * N, 2.5, nodes, coords=coords)
     assert fit is not None
     return fit, coords
 

@@ -85,7 +85,7 @@ def test_mls_fit_reproduces_a_uniform_strain():
     u = coords @ grad.T + np.array([0.3, -0.1])  # plus a translation
     centre = coords[cells[20]].mean(axis=0)
     near = np.flatnonzero(np.hypot(*(coords - centre).T) < 2.5)
-    fit = linear_fit(centre, 2.6, near, coords[near])
+    fit = linear_fit(centre, 2.6, near, coords=coords[near])
     assert fit is not None
     np.testing.assert_allclose(strain_matrix(fit) @ u[near].ravel(), eps, atol=1e-15)
 

@@ -131,9 +131,9 @@ def _pairs(at: list[float], states: list[int]) -> SimpleNamespace:
     ops = {}
     for e, x in enumerate(at):
         p = np.array([x, 0.0])
-        plus = linear_fit(p + 0.3 * N, 3.0, np.arange(12), XY[:12])
-        minus = linear_fit(p - 0.3 * N, 3.0, np.arange(12, 24), XY[12:])
-        ops[e] = pair_operator(plus, minus, p, T, N, d_matrix(1.0, 0.25, 2, "strain"))
+        plus = linear_fit(p + 0.3 * N, 3.0, np.arange(12), coords=XY[:12])
+        minus = linear_fit(p - 0.3 * N, 3.0, np.arange(12, 24), coords=XY[12:])
+        ops[e] = pair_operator(plus, minus, p, T, N, d_matrix(1.0, 0.25, 2, plane="strain"))
     k = len(at)
     return SimpleNamespace(
         ops=ops,

@@ -12,7 +12,7 @@ COARSE = {"h": 40.0, "h_fine": 12.0}  # a few hundred nodes
 
 
 def _nodes(parameters: dict[str, float], algorithm: str | None) -> np.ndarray:
-    with meshed_model(BEAM, parameters, None, 2, algorithm=algorithm) as gmsh:
+    with meshed_model(BEAM, parameters, None, dim=2, algorithm=algorithm) as gmsh:
         xyz = gmsh.model.mesh.getNodes()[1].reshape(-1, 3)[:, :2]
     return xyz[np.lexsort(xyz.T[::-1])]
 

@@ -25,12 +25,12 @@ def _clean():
         [[3, 0], [3, 1.5]],  # starts on the bottom side
     ]
     net = Network(np.array(segs, dtype=float), np.zeros(len(segs), dtype=np.int64), ("s",))
-    return clean_network(net, rectangle(0, 0, 10, 10), 0.1)
+    return clean_network(net, rectangle((0, 0), (10, 10)), 0.1)
 
 
 def _mesh(clean, spec):
     with gmsh_session(None, {}) as gmsh:
-        report = mesh_network(gmsh, clean, SIDES, CORNERS, spec)
+        report = mesh_network(gmsh, clean, SIDES, corners=CORNERS, spec=spec)
         model = gmsh.model
         groups = {model.getPhysicalName(d, t): (d, t) for d, t in model.getPhysicalGroups()}
         tags, coords, _ = model.mesh.getNodes()

@@ -175,7 +175,7 @@ def test_an_endless_loop_stops_at_the_time_limit(tmp_path):
     )
     with (
         pytest.raises(GmshTimeout, match=r"did not finish meshing 'x\.geo' within 1 s"),
-        meshed_model(path, {}, None, 2, time_limit=1.0),
+        meshed_model(path, {}, None, dim=2, time_limit=1.0),
     ):
         pass
 
@@ -288,7 +288,7 @@ def test_a_silent_gmsh_failure_says_what_was_done(monkeypatch):
 
     monkeypatch.setattr(geo, "_run_worker", silent)
     path = REPO / "meshes" / "square.geo"
-    with pytest.raises(MeshingFailed) as err, meshed_model(path, {"h": 0.5}, None, 2):
+    with pytest.raises(MeshingFailed) as err, meshed_model(path, {"h": 0.5}, None, dim=2):
         pass
     assert str(err.value) == (
         "meshing square.geo with parameters {'h': 0.5} failed (gmsh gave no message; "
@@ -319,6 +319,6 @@ def test_a_meshed_geo_matches_the_in_process_mesh_exactly():
     with gmsh_session(path, {"h": 5.0}) as gmsh:
         gmsh.model.mesh.generate(2)
         tags0, x0, _ = gmsh.model.mesh.getNodes()
-    with meshed_model(path, {"h": 5.0}, None, 2) as gmsh:
+    with meshed_model(path, {"h": 5.0}, None, dim=2) as gmsh:
         tags1, x1, _ = gmsh.model.mesh.getNodes()
     assert np.array_equal(tags0, tags1) and np.array_equal(x0, x1)

@@ -45,7 +45,7 @@ def _inside(k, seed, centre=CENTRE, h=H):
 
 def _fit(n, seed=0, **kw):
     xy = _satellites(n, seed)
-    return node_fit(CENTRE, H, 100, np.arange(n) + 1, xy, **kw), xy
+    return node_fit(CENTRE, H, 100, ids=np.arange(n) + 1, xy=xy, **kw), xy
 
 
 def _nodal(field, xy):
@@ -154,23 +154,25 @@ def test_order_0_reproduces_rigid_rotation(n):
     assert _rel(fit.displacement_matrix(x) @ u, rotation(x)) < 1e-12
     np.testing.assert_allclose(fit.parameters(u), [omega], rtol=1e-12)
     assert not fit.strain_matrix(x).any()
-    assert not node_stiffness(fit, D_EL, T, _grain()).any()
+    assert not node_stiffness(fit, D_EL, T, triangles=_grain()).any()
 
 
 def test_fragment_moves_rigidly_with_its_node():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        fit = node_fit(CENTRE, H, 5, np.zeros(0, dtype=int), np.zeros((0, 2)))
+        fit = node_fit(CENTRE, H, 5, ids=np.zeros(0, dtype=int), xy=np.zeros((0, 2)))
         assert fit.order == -1
         assert fit.coefficients.shape == (0, 2)
         x = _inside(4, seed=5)
         N = fit.displacement_matrix(x)
         np.testing.assert_array_equal(N, np.broadcast_to(np.eye(2), (4, 2, 2)))
         assert fit.parameters(np.array([0.1, 0.2])).shape == (0,)
-        K = node_stiffness(fit, D_EL, T, _grain())
+        K = node_stiffness(fit, D_EL, T, triangles=_grain())
         assert K.shape == (2, 2)
         assert not K.any()
-        order, G, Kc = compiled_node(CENTRE, H, np.zeros((0, 2)), None, _grain(), D_EL, T)
+        order, G, Kc = compiled_node(
+            CENTRE, H, np.zeros((0, 2)), order=None, triangles=_grain(), D=D_EL, thickness=T
+        )
         assert order == -1
         assert G.shape == (0, 2)
         assert not Kc.any()
@@ -199,10 +201,10 @@ def test_collinear_satellites_drop_below_order_2(offset, wobble, order):
     xy = _line(12, offset, wobble)
     n = len(xy)
     assert order_for(n) == 2
-    fit = node_fit(CENTRE, H, 0, np.arange(n) + 1, xy)
+    fit = node_fit(CENTRE, H, 0, ids=np.arange(n) + 1, xy=xy)
     assert fit.order == order
     assert np.all(np.isfinite(fit.coefficients))
-    K = node_stiffness(fit, D_EL, T, _grain())
+    K = node_stiffness(fit, D_EL, T, triangles=_grain())
     assert np.all(np.isfinite(K))
     field = Quadratic(seed=8, linear_only=True)
     x = _inside(5, seed=6)
@@ -224,7 +226,7 @@ def test_stiffness_is_symmetric_psd_with_rigid_null_space_and_strain_energy(n):
     fit, xy = _fit(n, seed=20 + n)
     assert fit.order == (2 if n >= 10 else 1)
     grain = _grain()
-    K = node_stiffness(fit, D_EL, T, grain)
+    K = node_stiffness(fit, D_EL, T, triangles=grain)
     scale = np.abs(K).max()
     assert scale > 0
     np.testing.assert_allclose(K, K.T, atol=1e-13 * scale)
@@ -258,10 +260,12 @@ def test_compiled_kernel_equals_numpy(case):
     xy, start, order = CASES[case]
     n = len(xy)
     grain = _grain()
-    fit = node_fit(CENTRE, H, 0, np.arange(n) + 1, xy, order=start)
-    K = node_stiffness(fit, D_EL, T, grain)
+    fit = node_fit(CENTRE, H, 0, ids=np.arange(n) + 1, xy=xy, order=start)
+    K = node_stiffness(fit, D_EL, T, triangles=grain)
     assert fit.order == order
-    accepted, G, Kc = compiled_node(CENTRE, H, xy, start, grain, D_EL, T)
+    accepted, G, Kc = compiled_node(
+        CENTRE, H, xy, order=start, triangles=grain, D=D_EL, thickness=T
+    )
     assert accepted == order
     assert G.shape == fit.coefficients.shape
     g_scale = max(np.abs(fit.coefficients).max(initial=0.0), 1.0)
@@ -273,10 +277,10 @@ def test_compiled_kernel_equals_numpy(case):
 def test_invalid_input_is_rejected():
     xy = _satellites(5, 40)
     with pytest.raises(ValueError, match="0 < r < h"):
-        node_fit(CENTRE, H, 0, np.arange(6), np.vstack([xy, CENTRE]))
+        node_fit(CENTRE, H, 0, ids=np.arange(6), xy=np.vstack([xy, CENTRE]))
     with pytest.raises(ValueError, match="0 < r < h"):
-        node_fit(CENTRE, H, 0, np.arange(6), np.vstack([xy, CENTRE + np.array([H, 0.0])]))
+        node_fit(CENTRE, H, 0, ids=np.arange(6), xy=np.vstack([xy, CENTRE + np.array([H, 0.0])]))
     with pytest.raises(ValueError, match="order"):
-        node_fit(CENTRE, H, 0, np.arange(5), xy, order=3)
+        node_fit(CENTRE, H, 0, ids=np.arange(5), xy=xy, order=3)
     with pytest.raises(ValueError, match="order"):
-        compiled_node(CENTRE, H, xy, -2, _grain(), D_EL, T)
+        compiled_node(CENTRE, H, xy, order=-2, triangles=_grain(), D=D_EL, thickness=T)

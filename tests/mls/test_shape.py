@@ -23,7 +23,7 @@ def _cloud(n=12, seed=3):
 
 def test_reproduces_linear_fields_and_sums_to_one():
     pts = _cloud()
-    fit = linear_fit(np.array([0.1, -0.05]), 2.0, np.arange(len(pts)), pts)
+    fit = linear_fit(np.array([0.1, -0.05]), 2.0, np.arange(len(pts)), coords=pts)
     assert fit is not None
     x = np.array([[0.0, 0.0], [0.3, -0.2], [-0.4, 0.1]])
     phi = fit.shape_functions(x)
@@ -36,15 +36,15 @@ def test_reproduces_linear_fields_and_sums_to_one():
 
 def test_strain_matrix_of_uniform_strain():
     pts = _cloud(10, 5)
-    fit = linear_fit(np.zeros(2), 2.5, np.arange(10), pts)
+    fit = linear_fit(np.zeros(2), 2.5, np.arange(10), coords=pts)
     u = np.column_stack([0.002 * pts[:, 0], -0.0006 * pts[:, 1] + 0.001 * pts[:, 0]])
     np.testing.assert_allclose(strain_matrix(fit) @ u.ravel(), [0.002, -0.0006, 0.001], atol=1e-14)
 
 
 def test_too_few_or_collinear_nodes_give_no_fit():
     pts = np.array([[0.1, 0.0], [0.5, 0.0]])
-    assert linear_fit(np.zeros(2), 1.0, np.arange(2), pts) is None
+    assert linear_fit(np.zeros(2), 1.0, np.arange(2), coords=pts) is None
     line = np.column_stack([np.linspace(-0.5, 0.5, 6), np.zeros(6)])
-    assert linear_fit(np.zeros(2), 1.0, np.arange(6), line) is None
+    assert linear_fit(np.zeros(2), 1.0, np.arange(6), coords=line) is None
     outside = np.array([[2.0, 0.0], [0.0, 2.0], [-2.0, 0.0], [0.1, 0.1]])
-    assert linear_fit(np.zeros(2), 1.0, np.arange(4), outside) is None  # one node weighs
+    assert linear_fit(np.zeros(2), 1.0, np.arange(4), coords=outside) is None  # one node weighs

@@ -57,9 +57,9 @@ def test_status_says_why_a_case_differs_and_flags_unexplained_ones():
 
 def test_closed_forms_against_hand_values():
     # Edo (2016), eq. 2.24-2.25 for jobs/quickstart.toml: 1000/25 + 5*10/200
-    assert timoshenko_tip(1.0, 10.0, 1.0, 100.0, 0.2) == pytest.approx(40.25, rel=1e-14)
+    assert timoshenko_tip(1.0, 10.0, 1.0, E=100.0, nu=0.2) == pytest.approx(40.25, rel=1e-14)
     # 1.3*10/3000 * (0.4 + 4)
-    assert lame_inner_displacement(10.0, 1.0, 2.0, 1000.0, 0.3) == pytest.approx(
+    assert lame_inner_displacement(10.0, 1.0, 2.0, E=1000.0, nu=0.3) == pytest.approx(
         1.3 * 10 / 3000 * 4.4, rel=1e-14
     )
     # β = 45°, μ = 0.5: 2c / (0.5 * 1); never below atan μ
@@ -130,8 +130,10 @@ def test_merge_keeps_the_full_runs_values_and_time():
     case = select(["mpm_bar"])[0]
     from geofrac.validation.suite import Result
 
-    full = merge(None, [Result(case, 0.0065, 1.0)], "geofrac validate", 100.0, True, "d1")
-    quick = merge(full, [], "geofrac validate --quick", 5.0, False, "d2")
+    full = merge(
+        None, [Result(case, 0.0065, 1.0)], "geofrac validate", seconds=100.0, full=True, stamp="d1"
+    )
+    quick = merge(full, [], "geofrac validate --quick", seconds=5.0, full=False, stamp="d2")
     assert quick["full_run"]["seconds"] == 100.0 and quick["last_run"]["date"] == "d2"
     assert quick["cases"]["mpm_bar"]["value"] == 0.0065
 
@@ -139,7 +141,7 @@ def test_merge_keeps_the_full_runs_values_and_time():
 def test_a_fresh_run_of_the_ci_cases_gives_the_pages_numbers(tmp_path):
     data = json.loads(DATA.read_text())["cases"]
     cases = select(ci=True)
-    results = run_cases(cases, tmp_path, MPI.COMM_SELF, REPO, say=lambda text: None)
+    results = run_cases(cases, tmp_path, MPI.COMM_SELF, root=REPO, say=lambda text: None)
     for r in results:
         page = data[r.case.name]
         assert r.error is None, (r.case.name, r.error)
