@@ -578,7 +578,7 @@ def make_driver(
         variant = GRAINS
     elif spec.cracking != "edges":
         raise ValueError(f"element {spec.name!r} does not support cracking")
-    return CrackDriver(config, solution, say, write, variant)
+    return CrackDriver(config, solution, say, write=write, variant=variant)
 
 
 def driver(

@@ -16,6 +16,7 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 import numpy as np
 from petsc4py import PETSc
 
+from geofrac.fracture.contact import constraint_terms, pair_links
 from geofrac.fracture.context import CrackContext
 from geofrac.fracture.topology import components, motion_pins, motion_rows, zero_energy_rows
 from geofrac.fracture.units import Units
@@ -32,6 +33,7 @@ class Assembler:
     Args:
         ctx: the shared set-up data.
         units: the discretisation of the crack state.
+        contact: the crack faces, whose closed pairs add blocks and links, or None.
 
     Attributes:
         fragment_nodes: nodes of pieces cut free by cracks (no Dirichlet node), held
@@ -40,14 +42,14 @@ class Assembler:
             free rigid motion, shape=(k,); pinned_nodes: their nodes, shape=(k,).
     """
 
-    def __init__(self, ctx: CrackContext, units: Units) -> None:
+    def __init__(self, ctx: CrackContext, units: Units, *, contact: Faces | None = None) -> None:
         self.ctx, self.units = ctx, units
         self.fragment_nodes = np.zeros(0, dtype=np.int64)
         self.pinned_dofs = np.zeros(0, dtype=np.int64)
         self.pinned_nodes = np.zeros(0, dtype=np.int64)
         self._b0: PETSc.Vec | None = None
         #: crack-face contact (:class:`~geofrac.fracture.faces.Faces`), or None.
-        self.contact: Faces | None = None
+        self.contact = contact
 
     def assemble(self, held_values: np.ndarray) -> tuple[PETSc.Mat, PETSc.Vec, np.ndarray]:
         """Stiffness and load vector of the current crack state; returns (A, b, held DOFs).
@@ -123,7 +125,7 @@ class Assembler:
         pieces = components(len(gm.coords), a, b)
         labels = pieces
         if self.contact is not None:  # closed faces join pieces into groups
-            ca, cb = self.contact.pairs.links()
+            ca, cb = pair_links(self.contact.pairs)
             labels = components(len(gm.coords), np.r_[a, ca], np.r_[b, cb])
         anchored = np.unique(labels[np.unique(ctx.bc_row_nodes)])
         touched = np.zeros(len(gm.coords), dtype=bool)
@@ -159,7 +161,7 @@ class Assembler:
         xy = ctx.gm.coords[:, :2]
         fixed_rows = np.concatenate([ctx.bc_rows, self.pinned_dofs])
         fixed_nodes = np.concatenate([ctx.bc_row_nodes, self.pinned_nodes])
-        terms = None if self.contact is None else self.contact.pairs.constraint_terms()
+        terms = None if self.contact is None else constraint_terms(self.contact.pairs)
         moving = touched.copy()
         moving[self.fragment_nodes] = False  # held: they support what they touch
         pinned: list[tuple[int, int]] = []

@@ -191,9 +191,13 @@ class EdgeUnits:
 
     Args:
         ctx: the shared set-up data.
+        cut: cracks cut the cells they end in (contact, the tip criteria; see
+            :class:`~geofrac.fracture.state.CrackState`).
+        keep_stress: keep the stress tensors of :meth:`measures` (the shear events and
+            the criteria that read them need them).
     """
 
-    def __init__(self, ctx: CrackContext) -> None:
+    def __init__(self, ctx: CrackContext, *, cut: bool, keep_stress: bool) -> None:
         self.ctx = ctx
         gm, spec = ctx.gm, ctx.spec
         #: extra vertex DOFs under a unit rigid rotation, shape=(bs - 2,).
@@ -212,7 +216,7 @@ class EdgeUnits:
             forced,
             settings,
             ctx.rank_map,
-            cut=cfg.contact or cfg.criterion != "principal",
+            cut=cut,
         )
         self._edge_keys = mesh_e.edges[:, 0] * len(gm.coords) + mesh_e.edges[:, 1]
         own = np.flatnonzero(gm.owned)
@@ -238,7 +242,7 @@ class EdgeUnits:
         # cell -> (its fit, the fit's stiffness): assembly and measures share it
         self._mls_k: dict[int, tuple[LinearFit, np.ndarray]] = {}
         #: keep the stress tensors of :meth:`measures` (shear events need them).
-        self.keep_stress = cfg.shear_cohesion is not None
+        self.keep_stress = keep_stress
         #: (σ_xx, σ_yy, σ_xy) of each cell at its edge midpoints from the last
         #: :meth:`measures` when ``keep_stress``, shape=(num_cells, 3, 3).
         self.midpoint_stress = np.zeros((0, 3, 3))

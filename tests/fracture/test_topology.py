@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from geofrac.fracture.contact import SLIP, STICK, FacePairs, pair_operator
+from geofrac.fracture.contact import SLIP, STICK, constraint_terms, pair_operator
 from geofrac.fracture.topology import (
     components,
     constraint_rank,
@@ -125,7 +125,7 @@ SCALE = 3.0
 def _pairs(at: list[float], states: list[int]) -> SimpleNamespace:
     """Face pairs at x = ``at`` on the crack: MLS fits of each side's nodes.
 
-    Carries what :meth:`FacePairs.constraint_terms` reads (the pairs' operators,
+    Carries what :func:`~geofrac.fracture.contact.constraint_terms` reads (the pairs' operators,
     states, frames and teeth).
     """
     ops = {}
@@ -148,7 +148,7 @@ def _constraints(pairs: SimpleNamespace) -> np.ndarray:
     """Piece 0 held by three Dirichlet DOFs; the pairs' rows on both pieces' motions."""
     fixed = [12, 12, 13]
     C = motion_rows(XY[fixed], [0, 1, 1], NO_EXTRA, PIECE[fixed], CENTRES, SCALE)
-    rows, nodes, comps, weights = FacePairs.constraint_terms(pairs)
+    rows, nodes, comps, weights = constraint_terms(pairs)
     if not len(rows):
         return C
     jumps = motion_rows(XY[nodes], comps, NO_EXTRA, PIECE[nodes], CENTRES, SCALE, rows, weights)
