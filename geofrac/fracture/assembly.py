@@ -178,7 +178,12 @@ class Assembler:
             on = piece_of[fixed_nodes] >= 0
             n = fixed_nodes[on]
             C = motion_rows(
-                xy[n], fixed_rows[on] % ctx.bs, units.rotation, piece_of[n], centres, scale
+                xy[n],
+                fixed_rows[on] % ctx.bs,
+                units.rotation,
+                pieces=piece_of[n],
+                centres=centres,
+                scale=scale,
             )
             if terms is not None and len(ids) > 1:
                 rows, nodes, comps, weights = terms
@@ -188,15 +193,17 @@ class Assembler:
                     xy[n],
                     comps[keep],
                     units.rotation,
-                    piece_of[n],
-                    centres,
-                    scale,
-                    rows[keep],
-                    weights[keep],
+                    pieces=piece_of[n],
+                    centres=centres,
+                    scale=scale,
+                    rows=rows[keep],
+                    weights=weights[keep],
                 )
                 C = np.vstack([C, pairs])
             candidates = [xy[m] for m in nodes_of]
-            for i, node, comp in motion_pins(C, units.rotation, candidates, centres, scale):
+            for i, node, comp in motion_pins(
+                C, units.rotation, candidates, centres=centres, scale=scale
+            ):
                 pinned.append((int(nodes_of[i][node]), comp))
         return pinned
 

@@ -134,8 +134,8 @@ def shear_factors(
     sigma_n: np.ndarray,
     tau: np.ndarray,
     cohesion: float,
-    friction_angle: float,
     *,
+    friction_angle: float,
     floor: float = 0.0,
 ) -> np.ndarray:
     """Load factor r at which Mohr-Coulomb shear failure |τ| = c − σn tan φ is reached.
@@ -180,6 +180,7 @@ def pair_operator(
     plus: LinearFit,
     minus: LinearFit,
     point: np.ndarray,
+    *,
     tangent: np.ndarray,
     normal: np.ndarray,
     D: np.ndarray,
@@ -255,10 +256,10 @@ class FacePairs:
         mesh: EdgeMesh,
         friction: np.ndarray,
         cohesion: np.ndarray,
+        *,
         modulus: float,
         penalty: float,
         D: np.ndarray,
-        *,
         jump_floor: float = 0.0,
         traction_floor: float = 0.0,
     ) -> None:
@@ -367,7 +368,9 @@ class FacePairs:
                     del self.ops[e]
                     changed.append(e)
                 continue
-            op = pair_operator(fp, fm, self.midpoint[e], self.tangent[e], self.normal[e], self.D)
+            op = pair_operator(
+                fp, fm, self.midpoint[e], tangent=self.tangent[e], normal=self.normal[e], D=self.D
+            )
             if old is None or not (
                 np.array_equal(old.nodes, op.nodes) and np.array_equal(old.weights, op.weights)
             ):

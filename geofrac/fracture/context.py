@@ -306,6 +306,25 @@ def _force(
     return control
 
 
+def _dirichlet(
+    problem: ElasticProblem, comm: MPI.Comm, n_global: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Dirichlet rows and values of every rank, shape=(k,), as a mask and a vector (collective).
+
+    Returns:
+        (rows, values, mask, full): the mask and the full vector have shape=(n_global,).
+    """
+    rows, vals = problem.dirichlet()
+    parts = comm.allgather((rows, vals))
+    bc_rows = np.concatenate([p[0] for p in parts]).astype(np.int64)
+    bc_vals = np.concatenate([p[1] for p in parts])
+    bc_mask = np.zeros(n_global, dtype=bool)
+    bc_mask[bc_rows] = True
+    bc_full = np.zeros(n_global)
+    bc_full[bc_rows] = bc_vals
+    return bc_rows, bc_vals, bc_mask, bc_full
+
+
 def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> CrackContext:
     """The shared data of a set-up problem (collective)."""
     scene, problem, tagged = solution.scene, solution.problem, solution.tagged
@@ -325,14 +344,7 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
     _, mu = lame(mat.E, mat.nu, 2, mat.plane)
     imap = space.dofmap.index_map
     n_global = imap.size_global * bs
-    rows, vals = problem.dirichlet()
-    parts = comm.allgather((rows, vals))
-    bc_rows = np.concatenate([p[0] for p in parts]).astype(np.int64)
-    bc_vals = np.concatenate([p[1] for p in parts])
-    bc_mask = np.zeros(n_global, dtype=bool)
-    bc_mask[bc_rows] = True
-    bc_full = np.zeros(n_global)
-    bc_full[bc_rows] = bc_vals
+    bc_rows, bc_vals, bc_mask, bc_full = _dirichlet(problem, comm, n_global)
     order = np.argsort(gm.node_block)
     bc_row_nodes = order[np.searchsorted(gm.node_block[order], bc_rows // bs)]
     # the control group: its prescribed, non-zero DOFs (none under force control)

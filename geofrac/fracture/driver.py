@@ -137,7 +137,7 @@ def _sites(ctx: CrackContext, units: Units, points: np.ndarray) -> Sites:
         state.crackable & ~state.mesh.boundary_edges,
         cfg.precracked_fraction,
         cfg.precrack_seed,
-        points,
+        points=points,
     )
     return Sites(np.union1d(group_sites, random), group_sites, random)
 

@@ -148,9 +148,9 @@ class Faces:
             units.state.mesh,
             mu,
             c,
-            E,
-            penalty,
-            ctx.D,
+            modulus=E,
+            penalty=penalty,
+            D=ctx.D,
             jump_floor=ROUNDOFF * ctx.scales.displacement,
             traction_floor=ROUNDOFF * ctx.scales.stress,
         )

@@ -118,4 +118,6 @@ class ModeChooser:
         t, n = self._frames
         sn, tau = edge_tractions(sigma[cand], t[cand], n[cand])
         s = self.shear
-        return cand, shear_factors(sn, tau, s.cohesion, s.friction_angle, floor=floor)
+        return cand, shear_factors(
+            sn, tau, s.cohesion, friction_angle=s.friction_angle, floor=floor
+        )

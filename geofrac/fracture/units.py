@@ -222,7 +222,7 @@ class EdgeUnits:
         own = np.flatnonzero(gm.owned)
         self.own = own
         x = gm.coords[gm.cells[own]]
-        self.K_fe = fe_matrices(spec, x, ctx.D, ctx.t, ctx.penalty)
+        self.K_fe = fe_matrices(spec, x, ctx.D, thickness=ctx.t, penalty=ctx.penalty)
         self.fe_dofs = ctx.node_dofs(gm.cells[own].ravel()).reshape(len(own), 3 * ctx.bs)
         stress_op = np.einsum("ij,cqjp->cqip", ctx.D, strain_operator(spec, x, MIDPOINTS))
         nc, nd = self.fe_dofs.shape
@@ -285,7 +285,7 @@ class EdgeUnits:
             return {}
         gm, ctx = self.ctx.gm, self.ctx
         x = gm.coords[gm.cells[units]]
-        ks = fe_matrices(ctx.spec, x, ctx.D, ctx.t, ctx.penalty)
+        ks = fe_matrices(ctx.spec, x, ctx.D, thickness=ctx.t, penalty=ctx.penalty)
         return {c: (ctx.node_dofs(gm.cells[c]), k) for c, k in zip(units, ks, strict=True)}
 
     def fit_block(self, unit: int, fit: Fit) -> Block | None:
@@ -300,7 +300,7 @@ class EdgeUnits:
         cached = self._mls_k.get(c)
         if cached is not None and cached[0] is fit:
             return cached[1]
-        k = mls_matrix(fit, self.ctx.D, self.ctx.t, self.state.areas[c])
+        k = mls_matrix(fit, self.ctx.D, self.ctx.t, area=self.state.areas[c])
         if c in self.state.fits and self.state.fits[c] is fit:
             self._mls_k[c] = (fit, k)
         return k
@@ -353,7 +353,7 @@ class EdgeUnits:
                 self._table.remove(c)
             else:
                 self._table.set(
-                    c, ctx.mls_dofs(fit.nodes), strain_matrix(fit), ctx.t * state.areas[c]
+                    c, ctx.mls_dofs(fit.nodes), strain_matrix(fit), weight=ctx.t * state.areas[c]
                 )
 
     def measures(self, u: np.ndarray) -> tuple[np.ndarray, float, float]:
