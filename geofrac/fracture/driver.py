@@ -61,7 +61,7 @@ from geofrac.fracture.record import Recorder
 from geofrac.fracture.replay import Replay
 from geofrac.fracture.summary import FaceReport, Summary
 from geofrac.fracture.topology import random_sites
-from geofrac.fracture.units import EdgeUnits, SiteState, Units
+from geofrac.fracture.units import EdgeUnits, SiteState, Units, mls_settings
 
 __all__ = ["EDGES", "CrackDriver", "EdgeVariant", "Variant"]
 
@@ -104,6 +104,7 @@ class EdgeVariant:
         cfg = ctx.config
         return EdgeUnits(
             ctx,
+            mls=mls_settings(cfg),
             cut=cfg.contact or cfg.criterion != "principal",
             keep_stress=cfg.shear_cohesion is not None or CRITERIA[cfg.criterion].needs_stress,
         )
@@ -232,7 +233,13 @@ class CrackDriver:
         chooser = ModeChooser(criterion, units, contact=contact, shear=shear)
         face = None if config.face is None else FaceReport(config.face, config.face_origin)
         output = EventOutput(
-            ctx, units.state, self.drawing, sites=self.sites, write=write, contact=config.contact
+            ctx,
+            units.state,
+            self.drawing,
+            sites=self.sites,
+            write=write,
+            contact=config.contact,
+            softening=config.fracture_energy is not None,
         )
         return LoopParts(
             units=units,

@@ -56,7 +56,7 @@ from geofrac.fracture.grains import (
 from geofrac.fracture.output import FrameData, SiteDrawing
 from geofrac.fracture.state import MlsSettings, segment_distance
 from geofrac.fracture.topology import edge_mesh
-from geofrac.fracture.units import GAUSS_6, Block, Fit, Units, unit_masks
+from geofrac.fracture.units import GAUSS_6, Block, Fit, Units, mls_settings, unit_masks
 from geofrac.mls import cmulti
 from geofrac.mls.cmulti import NodeFit
 
@@ -239,23 +239,25 @@ class GrainUnits:
 
     Args:
         ctx: the shared set-up data.
+        mls: the C-MultiMLSM fits' neighbours, margin and radius.
+        switch: which nodes switch to C-MultiMLSM when an interface cracks
+            (``cracking.switch``, :class:`~geofrac.fracture.grains.GrainState`).
     """
 
-    def __init__(self, ctx: CrackContext) -> None:
+    def __init__(self, ctx: CrackContext, *, mls: MlsSettings, switch: str) -> None:
         self.ctx = ctx
-        gm, d, cfg = ctx.gm, ctx.scene.discretization, ctx.config
+        gm, d = ctx.gm, ctx.scene.discretization
         self.rotation = np.zeros(0)
         self._ops: dict[int, NodeOperator] = {}
         self._fit_k: dict[int, tuple[NodeFit, np.ndarray]] = {}
         mesh_e = edge_mesh(gm.coords, gm.cells)
         frozen, forced_nodes = unit_masks(ctx, mesh_e, gm.coords)
-        settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
         self.domains = integration_domains(gm.coords, gm.cells, d.q_rand, d.domain_seed)
         self.faces = interfaces(mesh_e, self.domains)
         frozen_nodes = np.zeros(len(gm.coords), dtype=bool)
         frozen_nodes[ctx.bc_nodes] = True
         self.state: GrainState = GrainState(
-            mesh_e, self.faces, frozen_nodes, forced_nodes, settings, ctx.rank_map, cfg.switch
+            mesh_e, self.faces, frozen_nodes, forced_nodes, mls, ctx.rank_map, switch
         )
         self.state.crackable[np.unique(mesh_e.cell_edges[frozen])] = False
         #: the crack joined to its origin (``face`` reports, ``main_crack``).
@@ -589,7 +591,7 @@ class GrainVariant:
 
     def units(self, ctx: CrackContext) -> Units:
         """:class:`GrainUnits`."""
-        return GrainUnits(ctx)
+        return GrainUnits(ctx, mls=mls_settings(ctx.config), switch=ctx.config.switch)
 
     def criterion(self, ctx: CrackContext, units: Units) -> EventCriterion:
         """:class:`GrainCriterion`."""

@@ -235,6 +235,7 @@ class EventOutput:
         sites: the sites cracked before loading.
         write: write anything at all.
         contact: write the crack faces' contact (``cracking.contact``).
+        softening: write the cohesive faces' dissipation (a fracture energy is given).
     """
 
     def __init__(
@@ -246,6 +247,7 @@ class EventOutput:
         sites: Sites,
         write: bool,
         contact: bool,
+        softening: bool,
     ) -> None:
         self.ctx, self.state, self.drawing, self.sites = ctx, state, drawing, sites
         self.on = write and ctx.comm.rank == 0
@@ -253,7 +255,7 @@ class EventOutput:
         self._log: EventLog | None = None
         self._series: tuple[XdmfSeries, XdmfSeries] | None = None
         self._changes: tuple[IO[str], csv.writer] | None = None  # type: ignore[valid-type]
-        self._contact = contact
+        self._contact, self._softening = contact, softening
 
     def _open_series(
         self, name: str, coords: np.ndarray, cells: np.ndarray, keep: float | None
@@ -275,10 +277,9 @@ class EventOutput:
                 self._open_series("damage.xdmf", gm.coords, gm.cells, keep_until),
             )
         handle = open(self.out_dir / "events.csv", "w", newline="")  # noqa: SIM115
-        softening = self.ctx.config.fracture_energy is not None
         columns = (
             EVENT_COLUMNS
-            + (SOFTENING_COLUMNS if softening else ())
+            + (SOFTENING_COLUMNS if self._softening else ())
             + (CONTACT_COLUMNS if self._contact else ())
         )
         writer = csv.DictWriter(handle, fieldnames=columns)
@@ -377,7 +378,8 @@ class EventOutput:
         ax.plot(d, [0.0] + [r["reaction"] for r in rows], lw=0.8, marker=".", ms=2)
         ax.xaxis.set_major_locator(MaxNLocator(6))
         units = self.ctx.scene.units
-        group, control = self.ctx.config.control, self.ctx.control
+        control = self.ctx.control
+        group = control.group
         if control.kind == "force":
             along = "work-conjugate" if control.node is None else "control_point node"
             ax.set_xlabel(f"displacement of the load on {group}, {along} ({units.length})")

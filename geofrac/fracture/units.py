@@ -27,6 +27,7 @@ from geofrac.fracture.cells import (
     principal_max,
     strain_operator,
 )
+from geofrac.fracture.config import CrackingConfig
 from geofrac.fracture.context import CrackContext, JsonValue
 from geofrac.fracture.grains import GrainState
 from geofrac.fracture.state import CrackState, MlsSettings
@@ -34,7 +35,16 @@ from geofrac.fracture.topology import EdgeMesh, edge_mesh
 from geofrac.mls.cmulti import NodeFit
 from geofrac.mls.shape import LinearFit, strain_matrix
 
-__all__ = ["GAUSS_6", "Block", "EdgeUnits", "Fit", "SiteState", "Units", "unit_masks"]
+__all__ = [
+    "GAUSS_6",
+    "Block",
+    "EdgeUnits",
+    "Fit",
+    "SiteState",
+    "Units",
+    "mls_settings",
+    "unit_masks",
+]
 
 #: A unit's fitted field: an MLS fit (cells), a C-MultiMLSM fit (grains), or None (void).
 Fit = LinearFit | NodeFit | None
@@ -186,18 +196,26 @@ class Units(Protocol):
         ...
 
 
+def mls_settings(config: CrackingConfig) -> MlsSettings:
+    """The MLS fits' settings of ``[cracking]`` (neighbours, margin, radius factor)."""
+    return MlsSettings(config.neighbours, config.margin, config.max_radius_factor)
+
+
 class EdgeUnits:
     """Cells as units: element cells, MLS-cracked cells (2.19) (Edo (2016), chapter 2).
 
     Args:
         ctx: the shared set-up data.
+        mls: the MLS fits' neighbours, margin and radius (``cracking.neighbours``, ...).
         cut: cracks cut the cells they end in (contact, the tip criteria; see
             :class:`~geofrac.fracture.state.CrackState`).
         keep_stress: keep the stress tensors of :meth:`measures` (the shear events and
             the criteria that read them need them).
     """
 
-    def __init__(self, ctx: CrackContext, *, cut: bool, keep_stress: bool) -> None:
+    def __init__(
+        self, ctx: CrackContext, *, mls: MlsSettings, cut: bool, keep_stress: bool
+    ) -> None:
         self.ctx = ctx
         gm, spec = ctx.gm, ctx.spec
         #: extra vertex DOFs under a unit rigid rotation, shape=(bs - 2,).
@@ -208,13 +226,11 @@ class EdgeUnits:
         )
         mesh_e = edge_mesh(gm.coords, gm.cells)
         frozen, forced = unit_masks(ctx, mesh_e, mesh_e.centroids())
-        cfg = ctx.config
-        settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
         self.state: CrackState = CrackState(
             mesh_e,
             frozen,
             forced,
-            settings,
+            mls,
             ctx.rank_map,
             cut=cut,
         )
