@@ -191,25 +191,15 @@ class EventLoop:
         choice = self._choose(run, event)
         if choice is None:
             return False
-        energy = choice.r * choice.r * run.unit[0]  # type: ignore[index]
-        cracked = [int(e) for e in choice.sites]
-        row = None
+        assert run.unit is not None
+        energy = choice.r * choice.r * run.unit[0]
+        row = None if replay else self._log(run, event, choice, solved=solved, energy=energy)
         if replay:
-            if cracked != run.batches[event - 1]:
-                raise RunError(
-                    f"--resume: event {event} cracked edges {cracked}, the interrupted "
-                    f"run {run.batches[event - 1]}; the checkpoint does not reproduce it"
-                )
-        else:
-            control = (run.unit[1], run.unit[2])  # type: ignore[index]
-            row = parts.record.row(event, choice, solved=solved, control=control, energy=energy)
-            run.rows.append(row)
-            run.batches.append(cracked)
+            self._check_replay(run, event, choice)
         parts.crack.apply(choice)
         self._after_crack(run, event, choice, row=row, energy=energy)
-        if replay:
+        if row is None:  # a replayed event: in the log and the series already
             return True
-        assert row is not None
         return self._publish(run, event, row=row, energy=energy)
 
     def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
@@ -265,6 +255,24 @@ class EventLoop:
             run.end = "separated"
             return None
         return choice
+
+    def _log(self, run: _Run, event: int, choice: Choice, *, solved: Solved, energy: float) -> Row:
+        """The event's row, appended to the log with the sites it cracks."""
+        assert run.unit is not None
+        control = (run.unit[1], run.unit[2])
+        row = self.parts.record.row(event, choice, solved=solved, control=control, energy=energy)
+        run.rows.append(row)
+        run.batches.append([int(e) for e in choice.sites])
+        return row
+
+    def _check_replay(self, run: _Run, event: int, choice: Choice) -> None:
+        """A replayed event must crack the sites the interrupted run cracked."""
+        cracked = [int(e) for e in choice.sites]
+        if cracked != run.batches[event - 1]:
+            raise RunError(
+                f"--resume: event {event} cracked edges {cracked}, the interrupted "
+                f"run {run.batches[event - 1]}; the checkpoint does not reproduce it"
+            )
 
     def _after_crack(
         self, run: _Run, event: int, choice: Choice, *, row: Row | None, energy: float
