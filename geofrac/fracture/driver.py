@@ -165,7 +165,11 @@ def _faces(ctx: CrackContext, units: Units, sites: Sites) -> Faces | None:
 class CrackDriver:
     """Sequentially linear crack propagation for one scene.
 
-    Each ``[cracking]`` setting is read here, once, and handed to the part that needs it.
+    The ``[cracking]`` settings are read here, in the composition, and handed to the parts
+    that need them as constructor arguments (the loop's own as
+    :class:`~geofrac.fracture.config.LoopSettings`); no part reads ``cracking.contact``
+    itself. The context, the criteria and the solver strategies still take the
+    validated config as a whole.
 
     Args:
         config: the validated ``[cracking]`` settings.

@@ -8,10 +8,9 @@ the stiffness blocks of the closed pairs for the assembly, and the signed block 
 (:meth:`~geofrac.fracture.linear.UpdateSolver.contact_changed`).
 
 Per event the loop's solve (:class:`~geofrac.fracture.equilibrium.ContactEquilibrium`)
-runs an active-set iteration (solve, update the
-states, apply the changed blocks, solve again) until no pair changes state, at most
-``contact_iterations`` times; a state that does not settle ends the run with
-``end_reason = "contact"``.
+runs an active-set iteration (solve, update the states, apply the changed blocks, solve
+again) until no pair changes state, at most ``contact_iterations`` times; a state that
+does not settle ends the run with ``end_reason = "contact"``.
 
 With a fracture energy (material ``fracture_energy``) the faces of every edge cracked in
 tension are *cohesive* (docs/cracking.md, "Fracture energy"): springs of the edge's
