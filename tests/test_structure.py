@@ -31,7 +31,9 @@ GENERATED = ("mpm/mls_kernels.py",)
 
 
 def _files() -> list[Path]:
-    return sorted(p for p in ROOT.rglob("*.py") if str(p.relative_to(ROOT)) not in GENERATED)
+    return sorted(
+        p for p in ROOT.rglob("*.py") if str(p.relative_to(ROOT)) not in GENERATED
+    )
 
 
 def _compiled(node: ast.FunctionDef) -> bool:
