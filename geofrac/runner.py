@@ -112,7 +112,9 @@ def solve_scene(
             with timings.phase("compile"):
                 problem.compile()
             with timings.phase("events"):
-                loop = effect_registry.load(driven.name).driver(driven.config, solution, say, write)
+                loop = effect_registry.load(driven.name).driver(
+                    driven.config, solution, say, write=write
+                )
         else:
             _solve_phases(problem, timings, say)
     except BaseException:

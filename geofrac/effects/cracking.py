@@ -557,6 +557,7 @@ def make_driver(
     config: CrackingConfig,
     solution: Solution,
     say: Callable[[str], None],
+    *,
     write: bool = False,
 ) -> CrackDriver:
     """The event loop of a set-up problem, not yet run.
@@ -578,14 +579,14 @@ def make_driver(
         variant = GRAINS
     elif spec.cracking != "edges":
         raise ValueError(f"element {spec.name!r} does not support cracking")
-    return CrackDriver(config, solution, say, write, variant)
+    return CrackDriver(config, solution, say, write=write, variant=variant)
 
 
 def driver(
-    config: CrackingConfig, solution: Solution, say: Callable[[str], None], write: bool
+    config: CrackingConfig, solution: Solution, say: Callable[[str], None], *, write: bool
 ) -> dict[str, JsonValue]:
     """Run the event loop on a set-up problem; return the results (see the driver)."""
-    return make_driver(config, solution, say, write).run()
+    return make_driver(config, solution, say, write=write).run()
 
 
 def scene_driver(

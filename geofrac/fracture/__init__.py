@@ -9,7 +9,11 @@ parts behind protocols: :mod:`~geofrac.fracture.units` (the crack state's
 discretisation), :mod:`~geofrac.fracture.event_criterion`,
 :mod:`~geofrac.fracture.linear` (solver strategies, with
 :mod:`~geofrac.fracture.incremental`), :mod:`~geofrac.fracture.assembly`,
-:mod:`~geofrac.fracture.loop` and :mod:`~geofrac.fracture.output`; the grain variant is
+:mod:`~geofrac.fracture.output` and :mod:`~geofrac.fracture.loop`, the loop of Fig. 2.6
+over its parts :mod:`~geofrac.fracture.equilibrium` (solve),
+:mod:`~geofrac.fracture.modes` (choose), :mod:`~geofrac.fracture.crack_update` (crack,
+update), :mod:`~geofrac.fracture.record`, :mod:`~geofrac.fracture.replay` (checkpoints)
+and :mod:`~geofrac.fracture.summary` (results); the grain variant is
 :mod:`~geofrac.fracture.grain_driver`.
 """
 

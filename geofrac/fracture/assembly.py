@@ -15,6 +15,7 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import numpy as np
 
+from geofrac.fracture.contact import constraint_terms, pair_links
 from geofrac.fracture.context import CrackContext
 from geofrac.fracture.topology import components, motion_pins, motion_rows, zero_energy_rows
 from geofrac.fracture.units import Units
@@ -39,6 +40,7 @@ class Assembler:
     Args:
         ctx: the shared set-up data.
         units: the discretisation of the crack state.
+        contact: the crack faces, whose closed pairs add blocks and links, or None.
 
     Attributes:
         fragment_nodes: nodes of pieces cut free by cracks (no Dirichlet node), held
@@ -47,14 +49,14 @@ class Assembler:
             free rigid motion, shape=(k,); pinned_nodes: their nodes, shape=(k,).
     """
 
-    def __init__(self, ctx: CrackContext, units: Units) -> None:
+    def __init__(self, ctx: CrackContext, units: Units, *, contact: Faces | None = None) -> None:
         self.ctx, self.units = ctx, units
         self.fragment_nodes = np.zeros(0, dtype=np.int64)
         self.pinned_dofs = np.zeros(0, dtype=np.int64)
         self.pinned_nodes = np.zeros(0, dtype=np.int64)
         self._b0: Vector | None = None
         #: crack-face contact (:class:`~geofrac.fracture.faces.Faces`), or None.
-        self.contact: Faces | None = None
+        self.contact = contact
 
     def assemble(self, held_values: np.ndarray) -> tuple[Matrix, Vector, np.ndarray]:
         """Stiffness and load vector of the current crack state; returns (A, b, held DOFs).
@@ -120,7 +122,7 @@ class Assembler:
         pieces = components(len(gm.coords), a, b)
         labels = pieces
         if self.contact is not None:  # closed faces join pieces into groups
-            ca, cb = self.contact.pairs.links()
+            ca, cb = pair_links(self.contact.pairs)
             labels = components(len(gm.coords), np.r_[a, ca], np.r_[b, cb])
         anchored = np.unique(labels[np.unique(ctx.bc_row_nodes)])
         touched = np.zeros(len(gm.coords), dtype=bool)
@@ -156,7 +158,7 @@ class Assembler:
         xy = ctx.gm.coords[:, :2]
         fixed_rows = np.concatenate([ctx.bc_rows, self.pinned_dofs])
         fixed_nodes = np.concatenate([ctx.bc_row_nodes, self.pinned_nodes])
-        terms = None if self.contact is None else self.contact.pairs.constraint_terms()
+        terms = None if self.contact is None else constraint_terms(self.contact.pairs)
         moving = touched.copy()
         moving[self.fragment_nodes] = False  # held: they support what they touch
         pinned: list[tuple[int, int]] = []
@@ -173,7 +175,12 @@ class Assembler:
             on = piece_of[fixed_nodes] >= 0
             n = fixed_nodes[on]
             C = motion_rows(
-                xy[n], fixed_rows[on] % ctx.bs, units.rotation, piece_of[n], centres, scale
+                xy[n],
+                fixed_rows[on] % ctx.bs,
+                units.rotation,
+                pieces=piece_of[n],
+                centres=centres,
+                scale=scale,
             )
             if terms is not None and len(ids) > 1:
                 rows, nodes, comps, weights = terms
@@ -183,15 +190,17 @@ class Assembler:
                     xy[n],
                     comps[keep],
                     units.rotation,
-                    piece_of[n],
-                    centres,
-                    scale,
-                    rows[keep],
-                    weights[keep],
+                    pieces=piece_of[n],
+                    centres=centres,
+                    scale=scale,
+                    rows=rows[keep],
+                    weights=weights[keep],
                 )
                 C = np.vstack([C, pairs])
             candidates = [xy[m] for m in nodes_of]
-            for i, node, comp in motion_pins(C, units.rotation, candidates, centres, scale):
+            for i, node, comp in motion_pins(
+                C, units.rotation, candidates, centres=centres, scale=scale
+            ):
                 pinned.append((int(nodes_of[i][node]), comp))
         return pinned
 

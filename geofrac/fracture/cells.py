@@ -115,7 +115,7 @@ def strain_operator(spec: ElementSpec, x: np.ndarray, bary: np.ndarray) -> np.nd
 
 
 def fe_matrices(
-    spec: ElementSpec, x: np.ndarray, D: np.ndarray, thickness: float, penalty: float = 0.0
+    spec: ElementSpec, x: np.ndarray, D: np.ndarray, *, thickness: float, penalty: float = 0.0
 ) -> np.ndarray:
     """Stiffness matrices of intact cells.
 
@@ -153,7 +153,7 @@ def fe_matrices(
     return K
 
 
-def fe_stresses(spec: ElementSpec, x: np.ndarray, dofs: np.ndarray, D: np.ndarray) -> np.ndarray:
+def fe_stresses(spec: ElementSpec, x: np.ndarray, dofs: np.ndarray, *, D: np.ndarray) -> np.ndarray:
     """Stress (σ_xx, σ_yy, σ_xy) of intact cells at their three edge midpoints.
 
     Args:
@@ -169,7 +169,7 @@ def fe_stresses(spec: ElementSpec, x: np.ndarray, dofs: np.ndarray, D: np.ndarra
     return np.einsum("ij,cqjp,cp->cqi", D, B, dofs)
 
 
-def mls_matrix(fit: LinearFit, D: np.ndarray, thickness: float, area: float) -> np.ndarray:
+def mls_matrix(fit: LinearFit, D: np.ndarray, thickness: float, *, area: float) -> np.ndarray:
     """Stiffness (2.19) of a cracked cell on its satellites' translations, shape=(2n, 2n)."""
     B = strain_matrix(fit)
     return thickness * area * B.T @ D @ B
@@ -216,7 +216,7 @@ class MlsTable:
         self.weight = np.concatenate([self.weight, np.zeros(rows - r0)])
         self._free += list(range(rows - 1, r0 - 1, -1))
 
-    def set(self, cell: int, dofs: np.ndarray, B: np.ndarray, weight: float) -> None:
+    def set(self, cell: int, dofs: np.ndarray, B: np.ndarray, *, weight: float) -> None:
         """Put (or replace) a cell: DOFs shape=(p,), B shape=(3, p)."""
         if cell in self.row:
             r = self.row[cell]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["CrackingConfig", "JointProperties"]
+__all__ = ["CrackingConfig", "JointProperties", "LoopSettings"]
 
 
 @dataclass(frozen=True)
@@ -79,3 +79,21 @@ class CrackingConfig:
     fracture_energy: float | None = None
     #: teeth of the saw-tooth (with ``fracture_energy``).
     teeth: int = 10
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    """What the event loop itself reads of ``[cracking]`` (the driver makes it).
+
+    Attributes:
+        max_events: the last event.
+        output_every: a frame of the series every so many events (and the first).
+        energy_drop: end when an event's energy falls below (1 − it) × the peak; None:
+            never.
+        contact: the crack faces' contact is logged (``cracking.contact``).
+    """
+
+    max_events: int
+    output_every: int
+    energy_drop: float | None
+    contact: bool

@@ -36,7 +36,7 @@ reverses stick. Under the unit load every traction is proportional to the
 load (no cohesion enters the system), so the settled states hold at the event's load.
 Cohesion c enters as a strength, like f_t (2.20): a *bonded* pair (c > 0, never slipped
 or opened) sticks whatever its τ, and slips as an event at the load factor
-r = c / (|τ| − μ p) (:meth:`FacePairs.slip_factors`); the first such event is the onset of
+r = c / (|τ| − μ p) (:func:`slip_factors`); the first such event is the onset of
 slip on a joint (Jaeger's single plane of weakness). Slipping or opening breaks the bond
 (c is a peak strength; the residual strength is friction only, as the residual tensile
 strength of a cracked edge is zero).
@@ -51,7 +51,7 @@ w = √(⟨g⟩² + s²) (⟨g⟩ = max(g, 0): closed faces drive the teeth by s
 k_i w, energy ½ k_i w² per unit area, so that a tooth's drop dissipates ½ w_i² (k_i −
 k_{i+1}) in mixed mode too (the edges crack on σ1, Edo (2016) eq. 2.20, whatever their
 orientation: an edge along the load opens in slip). Its next tooth is an event at
-r = f_i / (k_i w) (:meth:`FacePairs.soften_factors`); after its last tooth it carries
+r = f_i / (k_i w) (:func:`soften_factors`); after its last tooth it carries
 nothing more than a contact pair.
 """
 
@@ -72,9 +72,14 @@ __all__ = [
     "STICK",
     "FacePairs",
     "PairOperator",
+    "constraint_terms",
     "edge_frames",
     "edge_tractions",
+    "pair_block",
+    "pair_links",
     "shear_factors",
+    "slip_factors",
+    "soften_factors",
 ]
 
 #: Pair states (``-1``: the edge is no face pair).
@@ -129,8 +134,8 @@ def shear_factors(
     sigma_n: np.ndarray,
     tau: np.ndarray,
     cohesion: float,
-    friction_angle: float,
     *,
+    friction_angle: float,
     floor: float = 0.0,
 ) -> np.ndarray:
     """Load factor r at which Mohr-Coulomb shear failure |τ| = c − σn tan φ is reached.
@@ -175,6 +180,7 @@ def pair_operator(
     plus: LinearFit,
     minus: LinearFit,
     point: np.ndarray,
+    *,
     tangent: np.ndarray,
     normal: np.ndarray,
     D: np.ndarray,
@@ -250,10 +256,10 @@ class FacePairs:
         mesh: EdgeMesh,
         friction: np.ndarray,
         cohesion: np.ndarray,
+        *,
         modulus: float,
         penalty: float,
         D: np.ndarray,
-        *,
         jump_floor: float = 0.0,
         traction_floor: float = 0.0,
     ) -> None:
@@ -327,29 +333,6 @@ class FacePairs:
         if self.ops.pop(edge, None) is not None:
             self._table = None
 
-    def soften_factors(self, *, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """Cohesive pairs and the load factor r = f_i / (k_i w) of their next tooth.
-
-        w = √(⟨g⟩² + s²) is the effective opening of the last :meth:`update` (module
-        docstring): k_i w is the springs' traction, whose work the teeth dissipate.
-
-        Args:
-            floor: the traction must exceed it (≥ 0;
-                :data:`~geofrac.fracture.scales.TENSION_FLOOR`).
-
-        Returns:
-            (pairs, r), shape=(k,) each; pairs whose faces do not move are left out.
-        """
-        edges = np.flatnonzero(self.tooth >= 0)
-        edges = edges[np.isin(edges, self.active())]
-        if not len(edges):
-            return edges, np.zeros(0)
-        k = np.array([self.teeth[e][0][self.tooth[e]] for e in edges.tolist()])
-        f = np.array([self.teeth[e][1][self.tooth[e]] for e in edges.tolist()])
-        traction = k * np.hypot(np.maximum(self.gap[edges], 0.0), self.slip[edges])
-        ok = traction > max(floor, 0.0)
-        return edges[ok], f[ok] / traction[ok]
-
     def soften(self, edge: int) -> tuple[float, bool]:
         """The pair's next tooth: (energy dissipated per unit area, whether it was the last).
 
@@ -385,7 +368,9 @@ class FacePairs:
                     del self.ops[e]
                     changed.append(e)
                 continue
-            op = pair_operator(fp, fm, self.midpoint[e], self.tangent[e], self.normal[e], self.D)
+            op = pair_operator(
+                fp, fm, self.midpoint[e], tangent=self.tangent[e], normal=self.normal[e], D=self.D
+            )
             if old is None or not (
                 np.array_equal(old.nodes, op.nodes) and np.array_equal(old.weights, op.weights)
             ):
@@ -510,95 +495,127 @@ class FacePairs:
                 self.bonded[e] = False
         return [(int(edges[i]), int(st[i]), int(new[i])) for i in change]
 
-    def slip_factors(self, *, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-        """Bonded sticking pairs and the load factor r = c / (|τ| − μ p) of their slip.
-
-        Args:
-            floor: the drive |τ| − μ p must exceed it (≥ 0): a drive at round-off is no
-                drive (:data:`~geofrac.fracture.scales.TENSION_FLOOR`).
-
-        Returns:
-            (pairs, r), shape=(k,) each; pairs whose τ never reaches c + μ p are left out.
-        """
-        edges = np.flatnonzero(self.bonded & (self.state == STICK))
-        edges = edges[np.isin(edges, self.active())]
-        p, tau = self.tractions(edges)
-        drive = np.abs(tau) - self.friction[edges] * p
-        ok = drive > max(floor, 0.0)
-        return edges[ok], self.cohesion[edges[ok]] / drive[ok]
-
     def unbond(self, edge: int) -> None:
         """The pair's cohesion is lost (its slip event)."""
         self.bonded[edge] = False
-
-    def block(self, edge: int) -> tuple[np.ndarray, np.ndarray] | None:
-        """(nodes, shape=(q,); matrix, shape=(2q, 2q)) of a pair's current state.
-
-        Per unit thickness; None when the pair carries nothing (open or inactive). The
-        matrix acts on (u_x, u_y) of ``nodes`` interleaved.
-        """
-        op = self.ops.get(edge)
-        st = int(self.state[edge])
-        tooth = int(self.tooth[edge])
-        if op is None or (st not in (STICK, SLIP) and tooth < 0):
-            return None
-        Bn, Bt = _jump_row(op, self.normal[edge]), _jump_row(op, self.tangent[edge])
-        out = None
-        if st == STICK:
-            K = np.outer(Bn, Bn) + np.outer(Bt, Bt)
-            out = self.block_scale * K
-        elif st == SLIP:
-            K = np.outer(Bn, Bn) - self.friction[edge] * self.sign[edge] * np.outer(Bt, Bn)
-            out = self.block_scale * K
-        if tooth >= 0:  # the cohesive springs, t L k_i (BnᵀBn + BtᵀBt) per unit thickness
-            springs = self.length[edge] * self.teeth[edge][0][tooth]
-            cohesive = springs * (np.outer(Bn, Bn) + np.outer(Bt, Bt))
-            out = cohesive if out is None else out + cohesive
-        return op.nodes, out
-
-    def links(self) -> tuple[np.ndarray, np.ndarray]:
-        """Node pairs (a, b) joined across closed faces: the pieces' graph."""
-        a, b = [], []
-        for e, op in self.ops.items():
-            joined = self.state[e] in (STICK, SLIP) or self.tooth[e] >= 0
-            if joined and len(op.nodes) > 1:
-                a += [int(op.nodes[0])] * (len(op.nodes) - 1)
-                b += op.nodes[1:].tolist()
-        return np.array(a, dtype=np.int64), np.array(b, dtype=np.int64)
-
-    def constraint_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """What the closed pairs hold, as rows of jumps: (rows, nodes, components, weights).
-
-        Row r is Σ weights · u_component(node) over its terms, shape=(k,) each. A
-        sticking pair ties both components of its faces' jump (two rows); a slipping
-        pair the normal one only: its block (B_n − μ s B_t) B_nᵀ has no stiffness for a
-        motion with B_n · u = 0, so the pieces it joins may slide along it. A cohesive
-        pair's springs tie both components whatever its state.
-        """
-        rows, nodes, comps, weights = [], [], [], []
-        r = 0
-        for e in sorted(self.ops):
-            op, st = self.ops[e], self.state[e]
-            cohesive = self.tooth[e] >= 0
-            if st not in (STICK, SLIP) and not cohesive:
-                continue
-            both = st == STICK or cohesive
-            dirs = [self.normal[e], self.tangent[e]] if both else [self.normal[e]]
-            q = len(op.nodes)
-            for d in dirs:
-                rows += [r] * (2 * q)
-                nodes += np.repeat(op.nodes, 2).tolist()
-                comps += [0, 1] * q
-                weights += _jump_row(op, d).tolist()
-                r += 1
-        return (
-            np.array(rows, dtype=np.int64),
-            np.array(nodes, dtype=np.int64),
-            np.array(comps, dtype=np.int64),
-            np.array(weights, dtype=float),
-        )
 
     def counts(self) -> dict[str, int]:
         """Active pairs per state."""
         st = self.state[self.active()]
         return {name: int((st == i).sum()) for i, name in enumerate(STATES)}
+
+
+# -- the pairs' events (the loop's modes "slip" and "soften") --------------------------
+def slip_factors(pairs: FacePairs, *, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Bonded sticking pairs and the load factor r = c / (|τ| − μ p) of their slip.
+
+    Args:
+        pairs: the face pairs (states and tractions of their last update).
+        floor: the drive |τ| − μ p must exceed it (≥ 0): a drive at round-off is no
+            drive (:data:`~geofrac.fracture.scales.TENSION_FLOOR`).
+
+    Returns:
+        (pairs, r), shape=(k,) each; pairs whose τ never reaches c + μ p are left out.
+    """
+    edges = np.flatnonzero(pairs.bonded & (pairs.state == STICK))
+    edges = edges[np.isin(edges, pairs.active())]
+    p, tau = pairs.tractions(edges)
+    drive = np.abs(tau) - pairs.friction[edges] * p
+    ok = drive > max(floor, 0.0)
+    return edges[ok], pairs.cohesion[edges[ok]] / drive[ok]
+
+
+def soften_factors(pairs: FacePairs, *, floor: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Cohesive pairs and the load factor r = f_i / (k_i w) of their next tooth.
+
+    w = √(⟨g⟩² + s²) is the effective opening of the last :meth:`FacePairs.update` (module
+    docstring): k_i w is the springs' traction, whose work the teeth dissipate.
+
+    Args:
+        pairs: the face pairs (jumps of their last update, current teeth).
+        floor: the traction must exceed it (≥ 0;
+            :data:`~geofrac.fracture.scales.TENSION_FLOOR`).
+
+    Returns:
+        (pairs, r), shape=(k,) each; pairs whose faces do not move are left out.
+    """
+    edges = np.flatnonzero(pairs.tooth >= 0)
+    edges = edges[np.isin(edges, pairs.active())]
+    if not len(edges):
+        return edges, np.zeros(0)
+    k = np.array([pairs.teeth[e][0][pairs.tooth[e]] for e in edges.tolist()])
+    f = np.array([pairs.teeth[e][1][pairs.tooth[e]] for e in edges.tolist()])
+    traction = k * np.hypot(np.maximum(pairs.gap[edges], 0.0), pairs.slip[edges])
+    ok = traction > max(floor, 0.0)
+    return edges[ok], f[ok] / traction[ok]
+
+
+# -- what the closed pairs add to the linear system ------------------------------------
+def pair_block(pairs: FacePairs, edge: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """(nodes, shape=(q,); matrix, shape=(2q, 2q)) of a pair's current state.
+
+    Per unit thickness; None when the pair carries nothing (open or inactive). The
+    matrix acts on (u_x, u_y) of ``nodes`` interleaved.
+    """
+    op = pairs.ops.get(edge)
+    st = int(pairs.state[edge])
+    tooth = int(pairs.tooth[edge])
+    if op is None or (st not in (STICK, SLIP) and tooth < 0):
+        return None
+    Bn, Bt = _jump_row(op, pairs.normal[edge]), _jump_row(op, pairs.tangent[edge])
+    out = None
+    if st == STICK:
+        K = np.outer(Bn, Bn) + np.outer(Bt, Bt)
+        out = pairs.block_scale * K
+    elif st == SLIP:
+        K = np.outer(Bn, Bn) - pairs.friction[edge] * pairs.sign[edge] * np.outer(Bt, Bn)
+        out = pairs.block_scale * K
+    if tooth >= 0:  # the cohesive springs, t L k_i (BnᵀBn + BtᵀBt) per unit thickness
+        springs = pairs.length[edge] * pairs.teeth[edge][0][tooth]
+        cohesive = springs * (np.outer(Bn, Bn) + np.outer(Bt, Bt))
+        out = cohesive if out is None else out + cohesive
+    return op.nodes, out
+
+
+def pair_links(pairs: FacePairs) -> tuple[np.ndarray, np.ndarray]:
+    """Node pairs (a, b) joined across closed faces: the pieces' graph."""
+    a, b = [], []
+    for e, op in pairs.ops.items():
+        joined = pairs.state[e] in (STICK, SLIP) or pairs.tooth[e] >= 0
+        if joined and len(op.nodes) > 1:
+            a += [int(op.nodes[0])] * (len(op.nodes) - 1)
+            b += op.nodes[1:].tolist()
+    return np.array(a, dtype=np.int64), np.array(b, dtype=np.int64)
+
+
+def constraint_terms(pairs: FacePairs) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What the closed pairs hold, as rows of jumps: (rows, nodes, components, weights).
+
+    Row r is Σ weights · u_component(node) over its terms, shape=(k,) each. A
+    sticking pair ties both components of its faces' jump (two rows); a slipping
+    pair the normal one only: its block (B_n − μ s B_t) B_nᵀ has no stiffness for a
+    motion with B_n · u = 0, so the pieces it joins may slide along it. A cohesive
+    pair's springs tie both components whatever its state.
+    """
+    rows, nodes, comps, weights = [], [], [], []
+    r = 0
+    for e in sorted(pairs.ops):
+        op, st = pairs.ops[e], pairs.state[e]
+        cohesive = pairs.tooth[e] >= 0
+        if st not in (STICK, SLIP) and not cohesive:
+            continue
+        both = st == STICK or cohesive
+        dirs = [pairs.normal[e], pairs.tangent[e]] if both else [pairs.normal[e]]
+        q = len(op.nodes)
+        for d in dirs:
+            rows += [r] * (2 * q)
+            nodes += np.repeat(op.nodes, 2).tolist()
+            comps += [0, 1] * q
+            weights += _jump_row(op, d).tolist()
+            r += 1
+    return (
+        np.array(rows, dtype=np.int64),
+        np.array(nodes, dtype=np.int64),
+        np.array(comps, dtype=np.int64),
+        np.array(weights, dtype=float),
+    )

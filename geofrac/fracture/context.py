@@ -306,22 +306,23 @@ def _force(
     return control
 
 
-def _dirichlet_rows(
-    problem: ElasticProblem, gm: GlobalMesh, *, bs: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The Dirichlet DOFs of every rank (collective).
+def _dirichlet(
+    problem: ElasticProblem, comm: MPI.Comm, n_global: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Dirichlet rows and values of every rank, shape=(k,), as a mask and a vector (collective).
 
     Returns:
-        global DOF indices, shape=(p,); their prescribed values, shape=(p,); the node
-        of each, shape=(p,).
+        (rows, values, mask, full): the mask and the full vector have shape=(n_global,).
     """
     rows, vals = problem.dirichlet()
-    parts = problem.comm.allgather((rows, vals))
+    parts = comm.allgather((rows, vals))
     bc_rows = np.concatenate([p[0] for p in parts]).astype(np.int64)
     bc_vals = np.concatenate([p[1] for p in parts])
-    order = np.argsort(gm.node_block)
-    bc_row_nodes = order[np.searchsorted(gm.node_block[order], bc_rows // bs)]
-    return bc_rows, bc_vals, bc_row_nodes
+    bc_mask = np.zeros(n_global, dtype=bool)
+    bc_mask[bc_rows] = True
+    bc_full = np.zeros(n_global)
+    bc_full[bc_rows] = bc_vals
+    return bc_rows, bc_vals, bc_mask, bc_full
 
 
 def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> CrackContext:
@@ -343,11 +344,9 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
     _, mu = lame(mat.E, mat.nu, 2, plane=mat.plane)
     imap = space.dofmap.index_map
     n_global = imap.size_global * bs
-    bc_rows, bc_vals, bc_row_nodes = _dirichlet_rows(problem, gm, bs=bs)
-    bc_mask = np.zeros(n_global, dtype=bool)
-    bc_mask[bc_rows] = True
-    bc_full = np.zeros(n_global)
-    bc_full[bc_rows] = bc_vals
+    bc_rows, bc_vals, bc_mask, bc_full = _dirichlet(problem, comm, n_global)
+    order = np.argsort(gm.node_block)
+    bc_row_nodes = order[np.searchsorted(gm.node_block[order], bc_rows // bs)]
     # the control group: its prescribed, non-zero DOFs (none under force control)
     control_nodes = np.unique(facet_nodes(tagged, gm, config.control))
     on = np.isin(bc_row_nodes, control_nodes) & (bc_vals != 0)

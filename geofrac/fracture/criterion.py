@@ -127,9 +127,9 @@ def select_edges(
     sigma1: np.ndarray,
     candidates: np.ndarray,
     tensile_strength: float,
+    *,
     batch_tolerance: float = 0.0,
     max_edges: int = 1,
-    *,
     floor: float = 0.0,
     points: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float]:

@@ -144,7 +144,7 @@ def principal_direction(stress: np.ndarray) -> tuple[float, float, np.ndarray]:
 
 
 def averaged_stress(
-    stress: np.ndarray, areas: np.ndarray, distance: np.ndarray, radius: float
+    stress: np.ndarray, areas: np.ndarray, distance: np.ndarray, *, radius: float
 ) -> np.ndarray:
     """The Gaussian-weighted mean of cell stresses about a point, shape=(3,).
 
@@ -175,6 +175,7 @@ def choose_edge(
     coords: np.ndarray,
     tip: int,
     ideal: Tip,
+    *,
     direction: np.ndarray,
     edges: np.ndarray,
     others: np.ndarray,

@@ -38,7 +38,7 @@ from geofrac.errors import RunError
 from geofrac.fem.elastic import ElasticProblem
 from geofrac.fem.solution import Solution
 from geofrac.fracture.assembly import Assembler
-from geofrac.fracture.config import CrackingConfig
+from geofrac.fracture.config import CrackingConfig, LoopSettings
 from geofrac.fracture.context import (
     CrackContext,
     GlobalMesh,
@@ -48,13 +48,19 @@ from geofrac.fracture.context import (
     crack_context,
     facet_nodes,
 )
+from geofrac.fracture.crack_update import CrackUpdate
+from geofrac.fracture.equilibrium import ContactEquilibrium, Equilibrium, LinearEquilibrium
 from geofrac.fracture.event_criterion import CRITERIA, EventCriterion
-from geofrac.fracture.faces import Faces
+from geofrac.fracture.faces import Faces, Softening, joint_properties
 from geofrac.fracture.linear import SolverStrategy, Timing, make_strategy
-from geofrac.fracture.loop import EventLoop
+from geofrac.fracture.loop import EventLoop, LoopParts
+from geofrac.fracture.modes import ModeChooser, ShearStrength
 from geofrac.fracture.output import EdgeDrawing, EventOutput, Row, SiteDrawing
+from geofrac.fracture.record import Recorder
+from geofrac.fracture.replay import Replay
+from geofrac.fracture.summary import FaceReport, Summary
 from geofrac.fracture.topology import random_sites
-from geofrac.fracture.units import EdgeUnits, SiteState, Units
+from geofrac.fracture.units import EdgeUnits, SiteState, Units, mls_settings
 from geofrac.solvers import Matrix, Vector
 
 __all__ = ["EDGES", "CrackDriver", "EdgeVariant", "Variant"]
@@ -90,15 +96,23 @@ class EdgeVariant:
     kind: str = "cracking"
 
     def units(self, ctx: CrackContext) -> Units:
-        """:class:`~geofrac.fracture.units.EdgeUnits`."""
-        return EdgeUnits(ctx)
+        """:class:`~geofrac.fracture.units.EdgeUnits`.
+
+        Cracks cut cells with contact and the tip criteria; the stress tensors are kept
+        for shear events and the criteria that read them.
+        """
+        cfg = ctx.config
+        return EdgeUnits(
+            ctx,
+            mls=mls_settings(cfg),
+            cut=cfg.contact or cfg.criterion != "principal",
+            keep_stress=cfg.shear_cohesion is not None or CRITERIA[cfg.criterion].needs_stress,
+        )
 
     def criterion(self, ctx: CrackContext, units: Units) -> EventCriterion:
         """The ``cracking.criterion`` of :data:`~geofrac.fracture.event_criterion.CRITERIA`."""
         assert isinstance(units, EdgeUnits)
-        kind = CRITERIA[ctx.config.criterion]
-        units.keep_stress |= kind.needs_stress
-        return kind(units, ctx.config)
+        return CRITERIA[ctx.config.criterion](units, ctx.config)
 
     def drawing(self, ctx: CrackContext, units: Units, sites: Sites) -> SiteDrawing:
         """:class:`~geofrac.fracture.output.EdgeDrawing`."""
@@ -124,13 +138,38 @@ def _sites(ctx: CrackContext, units: Units, points: np.ndarray) -> Sites:
         state.crackable & ~state.mesh.boundary_edges,
         cfg.precracked_fraction,
         cfg.precrack_seed,
-        points,
+        points=points,
     )
     return Sites(np.union1d(group_sites, random), group_sites, random)
 
 
+def _faces(ctx: CrackContext, units: Units, sites: Sites) -> Faces | None:
+    """The crack faces: with ``cracking.contact`` or a fracture energy, else None."""
+    cfg = ctx.config
+    if not cfg.contact and cfg.fracture_energy is None:
+        return None
+    assert isinstance(units, EdgeUnits)
+    softening = None
+    if cfg.fracture_energy is not None:
+        softening = Softening(cfg.tensile_strength, cfg.fracture_energy, cfg.teeth)
+    return Faces(
+        ctx,
+        units,
+        contact=cfg.contact,
+        joints=joint_properties(ctx, units, sites) if cfg.contact else None,
+        penalty=cfg.contact_penalty,
+        softening=softening,
+    )
+
+
 class CrackDriver:
     """Sequentially linear crack propagation for one scene.
+
+    The ``[cracking]`` settings are read here, in the composition, and handed to the parts
+    that need them as constructor arguments (the loop's own as
+    :class:`~geofrac.fracture.config.LoopSettings`); no part reads ``cracking.contact``
+    itself. The context, the criteria and the solver strategies still take the
+    validated config as a whole.
 
     Args:
         config: the validated ``[cracking]`` settings.
@@ -148,6 +187,7 @@ class CrackDriver:
         config: CrackingConfig,
         solution: Solution,
         say: Say,
+        *,
         write: bool = False,
         variant: Variant = EDGES,
     ) -> None:
@@ -162,29 +202,81 @@ class CrackDriver:
         self.units: Units = variant.units(ctx)
         self.criterion: EventCriterion = variant.criterion(ctx, self.units)
         self.sites = _sites(ctx, self.units, self.criterion.points)
-        self.assembler = Assembler(ctx, self.units)
         #: crack-face contact (``cracking.contact``) and cohesive faces (fracture
         #: energy), or None.
-        self.contact: Faces | None = None
-        if config.contact or config.fracture_energy is not None:
-            assert isinstance(self.units, EdgeUnits)
-            self.contact = Faces(ctx, self.units, self.sites)
-            self.assembler.contact = self.contact
+        self.contact: Faces | None = _faces(ctx, self.units, self.sites)
+        self.assembler = Assembler(ctx, self.units, contact=self.contact)
         self.timing = Timing()
         self.strategy: SolverStrategy = make_strategy(ctx, self.assembler, self.timing)
         self.drawing: SiteDrawing = variant.drawing(ctx, self.units, self.sites)
-        output = EventOutput(ctx, self.units.state, self.drawing, self.sites, write)
         self.loop = EventLoop(
             ctx,
-            self.units,
-            self.criterion,
-            self.strategy,
-            self.assembler,
-            output,
+            self._parts(write=write),
             self.sites,
-            self.timing,
-            self.control,
-            self.contact,
+            settings=LoopSettings(
+                max_events=config.max_events,
+                output_every=config.output_every,
+                energy_drop=config.energy_drop,
+                contact=config.contact,
+            ),
+            control=self.control,
+        )
+
+    def _parts(self, *, write: bool) -> LoopParts:
+        """The loop's parts on the units, criterion, faces, solver and assembler."""
+        ctx, config, contact = self.ctx, self.config, self.contact
+        units, criterion, strategy = self.units, self.criterion, self.strategy
+        equilibrium: Equilibrium = (
+            LinearEquilibrium(strategy)
+            if contact is None
+            else ContactEquilibrium(strategy, contact, config.contact_iterations)
+        )
+        shear = None
+        if config.shear_cohesion is not None:
+            shear = ShearStrength(config.shear_cohesion, config.shear_friction_angle)
+        chooser = ModeChooser(criterion, units, contact=contact, shear=shear)
+        face = None if config.face is None else FaceReport(config.face, config.face_origin)
+        output = EventOutput(
+            ctx,
+            units.state,
+            self.drawing,
+            sites=self.sites,
+            write=write,
+            contact=config.contact,
+            softening=config.fracture_energy is not None,
+        )
+        return LoopParts(
+            units=units,
+            criterion=criterion,
+            strategy=strategy,
+            assembler=self.assembler,
+            equilibrium=equilibrium,
+            chooser=chooser,
+            crack=CrackUpdate(units, criterion, strategy, contact=contact),
+            record=Recorder(ctx, units, output, contact=contact, contact_on=config.contact),
+            output=output,
+            replay=Replay(
+                units,
+                criterion,
+                strategy,
+                assembler=self.assembler,
+                timing=self.timing,
+                contact=contact,
+            ),
+            summary=Summary(
+                ctx,
+                units,
+                self.sites,
+                timing=self.timing,
+                assembler=self.assembler,
+                contact=contact,
+                contact_on=config.contact,
+                modes=chooser.modes,
+                face=face,
+                solver=config.solver,
+            ),
+            timing=self.timing,
+            contact=contact,
         )
 
     # -- views ---------------------------------------------------------------------------

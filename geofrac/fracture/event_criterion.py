@@ -110,8 +110,8 @@ def next_sites(
         sigma1,
         candidates,
         config.tensile_strength,
-        config.batch_tolerance,
-        config.edges_per_event,
+        batch_tolerance=config.batch_tolerance,
+        max_edges=config.edges_per_event,
         floor=floor,
         points=points,
     )
@@ -296,13 +296,15 @@ class DirectionCriterion(TractionCriterion):
         if not len(cells):
             return None
         cell_stress = self.units.midpoint_stress[cells].mean(axis=1)
-        s_bar = averaged_stress(cell_stress, tracker.areas[cells], dist, tracker.tip_radius(a))
+        s_bar = averaged_stress(
+            cell_stress, tracker.areas[cells], dist, radius=tracker.tip_radius(a)
+        )
         _, d = growth_direction(s_bar, tip.direction)
         at = tracker.edges_at(a)
         cand = at[open_[at]]
         ends = mesh.edges[cand]
         others = np.where(ends[:, 0] == a, ends[:, 1], ends[:, 0])
-        pick = choose_edge(mesh.coords, a, tip, d, cand, others)
+        pick = choose_edge(mesh.coords, a, tip, direction=d, edges=cand, others=others)
         if pick is None:
             return None
         e, p = pick

@@ -7,10 +7,10 @@ the stiffness blocks of the closed pairs for the assembly, and the signed block 
 (new − old) that the ``update`` solver folds into its factorisation
 (:meth:`~geofrac.fracture.linear.UpdateSolver.contact_changed`).
 
-Per event the loop calls :meth:`Faces.settle`: an active-set iteration (solve, update the
-states, apply the changed blocks, solve again) until no pair changes state, at most
-``contact_iterations`` times; a state that does not settle ends the run with
-``end_reason = "contact"``.
+Per event the loop's solve (:class:`~geofrac.fracture.equilibrium.ContactEquilibrium`)
+runs an active-set iteration (solve, update the states, apply the changed blocks, solve
+again) until no pair changes state, at most ``contact_iterations`` times; a state that
+does not settle ends the run with ``end_reason = "contact"``.
 
 With a fracture energy (material ``fracture_energy``) the faces of every edge cracked in
 tension are *cohesive* (docs/cracking.md, "Fracture energy"): springs of the edge's
@@ -26,15 +26,24 @@ their last tooth (the brittle crack's free faces).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from geofrac.errors import RunError
-from geofrac.fracture.contact import NO_PAIR, OPEN, ROUNDOFF, SLIP, FacePairs
+from geofrac.fracture.contact import NO_PAIR, OPEN, ROUNDOFF, SLIP, FacePairs, pair_block
 from geofrac.fracture.context import CrackContext, JsonValue, Sites, facet_nodes
 from geofrac.fracture.softening import saw_tooth
 from geofrac.fracture.units import Block, EdgeUnits
 
-__all__ = ["PAIR_FIELDS", "Faces", "joint_properties"]
+__all__ = [
+    "PAIR_FIELDS",
+    "Faces",
+    "Softening",
+    "contact_frame",
+    "contact_summary",
+    "joint_properties",
+]
 
 #: Per-pair arrays of :class:`~geofrac.fracture.contact.FacePairs` that a checkpoint keeps
 #: (the operators and blocks follow from them and the fits).
@@ -88,31 +97,59 @@ def joint_properties(
     return mu, c
 
 
+@dataclass(frozen=True)
+class Softening:
+    """The saw-tooth of cohesive faces (docs/cracking.md, "Fracture energy").
+
+    Attributes:
+        tensile_strength: f_t, the first tooth's peak traction.
+        fracture_energy: G_f per unit area.
+        teeth: N, the number of teeth.
+    """
+
+    tensile_strength: float
+    fracture_energy: float
+    teeth: int
+
+
 class Faces:
     """The face pairs of the crack state and what they add to the linear system.
 
     Args:
         ctx: the shared set-up data.
         units: the edge units (cells and their MLS fits).
-        sites: the pre-cracked sites.
+        contact: crack-face contact (``cracking.contact``); False: cohesive pairs only.
+        joints: friction μ and cohesion c per edge (:func:`joint_properties`), each
+            shape=(num_edges,); None: no friction, no cohesion (cohesive faces only).
+        penalty: the stiffness of closed faces (``contact_penalty``).
+        softening: the cohesive faces' saw-tooth, or None (brittle cracks).
     """
 
-    def __init__(self, ctx: CrackContext, units: EdgeUnits, sites: Sites) -> None:
+    def __init__(
+        self,
+        ctx: CrackContext,
+        units: EdgeUnits,
+        *,
+        contact: bool,
+        joints: tuple[np.ndarray, np.ndarray] | None,
+        penalty: float,
+        softening: Softening | None,
+    ) -> None:
         self.ctx, self.units = ctx, units
         #: crack-face contact (``cracking.contact``); False: cohesive pairs only.
-        self.contact_on = ctx.config.contact
-        if self.contact_on:
-            mu, c = joint_properties(ctx, units, sites)
-        else:  # cohesive faces close without friction
+        self.contact_on = contact
+        if joints is None:  # cohesive faces close without friction
             mu = c = np.zeros(len(units.state.mesh.edges))
+        else:
+            mu, c = joints
         E = float(ctx.scene.material.E)
         self.pairs = FacePairs(
             units.state.mesh,
             mu,
             c,
-            E,
-            ctx.config.contact_penalty,
-            ctx.D,
+            modulus=E,
+            penalty=penalty,
+            D=ctx.D,
             jump_floor=ROUNDOFF * ctx.scales.displacement,
             traction_floor=ROUNDOFF * ctx.scales.stress,
         )
@@ -122,8 +159,6 @@ class Faces:
         self.applied: dict[int, Block] = {}
         #: active-set iterations (solves after the first) over the run.
         self.iterations = 0
-        #: state changes of the last :meth:`settle`: (edge, old, new).
-        self.last_changes: list[tuple[int, int, int]] = []
         #: most negative gap times the load factor over the run (penetration < 0).
         self.worst_gap = 0.0
         #: pairs held in their least violated state after a cycle, over the run, and
@@ -132,10 +167,11 @@ class Faces:
         self.worst_violation = 0.0
         #: energy dissipated by the cohesive pairs' teeth so far (times the thickness).
         self.dissipated = 0.0
+        self._softening = softening
         #: the first tooth's stiffness per unit area of each edge, E / d (module
         #: docstring), shape=(num_edges,); None without a fracture energy.
         self.k0: np.ndarray | None = None
-        if ctx.config.fracture_energy is not None:
+        if softening is not None:
             self.k0 = self.pairs.k.copy()
 
     @property
@@ -149,13 +185,16 @@ class Faces:
         Raises:
             RunError: G_f is not above a first tooth's elastic energy (cells too large).
         """
-        cfg = self.ctx.config
-        assert self.k0 is not None and cfg.fracture_energy is not None
+        soft = self._softening
+        assert self.k0 is not None and soft is not None
         if not len(edges):
             return
         try:
             st = saw_tooth(
-                self.k0[edges], ft=cfg.tensile_strength, gf=cfg.fracture_energy, n=cfg.teeth
+                self.k0[edges],
+                ft=soft.tensile_strength,
+                gf=soft.fracture_energy,
+                n=soft.teeth,
             )
         except ValueError as exc:
             raise RunError(
@@ -166,7 +205,7 @@ class Faces:
 
     # -- the system ------------------------------------------------------------------
     def _block(self, edge: int) -> Block | None:
-        b = self.pairs.block(edge)
+        b = pair_block(self.pairs, edge)
         if b is None:
             return None
         nodes, K = b
@@ -299,22 +338,6 @@ class Faces:
         out["min_gap"] = gap
         return out
 
-    def summary(self, events: int, control: float) -> dict[str, int | float]:
-        """The ``contact`` entry of the results.
-
-        ``control``: the largest |control displacement| of the run (the gap's scale).
-        """
-        out: dict[str, int | float] = {"pairs": len(self.pairs.active())}
-        out |= self.pairs.counts()
-        out["bonded"] = int(np.count_nonzero(self.pairs.bonded))
-        out["worst_gap"] = self.worst_gap
-        out["worst_gap_relative"] = self.worst_gap / control if control > 0 else 0.0
-        out["frozen_pairs"] = self.frozen_pairs
-        out["worst_violation"] = self.worst_violation
-        out["iterations"] = self.iterations
-        out["iterations_per_event"] = self.iterations / events if events else 0.0
-        return out
-
     # -- checkpoints -----------------------------------------------------------------
     def snapshot(self) -> tuple[dict[str, JsonValue], dict[str, np.ndarray]]:
         """The contact state now, for a checkpoint: (counters, arrays).
@@ -386,22 +409,39 @@ class Faces:
         self.worst_violation = float(counters["worst_violation"])  # type: ignore[arg-type]
         self.worst_gap = min([0.0, *min_gaps])
 
-    def frame(self, r: float) -> dict[str, np.ndarray]:
-        """Per-edge fields of the crack series at load factor r (−1 state: no pair)."""
-        pairs = self.pairs
-        ne = len(pairs.state)
-        state = np.full(ne, -1.0)
-        act = pairs.active()
-        state[act] = pairs.state[act]
-        p, tau = pairs.tractions(act)
-        out = {"contact_state": state}
-        for name, values in (
-            ("gap", pairs.gap[act]),
-            ("slip", pairs.slip[act]),
-            ("normal_traction", p),
-            ("shear_traction", tau),
-        ):
-            full = np.zeros(ne)
-            full[act] = r * values
-            out[name] = full
-        return out
+
+def contact_summary(faces: Faces, events: int, control: float) -> dict[str, int | float]:
+    """The ``contact`` entry of the results.
+
+    ``control``: the largest |control displacement| of the run (the gap's scale).
+    """
+    out: dict[str, int | float] = {"pairs": len(faces.pairs.active())}
+    out |= faces.pairs.counts()
+    out["bonded"] = int(np.count_nonzero(faces.pairs.bonded))
+    out["worst_gap"] = faces.worst_gap
+    out["worst_gap_relative"] = faces.worst_gap / control if control > 0 else 0.0
+    out["frozen_pairs"] = faces.frozen_pairs
+    out["worst_violation"] = faces.worst_violation
+    out["iterations"] = faces.iterations
+    out["iterations_per_event"] = faces.iterations / events if events else 0.0
+    return out
+
+
+def contact_frame(pairs: FacePairs, r: float) -> dict[str, np.ndarray]:
+    """Per-edge fields of the crack series at load factor r (−1 state: no pair)."""
+    ne = len(pairs.state)
+    state = np.full(ne, -1.0)
+    act = pairs.active()
+    state[act] = pairs.state[act]
+    p, tau = pairs.tractions(act)
+    out = {"contact_state": state}
+    for name, values in (
+        ("gap", pairs.gap[act]),
+        ("slip", pairs.slip[act]),
+        ("normal_traction", p),
+        ("shear_traction", tau),
+    ):
+        full = np.zeros(ne)
+        full[act] = r * values
+        out[name] = full
+    return out

@@ -30,6 +30,7 @@ node its whole patch), so they are assembled through PETSc's COO interface like 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -45,11 +46,17 @@ from geofrac.errors import RunError
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
 from geofrac.fracture.criterion import normal_stress
 from geofrac.fracture.event_criterion import EventCriterion, StatelessCriterion, next_sites
-from geofrac.fracture.grains import GrainState, connected_cracks, interfaces, side_sites
+from geofrac.fracture.grains import (
+    GrainState,
+    Interfaces,
+    connected_cracks,
+    interfaces,
+    side_sites,
+)
 from geofrac.fracture.output import FrameData, SiteDrawing
 from geofrac.fracture.state import MlsSettings, segment_distance
 from geofrac.fracture.topology import edge_mesh
-from geofrac.fracture.units import GAUSS_6, Block, Fit, Units, unit_masks
+from geofrac.fracture.units import GAUSS_6, Block, Fit, Units, mls_settings, unit_masks
 from geofrac.mls import cmulti
 from geofrac.mls.cmulti import NodeFit
 
@@ -59,114 +66,106 @@ if TYPE_CHECKING:
 __all__ = ["GRAINS", "GrainCriterion", "GrainDrawing", "GrainUnits", "GrainVariant"]
 
 
-class GrainUnits:
-    """Nodes (grains) as units: EFMM node operators, C-MultiMLSM on cracked interfaces.
+@dataclass(frozen=True)
+class _NodeTables:
+    """The owned nodes' EFMM data: matrices as COO and padded, stress at their interfaces.
 
-    The interfaces inside the triangles that touch a Dirichlet node never crack (the
-    edges chapter 2 freezes: point supports and loads concentrate stress there);
-    ``mls_region`` selects nodes (not cells) that use C-MultiMLSM from the start.
-
-    Args:
-        ctx: the shared set-up data.
+    Attributes:
+        own: the owned nodes, shape=(n,); owned: the mask, shape=(num_nodes,).
+        coo: (rows, cols, values, owned node index) of the EFMM matrices, shape=(m,) each.
+        dofs: each owned node's patch DOFs padded with n_global, shape=(n, d).
+        K: its t K_i padded with zeros, shape=(n, d, d).
+        pair_unit, pair_edge, pair_slot: per (node, interface) pair, the node's index in
+            ``own``, the interface and the node's side (0/1), shape=(p,) each.
+        pair_S: the pair's stress operator at the interface centre, shape=(p, 3, d).
     """
 
-    def __init__(self, ctx: CrackContext) -> None:
-        self.ctx = ctx
-        gm, d, cfg = ctx.gm, ctx.scene.discretization, ctx.config
-        self.rotation = np.zeros(0)
-        self._ops: dict[int, NodeOperator] = {}
-        self._fit_k: dict[int, tuple[NodeFit, np.ndarray]] = {}
-        # the crack's origin and the interfaces on the face, set at the first event
-        self._origin: np.ndarray | None = None
-        self._face_sites = np.zeros(0, dtype=np.int64)
-        self._group_precracked = np.zeros(0, dtype=np.int64)
-        mesh_e = edge_mesh(gm.coords, gm.cells)
-        frozen, forced_nodes = unit_masks(ctx, mesh_e, gm.coords)
-        settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
-        self.domains = integration_domains(gm.coords, gm.cells, d.q_rand, seed=d.domain_seed)
-        self.faces = interfaces(mesh_e, self.domains)
-        frozen_nodes = np.zeros(len(gm.coords), dtype=bool)
-        frozen_nodes[ctx.bc_nodes] = True
-        self.state: GrainState = GrainState(
-            mesh_e, self.faces, frozen_nodes, forced_nodes, settings, ctx.rank_map, cfg.switch
-        )
-        self.state.crackable[np.unique(mesh_e.cell_edges[frozen])] = False
-        self._setup_nodes()
-        # the element's own domains and stress coefficients serve results.xdmf and the
-        # grains file of the last state
-        ctx.problem.element.setup(ctx.D, d.q_rand, d.domain_seed)
-        kernels.load("cmulti", ctx.comm)  # collective: rank 0 compiles on first use
+    own: np.ndarray
+    owned: np.ndarray
+    coo: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+    dofs: np.ndarray
+    K: np.ndarray
+    pair_unit: np.ndarray
+    pair_edge: np.ndarray
+    pair_slot: np.ndarray
+    pair_S: np.ndarray
 
-    def operator(self, node: int) -> NodeOperator:
-        """EFMM operators of any node (cached)."""
-        op = self._ops.get(node)
-        if op is None:
-            f, gm = self.faces, self.ctx.gm
-            mine = f.grain_order[f.grain_offsets[node] : f.grain_offsets[node + 1]]
-            op = node_operator(
-                gm.coords, gm.cells, self.ctx.D, domains=self.domains, node=node, mine=mine
-            )
-            self._ops[node] = op
-        return op
 
-    def _setup_nodes(self) -> None:
-        """Owned nodes, their EFMM matrices (COO) and stress operators at the interfaces."""
-        ctx = self.ctx
-        gm, bs = ctx.gm, ctx.bs
-        lo, hi = ctx.row0 // bs, (ctx.row0 + ctx.n_local) // bs
-        own = np.flatnonzero((gm.node_block >= lo) & (gm.node_block < hi))
-        self.own = own
-        self.owned = np.zeros(len(gm.coords), dtype=bool)
-        self.owned[own] = True
-        ops = [self.operator(int(i)) for i in own]
-        pad = ctx.n_global
-        nd = max((2 * len(op.patch) for op in ops), default=2)
-        dofs = np.full((len(own), nd), pad, dtype=np.int64)
-        K = np.zeros((len(own), nd, nd))
-        rows, cols, vals, unit = [], [], [], []
-        pair_unit, pair_edge, pair_slot, pair_S = [], [], [], []
-        for k, (i, op) in enumerate(zip(own, ops, strict=True)):
-            dd = ctx.mls_dofs(op.patch)
-            m = len(dd)
-            dofs[k, :m] = dd
-            Kt = ctx.t * op.K  # per unit thickness in node_operator; t as the C-MultiMLSM K
-            K[k, :m, :m] = Kt
-            rows.append(np.repeat(dd, m))
-            cols.append(np.tile(dd, m))
-            vals.append(Kt.ravel())
-            unit.append(np.full(m * m, k))
-            edges = self.state.edges_of_node(int(i))
-            S = op.stress_at(self.faces.point[edges])  # shape=(k, 3, m)
-            Sp = np.zeros((len(edges), 3, nd))
-            Sp[:, :, :m] = S
-            pair_unit.append(np.full(len(edges), k))
-            pair_edge.append(edges)
-            pair_slot.append((self.state.mesh.edges[edges, 1] == i).astype(np.int64))
-            pair_S.append(Sp)
-        cat = np.concatenate
-        empty_i = np.zeros(0, dtype=np.int64)
-        self._coo = (
+def _node_tables(
+    ctx: CrackContext, state: GrainState, faces: Interfaces, operator: Callable[[int], NodeOperator]
+) -> _NodeTables:
+    """Owned nodes, their EFMM matrices (COO) and stress operators at the interfaces."""
+    gm, bs = ctx.gm, ctx.bs
+    lo, hi = ctx.row0 // bs, (ctx.row0 + ctx.n_local) // bs
+    own = np.flatnonzero((gm.node_block >= lo) & (gm.node_block < hi))
+    owned = np.zeros(len(gm.coords), dtype=bool)
+    owned[own] = True
+    ops = [operator(int(i)) for i in own]
+    pad = ctx.n_global
+    nd = max((2 * len(op.patch) for op in ops), default=2)
+    dofs = np.full((len(own), nd), pad, dtype=np.int64)
+    K = np.zeros((len(own), nd, nd))
+    rows, cols, vals, unit = [], [], [], []
+    pair_unit, pair_edge, pair_slot, pair_S = [], [], [], []
+    for k, (i, op) in enumerate(zip(own, ops, strict=True)):
+        dd = ctx.mls_dofs(op.patch)
+        m = len(dd)
+        dofs[k, :m] = dd
+        Kt = ctx.t * op.K  # per unit thickness in node_operator; t as the C-MultiMLSM K
+        K[k, :m, :m] = Kt
+        rows.append(np.repeat(dd, m))
+        cols.append(np.tile(dd, m))
+        vals.append(Kt.ravel())
+        unit.append(np.full(m * m, k))
+        edges = state.edges_of_node(int(i))
+        S = op.stress_at(faces.point[edges])  # shape=(k, 3, m)
+        Sp = np.zeros((len(edges), 3, nd))
+        Sp[:, :, :m] = S
+        pair_unit.append(np.full(len(edges), k))
+        pair_edge.append(edges)
+        pair_slot.append((state.mesh.edges[edges, 1] == i).astype(np.int64))
+        pair_S.append(Sp)
+    cat = np.concatenate
+    empty_i = np.zeros(0, dtype=np.int64)
+    return _NodeTables(
+        own=own,
+        owned=owned,
+        coo=(
             cat(rows) if rows else empty_i,
             cat(cols) if cols else empty_i,
             cat(vals) if vals else np.zeros(0),
             cat(unit) if unit else empty_i,
-        )
-        self._int_dofs, self._int_K = dofs, K
-        self._pair_unit = cat(pair_unit) if pair_unit else empty_i
-        self._pair_edge = cat(pair_edge) if pair_edge else empty_i
-        self._pair_slot = cat(pair_slot) if pair_slot else empty_i
-        self._pair_S = cat(pair_S) if pair_S else np.zeros((0, 3, nd))
+        ),
+        dofs=dofs,
+        K=K,
+        pair_unit=cat(pair_unit) if pair_unit else empty_i,
+        pair_edge=cat(pair_edge) if pair_edge else empty_i,
+        pair_slot=cat(pair_slot) if pair_slot else empty_i,
+        pair_S=cat(pair_S) if pair_S else np.zeros((0, 3, nd)),
+    )
 
-    # -- sites --------------------------------------------------------------------------
-    def group_sites(self, pairs: np.ndarray) -> np.ndarray:
-        """A notch line: the interfaces between its nodes and those on its left."""
-        sites = side_sites(self.state.mesh, pairs)
+
+class MainCrack:
+    """The crack joined to its origin: where it reaches the ``face`` group, where it ends.
+
+    The origin is the interfaces of the ``precracked`` groups, else the first event's.
+
+    Args:
+        state: the grain state (cracked interfaces, the mesh).
+        faces: the interfaces (their centres).
+        face_nodes: the nodes of the ``face`` group, or None.
+    """
+
+    def __init__(self, state: GrainState, faces: Interfaces, face_nodes: np.ndarray | None) -> None:
+        self.state, self.faces, self.face_nodes = state, faces, face_nodes
+        # the crack's origin and the interfaces on the face, set at the first event
+        self._origin: np.ndarray | None = None
+        self._face_sites = np.zeros(0, dtype=np.int64)
+        self._group_precracked = np.zeros(0, dtype=np.int64)
+
+    def add_group(self, sites: np.ndarray) -> None:
+        """The interfaces of a ``precracked`` group join the origin."""
         self._group_precracked = np.union1d(self._group_precracked, sites)
-        return sites
-
-    def site_point(self, site: int) -> np.ndarray:
-        """The interface's centre X_ij, shape=(2,)."""
-        return self.faces.centre[site]
 
     def face_x(self, sites: np.ndarray) -> float | None:
         """Where the crack from the notch first reaches the ``face`` group: x or None.
@@ -183,7 +182,7 @@ class GrainUnits:
         if self._origin is None:
             group = self._group_precracked
             self._origin = group if len(group) else np.asarray(sites, dtype=np.int64)
-            on = np.isin(m.edges, self.ctx.face_nodes).all(axis=1) & m.boundary_edges
+            on = np.isin(m.edges, self.face_nodes).all(axis=1) & m.boundary_edges
             self._face_sites = np.flatnonzero(on)
         at = self._face_sites[self.state.cracked[self._face_sites]]
         if not len(at):
@@ -196,7 +195,7 @@ class GrainUnits:
         d = np.hypot(*(centre[at] - centre[self._origin].mean(axis=0)).T)
         return float(centre[at[np.argmin(d)], 0])
 
-    def main_crack(self) -> dict[str, JsonValue] | None:
+    def describe(self) -> dict[str, JsonValue] | None:
         """The crack joined to the origin (see :meth:`face_x`) at the end.
 
         Its interfaces (the origin's included) and, with a ``face``, its interface
@@ -218,6 +217,87 @@ class GrainUnits:
                 "distance": float(d[k]),
             }
         return out
+
+    def snapshot(self) -> dict[str, JsonValue]:
+        """The crack origin that ``face`` reports follow (set at the first event)."""
+        origin = None if self._origin is None else [int(e) for e in self._origin]
+        return {"origin": origin, "face_sites": [int(e) for e in self._face_sites]}  # type: ignore[dict-item]
+
+    def restore(self, extra: dict[str, JsonValue]) -> None:
+        """Restore the crack origin."""
+        if extra.get("origin") is not None:
+            self._origin = np.asarray(extra["origin"], dtype=np.int64)
+            self._face_sites = np.asarray(extra.get("face_sites", []), dtype=np.int64)
+
+
+class GrainUnits:
+    """Nodes (grains) as units: EFMM node operators, C-MultiMLSM on cracked interfaces.
+
+    The interfaces inside the triangles that touch a Dirichlet node never crack (the
+    edges chapter 2 freezes: point supports and loads concentrate stress there);
+    ``mls_region`` selects nodes (not cells) that use C-MultiMLSM from the start.
+
+    Args:
+        ctx: the shared set-up data.
+        mls: the C-MultiMLSM fits' neighbours, margin and radius.
+        switch: which nodes switch to C-MultiMLSM when an interface cracks
+            (``cracking.switch``, :class:`~geofrac.fracture.grains.GrainState`).
+    """
+
+    def __init__(self, ctx: CrackContext, *, mls: MlsSettings, switch: str) -> None:
+        self.ctx = ctx
+        gm, d = ctx.gm, ctx.scene.discretization
+        self.rotation = np.zeros(0)
+        self._ops: dict[int, NodeOperator] = {}
+        self._fit_k: dict[int, tuple[NodeFit, np.ndarray]] = {}
+        mesh_e = edge_mesh(gm.coords, gm.cells)
+        frozen, forced_nodes = unit_masks(ctx, mesh_e, gm.coords)
+        self.domains = integration_domains(gm.coords, gm.cells, d.q_rand, seed=d.domain_seed)
+        self.faces = interfaces(mesh_e, self.domains)
+        frozen_nodes = np.zeros(len(gm.coords), dtype=bool)
+        frozen_nodes[ctx.bc_nodes] = True
+        self.state: GrainState = GrainState(
+            mesh_e, self.faces, frozen_nodes, forced_nodes, mls, ctx.rank_map, switch
+        )
+        self.state.crackable[np.unique(mesh_e.cell_edges[frozen])] = False
+        #: the crack joined to its origin (``face`` reports, ``main_crack``).
+        self.main = MainCrack(self.state, self.faces, ctx.face_nodes)
+        t = _node_tables(ctx, self.state, self.faces, self.operator)
+        self.own, self.owned, self._coo = t.own, t.owned, t.coo
+        self._int_dofs, self._int_K = t.dofs, t.K
+        self._pair_unit, self._pair_edge, self._pair_slot = t.pair_unit, t.pair_edge, t.pair_slot
+        self._pair_S = t.pair_S
+        # the element's own domains and stress coefficients serve results.xdmf and the
+        # grains file of the last state
+        ctx.problem.element.setup(ctx.D, d.q_rand, d.domain_seed)
+        kernels.load("cmulti", ctx.comm)  # collective: rank 0 compiles on first use
+
+    def operator(self, node: int) -> NodeOperator:
+        """EFMM operators of any node (cached)."""
+        op = self._ops.get(node)
+        if op is None:
+            f, gm = self.faces, self.ctx.gm
+            mine = f.grain_order[f.grain_offsets[node] : f.grain_offsets[node + 1]]
+            op = node_operator(
+                gm.coords, gm.cells, self.ctx.D, domains=self.domains, node=node, mine=mine
+            )
+            self._ops[node] = op
+        return op
+
+    # -- sites --------------------------------------------------------------------------
+    def group_sites(self, pairs: np.ndarray) -> np.ndarray:
+        """A notch line: the interfaces between its nodes and those on its left."""
+        sites = side_sites(self.state.mesh, pairs)
+        self.main.add_group(sites)
+        return sites
+
+    def site_point(self, site: int) -> np.ndarray:
+        """The interface's centre X_ij, shape=(2,)."""
+        return self.faces.centre[site]
+
+    def face_x(self, sites: np.ndarray) -> float | None:
+        """Where the crack from the notch first reaches the ``face`` group (:class:`MainCrack`)."""
+        return self.main.face_x(sites)
 
     # -- stiffness ----------------------------------------------------------------------
     def intact_coo(self, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -382,14 +462,11 @@ class GrainUnits:
 
     def checkpoint_extra(self) -> dict[str, JsonValue]:
         """The crack origin that ``face`` reports follow (set at the first event)."""
-        origin = None if self._origin is None else [int(e) for e in self._origin]
-        return {"origin": origin, "face_sites": [int(e) for e in self._face_sites]}  # type: ignore[dict-item]
+        return self.main.snapshot()
 
     def restore_extra(self, extra: dict[str, JsonValue]) -> None:
         """Restore the crack origin."""
-        if extra.get("origin") is not None:
-            self._origin = np.asarray(extra["origin"], dtype=np.int64)
-            self._face_sites = np.asarray(extra.get("face_sites", []), dtype=np.int64)
+        self.main.restore(extra)
 
     def results(self, out: dict[str, JsonValue], precracked: int, random_precracked: int) -> None:
         """Interfaces and grains instead of edges and MLS cells."""
@@ -406,7 +483,7 @@ class GrainUnits:
             "precracked_interfaces": precracked,
             "random_precracked_interfaces": random_precracked,
             "grains": len(orders),
-            "main_crack": self.main_crack(),
+            "main_crack": self.main.describe(),
             "grains_by_field": {
                 name: int(np.sum(orders == k))
                 for name, k in (
@@ -516,7 +593,7 @@ class GrainVariant:
 
     def units(self, ctx: CrackContext) -> Units:
         """:class:`GrainUnits`."""
-        return GrainUnits(ctx)
+        return GrainUnits(ctx, mls=mls_settings(ctx.config), switch=ctx.config.switch)
 
     def criterion(self, ctx: CrackContext, units: Units) -> EventCriterion:
         """:class:`GrainCriterion`."""

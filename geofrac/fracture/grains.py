@@ -301,7 +301,10 @@ class GrainState:
         for i in sorted(near - own):
             fit = self.fits[i]
             sats = fit.nodes[1:]
-            if len(sats) < target or blocked(coords[i], coords[sats], seg[:, 0], seg[:, 1]).any():
+            if (
+                len(sats) < target
+                or blocked(coords[i], coords[sats], a=seg[:, 0], b=seg[:, 1]).any()
+            ):
                 own.add(i)
         return self.refit(np.array(sorted(own), dtype=np.int64))
 
@@ -374,8 +377,8 @@ class GrainState:
             self.mesh.coords[i],
             self.mesh.coords,
             self.node_bins,
-            self.crack_bins,
-            self.crack_segments,
+            crack_bins=self.crack_bins,
+            crack_segments=self.crack_segments,
             start=1.5 * size,
             target=s.neighbours + 1,  # the node itself is found at distance 0
             max_radius=s.max_radius_factor * size,

@@ -1,4 +1,4 @@
-"""What the event loop writes: ``events.csv``, the XDMF series, the pictures, checkpoints.
+"""What the event loop writes: ``events.csv``, the XDMF series, the pictures.
 
 The loop talks to an :class:`OutputWriter`; :class:`EventOutput` is the one writer: the
 event log streamed row by row, the series ``cracks.xdmf`` (crack sites) and
@@ -6,8 +6,7 @@ event log streamed row by row, the series ``cracks.xdmf`` (crack sites) and
 and the crack picture show of the sites comes from a :class:`SiteDrawing`
 (:class:`EdgeDrawing` for element edges; the grain variant draws interfaces, fills
 fragment grains and adds the grain file through it). Files are written on rank 0.
-:func:`save_checkpoint` and :func:`read_checkpoint` are the loop's side of
-:class:`~geofrac.io.checkpoint.RunControl`'s checkpoint files.
+The checkpoints are :mod:`geofrac.fracture.replay`'s.
 """
 
 from __future__ import annotations
@@ -21,11 +20,9 @@ from typing import IO, TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from geofrac.errors import RunError
 from geofrac.fracture.contact import STATES
-from geofrac.fracture.context import CrackContext, JsonValue, Sites
+from geofrac.fracture.context import CrackContext, Sites
 from geofrac.fracture.units import SiteState
-from geofrac.io.checkpoint import Checkpoint, RunControl
 from geofrac.io.series import XdmfSeries
 
 if TYPE_CHECKING:
@@ -43,8 +40,6 @@ __all__ = [
     "OutputWriter",
     "Row",
     "SiteDrawing",
-    "read_checkpoint",
-    "save_checkpoint",
 ]
 
 #: Columns of ``events.csv``.
@@ -239,6 +234,8 @@ class EventOutput:
         drawing: the variant's drawing of its sites.
         sites: the sites cracked before loading.
         write: write anything at all.
+        contact: write the crack faces' contact (``cracking.contact``).
+        softening: write the cohesive faces' dissipation (a fracture energy is given).
     """
 
     def __init__(
@@ -246,8 +243,11 @@ class EventOutput:
         ctx: CrackContext,
         state: SiteState,
         drawing: SiteDrawing,
+        *,
         sites: Sites,
         write: bool,
+        contact: bool,
+        softening: bool,
     ) -> None:
         self.ctx, self.state, self.drawing, self.sites = ctx, state, drawing, sites
         self.on = write and ctx.comm.rank == 0
@@ -255,7 +255,7 @@ class EventOutput:
         self._log: EventLog | None = None
         self._series: tuple[XdmfSeries, XdmfSeries] | None = None
         self._changes: tuple[IO[str], csv.writer] | None = None  # type: ignore[valid-type]
-        self._contact = ctx.config.contact
+        self._contact, self._softening = contact, softening
 
     def _open_series(
         self, name: str, coords: np.ndarray, cells: np.ndarray, keep: float | None
@@ -277,10 +277,9 @@ class EventOutput:
                 self._open_series("damage.xdmf", gm.coords, gm.cells, keep_until),
             )
         handle = open(self.out_dir / "events.csv", "w", newline="")  # noqa: SIM115
-        softening = self.ctx.config.fracture_energy is not None
         columns = (
             EVENT_COLUMNS
-            + (SOFTENING_COLUMNS if softening else ())
+            + (SOFTENING_COLUMNS if self._softening else ())
             + (CONTACT_COLUMNS if self._contact else ())
         )
         writer = csv.DictWriter(handle, fieldnames=columns)
@@ -379,7 +378,8 @@ class EventOutput:
         ax.plot(d, [0.0] + [r["reaction"] for r in rows], lw=0.8, marker=".", ms=2)
         ax.xaxis.set_major_locator(MaxNLocator(6))
         units = self.ctx.scene.units
-        group, control = self.ctx.config.control, self.ctx.control
+        control = self.ctx.control
+        group = control.group
         if control.kind == "force":
             along = "work-conjugate" if control.node is None else "control_point node"
             ax.set_xlabel(f"displacement of the load on {group}, {along} ({units.length})")
@@ -466,22 +466,3 @@ def _changes_until(path: Path, event: float) -> list[list[str]]:
         except (ValueError, IndexError):
             break  # a line cut by the interruption: nothing after it was written whole
     return out
-
-
-def save_checkpoint(
-    control: RunControl, event: int, data: dict[str, JsonValue], arrays: dict[str, np.ndarray]
-) -> None:
-    """Write checkpoint ``event``: JSON ``data`` and ``arrays`` alike on every rank (collective)."""
-    control.save(event, data, shared=arrays)
-
-
-def read_checkpoint(
-    ck: Checkpoint, n_global: int
-) -> tuple[dict[str, JsonValue], dict[str, np.ndarray]]:
-    """(JSON data, shared arrays) of a checkpoint of the event loop, checked against the mesh."""
-    data, arrays = ck.data, ck.shared()
-    u_prev = arrays.get("u_prev")
-    replay_from = data.get("replay_from", 0)
-    if u_prev is None or len(u_prev) != n_global or int(replay_from) < 1:  # type: ignore[arg-type]
-        raise RunError(f"--resume: the checkpoint {ck.path} does not match this mesh")
-    return data, arrays

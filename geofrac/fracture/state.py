@@ -230,7 +230,7 @@ class CrackState:
             if (
                 fit is None
                 or len(fit.nodes) < target
-                or blocked(self.centroids[c], coords[fit.nodes], seg[:, 0], seg[:, 1]).any()
+                or blocked(self.centroids[c], coords[fit.nodes], a=seg[:, 0], b=seg[:, 1]).any()
             ):
                 own.add(c)
         return self._refit_hinged(self.refit(np.array(sorted(own), dtype=np.int64)))
@@ -270,8 +270,8 @@ class CrackState:
             self.centroids[c],
             self.mesh.coords,
             self.node_bins,
-            self.crack_bins,
-            self.segments,
+            crack_bins=self.crack_bins,
+            crack_segments=self.segments,
             start=1.5 * size,
             target=s.neighbours,
             max_radius=s.max_radius_factor * size,

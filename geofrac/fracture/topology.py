@@ -123,6 +123,7 @@ def motion_rows(
     points: np.ndarray,
     components: np.ndarray,
     rotation: np.ndarray,
+    *,
     pieces: np.ndarray,
     centres: np.ndarray,
     scale: float,
@@ -211,7 +212,9 @@ def constraint_rank(points: np.ndarray, components: np.ndarray, rotation: np.nda
     points = np.asarray(points, dtype=float)
     centre = points.mean(axis=0)
     scale = max(1.0, float(np.abs(points - centre).max()))
-    C = motion_rows(points, components, rotation, np.zeros(len(points), int), centre, scale)
+    C = motion_rows(
+        points, components, rotation, pieces=np.zeros(len(points), int), centres=centre, scale=scale
+    )
     return 3 - free_motions(C, 3).shape[1]
 
 
@@ -219,6 +222,7 @@ def motion_pins(
     C: np.ndarray,
     rotation: np.ndarray,
     candidates: list[np.ndarray],
+    *,
     centres: np.ndarray,
     scale: float,
 ) -> list[tuple[int, int, int]]:
@@ -257,7 +261,9 @@ def motion_pins(
             for comp in (0, 1):
                 if free.shape[1] == 0:
                     return pins
-                row = motion_rows(c[node], [comp], rotation, [i], centres, scale)
+                row = motion_rows(
+                    c[node], [comp], rotation, pieces=[i], centres=centres, scale=scale
+                )
                 v = row @ free  # shape=(1, d): how the free motions move this DOF
                 if np.linalg.norm(v) > 1e-8:
                     free = free @ np.linalg.svd(v)[2][1:].T  # the motions it leaves free
@@ -289,7 +295,7 @@ def zero_energy_rows(K: np.ndarray, tol: float) -> np.ndarray:
 
 
 def random_sites(
-    candidates: np.ndarray, fraction: float, seed: int, points: np.ndarray
+    candidates: np.ndarray, fraction: float, seed: int, *, points: np.ndarray
 ) -> np.ndarray:
     """A seeded random ``fraction`` of the candidate crack sites (pre-existing cracks).
 

@@ -27,6 +27,7 @@ from geofrac.fracture.cells import (
     principal_max,
     strain_operator,
 )
+from geofrac.fracture.config import CrackingConfig
 from geofrac.fracture.context import CrackContext, JsonValue
 from geofrac.fracture.grains import GrainState
 from geofrac.fracture.state import CrackState, MlsSettings
@@ -34,7 +35,16 @@ from geofrac.fracture.topology import EdgeMesh, edge_mesh
 from geofrac.mls.cmulti import NodeFit
 from geofrac.mls.shape import LinearFit, strain_matrix
 
-__all__ = ["GAUSS_6", "Block", "EdgeUnits", "Fit", "SiteState", "Units", "unit_masks"]
+__all__ = [
+    "GAUSS_6",
+    "Block",
+    "EdgeUnits",
+    "Fit",
+    "SiteState",
+    "Units",
+    "mls_settings",
+    "unit_masks",
+]
 
 #: A unit's fitted field: an MLS fit (cells), a C-MultiMLSM fit (grains), or None (void).
 Fit = LinearFit | NodeFit | None
@@ -186,14 +196,26 @@ class Units(Protocol):
         ...
 
 
+def mls_settings(config: CrackingConfig) -> MlsSettings:
+    """The MLS fits' settings of ``[cracking]`` (neighbours, margin, radius factor)."""
+    return MlsSettings(config.neighbours, config.margin, config.max_radius_factor)
+
+
 class EdgeUnits:
     """Cells as units: element cells, MLS-cracked cells (2.19) (Edo (2016), chapter 2).
 
     Args:
         ctx: the shared set-up data.
+        mls: the MLS fits' neighbours, margin and radius (``cracking.neighbours``, ...).
+        cut: cracks cut the cells they end in (contact, the tip criteria; see
+            :class:`~geofrac.fracture.state.CrackState`).
+        keep_stress: keep the stress tensors of :meth:`measures` (the shear events and
+            the criteria that read them need them).
     """
 
-    def __init__(self, ctx: CrackContext) -> None:
+    def __init__(
+        self, ctx: CrackContext, *, mls: MlsSettings, cut: bool, keep_stress: bool
+    ) -> None:
         self.ctx = ctx
         gm, spec = ctx.gm, ctx.spec
         #: extra vertex DOFs under a unit rigid rotation, shape=(bs - 2,).
@@ -204,21 +226,19 @@ class EdgeUnits:
         )
         mesh_e = edge_mesh(gm.coords, gm.cells)
         frozen, forced = unit_masks(ctx, mesh_e, mesh_e.centroids())
-        cfg = ctx.config
-        settings = MlsSettings(cfg.neighbours, cfg.margin, cfg.max_radius_factor)
         self.state: CrackState = CrackState(
             mesh_e,
             frozen,
             forced,
-            settings,
+            mls,
             ctx.rank_map,
-            cut=cfg.contact or cfg.criterion != "principal",
+            cut=cut,
         )
         self._edge_keys = mesh_e.edges[:, 0] * len(gm.coords) + mesh_e.edges[:, 1]
         own = np.flatnonzero(gm.owned)
         self.own = own
         x = gm.coords[gm.cells[own]]
-        self.K_fe = fe_matrices(spec, x, ctx.D, ctx.t, ctx.penalty)
+        self.K_fe = fe_matrices(spec, x, ctx.D, thickness=ctx.t, penalty=ctx.penalty)
         self.fe_dofs = ctx.node_dofs(gm.cells[own].ravel()).reshape(len(own), 3 * ctx.bs)
         stress_op = np.einsum("ij,cqjp->cqip", ctx.D, strain_operator(spec, x, MIDPOINTS))
         nc, nd = self.fe_dofs.shape
@@ -238,7 +258,7 @@ class EdgeUnits:
         # cell -> (its fit, the fit's stiffness): assembly and measures share it
         self._mls_k: dict[int, tuple[LinearFit, np.ndarray]] = {}
         #: keep the stress tensors of :meth:`measures` (shear events need them).
-        self.keep_stress = cfg.shear_cohesion is not None
+        self.keep_stress = keep_stress
         #: (σ_xx, σ_yy, σ_xy) of each cell at its edge midpoints from the last
         #: :meth:`measures` when ``keep_stress``, shape=(num_cells, 3, 3).
         self.midpoint_stress = np.zeros((0, 3, 3))
@@ -281,7 +301,7 @@ class EdgeUnits:
             return {}
         gm, ctx = self.ctx.gm, self.ctx
         x = gm.coords[gm.cells[units]]
-        ks = fe_matrices(ctx.spec, x, ctx.D, ctx.t, ctx.penalty)
+        ks = fe_matrices(ctx.spec, x, ctx.D, thickness=ctx.t, penalty=ctx.penalty)
         return {c: (ctx.node_dofs(gm.cells[c]), k) for c, k in zip(units, ks, strict=True)}
 
     def fit_block(self, unit: int, fit: Fit) -> Block | None:
@@ -296,7 +316,7 @@ class EdgeUnits:
         cached = self._mls_k.get(c)
         if cached is not None and cached[0] is fit:
             return cached[1]
-        k = mls_matrix(fit, self.ctx.D, self.ctx.t, self.state.areas[c])
+        k = mls_matrix(fit, self.ctx.D, self.ctx.t, area=self.state.areas[c])
         if c in self.state.fits and self.state.fits[c] is fit:
             self._mls_k[c] = (fit, k)
         return k
@@ -349,7 +369,7 @@ class EdgeUnits:
                 self._table.remove(c)
             else:
                 self._table.set(
-                    c, ctx.mls_dofs(fit.nodes), strain_matrix(fit), ctx.t * state.areas[c]
+                    c, ctx.mls_dofs(fit.nodes), strain_matrix(fit), weight=ctx.t * state.areas[c]
                 )
 
     def measures(self, u: np.ndarray) -> tuple[np.ndarray, float, float]:

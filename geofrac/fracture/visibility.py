@@ -120,7 +120,7 @@ def _orientations(
     return P, Q, A, B, scale, tol, orients
 
 
-def blocked(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def blocked(p: np.ndarray, q: np.ndarray, *, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Whether each closed segment p–q_k touches any closed segment a_j–b_j.
 
     Args:
@@ -154,7 +154,7 @@ def blocked(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
     return hit.any(axis=1)
 
 
-def leaves(p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def leaves(p: np.ndarray, q: np.ndarray, *, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Whether each segment p–q_k leaves the body through the boundary edges a_j–b_j.
 
     It does when it crosses an edge at a point inside both (a proper crossing, beyond
@@ -189,6 +189,7 @@ def visible_nodes(
     centre: np.ndarray,
     coords: np.ndarray,
     node_bins: PointIndex,
+    *,
     crack_bins: Bins,
     crack_segments: np.ndarray,
     start: float,
@@ -267,7 +268,7 @@ def _visible_within(
     edges = crack_bins.query(centre, radius)
     if len(edges):
         seg = crack_segments[edges]
-        hidden = blocked(centre, coords[cand], seg[:, 0], seg[:, 1])
+        hidden = blocked(centre, coords[cand], a=seg[:, 0], b=seg[:, 1])
         cand, d = cand[~hidden], d[~hidden]
     edges = (
         np.zeros(0, dtype=np.int64)
@@ -276,7 +277,7 @@ def _visible_within(
     )
     if len(edges):
         seg = crack_segments[edges]
-        out = leaves(centre, coords[cand], seg[:, 0], seg[:, 1])
+        out = leaves(centre, coords[cand], a=seg[:, 0], b=seg[:, 1])
         cand, d = cand[~out], d[~out]
     order = np.lexsort((cand, d))
     return cand[order], d[order]

@@ -268,7 +268,7 @@ def test_numpy_cell_matrices_equal_the_elements_own_assembly(name):
     alpha = spec.zero_mode_penalty or 0.0
     cells = mesh.geometry.dofmaps[0]
     x = mesh.geometry.x[cells][:, :, :2]
-    Ke = fe_matrices(spec, x, d_matrix(E_MOD, NU, 2), 1.0, alpha * mu)
+    Ke = fe_matrices(spec, x, d_matrix(E_MOD, NU, 2), thickness=1.0, penalty=alpha * mu)
     space = element.unknowns
     bs = space.dofmap.index_map_bs
     dense = np.zeros_like(K)

@@ -33,8 +33,8 @@ def test_fe_matrices_match_dolfinx(element):
             elements.get(element),
             gm.coords[gm.cells],
             d_matrix(mat.E, mat.nu, 2, plane=mat.plane),
-            mat.thickness,
-            sol.scene.discretization.zero_mode_penalty * mu,
+            thickness=mat.thickness,
+            penalty=sol.scene.discretization.zero_mode_penalty * mu,
         )
         n = len(gm.coords) * bs
         dofs = (gm.node_block[gm.cells][:, :, None] * bs + np.arange(bs)).reshape(len(gm.cells), -1)
@@ -68,11 +68,11 @@ def test_mls_table_strains_match_each_cell():
     for c, p in [(3, 4), (8, 10), (11, 6), (20, 24)]:  # the 24-DOF cell widens the table
         dofs = rng.choice(n, size=p, replace=False)
         B = rng.normal(size=(3, p))
-        table.set(c, dofs, B, 1.0)
+        table.set(c, dofs, B, weight=1.0)
         cells[c] = (dofs, B)
     table.remove(8)
     dofs, B = rng.choice(n, size=8, replace=False), rng.normal(size=(3, 8))
-    table.set(30, dofs, B, 2.0)  # takes the freed row
+    table.set(30, dofs, B, weight=2.0)  # takes the freed row
     cells[30] = (dofs, B)
     del cells[8]
     eps = table.strains(np.append(u, 0.0))

@@ -41,7 +41,7 @@ def _side(sign: float, first: int) -> tuple:
 def test_pair_operator_gives_the_jump_and_cauchy_tractions_of_linear_fields():
     plus, xp = _side(1.0, 0)
     minus, xm = _side(-1.0, 9)
-    op = pair_operator(plus, minus, np.zeros(2), T, N, D)
+    op = pair_operator(plus, minus, np.zeros(2), tangent=T, normal=N, D=D)
     u = np.zeros((18, 2))
     u[:9] = xp @ GRAD.T + SHIFT
     u[9:] = xm @ GRAD.T
@@ -62,7 +62,7 @@ def test_shear_factor_reaches_the_mohr_coulomb_envelope():
     """The factor r solves r (|τ| + σn tan φ) = c; compression raises r; no drive: inf."""
     sn = np.array([-1.0, 0.5, -10.0])
     tau = np.array([2.0, -1.0, 1.0])
-    r = shear_factors(sn, tau, 3.0, 30.0)
+    r = shear_factors(sn, tau, 3.0, friction_angle=30.0)
     t = np.tan(np.radians(30.0))
     assert r[0] == pytest.approx(3.0 / (2.0 - t))
     assert r[1] == pytest.approx(3.0 / (1.0 + 0.5 * t))

@@ -140,14 +140,14 @@ def test_random_sites_are_seeded_and_a_fraction_of_the_candidates():
     cand = np.zeros(1000, bool)
     cand[::2] = True
     points = np.random.default_rng(0).uniform(size=(1000, 2))
-    a = random_sites(cand, 0.04, 7, points)
+    a = random_sites(cand, 0.04, 7, points=points)
     assert len(a) == 20 and cand[a].all()
-    assert np.array_equal(a, random_sites(cand, 0.04, 7, points))
-    assert not np.array_equal(a, random_sites(cand, 0.04, 8, points))
-    assert len(random_sites(cand, 0.0, 7, points)) == 0
+    assert np.array_equal(a, random_sites(cand, 0.04, 7, points=points))
+    assert not np.array_equal(a, random_sites(cand, 0.04, 8, points=points))
+    assert len(random_sites(cand, 0.0, 7, points=points)) == 0
     # the same sites numbered otherwise: the same sites are drawn
     perm = np.random.default_rng(1).permutation(1000)
-    b = random_sites(cand[perm], 0.04, 7, points[perm])
+    b = random_sites(cand[perm], 0.04, 7, points=points[perm])
     assert np.array_equal(np.sort(perm[b]), a)
 
 
@@ -340,7 +340,7 @@ def test_crack_reaches_the_face_only_through_the_crack_from_its_origin():
     d.state.cracked[chain[-1]] = True
     assert d.units.face_x(chain[-1:]) == pytest.approx(top[0])
     assert abs(top[0] - 30.37) < 16.0  # within one element of the line
-    main = d.units.main_crack()
+    main = d.units.main.describe()
     assert main["interfaces"] == len(chain) and main["nearest_to_face"]["distance"] < 1e-9
     d.destroy()
 

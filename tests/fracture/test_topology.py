@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from geofrac.fracture.contact import SLIP, STICK, FacePairs, pair_operator
+from geofrac.fracture.contact import SLIP, STICK, constraint_terms, pair_operator
 from geofrac.fracture.topology import (
     components,
     constraint_rank,
@@ -29,8 +29,12 @@ def free_motion_pins(
     centre = c.mean(axis=0, keepdims=True)
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     scale = max(1.0, float(np.abs(np.vstack([pts, c]) - centre).max()))
-    C = motion_rows(pts, components, rotation, np.zeros(len(pts), int), centre, scale)
-    return [(node, comp) for _, node, comp in motion_pins(C, rotation, [c], centre, scale)]
+    C = motion_rows(
+        pts, components, rotation, pieces=np.zeros(len(pts), int), centres=centre, scale=scale
+    )
+    return [
+        (node, comp) for _, node, comp in motion_pins(C, rotation, [c], centres=centre, scale=scale)
+    ]
 
 
 def column() -> tuple[np.ndarray, np.ndarray]:
@@ -125,7 +129,7 @@ SCALE = 3.0
 def _pairs(at: list[float], states: list[int]) -> SimpleNamespace:
     """Face pairs at x = ``at`` on the crack: MLS fits of each side's nodes.
 
-    Carries what :meth:`FacePairs.constraint_terms` reads (the pairs' operators,
+    Carries what :func:`~geofrac.fracture.contact.constraint_terms` reads (the pairs' operators,
     states, frames and teeth).
     """
     ops = {}
@@ -133,7 +137,9 @@ def _pairs(at: list[float], states: list[int]) -> SimpleNamespace:
         p = np.array([x, 0.0])
         plus = linear_fit(p + 0.3 * N, 3.0, np.arange(12), coords=XY[:12])
         minus = linear_fit(p - 0.3 * N, 3.0, np.arange(12, 24), coords=XY[12:])
-        ops[e] = pair_operator(plus, minus, p, T, N, d_matrix(1.0, 0.25, 2, plane="strain"))
+        ops[e] = pair_operator(
+            plus, minus, p, tangent=T, normal=N, D=d_matrix(1.0, 0.25, 2, plane="strain")
+        )
     k = len(at)
     return SimpleNamespace(
         ops=ops,
@@ -147,11 +153,22 @@ def _pairs(at: list[float], states: list[int]) -> SimpleNamespace:
 def _constraints(pairs: SimpleNamespace) -> np.ndarray:
     """Piece 0 held by three Dirichlet DOFs; the pairs' rows on both pieces' motions."""
     fixed = [12, 12, 13]
-    C = motion_rows(XY[fixed], [0, 1, 1], NO_EXTRA, PIECE[fixed], CENTRES, SCALE)
-    rows, nodes, comps, weights = FacePairs.constraint_terms(pairs)
+    C = motion_rows(
+        XY[fixed], [0, 1, 1], NO_EXTRA, pieces=PIECE[fixed], centres=CENTRES, scale=SCALE
+    )
+    rows, nodes, comps, weights = constraint_terms(pairs)
     if not len(rows):
         return C
-    jumps = motion_rows(XY[nodes], comps, NO_EXTRA, PIECE[nodes], CENTRES, SCALE, rows, weights)
+    jumps = motion_rows(
+        XY[nodes],
+        comps,
+        NO_EXTRA,
+        pieces=PIECE[nodes],
+        centres=CENTRES,
+        scale=SCALE,
+        rows=rows,
+        weights=weights,
+    )
     return np.vstack([C, jumps])
 
 
@@ -192,8 +209,11 @@ def test_motion_pins_hold_what_the_pairs_leave_free(states, num_pins):
     at = [-1.0, 1.0][: len(states)]
     C = _constraints(_pairs(at, states))
     candidates = [XY[12:], XY[:12]]
-    pins = motion_pins(C, NO_EXTRA, candidates, CENTRES, SCALE)
+    pins = motion_pins(C, NO_EXTRA, candidates, centres=CENTRES, scale=SCALE)
     assert len(pins) == num_pins
     assert all(piece == 1 for piece, _, _ in pins)
-    extra = [motion_rows(candidates[i][n], [k], NO_EXTRA, [i], CENTRES, SCALE) for i, n, k in pins]
+    extra = [
+        motion_rows(candidates[i][n], [k], NO_EXTRA, pieces=[i], centres=CENTRES, scale=SCALE)
+        for i, n, k in pins
+    ]
     assert free_motions(np.vstack([C, *extra]), 6).shape[1] == 0

@@ -12,11 +12,11 @@ def test_blocked_touching_and_crossing():
     p = np.zeros(2)
     a, b = np.array([[1.0, -1.0]]), np.array([[1.0, 1.0]])
     q = np.array([[2.0, 0.0], [0.5, 0.0], [1.0, 0.0], [1.0, 1.0], [2.0, 3.0]])
-    np.testing.assert_array_equal(blocked(p, q, a, b), [True, False, True, True, False])
+    np.testing.assert_array_equal(blocked(p, q, a=a, b=b), [True, False, True, True, False])
     # collinear: overlapping blocks, disjoint does not
     a2, b2 = np.array([[1.0, 0.0]]), np.array([[2.0, 0.0]])
     q2 = np.array([[3.0, 0.0], [0.5, 0.0]])
-    np.testing.assert_array_equal(blocked(p, q2, a2, b2), [True, False])
+    np.testing.assert_array_equal(blocked(p, q2, a=a2, b=b2), [True, False])
 
 
 def test_edge_mesh_counts():
@@ -90,8 +90,8 @@ def test_visible_nodes_grow_to_target():
         np.array([5.2, 5.3]),
         coords,
         PointIndex(coords),
-        Bins(2.0),
-        np.zeros((0, 2, 2)),
+        crack_bins=Bins(2.0),
+        crack_segments=np.zeros((0, 2, 2)),
         start=0.5,
         target=10,
         max_radius=20.0,
