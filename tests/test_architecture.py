@@ -5,7 +5,8 @@ viewers): one box per layer of :data:`tests.test_layers.LAYERS`, lowest at the b
 holding the packages and modules that belong to it, and one arrow per pair of layers
 with an import between them. It is made from :func:`tests.test_layers.edges`, the graph
 the layer test checks, so the picture is what the code does; it changes when a package
-moves or a layer starts to use another, not with every import. Regenerate it after changing the layers::
+moves or a layer starts to use another, not with every import. Regenerate it after
+changing the layers::
 
     python -m tests.test_architecture --write
 """
