@@ -9,7 +9,7 @@ network; the pipeline writes ``summary.json`` and publishes the directory.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol, cast
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -61,6 +61,14 @@ OUTPUT_FILES = (
 )
 
 
+class _DescribesReport(Protocol):
+    """A geometry builder that reports (the dfn effect's): it words its report for the log."""
+
+    def describe(self, report: dict[str, Any]) -> str:
+        """One log line summarising ``report`` (what :meth:`build` returned)."""
+        ...
+
+
 def solve_scene(
     scene: Scene,
     comm: MPI.Comm,
@@ -82,18 +90,21 @@ def solve_scene(
     timings = timings or Timings()
     say = sayer(comm, verbose=verbose)
     with timings.phase("mesh"):
-        tagged = build_mesh(scene.geometry, comm)
+        geometry = scene.geometry
+        assert geometry is not None  # a fem scene has one
+        tagged = build_mesh(geometry, comm)
         geometry_report = dict(tagged.report)
         if tagged.fractures is not None:
             geometry_report |= check_fracture_cover(tagged)
-    if geometry_report and scene.geometry.builder is not None:
-        say(scene.geometry.builder.describe(geometry_report))
+    if geometry_report and geometry.builder is not None:
+        say(cast(_DescribesReport, geometry.builder).describe(geometry_report))
     mesh = tagged.mesh
     names = list(scene.output.probes)
     points = np.zeros((len(names), 3))
     for i, name in enumerate(names):
         points[i, : scene.gdim] = scene.output.probes[name]
     with timings.phase("setup"):
+        assert scene.discretization is not None  # a fem scene has one
         element = make_element(scene.discretization.element, mesh)
         cells = locate_points(mesh, points, [f"output.probes.{n}" for n in names])
         line_cells = {n: locate_line(mesh, n, ln) for n, ln in scene.output.lines.items()}
@@ -142,7 +153,8 @@ def solve_scene(
             results["strain_energy"] = integrate(
                 strain_energy_form(uh, problem.lam, problem.mu, problem.thickness, problem.dx), comm
             )
-            results["solver"] = problem.solver.describe() | {"iterations": problem.iterations}  # type: ignore[union-attr]
+            assert problem.solver is not None  # set by the solve
+            results["solver"] = problem.solver.describe() | {"iterations": problem.iterations}
         if geometry_report:
             results["geometry"] = geometry_report
         if facts := problem.describe():  # the element's own facts (EFMM's domains)
@@ -260,7 +272,8 @@ def _solve_phases(problem: ElasticProblem, timings: Timings, say: Callable[[str]
     say(f"assemble: {format_seconds(timings.local['assemble'])}")
     with timings.phase("solve"):
         problem.solve()
-    info = problem.solver.describe()  # type: ignore[union-attr]
+    assert problem.solver is not None  # set by the solve
+    info = problem.solver.describe()
     say(
         f"solve: {format_seconds(timings.local['solve'])} ({info['preset']}: {info['ksp_type']} + "
         f"{info['pc_type']}, {problem.iterations} iterations, "
@@ -332,6 +345,7 @@ class FemMethod:
 
     def head(self, scene: Scene) -> dict[str, Any]:
         """The summary head names the element."""
+        assert scene.discretization is not None  # a fem scene has one
         return {"element": scene.discretization.element}
 
     def run(

@@ -164,6 +164,7 @@ def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
             record |= _check(blocks, mesh, args.validate, comm)
         del blocks, mesh
         if comm.rank == 0:
+            assert seeds is not None  # gathered on rank 0
             seconds = _voronoi(np.concatenate(seeds), comm.size)
             record |= {
                 "reference": "freud.locality.Voronoi (voro++), periodic box around the cube",
@@ -197,6 +198,7 @@ def _check(blocks: Blocks, mesh: Mesh, validate: int, comm: MPI.Comm) -> dict[st
     whole = gather_blocks(blocks, comm)
     out = None
     if comm.rank == 0:
+        assert whole is not None  # gathered on rank 0
         report = quality.summarize(whole, domain, validate=True, sample=validate)
         bad_pairs = 0 if report["pairing"]["ok"] else report["pairing"]["bad_blocks"]
         out = {

@@ -69,6 +69,7 @@ def run(args: argparse.Namespace, comm: MPI.Comm) -> list[dict[str, Any]]:
                 sol = solve_scene(scene, comm, verbose=False)
                 res = sol.results["cracking"]
                 sol.problem.destroy()
+                assert scene.discretization is not None  # a fem scene has one
                 records.append(
                     {
                         "case": "patch",
@@ -118,6 +119,7 @@ def event_case(
     sol = solve_scene(scene, comm, verbose=False)
     res = sol.results["cracking"]
     sol.problem.destroy()
+    assert scene.discretization is not None  # a fem scene has one
     record = {
         "case": case,
         "element": scene.discretization.element,

@@ -99,9 +99,11 @@ def network_statistics(network: Network, sets: Sequence[FractureSet]) -> list[di
         lengths = network.lengths[mask]
         row: dict[str, Any] = {"set": fset.name, "count": int(mask.sum())}
         if len(lengths):
-            d = ks_statistic(
-                lengths, lambda x, s=fset: power_law_cdf(x, s.lmin, s.lmax, exponent=s.exponent)
-            )
+
+            def cdf(x: np.ndarray, s: FractureSet = fset) -> np.ndarray:
+                return power_law_cdf(x, s.lmin, s.lmax, exponent=s.exponent)
+
+            d = ks_statistic(lengths, cdf)
             row |= {"ks_d": d, "ks_p": ks_pvalue(d, len(lengths))}
         if len(lengths) > 1:
             summary = orientation_summary(network.angles_deg[mask])
@@ -115,12 +117,14 @@ def network_statistics(network: Network, sets: Sequence[FractureSet]) -> list[di
 
 def _case(comm: MPI.Comm, model: str, scale: float) -> tuple[dict[str, Any], Any]:
     """Mesh one model at one scale; return (record, tagged mesh)."""
+    from geofrac.effects.dfn import DfnConfig
     from geofrac.meshing.distribute import build_mesh, check_fracture_cover
     from geofrac.scene import load_scene_collective
 
     path = MODELS[model]
     base = load_scene_collective(comm, path, [])
-    config = next(e.config for e in base.effects if e.name == "dfn")
+    config = base.effect_config("dfn", DfnConfig)
+    assert config is not None  # the model declares the dfn effect
     factor = scale**-0.5
     overrides = [
         f"dfn.mesh_size={config.mesh.size * factor!r}",
@@ -128,8 +132,10 @@ def _case(comm: MPI.Comm, model: str, scale: float) -> tuple[dict[str, Any], Any
         f"dfn.tolerance={config.tolerance * factor!r}",
     ]
     scene = load_scene_collective(comm, path, overrides)
-    config = next(e.config for e in scene.effects if e.name == "dfn")
+    config = scene.effect_config("dfn", DfnConfig)
+    assert config is not None  # the model declares the dfn effect
     start = time.perf_counter()
+    assert scene.geometry is not None  # the dfn effect's builder
     tagged = build_mesh(scene.geometry, comm)
     total = comm.allreduce(time.perf_counter() - start, op=_max())
     report = dict(tagged.report)

@@ -133,7 +133,7 @@ def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
         solution = solve_scene(scene, comm, verbose=False)
         try:
             errors = solution.results["errors"]
-            clamped = solution.problem.describe()["clamped_crossings"]  # type: ignore[attr-defined]
+            clamped = solution.problem.describe()["clamped_crossings"]
         finally:
             solution.problem.destroy()
         records.append(

@@ -67,6 +67,8 @@ from geofrac.bench.args import name_list, number_list
 if TYPE_CHECKING:
     import numpy as np
 
+    from geofrac.mpm.block import Throughput
+
 __all__ = [
     "COLUMNS",
     "TRANSLATING_SCENE",
@@ -229,18 +231,22 @@ def translating_bar(
     arr = np.array(rows)
     col = {name: i - 1 for i, name in enumerate(CSV_COLUMNS) if i >= 1}
     budget = {c: arr[:, col[c]] / e0 for c in COLUMNS}
+    drift_max = drift_work_max = float("inf")
+    if finite:
+        assert log.drift_max is not None and log.drift_work_max is not None  # E₀ > 0
+        drift_max, drift_work_max = float(log.drift_max), float(log.drift_work_max)
     return EnergyHistory(
         t=arr[:, 0],
         kinetic=arr[:, col["kinetic"]] / e0,
         strain=arr[:, col["strain"]] / e0,
         total=arr[:, col["total"]] / e0,
-        drift_max=float(log.drift_max) if finite else float("inf"),
+        drift_max=drift_max,
         finite=finite,
         steps=k,
         seconds=seconds,
         particles=run.total,
         stored_work=budget["stored_work"],
-        drift_work_max=float(log.drift_work_max) if finite else float("inf"),
+        drift_work_max=drift_work_max,
         budget=budget,
         closure_max=log.closure / e0,
     )
@@ -538,7 +544,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
     # the block runs on every rank, decomposed over comm; the bars on rank 0
     ratios = []
     for shape in shapes if "block" in cases else ():
-        plain = None
+        plain: Throughput | None = None
         for sm in smoothings:
             tp = gravity_block(
                 args.particles,
@@ -549,7 +555,10 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
                 comm=comm,
                 backend=args.backend,
             )
-            ratio = None if sm is None else plain.particle_steps_per_s / tp.particle_steps_per_s
+            ratio = None
+            if sm is not None:
+                assert plain is not None  # the plain run (smoothing None) comes first
+                ratio = plain.particle_steps_per_s / tp.particle_steps_per_s
             records.append(
                 _record(
                     "block2d", "musl", shape, sm, 2, tp.particles, tp.steps, tp.seconds,
@@ -567,6 +576,7 @@ def run(args: argparse.Namespace, comm: Any) -> dict[str, Any]:
             if sm is None:
                 plain = tp
             else:
+                assert plain is not None  # as above
                 ratios.append(
                     f"block {shape}, {tp.ranks} rank(s), {tp.particles} particles, "
                     f"{tp.steps} steps: plain {plain.particle_steps_per_s:.3g} "

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -42,6 +42,7 @@ def _tensor(voigt: np.ndarray, problem: ElasticProblem) -> np.ndarray:
     out[:, 0, 0], out[:, 1, 1] = voigt[:, 0], voigt[:, 1]
     out[:, 0, 1] = out[:, 1, 0] = voigt[:, 2]
     mat = problem.scene.material
+    assert mat is not None  # a fem scene has one
     if mat.plane == "strain":
         out[:, 2, 2] = mat.nu * (voigt[:, 0] + voigt[:, 1])
     return out.reshape(-1, 9)
@@ -76,6 +77,7 @@ class EfmmProblem(ElasticProblem):
     ) -> None:
         super().__init__(tagged, element, scene, terms=terms)
         mat = scene.material
+        assert mat is not None  # a fem scene has one
         self.D = d_matrix(mat.E, mat.nu, 2, plane=mat.plane)
         self.e: dolfinx.fem.Function | None = None
 
@@ -92,6 +94,7 @@ class EfmmProblem(ElasticProblem):
             self.compile()
         self._free_operators()
         d = self.scene.discretization
+        assert d is not None  # a fem scene has one
         self.element.setup(self.D, d.q_rand, d.domain_seed)
         self.A = self.element.stiffness()  # per unit thickness (A and C integrate over areas)
         self.A.scale(float(self.thickness.value))  # as the loads, which carry t (forms/)
@@ -134,7 +137,9 @@ class EfmmProblem(ElasticProblem):
         pts, wts = basix.make_quadrature(basix.CellType.triangle, ERROR_DEGREE)
 
         def stress(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-            (sxx, sxy), (_, syy) = exact.stress(x, y)
+            # array coordinates give array fields
+            rows = cast("tuple[tuple[np.ndarray, ...], ...]", exact.stress(x, y))
+            (sxx, sxy), (_, syy) = rows
             return np.stack(np.broadcast_arrays(sxx, syy, sxy), axis=1)
 
         assert self.element.domains is not None
@@ -199,12 +204,13 @@ class EfmmProblem(ElasticProblem):
             coef = data["e"][c, j].reshape(3, 3)  # (σx, σy, τxy) x (1, ξ, η)
             xi = (x - data["x"][c, j]) / self.element.domains.length
             local[i] = _tensor((coef @ np.array([1.0, *xi]))[None, :], self)[0]
-        stress = np.empty_like(local)
+        stress: np.ndarray = np.empty_like(local)
         self.comm.Allreduce(local, stress, op=MPI.SUM)
         stress = stress.reshape(-1, 3, 3)
         out = {"stress": stress}
         if "strain" in names:
             mat = self.scene.material
+            assert mat is not None  # a fem scene has one
             trace = np.trace(stress, axis1=1, axis2=2)[:, None, None]
             out["strain"] = ((1 + mat.nu) * stress - mat.nu * trace * np.eye(3)) / mat.E
         return {n: out[n] for n in names}
@@ -270,6 +276,7 @@ class EfmmProblem(ElasticProblem):
         """Domain facts for the results: the length h and the clamped edge crossings."""
         assert self.element.domains is not None
         d = self.scene.discretization
+        assert d is not None  # a fem scene has one
         return {
             "q_rand": d.q_rand,
             "domain_seed": d.domain_seed,

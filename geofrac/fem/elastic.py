@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -38,6 +38,9 @@ from geofrac.solvers import (
 )
 from geofrac_forms import elasticity as forms
 from geofrac_forms.gradient_dofs import penalty_forms
+
+if TYPE_CHECKING:
+    from geofrac.elements.gradient import GradientDofElement
 
 __all__ = [
     "ElasticProblem",
@@ -131,6 +134,7 @@ class ElasticProblem:
         self.comm: MPI.Comm = mesh.comm
         V = element.space
         mat = scene.material
+        assert mat is not None and scene.discretization is not None  # a fem scene has both
         gdim = mesh.geometry.dim
         lam, mu = lame(mat.E, mat.nu, gdim, plane=mat.plane)
         self.lam = dolfinx.fem.Constant(mesh, SCALAR(lam))
@@ -189,8 +193,10 @@ class ElasticProblem:
             load, v, self.tagged, ds=self.ds, dx=self.dx, thickness=self.thickness, value=value
         )
 
-    #: whether the unknowns are in a changed basis (:class:`GradientDofProblem`).
-    changes_basis = False
+    @property
+    def changes_basis(self) -> bool:
+        """Whether the unknowns are in a changed basis (:class:`GradientDofProblem`)."""
+        return False
 
     def _add_point_forces(self, b: Vector) -> None:
         """Add the point loads to an assembled vector on ``element.space``.
@@ -276,6 +282,7 @@ class ElasticProblem:
         """Stress/strain fields of the solution for XDMF (see :func:`post.tensor_fields`)."""
         from geofrac.fem.post import tensor_fields
 
+        assert self.scene.material is not None  # a fem scene has one
         plane = self.scene.material.plane
         return tensor_fields(self.uh, self.lam, self.mu, plane=plane, names=names)
 
@@ -294,6 +301,7 @@ class ElasticProblem:
         """
         from geofrac.fem.post import point_tensors
 
+        assert self.scene.material is not None  # a fem scene has one
         plane = self.scene.material.plane
         return point_tensors(
             self.uh, self.lam, self.mu, plane=plane, names=names, points=points, cells=cells
@@ -436,11 +444,12 @@ class GradientDofProblem(ElasticProblem):
     """
 
     basis: np.ndarray | None = None
+    element: GradientDofElement
 
     def __init__(
         self,
         tagged: TaggedMesh,
-        element: Element,
+        element: GradientDofElement,
         scene: Scene,
         *,
         terms: Sequence[LinearTerm] = (),
@@ -450,6 +459,7 @@ class GradientDofProblem(ElasticProblem):
         self.wh = dolfinx.fem.Function(W, name="vertex_dofs")
         g, h = ufl.TrialFunction(W), ufl.TestFunction(W)
         u, v = ufl.TrialFunction(element.space), ufl.TestFunction(element.space)
+        assert scene.discretization is not None  # a fem scene has one
         alpha = scene.discretization.zero_mode_penalty
         self.penalty_scale = dolfinx.fem.Constant(self.mesh, SCALAR(alpha * float(self.mu.value)))
         pen_vv, self._a_wv, self._a_ww = penalty_forms(
@@ -469,7 +479,7 @@ class GradientDofProblem(ElasticProblem):
         """Whether the unknowns are the rotated DOFs h (w = Q h), not w."""
         return self.basis is not None
 
-    def _boundary_conditions(self) -> list[tuple[np.ndarray, np.ndarray]]:  # type: ignore[override]
+    def _boundary_conditions(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """(global DOF indices, values) per Dirichlet condition, owned DOFs only.
 
         With ``gradient_bc = "consistent"`` the last entry holds the extra DOFs that the
@@ -479,19 +489,25 @@ class GradientDofProblem(ElasticProblem):
         element = self.element
         kind = element.kind
         gdim, bs = kind.gdim, kind.block_size
+        assert self.scene.discretization is not None  # a fem scene has one
         mode = self.scene.discretization.gradient_bc
         out = []
         conditions = []
+        values: Callable[[np.ndarray], np.ndarray]
         for i, bc in enumerate(self.scene.bcs):
             dim, entities = self._bc_entities(i)
             if bc.value == "exact":
-                exact = self.exact
-                assert exact is not None
+                assert self.exact is not None
+                exact: ExactSolution = self.exact
 
-                def values(x: np.ndarray, ex: ExactSolution = exact) -> np.ndarray:
-                    u = np.stack(np.broadcast_arrays(*ex.displacement(*x[:, :gdim].T)), axis=1)
+                def exact_values(x: np.ndarray, ex: ExactSolution = exact) -> np.ndarray:
+                    # array coordinates give array fields
+                    parts = cast("tuple[np.ndarray, ...]", ex.displacement(*x[:, :gdim].T))
+                    u = np.stack(np.broadcast_arrays(*parts), axis=1)
                     g = dofs_from_gradient(kind, displacement_gradient(ex, x))
                     return np.hstack([u, g])
+
+                values = exact_values
 
                 comps = tuple(range(gdim))
                 if mode != "free":  # the exact field's extra DOFs are data
@@ -500,8 +516,10 @@ class GradientDofProblem(ElasticProblem):
                 fixed = np.zeros(bs)  # the extra DOFs of a constant boundary value are 0
                 fixed[list(bc.components)] = bc.value
 
-                def values(x: np.ndarray, fixed: np.ndarray = fixed) -> np.ndarray:
+                def fixed_values(x: np.ndarray, fixed: np.ndarray = fixed) -> np.ndarray:
                     return np.tile(fixed, (len(x), 1))
+
+                values = fixed_values
 
                 comps = bc.components
                 if mode == "fixed":
@@ -512,7 +530,7 @@ class GradientDofProblem(ElasticProblem):
             out.append(element.vertex_constraints(dim, entities, values, components=comps))
         if mode == "consistent":
             out.append(self._implied_constraints(conditions, out))
-        return out  # type: ignore[return-value]
+        return out
 
     def _implied_constraints(
         self,

@@ -124,10 +124,10 @@ def load_form(
         value: the load's value as UFL when it is not ``load.value`` (``"exact"``).
     """
     if value is None:
-        value = value_ufl(load.value, tagged.mesh)  # type: ignore[arg-type]
+        value = value_ufl(load.value, tagged.mesh)
     if load.type == "body_force":
         return forms.body_force_form(v, value, thickness, dx)
-    _, tag = tagged.groups[load.group]  # type: ignore[index]
+    _, tag = tagged.groups[load.group]
     if load.type == "pressure":
         value = -value * ufl.FacetNormal(tagged.mesh)
     return forms.traction_form(v, value, thickness, ds(tag))
@@ -183,7 +183,7 @@ def point_forces(
             dofs = dolfinx.fem.locate_dofs_topological(V.sub(c), dim, vertices)
             dofs = np.unique(dofs[dofs < owned_size])
             rows.append(dofs)
-            values.append(np.full(len(dofs), thickness * float(load.value[c])))  # type: ignore[arg-type]
+            values.append(np.full(len(dofs), thickness * float(load.value[c])))
     if not rows:
         return PointForces(np.empty(0, dtype=np.int32), np.empty(0))
     return PointForces(np.concatenate(rows).astype(np.int32), np.concatenate(values))

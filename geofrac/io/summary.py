@@ -58,7 +58,7 @@ def versions(*, fem: bool = True) -> dict[str, str]:
     return out
 
 
-def write_json(path: Path, data: dict[str, Any]) -> None:
+def write_json(path: Path, data: dict[str, Any] | list[dict[str, Any]]) -> None:
     """Write ``data`` as indented JSON atomically (a reader never sees half a file)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)

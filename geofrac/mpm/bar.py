@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from geofrac.mpm import shapes
 from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
@@ -99,7 +100,7 @@ def quasi_static_bar(
     mat = Elastic(E)
     dt = time_step(courant, cell, mat, density=rho0, dim=1)
     fixed = (g.nodes() <= 0.0).reshape(-1, 1)
-    s = StepSettings(scheme, shape, dt, np.array([-b]), fixed)
+    s = StepSettings(scheme, shapes.get(shape), dt, np.array([-b]), fixed)
     steps = round(L0 / mat.wave_speed(rho0, 1) / dt)
     t0 = time.perf_counter()
     for _ in range(steps):
@@ -148,7 +149,7 @@ def impact_bar(
     g = grid([-2.0 * cell], cell, [round(L0 / cell) + 6])
     dt = time_step(0.1, cell, mat, density=rho0, dim=1)
     fixed = (g.nodes() <= 0.0).reshape(-1, 1)
-    s = StepSettings(scheme, shape, dt, np.zeros(1), fixed, smoothing)
+    s = StepSettings(scheme, shapes.get(shape), dt, np.zeros(1), fixed, smoothing)
     steps = round(0.8 * L0 / c / dt)
     t0 = time.perf_counter()
     for _ in range(steps):

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from geofrac.mpm import shapes
 from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.grid import grid
 from geofrac.mpm.particles import lattice
@@ -93,7 +94,14 @@ def gravity_block(
     fixed[g.nodes()[:, 1] <= 2.0] = True
     dt = time_step(0.1, cell, mat, density=rho, dim=2)
     s = StepSettings(
-        scheme, shape, dt, np.array([0.0, -9.81]), fixed, smoothing, backend=backend, domain=dom
+        scheme,
+        shapes.get(shape),
+        dt,
+        np.array([0.0, -9.81]),
+        fixed,
+        smoothing,
+        backend=backend,
+        domain=dom,
     )
     t0 = time.perf_counter()
     step(g, p, mat, settings=s)

@@ -77,6 +77,7 @@ class MlsOperator:
         Collective with a domain (the ghosts' values are fetched).
         """
         if self.domain is not None:
+            assert self.sent is not None  # given with the domain
             values = np.concatenate([values, self.domain.send_rows(self.sent, values)[0]])
         return np.stack(
             [

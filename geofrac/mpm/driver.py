@@ -117,7 +117,7 @@ def _all_particles(
     from geofrac.mpm.seeding import from_cells, from_lattice
 
     spec, mat = scene.mpm, scene.material
-    assert spec is not None and mat.density is not None
+    assert spec is not None and mat is not None and mat.density is not None
     src = spec.particles
     bed = spec.bed
     if src.kind == "bodies":
@@ -155,12 +155,12 @@ def _all_particles(
         named = sorted(meshed, key=lambda n: n not in src.densities)
         points = next(xyz for xyz, _ in meshed.values())
         cells = np.concatenate([meshed[n][1] for n in named])
-        density = np.concatenate(
+        cell_density = np.concatenate(
             [np.full(len(meshed[n][1]), src.densities.get(n, mat.density)) for n in named]
         )
         _, first_cell = np.unique(np.sort(cells, axis=1), axis=0, return_index=True)
         first_cell = np.sort(first_cell)
-        p = from_cells(points, cells[first_cell], density[first_cell])
+        p = from_cells(points, cells[first_cell], cell_density[first_cell])
         p.v[:] = _velocity(spec.velocity, p.x, "mpm.velocity")
     if src.kind != "bodies":
         bodies = {"body": {"particles": p.n, "first_id": 0, "mass": float(np.sum(p.mass))}}
@@ -240,6 +240,7 @@ def _material(scene: Scene) -> ConstitutiveModel:
 
     name = constitutive.select(scene.effect_names)
     config = _config(scene, name)
+    assert scene.material is not None  # an mpm scene has a material
     return constitutive.load(name).from_scene(scene.material.E, scene.material.nu, config)
 
 
@@ -269,6 +270,7 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
     if spec.initial_stress == "geostatic":
         from geofrac.mpm.seeding import geostatic
 
+        assert scene.material is not None  # an mpm scene has a material
         geostatic(p, np.asarray(gravity.acceleration), scene.material.nu, width=spec.spacing)
     density = float(np.min(p.density))  # the fastest wave: the lightest particle
     if spec.dt is not None:
@@ -308,13 +310,13 @@ def prepare(scene: Scene, comm: MPI.Comm) -> MpmRun:
         friction = make_friction(f_nodes, f_normals, mus[f_which], offsets=f_planes)
     settings = StepSettings(
         spec.scheme,
-        spec.shape,
+        shapes.get(spec.shape),
         dt,
         np.asarray(gravity.acceleration if gravity else (0.0,) * spec.dim),
         fixed,
         None if smoothing is None else smoothing.radius,
         friction,
-        **({"domain": domain} if domain is not None else {}),
+        domain=domain,
         damping=spec.damping,
         smoothing_kind="standard" if smoothing is None else smoothing.kind,
     )
@@ -758,7 +760,7 @@ def _open_logs(run: MpmRun, out: Any, loop: dict[str, Any], resumed: bool) -> tu
     first = loop["first"]
     if out.xdmf:
         series = PointSeries(out.dir / "particles.xdmf", first.n)
-        series.write(0.0, first.x, _fields(first, loop["x0"], out.fields))  # type: ignore[arg-type]
+        series.write(0.0, first.x, _fields(first, loop["x0"], out.fields))
     csv = path.open("w")
     csv.write(_ENERGY_HEADER)
     csv.write(",".join(["0", "0.0", *map(repr, loop["log"].first_row())]) + "\n")

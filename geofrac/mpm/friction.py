@@ -230,6 +230,7 @@ def gaps(
     rr = r[p_idx, slot, j]
     n = fr.normals[rr]
     reach = np.einsum("ka,ka->k", x[p_idx], n) + np.einsum("ka,ka->k", lp[p_idx], np.abs(n))
+    assert fr.offsets is not None  # a boundary with a touch check (the gaps need its planes)
     np.minimum.at(out, (nodes[p_idx, slot], j), fr.offsets[rr] - reach)
     return out
 

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from geofrac.mpm import shapes
 from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.grid import Grid, grid
 from geofrac.mpm.particles import Particles, lattice
@@ -98,7 +99,7 @@ def _translating(shape: str, scheme: str) -> tuple[Grid, Particles, Elastic, Any
     def settings(local: Grid, domain: Any) -> StepSettings:
         X = local.nodes()[:, 0]
         fixed = ((X <= 0.0) | (X >= 50.0)).reshape(-1, 1)
-        return StepSettings(scheme, shape, dt, np.zeros(1), fixed, domain=domain)
+        return StepSettings(scheme, shapes.get(shape), dt, np.zeros(1), fixed, domain=domain)
 
     return g, p, mat, settings
 
@@ -122,7 +123,9 @@ def _sliding(shape: str, scheme: str) -> tuple[Grid, Particles, Elastic, Any]:
         floor = np.flatnonzero(np.isclose(X[:, 1], 0.5))
         fr = friction(floor, np.tile([0.0, -1.0], (len(floor), 1)), 0.3)
         gravity = np.array([0.0, -9.81])
-        return StepSettings(scheme, shape, dt, gravity, fixed, friction=fr, domain=domain)
+        return StepSettings(
+            scheme, shapes.get(shape), dt, gravity, fixed, friction=fr, domain=domain
+        )
 
     return g, p, mat, settings
 

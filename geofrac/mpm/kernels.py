@@ -150,8 +150,9 @@ def weights_hat(
     for i in range(n):
         for a in range(dim):
             st = np.int64(np.floor((x[i, a] - origin[a]) / L))
-            # a particle on the upper boundary belongs to the last cell
-            st = min(max(st, 0), shape[a] - 2)
+            # a particle on the upper boundary belongs to the last cell (numba unifies the
+            # np.int64 with the int literal; numpy's stubs give max no common type for them)
+            st = min(max(st, 0), shape[a] - 2)  # type: ignore[call-overload]
             s = x[i, a] - (origin[a] + L * st)
             i1[a, 0] = st
             i1[a, 1] = st + 1

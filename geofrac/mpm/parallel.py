@@ -21,7 +21,7 @@ through the small methods of :class:`Domain`.
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 
@@ -95,6 +95,10 @@ class Domain:
             return out
         return self.comm.allreduce(value, op=MPI.SUM)
 
+    @overload
+    def allmax(self, value: float) -> float: ...
+    @overload
+    def allmax(self, value: np.ndarray) -> np.ndarray: ...
     def allmax(self, value: float | np.ndarray) -> float | np.ndarray:
         """The largest value over the ranks (per entry of an array)."""
         from mpi4py import MPI

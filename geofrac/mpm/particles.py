@@ -39,7 +39,7 @@ class Particles:
     lp: np.ndarray
     stress_zz: np.ndarray
     plastic: np.ndarray
-    ids: np.ndarray = field(default=None)  # type: ignore[assignment]
+    ids: np.ndarray = field(default=None)  # type: ignore[arg-type]  # None: numbered in __post_init__
 
     def __post_init__(self) -> None:
         """Number the particles 0 … n−1 unless ids were given."""

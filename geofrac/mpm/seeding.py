@@ -95,7 +95,7 @@ def mesh_cells(
         trusted=trusted,
         algorithm=algorithm,
     ) as gmsh:
-        model = gmsh.model  # type: ignore[attr-defined]
+        model = gmsh.model
         tags, coords, _ = model.mesh.getNodes()
         xyz = coords.reshape(-1, 3)[:, :dim]
         index = np.zeros(int(tags.max()) + 1, dtype=np.int64)

@@ -305,7 +305,7 @@ class _Lists:
 
 #: The lists of the serial run ([None] until built) and of each domain.
 _SERIAL: list[_Lists | None] = [None]
-_BY_DOMAIN: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_BY_DOMAIN: weakref.WeakKeyDictionary[Domain, _Lists] = weakref.WeakKeyDictionary()
 
 #: Builds of Verlet lists and their wall seconds in this process (for the bench).
 _STATS = {"builds": 0, "build_seconds": 0.0, "uses": 0}
@@ -399,7 +399,9 @@ def smooth_particles(
         _STATS["builds"] += 1
         _STATS["build_seconds"] += time.perf_counter() - t0
     _STATS["uses"] += 1
+    assert lists is not None  # built above unless the kept lists were fresh
     if domain is not None:
+        assert lists.rows is not None  # built with this domain
         gx, gv = domain.send_rows(lists.rows, x, values)
         x, values = np.concatenate([x, gx]), np.concatenate([values, gv])
     x = np.ascontiguousarray(x, dtype=float)
