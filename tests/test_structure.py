@@ -74,13 +74,11 @@ def positional_violations(source: str, name: str) -> list[str]:
 def size_violations(source: str, name: str) -> list[str]:
     out = []
     for node in ast.walk(ast.parse(source)):
-        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and not _compiled(node):
             limit = MAX_FUNCTION_LINES
         elif isinstance(node, ast.ClassDef):
             limit = MAX_CLASS_LINES
         else:
-            continue
-        if _compiled(node) if not isinstance(node, ast.ClassDef) else False:
             continue
         lines = node.end_lineno - node.lineno + 1
         if lines > limit:
