@@ -11,11 +11,12 @@ These tests tell the two possible causes apart:
 - the field it reads is not: the MLS cells (Edo (2016), eq. 2.19) fail the patch test in
   stress. In an uncracked specimen under uniform compression, a band of cells switched to
   MLS (``mls_region``) carries 0.93-1.22 times the uniform stress (mean 1.13) on the
-  test's mesh (h = 5; 1.08-1.18 at h = 2.5), and the element cells beside it 0.60-1.13. A linear field lies in every cell's space (the fits
-  reproduce it), so a consistent discretisation would return it to round-off; this one
-  does not, because the cells' fields do not conform and their one-point stiffness is not
-  integration-consistent. That test is a strict xfail: it passes, and fails as xfail,
-  once the MLS cells are made consistent.
+  test's mesh (h = 5; 1.08-1.18 at h = 2.5), and the element cells beside it 0.60-1.13.
+  A linear field lies in every cell's space (the fits reproduce it), so a consistent
+  discretisation would return it to round-off; this one does not, because the cells'
+  fields do not conform and their one-point stiffness is not integration-consistent.
+  That test is a strict xfail: once the MLS cells are made consistent it passes, and
+  the xfail marker must go (docs/jaeger_cause.py --consistent: a prototype that passes).
 """
 
 from __future__ import annotations
