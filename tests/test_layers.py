@@ -39,6 +39,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "geofrac.interrupt",
             "geofrac.materials",
             "geofrac.analytic",
+            "geofrac.analytic_joints",
             "geofrac.kernels",
         ),
     ),

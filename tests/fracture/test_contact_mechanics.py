@@ -115,7 +115,8 @@ def slip_stress(beta: float, comm: MPI.Comm = MPI.COMM_SELF) -> float:
 #: are not conforming (a bonded horizontal joint already moves the element stresses beside
 #: it by -11 to +6 %). The slip load comes 4-6 % early for beta = 45-75 and 32 % at 30
 #: (where 1 - mu cot beta = 0.13 amplifies any traction error eightfold); docs/cracking.md,
-#: "Crack faces in contact", status. strict: a fix makes these fail.
+#: "Crack faces in contact", status. The recovery itself is exact and the MLS cells fail the
+#: stress patch test (tests/fracture/test_joint_faces.py). strict: a fix makes these fail.
 TRACTIONS_UNRELIABLE = pytest.mark.xfail(
     strict=True, reason="the faces' stress along the joint is 2-5 % off the uniform field"
 )
