@@ -344,8 +344,8 @@ def _point(file: str, key: str, value: Any) -> tuple[float, float]:
     return _number(file, f"{key}[0]", value[0]), _number(file, f"{key}[1]", value[1])
 
 
-def _shape(file: str, key: str, kind: str, raw: Any, size: float) -> np.ndarray:
-    """A ``circle`` or ``horseshoe`` table as a polygon (``size``: its outline's mesh size)."""
+def _shape(file: str, key: str, kind: str, raw: Any, side: float) -> np.ndarray:
+    """A ``circle`` or ``horseshoe`` table as a polygon (``side``: the default side length)."""
     t = _check_keys(file, key, raw, CIRCLE_KEYS if kind == "circle" else HORSESHOE_KEYS)
     needed = ("centre", "radius") if kind == "circle" else ("centre", "width", "wall_height")
     for name in needed:
@@ -359,13 +359,13 @@ def _shape(file: str, key: str, kind: str, raw: Any, size: float) -> np.ndarray:
     try:
         if kind == "circle":
             radius = _number(file, f"{key}.radius", t["radius"], positive=True)
-            default = max(32, 4 * math.ceil(2 * math.pi * radius / (4 * size)))
+            default = max(32, 4 * math.ceil(2 * math.pi * radius / (4 * side)))
             segments = _integer(file, f"{key}.segments", t.get("segments", default), 3, 10**5)
             poly = circle_polygon(centre, radius, segments, level=level)
         else:
             width = _number(file, f"{key}.width", t["width"], positive=True)
             wall = _number(file, f"{key}.wall_height", t["wall_height"], positive=True)
-            default = max(16, 2 * math.ceil(math.pi * width / (4 * size)))
+            default = max(16, 2 * math.ceil(math.pi * width / (4 * side)))
             segments = _integer(file, f"{key}.segments", t.get("segments", default), 2, 10**5)
             poly = horseshoe_polygon(centre, width, wall, segments=segments, level=level)
         if cuts:
@@ -376,9 +376,15 @@ def _shape(file: str, key: str, kind: str, raw: Any, size: float) -> np.ndarray:
 
 
 def _regions(
-    file: str, raw: Any, reserved: set[str], *, fracture_size: float, mesh: MeshSpec
+    file: str, raw: Any, reserved: set[str], *, mesh: MeshSpec, tolerance: float
 ) -> list[Region]:
-    """The ``[dfn.regions.NAME]`` tables, in the order given."""
+    """The ``[dfn.regions.NAME]`` tables, in the order given.
+
+    A circle's or horseshoe's default number of sides makes each side about the outline's
+    mesh size, but at least 4 × the cleaning tolerance: a fracture crossing the outline
+    is bent through an outline vertex within the tolerance of it, so short sides would
+    bend (and shorten) more fractures.
+    """
     if not isinstance(raw, dict) or not raw:
         raise _error(file, "regions", f"must be a table of named regions, got {short(raw)}")
     out = []
@@ -392,7 +398,7 @@ def _regions(
                 f"{sorted(reserved)} and the fracture sets",
             )
         t = _check_keys(file, key, spec, REGION_KEYS)
-        size = fracture_size
+        size = mesh.fracture_size
         if "mesh_size" in t:
             size = _number(file, f"{key}.mesh_size", t["mesh_size"], positive=True)
             if size > mesh.size:
@@ -405,7 +411,8 @@ def _regions(
         if shapes[0] == "polygon":
             poly = _polygon(file, f"{key}.polygon", t["polygon"], ("polygon",))
         else:
-            poly = _shape(file, f"{key}.{shapes[0]}", shapes[0], t[shapes[0]], size)
+            side = max(size, 4.0 * tolerance)
+            poly = _shape(file, f"{key}.{shapes[0]}", shapes[0], t[shapes[0]], side)
         out.append(Region(name, poly, size))
     return out
 
@@ -491,7 +498,7 @@ def _configure(table: dict[str, Any], file: str) -> DfnConfig:
     layout = None
     if "regions" in t:
         reserved = {DOMAIN_GROUP, FRACTURE_GROUP, *sides, *corners, *(s.name for s in sets)}
-        regions = _regions(file, t["regions"], reserved, fracture_size=fracture_size, mesh=spec)
+        regions = _regions(file, t["regions"], reserved, mesh=spec, tolerance=tolerance)
         outlines = {r.name + OUTLINE_SUFFIX for r in regions}
         clash = outlines & (reserved | {r.name for r in regions})
         if clash:
