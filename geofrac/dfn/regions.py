@@ -383,7 +383,7 @@ def _check_spacing(
         k = int(np.unravel_index(int(np.argmin(d)), d.shape)[0])
         e = int(np.flatnonzero((edges == k).any(axis=1))[0])
     else:
-        k, e = np.unravel_index(int(np.argmin(dist)), dist.shape)
+        k, e = (int(i) for i in np.unravel_index(int(np.argmin(dist)), dist.shape))
     p = vertices[k]
     raise DfnError(
         f"region '{names[owner[e]]}': outline points {min(close_points, close_edge):.3g} "
@@ -413,7 +413,7 @@ def layout_regions(
     """
     names = [r.name for r in regions]
     polygons = [as_polygon(r.polygon) for r in regions]
-    for r, poly in zip(regions, polygons, strict=True):
+    for region, poly in zip(regions, polygons, strict=True):
         inside = strictly_inside(poly, domain)
         gap = float(nearest_boundary_point(poly, domain)[0].min())
         corner_gap, _ = point_segment_distance(
@@ -423,7 +423,8 @@ def layout_regions(
         if not inside.all() or gap < margin:
             where = "leaves the domain" if not inside.all() else f"lies {gap:.3g} from its boundary"
             raise DfnError(
-                f"region '{r.name}' {where}; keep it at least {margin:g} (the mesh size) inside"
+                f"region '{region.name}' {where}; keep it at least {margin:g} (the mesh size) "
+                "inside"
             )
     scale = float(np.ptp(domain, axis=0).max())
     eps = SAME_RTOL * scale

@@ -111,9 +111,9 @@ def _outline_chains(
     vertices = clean.vertices
     eps = 1e-12 * float(np.ptp(clean.domain, axis=0).max())
     ids = np.empty(len(layout.vertices), dtype=np.int64)
-    extra = []
+    extra: list[np.ndarray] = []
     for k, p in enumerate(layout.vertices):
-        hit = np.flatnonzero(np.hypot(*(vertices - p).T) <= eps) if len(vertices) else []
+        hit = np.flatnonzero(np.hypot(*(vertices - p).T) <= eps) if len(vertices) else np.zeros(0)
         if len(hit):
             ids[k] = int(hit[0])
         else:
@@ -242,8 +242,8 @@ def mesh_network(
         _outline_chains(clean, regions, first_extra) if regions is not None else ([], None)
     )
     points = np.vstack([clean.vertices, clean.domain, *([extra] if extra is not None else [])])
-    used = {v for chain in chains + outline_chains for v in chain}
-    used = sorted(used | set(clean.edges.ravel().tolist()))
+    on_lines = {v for chain in chains + outline_chains for v in chain}
+    used = sorted(on_lines | set(clean.edges.ravel().tolist()))
     tag = {v: geo.addPoint(points[v, 0], points[v, 1], 0.0) for v in used}
     side_lines = [
         [geo.addLine(tag[a], tag[b]) for a, b in itertools.pairwise(chain)] for chain in chains

@@ -262,11 +262,33 @@ def test_dolfinx_cell_tags_follow_the_regions():
 @pytest.mark.mpi(min_size=2)
 def test_dolfinx_cell_tags_same_on_one_and_n_ranks():
     world = MPI.COMM_WORLD
-    serial = _distributed_tags(MPI.COMM_SELF) if world.rank == 0 else None
+    serial = None
+    if world.rank == 0:  # a failure here must not leave the other ranks in bcast
+        try:
+            serial = _distributed_tags(MPI.COMM_SELF)
+        except Exception as exc:
+            serial = RuntimeError(f"the 1-rank mesh failed: {exc}")
     serial = world.bcast(serial, root=0)
+    if isinstance(serial, Exception):
+        raise serial
     tags = _distributed_tags(world)
     _check_distributed(tags)
     assert tags["split"] == world.size  # the mesh really is split
     for name in (DOMAIN_GROUP, "heading", "bench", "pillar"):
         assert tags[name][0] == serial[name][0]
         assert tags[name][1] == pytest.approx(serial[name][1], rel=1e-12)
+
+
+def test_the_tunnel_example_in_the_docs_is_a_valid_scene(tmp_path):
+    text = (Path(__file__).resolve().parents[2] / "docs" / "dfn.md").read_text()
+    section = text[text.index("## Regions: openings") :]
+    example = section[section.index("```toml\n") + 8 : section.index("```\n", 10)]
+    path = tmp_path / "tunnel.toml"
+    path.write_text('name = "tunnel"\n' + example)
+    scene = load_scene_collective(MPI.COMM_SELF, path)
+    layout = scene.geometry.builder.config.regions
+    assert layout.names == ("heading", "bench")
+    assert len(layout.vertices) == 40  # sides of 0.47 m: at least 4 x tolerance (0.125)
+    assert len(layout.holes) == 1
+    area = sum(polygon_area(r.polygon) for r in layout.regions)
+    assert area == pytest.approx(np.pi * 9.0, rel=0.005)  # the inscribed 40-gon
