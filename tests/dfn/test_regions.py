@@ -269,6 +269,8 @@ def test_fracture_along_the_bench_line_is_dropped():
     c = _clean(layout, [[-1.0, -0.48], [1.0, -0.49]], [[-8.0, 5.0], [8.0, 5.0]])
     assert [f for f, _, _ in c.report.events["on_boundary"]] == [0]
     assert np.all(c.edge_fracture == 1)
+    # dropped whole as a piece along the outline, before any snapping
+    assert c.moved[0] == np.inf and not c.report.events["boundary_snap"]
 
 
 def test_junction_near_the_outline_is_snapped_onto_it():
