@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from geofrac.dfn.clean import box_pairs
 from geofrac.dfn.errors import DfnError
 from geofrac.dfn.polygon import (
     as_polygon,
@@ -262,21 +263,17 @@ def strictly_inside(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
 
 
 def _merge_points(polygons: Sequence[np.ndarray], eps: float) -> tuple[np.ndarray, list[list[int]]]:
-    """Common vertex numbers: points closer than eps are one (the first given)."""
-    vertices: list[np.ndarray] = []
-    ids: list[list[int]] = []
-    for poly in polygons:
-        row = []
-        for p in poly:
-            d = np.hypot(*(np.array(vertices) - p).T) if vertices else np.zeros(0)
-            hit = np.flatnonzero(d <= eps)
-            if len(hit):
-                row.append(int(hit[0]))
-            else:
-                row.append(len(vertices))
-                vertices.append(p)
-        ids.append(row)
-    return np.array(vertices).reshape(-1, 2), ids
+    """Common vertex numbers: points within eps of an earlier point are that point."""
+    points = np.vstack(polygons)
+    rep = np.arange(len(points))
+    i, j = box_pairs(np.hstack([points, points]), pad=eps)  # i < j
+    close = np.hypot(*(points[i] - points[j]).T) <= eps
+    np.minimum.at(rep, j[close], i[close])
+    while np.any(rep[rep] != rep):  # chains: follow to the first point
+        rep = rep[rep]
+    first, number = np.unique(rep, return_inverse=True)
+    ids = np.split(number, np.cumsum([len(p) for p in polygons])[:-1])
+    return points[first], [row.tolist() for row in ids]
 
 
 def _split_loops(
@@ -285,36 +282,47 @@ def _split_loops(
     """Each region's directed edges, split at every other vertex lying on them."""
     loops = []
     for row in ids:
+        u_all = np.array(row)
+        v_all = np.roll(u_all, -1)
+        segs = np.stack([vertices[u_all], vertices[v_all]], axis=1)
+        e, k = box_pairs(_boxes(segs), np.hstack([vertices, vertices]), pad=eps)
+        d, t = point_segment_distance(vertices[k], segs[e, 0], segs[e, 1])
+        on = (d <= eps) & (t > 0.0) & (t < 1.0) & (k != u_all[e]) & (k != v_all[e])
+        e, k, t = e[on], k[on], t[on]
+        order = np.lexsort((t, e))
+        inner = np.split(k[order], np.searchsorted(e[order], np.arange(1, len(row))))
         directed: list[tuple[int, int]] = []
-        for u, v in zip(row, row[1:] + row[:1], strict=True):
-            d, t = point_segment_distance(vertices, vertices[u], vertices[v])
-            inner = np.flatnonzero((d <= eps) & (t > 0.0) & (t < 1.0))
-            inner = inner[(inner != u) & (inner != v)]
-            chain = [u, *inner[np.argsort(t[inner])].tolist(), v]
-            directed += list(itertools.pairwise(chain))
+        for u, v, mid in zip(u_all.tolist(), v_all.tolist(), inner, strict=True):
+            directed += list(itertools.pairwise([u, *mid.tolist(), v]))
         loops.append(directed)
     return loops
 
 
+def _boxes(segments: np.ndarray) -> np.ndarray:
+    """Bounding boxes of segments shape=(n, 2, 2) -> shape=(n, 4)."""
+    return np.hstack([segments.min(axis=1), segments.max(axis=1)])
+
+
 def _check_crossings(layout_segments: np.ndarray, owner: np.ndarray, names: Sequence[str]) -> None:
     """No outline edge properly crosses another region's (after the splits)."""
-    a0, a1 = layout_segments[:, None, 0], layout_segments[:, None, 1]
-    b0, b1 = layout_segments[None, :, 0], layout_segments[None, :, 1]
-    r, s = a1 - a0, b1 - b0
-    den = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+    i, j = box_pairs(_boxes(layout_segments))
+    keep = owner[i] != owner[j]
+    i, j = i[keep], j[keep]
+    a0, b0 = layout_segments[i, 0], layout_segments[j, 0]
+    r, s = layout_segments[i, 1] - a0, layout_segments[j, 1] - b0
+    den = r[:, 0] * s[:, 1] - r[:, 1] * s[:, 0]
     w = b0 - a0
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * s[..., 1] - w[..., 1] * s[..., 0]) / den
-        u = (w[..., 0] * r[..., 1] - w[..., 1] * r[..., 0]) / den
+        t = (w[:, 0] * s[:, 1] - w[:, 1] * s[:, 0]) / den
+        u = (w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]) / den
     eps = 1e-9
-    hit = (den != 0) & (t > eps) & (t < 1 - eps) & (u > eps) & (u < 1 - eps)
-    hit &= owner[:, None] != owner[None, :]
-    if np.any(hit):
-        i, j = (int(k[0]) for k in np.nonzero(hit))
-        p = layout_segments[i, 0] + t[i, j] * r[i, 0]
+    hit = np.flatnonzero((den != 0) & (t > eps) & (t < 1 - eps) & (u > eps) & (u < 1 - eps))
+    if len(hit):
+        k = int(hit[0])
+        p = a0[k] + t[k] * r[k]
         raise DfnError(
-            f"regions '{names[owner[i]]}' and '{names[owner[j]]}' overlap: their outlines "
-            f"cross at ({p[0]:.6g}, {p[1]:.6g})"
+            f"regions '{names[owner[i[k]]]}' and '{names[owner[j[k]]]}' overlap: their "
+            f"outlines cross at ({p[0]:.6g}, {p[1]:.6g})"
         )
 
 
@@ -367,26 +375,24 @@ def _check_spacing(
     vertices: np.ndarray, edges: np.ndarray, owner: np.ndarray, names: Sequence[str], tol: float
 ) -> None:
     """Outline vertices at least tol apart and from outline edges they do not end on."""
-    d = np.hypot(*(vertices[:, None, :] - vertices[None, :, :]).transpose(2, 0, 1))
-    np.fill_diagonal(d, np.inf)
-    dist, _ = point_segment_distance(
-        vertices[:, None, :], vertices[edges[:, 0]][None], vertices[edges[:, 1]][None]
-    )
-    incident = (edges[None, :, 0] == np.arange(len(vertices))[:, None]) | (
-        edges[None, :, 1] == np.arange(len(vertices))[:, None]
-    )
-    dist[incident] = np.inf
+    points = np.hstack([vertices, vertices])
+    i, j = box_pairs(points, pad=tol)
+    d = np.hypot(*(vertices[i] - vertices[j]).T)
+    v, e = box_pairs(points, _boxes(vertices[edges]), pad=tol)
+    foreign = (edges[e, 0] != v) & (edges[e, 1] != v)
+    v, e = v[foreign], e[foreign]
+    dist, _ = point_segment_distance(vertices[v], vertices[edges[e, 0]], vertices[edges[e, 1]])
     close_points, close_edge = d.min(initial=np.inf), dist.min(initial=np.inf)
     if min(close_points, close_edge) >= tol:
         return
     if close_points <= close_edge:
-        k = int(np.unravel_index(int(np.argmin(d)), d.shape)[0])
-        e = int(np.flatnonzero((edges == k).any(axis=1))[0])
+        k = int(i[np.argmin(d)])
+        edge = int(np.flatnonzero((edges == k).any(axis=1))[0])
     else:
-        k, e = (int(i) for i in np.unravel_index(int(np.argmin(dist)), dist.shape))
+        k, edge = int(v[np.argmin(dist)]), int(e[np.argmin(dist)])
     p = vertices[k]
     raise DfnError(
-        f"region '{names[owner[e]]}': outline points {min(close_points, close_edge):.3g} "
+        f"region '{names[owner[edge]]}': outline points {min(close_points, close_edge):.3g} "
         f"apart near ({p[0]:.6g}, {p[1]:.6g}), closer than the cleaning tolerance {tol:g}; "
         "use fewer segments or a smaller tolerance"
     )

@@ -359,14 +359,14 @@ def _shape(file: str, key: str, kind: str, raw: Any, side: float) -> np.ndarray:
     try:
         if kind == "circle":
             radius = _number(file, f"{key}.radius", t["radius"], positive=True)
-            default = max(32, 4 * math.ceil(2 * math.pi * radius / (4 * side)))
-            segments = _integer(file, f"{key}.segments", t.get("segments", default), 3, 10**5)
+            default = min(1000, max(32, 4 * math.ceil(2 * math.pi * radius / (4 * side))))
+            segments = _integer(file, f"{key}.segments", t.get("segments", default), 3, 1000)
             poly = circle_polygon(centre, radius, segments, level=level)
         else:
             width = _number(file, f"{key}.width", t["width"], positive=True)
             wall = _number(file, f"{key}.wall_height", t["wall_height"], positive=True)
-            default = max(16, 2 * math.ceil(math.pi * width / (4 * side)))
-            segments = _integer(file, f"{key}.segments", t.get("segments", default), 2, 10**5)
+            default = min(1000, max(16, 2 * math.ceil(math.pi * width / (4 * side))))
+            segments = _integer(file, f"{key}.segments", t.get("segments", default), 2, 1000)
             poly = horseshoe_polygon(centre, width, wall, segments=segments, level=level)
         if cuts:
             poly = cut_polygon(poly, float(level), keep=cuts[0])  # type: ignore[arg-type]
