@@ -37,14 +37,16 @@ def test_every_registered_name_is_documented():
 
 
 def test_every_dfn_key_has_a_row():
-    from geofrac.effects.dfn import SET_KEYS, TABLE_KEYS
+    from geofrac.effects.dfn import CIRCLE_KEYS, HORSESHOE_KEYS, REGION_KEYS, SET_KEYS, TABLE_KEYS
 
     start = TEXT.index("### `[dfn]`")
     body = TEXT[start:]
     rows = re.findall(r"^\| (`[^|]*`) \|", body, re.MULTILINE)  # first cells, e.g. `a`, `b`
     documented = {name for row in rows for name in re.findall(r"`(\w+)`", row)}
-    for key in (*TABLE_KEYS, *SET_KEYS):
+    for key in (*TABLE_KEYS, *SET_KEYS, *REGION_KEYS):
         assert key in documented, key
+    for key in (*CIRCLE_KEYS, *HORSESHOE_KEYS):  # the shapes' keys, in their rows' text
+        assert f"`{key}`" in body[: body.index("## MPM scenes")], key
 
 
 def test_every_cracking_key_has_a_row():

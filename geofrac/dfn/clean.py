@@ -144,6 +144,9 @@ class CleanNetwork:
             shape=(num_fractures,).
         tol: the tolerance used.
         report: the events.
+        constraints: fixed lines inside the domain that the cleaning treated like the
+            boundary (region outlines, :mod:`geofrac.dfn.regions`); fractures crossing
+            them are split there, shape=(num_constraints, 2, 2).
     """
 
     vertices: np.ndarray
@@ -156,6 +159,7 @@ class CleanNetwork:
     moved: np.ndarray
     tol: float
     report: CleanReport
+    constraints: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))
 
     @property
     def edge_length(self) -> np.ndarray:
@@ -201,6 +205,8 @@ class CleanNetwork:
             along = np.arctan2(t[:, 1], t[:, 0])
             vert = np.concatenate([vert, on, on])
             theta = np.concatenate([theta, along, along + np.pi])
+        more_vert, more_theta = self._constraint_directions()
+        vert, theta = np.concatenate([vert, more_vert]), np.concatenate([theta, more_theta])
         theta = np.mod(theta, 2 * np.pi)
         order = np.lexsort((theta, vert))
         vert, theta = vert[order], theta[order]
@@ -214,6 +220,27 @@ class CleanNetwork:
         gaps.append(2 * np.pi - (theta[last[many]] - theta[first[many]]))
         smallest = np.concatenate(gaps)
         return float(np.degrees(smallest.min())) if smallest.size else 180.0
+
+    def _constraint_directions(self) -> tuple[np.ndarray, np.ndarray]:
+        """(vertex, direction angle) of the constraint lines leaving each vertex on one.
+
+        A vertex inside a constraint segment sees both of its directions, a vertex at its
+        end only the one into it. Shapes (k,) each.
+        """
+        if len(self.constraints) == 0 or len(self.vertices) == 0:
+            return np.zeros(0, dtype=np.int64), np.zeros(0)
+        a, b = self.constraints[:, 0], self.constraints[:, 1]
+        d, t = point_segment_distance(self.vertices[:, None, :], a[None], b[None])
+        eps = 1e-12 * float(np.ptp(self.domain, axis=0).max())
+        v, c = np.nonzero(d <= eps)
+        length = np.hypot(*(b - a).T)[c]
+        t = t[v, c]
+        fwd = np.arctan2(*(b - a)[c][:, ::-1].T)
+        toward_a = t * length > eps
+        toward_b = (1 - t) * length > eps
+        vert = np.concatenate([v[toward_b], v[toward_a]])
+        theta = np.concatenate([fwd[toward_b], fwd[toward_a] + np.pi])
+        return vert, theta
 
 
 # ----------------------------------------------------------------------------- geometry
@@ -267,13 +294,48 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
+class _Fixed:
+    """Lines the cleaning cannot move: the domain's sides, then the constraint segments.
+
+    Attributes:
+        domain: the domain polygon, shape=(m, 2).
+        a, b: segment ends, each shape=(k, 2); the first ``len(domain)`` are the sides.
+        corners: fixed points (the domain's corners, then the constraints' ends),
+            shape=(c, 2).
+        constraints: the constraint segments, shape=(n, 2, 2).
+    """
+
+    def __init__(self, domain: np.ndarray, constraints: np.ndarray) -> None:
+        self.domain, self.constraints = domain, constraints
+        self.a = np.vstack([domain, constraints[:, 0]])
+        self.b = np.vstack([np.roll(domain, -1, axis=0), constraints[:, 1]])
+        ends = constraints.reshape(-1, 2)
+        if len(ends):
+            ends = np.unique(ends, axis=0)
+        self.corners = np.vstack([domain, ends])
+
+    def nearest(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(distance, segment, closest point) of each point, shapes (n,), (n,), (n, 2).
+
+        Without constraints, the same numbers as
+        :func:`~geofrac.dfn.polygon.nearest_boundary_point` on the domain.
+        """
+        d, t = point_segment_distance(points[:, None, :], self.a[None], self.b[None])
+        side = np.argmin(d, axis=1)
+        rows = np.arange(len(points))
+        ts = t[rows, side]
+        closest = self.a[side] + ts[:, None] * (self.b[side] - self.a[side])
+        return d[rows, side], side, closest
+
+
 # ----------------------------------------------------------------------- piece rules
 
 
 def _initial_pieces(
-    network: Network, domain: np.ndarray, tol: float, report: CleanReport
+    network: Network, fixed: _Fixed, tol: float, report: CleanReport
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Rules 1-3: clip, drop short pieces and pieces along the boundary."""
+    """Rules 1-3: clip, drop short pieces and pieces along the boundary (or a constraint)."""
+    domain = fixed.domain
     n = len(network)
     pieces, parent = clip_segments(network.segments, domain)
     lengths = np.hypot(*(pieces[:, 1] - pieces[:, 0]).T) if len(pieces) else np.zeros(0)
@@ -293,7 +355,7 @@ def _initial_pieces(
             pieces[:, 0, None, :]
             + samples[None, :, None] * (pieces[:, 1] - pieces[:, 0])[:, None, :]
         )
-        d, side, _, _ = nearest_boundary_point(pts.reshape(-1, 2), domain)
+        d, side, _ = fixed.nearest(pts.reshape(-1, 2))
         d, side = d.reshape(-1, 5), side.reshape(-1, 5)
         along = (d.max(axis=1) < tol) & (side == side[:, :1]).all(axis=1)
         for k in np.flatnonzero(along):
@@ -415,21 +477,22 @@ class _Pass:
         self,
         segs: np.ndarray,
         fid: np.ndarray,
-        domain: np.ndarray,
+        fixed: _Fixed,
         *,
         tol: float,
         report: CleanReport,
         moved: np.ndarray,
         count_junctions: bool,
     ) -> None:
-        self.segs, self.fid, self.domain, self.tol = segs, fid, domain, tol
+        self.segs, self.fid, self.fixed, self.tol = segs, fid, fixed, tol
         self.report, self.moved, self.count = report, moved, count_junctions
-        self.exact = 1e-12 * float(np.ptp(domain, axis=0).max())
+        self.exact = 1e-12 * float(np.ptp(fixed.domain, axis=0).max())
         self.changed = False
         m = len(segs)
         self.ends = segs.reshape(-1, 2).copy()  # endpoint k belongs to segment k // 2
         self.end_kind = np.full(2 * m, _ENDPOINT)
         self.crossings: list[np.ndarray] = []
+        self.crossing_kind: list[int] = []  # _CROSSING, or _BOUNDARY on a constraint
         # segment -> vertices on its interior: ("end", k) or ("cross", c)
         self.on_seg: dict[int, list[tuple[str, int]]] = defaultdict(list)
         self.tee_pairs: set[tuple[int, int]] = set()  # (segment of the endpoint, target)
@@ -440,7 +503,11 @@ class _Pass:
         i, j = box_pairs(_boxes(self.segs), pad=self.tol)
         if len(i):
             self.snap_tees(i, j)
+        self.snap_tees_on_fixed_corners()
+        if len(i):
             self.split_crossings(i, j)
+        if len(self.fixed.constraints):
+            self.split_constraint_crossings()
         vertices, edges, fids = self.build()
         return vertices, edges, fids, self.changed
 
@@ -452,11 +519,12 @@ class _Pass:
 
     def snap_to_boundary(self) -> None:
         """boundary_snap: endpoints within tol of the boundary move onto it."""
-        dist, _, _, proj = nearest_boundary_point(self.ends, self.domain)
-        to_corner = np.hypot(*(self.ends[:, None, :] - self.domain[None]).transpose(2, 0, 1))
+        dist, _, proj = self.fixed.nearest(self.ends)
+        corners = self.fixed.corners
+        to_corner = np.hypot(*(self.ends[:, None, :] - corners[None]).transpose(2, 0, 1))
         for k in np.flatnonzero(dist < self.tol):
             corner = np.flatnonzero(to_corner[k] < self.tol)
-            target = self.domain[corner[0]] if len(corner) else proj[k]
+            target = corners[corner[0]] if len(corner) else proj[k]
             self.move(self.fid[k // 2], float(np.hypot(*(target - self.ends[k]))), "boundary_snap")
             self.ends[k] = target
             self.end_kind[k] = _CORNER if len(corner) else _BOUNDARY
@@ -466,8 +534,7 @@ class _Pass:
 
         A free endpoint moves onto the nearest such segment, which is split there. An
         endpoint on the boundary cannot leave it, so the segment is bent through it
-        instead (the segment's fracture moves by less than tol); so is a segment passing
-        within tol of a domain corner.
+        instead (the segment's fracture moves by less than tol).
         """
         segs, tol = self.segs, self.tol
         length = np.hypot(*(segs[:, 1] - segs[:, 0]).T)
@@ -491,9 +558,14 @@ class _Pass:
             self.tee_pairs.add((kk // 2, s))
             if self.count:
                 self.report.tees += 1
-        boxes = _boxes(segs)
-        c, s_idx = box_pairs(np.hstack([self.domain, self.domain]), boxes, pad=tol)
-        d, t = point_segment_distance(self.domain[c], segs[s_idx, 0], segs[s_idx, 1])
+
+    def snap_tees_on_fixed_corners(self) -> None:
+        """tee_snap: a segment passing within tol of a domain (or constraint) corner bends."""
+        segs, tol = self.segs, self.tol
+        length = np.hypot(*(segs[:, 1] - segs[:, 0]).T)
+        corners = self.fixed.corners
+        c, s_idx = box_pairs(np.hstack([corners, corners]), _boxes(segs), pad=tol)
+        d, t = point_segment_distance(corners[c], segs[s_idx, 0], segs[s_idx, 1])
         hit = (d < tol) & (t * length[s_idx] > self.exact) & ((1 - t) * length[s_idx] > self.exact)
         for corner, s, dd in zip(c[hit], s_idx[hit], d[hit], strict=True):
             self._bend(int(s), ("corner", int(corner)), float(dd))
@@ -525,23 +597,49 @@ class _Pass:
                 continue  # an endpoint overshooting the other edge by < tol: the tee cut it
             c = len(self.crossings)
             self.crossings.append(segs[a, 0] + tt * (segs[a, 1] - segs[a, 0]))
+            self.crossing_kind.append(_CROSSING)
             self.on_seg[int(a)].append(("cross", c))
             self.on_seg[int(b)].append(("cross", c))
             self.changed = True
             if self.count:
                 self.report.crossings += 1
 
+    def split_constraint_crossings(self) -> None:
+        """A segment crossing a constraint line is split there (a boundary vertex).
+
+        Crossings within tol of the constraint's ends are left to the corner bend.
+        """
+        segs, cons = self.segs, self.fixed.constraints
+        i, j = box_pairs(_boxes(segs), _boxes(cons), pad=self.tol)
+        a0, b0 = segs[i, 0], cons[j, 0]
+        r, s = segs[i, 1] - a0, cons[j, 1] - b0
+        den = _cross(r, s)
+        ok = np.abs(den) > 1e-14 * np.hypot(*r.T) * np.hypot(*s.T)
+        den = np.where(ok, den, 1.0)
+        t = _cross(b0 - a0, s) / den
+        u = _cross(b0 - a0, r) / den
+        la, lb = np.hypot(*r.T), np.hypot(*s.T)
+        eps = self.exact
+        hit = ok & (t * la > eps) & ((1 - t) * la > eps) & (u * lb > eps) & ((1 - u) * lb > eps)
+        for a, b, uu in zip(i[hit], j[hit], u[hit], strict=True):
+            c = len(self.crossings)
+            self.crossings.append(cons[b, 0] + uu * (cons[b, 1] - cons[b, 0]))
+            self.crossing_kind.append(_BOUNDARY)
+            self.on_seg[int(a)].append(("cross", c))
+            self.changed = True
+
     def build(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Merge close vertices, split segments at their vertices, drop repeated edges."""
-        m, nc, ncr = len(self.segs), len(self.domain), len(self.crossings)
-        points = np.vstack([self.domain, *self.crossings, self.ends]) if m else self.domain
+        corners = self.fixed.corners
+        m, nc, ncr = len(self.segs), len(corners), len(self.crossings)
+        points = np.vstack([corners, *self.crossings, self.ends]) if m else corners
         kinds = np.concatenate(
-            [np.full(nc, _CORNER), np.full(ncr, _CROSSING), self.end_kind]
+            [np.full(nc, _CORNER), np.array(self.crossing_kind, dtype=np.int64), self.end_kind]
         ).astype(np.int64)
         orig = points.copy()
         if ncr:  # boundary_snap for crossings: a junction within tol of the boundary
             crossing = slice(nc, nc + ncr)
-            dist, _, _, proj = nearest_boundary_point(points[crossing], self.domain)
+            dist, _, proj = self.fixed.nearest(points[crossing])
             near = dist < self.tol
             points[crossing][near] = proj[near]
             kinds[crossing][near] = _BOUNDARY
@@ -574,7 +672,7 @@ class _Pass:
                     continue
                 if kinds[a] <= _BOUNDARY and kinds[b] <= _BOUNDARY:
                     mid = 0.5 * (points[a] + points[b])
-                    if nearest_boundary_point(mid[None], self.domain)[0][0] < self.tol:
+                    if self.fixed.nearest(mid[None])[0][0] < self.tol:
                         f = int(self.fid[s])  # on_boundary: the edge runs along the boundary
                         self.report.add(
                             "on_boundary", f, amount=float(np.hypot(*(points[b] - points[a])))
@@ -601,7 +699,12 @@ class _Pass:
 
 
 def clean_network(
-    network: Network, domain: np.ndarray, tol: float, *, max_passes: int = 8
+    network: Network,
+    domain: np.ndarray,
+    tol: float,
+    *,
+    max_passes: int = 8,
+    constraints: np.ndarray | None = None,
 ) -> CleanNetwork:
     """Apply the rules of this module and return the planar graph.
 
@@ -611,6 +714,13 @@ def clean_network(
         tol: tolerance (length): pieces shorter than this are dropped, points closer than
             this are merged or snapped.
         max_passes: arrangement passes before giving up.
+        constraints: fixed segments inside the domain (region outlines), shape=(k, 2, 2),
+            whose ends keep at least ``tol`` apart and from the other segments. The rules
+            treat them as the boundary: a fracture crossing one is split at the crossing
+            (not moved; it stays a fracture on both sides), endpoints and junctions within
+            ``tol`` of one snap onto it (onto its ends when within ``tol`` of them), a
+            fracture passing within ``tol`` of an end bends through it, and a piece along
+            one is dropped.
 
     Raises:
         DfnError: ``tol`` is not positive, or the arrangement did not settle.
@@ -618,9 +728,11 @@ def clean_network(
     if not (np.isfinite(tol) and tol > 0):
         raise DfnError(f"tolerance must be a positive length, got {tol!r}")
     domain = np.asarray(domain, dtype=float)
+    cons = np.zeros((0, 2, 2)) if constraints is None else np.asarray(constraints, dtype=float)
+    fixed = _Fixed(domain, cons.reshape(-1, 2, 2))
     report = CleanReport()
     n = len(network)
-    pieces, parent, clipped = _initial_pieces(network, domain, tol, report)
+    pieces, parent, clipped = _initial_pieces(network, fixed, tol, report)
     if len(pieces):
         pieces, parent = _drop_duplicates(pieces, parent, tol, report)
         pieces, parent = _merge_parallel(pieces, parent, tol, report)
@@ -646,7 +758,7 @@ def clean_network(
         vertices, edges, fids, changed = _Pass(
             segs,
             fid,
-            domain,
+            fixed,
             tol=tol,
             report=report,
             moved=moved,
@@ -671,4 +783,5 @@ def clean_network(
         moved=moved,
         tol=float(tol),
         report=report,
+        constraints=fixed.constraints,
     )

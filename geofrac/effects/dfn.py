@@ -14,6 +14,7 @@ checked then, so a malformed file fails before any heavy work.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -31,8 +32,16 @@ from geofrac.dfn.polygon import (
     polygon_area,
     rectangle,
 )
+from geofrac.dfn.regions import (
+    Region,
+    RegionLayout,
+    circle_polygon,
+    cut_polygon,
+    horseshoe_polygon,
+    layout_regions,
+)
 from geofrac.dfn.sampling import FractureSet, Network, generate_network
-from geofrac.meshing.dfn import ALGORITHMS, DOMAIN_GROUP, FRACTURE_GROUP, MeshSpec
+from geofrac.meshing.dfn import ALGORITHMS, DOMAIN_GROUP, FRACTURE_GROUP, OUTLINE_SUFFIX, MeshSpec
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import MAX_INTEGER, finite, short
 
@@ -40,8 +49,11 @@ if TYPE_CHECKING:
     from geofrac.effects import ConfigureContext
 
 __all__ = [
+    "CIRCLE_KEYS",
+    "HORSESHOE_KEYS",
     "RECTANGLE_CORNERS",
     "RECTANGLE_SIDES",
+    "REGION_KEYS",
     "SET_KEYS",
     "TABLE_KEYS",
     "DfnConfig",
@@ -63,7 +75,12 @@ TABLE_KEYS = (
     "transition",
     "tolerance",
     "algorithm",
+    "regions",
 )
+#: Keys of each ``[dfn.regions.NAME]`` table and of its ``circle`` / ``horseshoe`` shape.
+REGION_KEYS = ("polygon", "circle", "horseshoe", "mesh_size")
+CIRCLE_KEYS = ("centre", "radius", "segments", "above", "below")
+HORSESHOE_KEYS = ("centre", "width", "wall_height", "segments", "above", "below")
 SET_KEYS = (
     "name",
     "mean",
@@ -98,6 +115,7 @@ class DfnConfig:
         file: the network file, or None.
         mesh: element sizes and algorithm.
         tolerance: cleaning tolerance (length).
+        regions: named cell regions (``[dfn.regions]``), or None.
     """
 
     domain: np.ndarray
@@ -110,6 +128,7 @@ class DfnConfig:
     file: Path | None
     mesh: MeshSpec
     tolerance: float
+    regions: RegionLayout | None = None
 
     def make_network(self) -> Network:
         """The network: read from the file, or generated (seeded, deterministic)."""
@@ -138,6 +157,7 @@ class DfnGeometry:
         cleaning = ", ".join(
             f"{k} {v}" for k, v in report["cleaning"].items() if v and k != "passes"
         )
+        regions = ", ".join(f"{k} {v}" for k, v in report.get("region_cells", {}).items())
         return (
             f"dfn: {report['fractures']} fractures ({report['fractures_meshed']} meshed), "
             f"P21 {report['p21']:.4g}; cleaning: {cleaning or 'nothing'}; "
@@ -145,6 +165,7 @@ class DfnGeometry:
             f"{report.get('fracture_facets', report['fracture_edges'])} fracture edges, "
             f"min angle {report['min_angle_deg']:.1f}°, shortest edge "
             f"{report['shortest_edge']:.3g} ({report['time_mesh_s']:.1f} s)"
+            + (f"; region triangles: {regions}" if regions else "")
         )
 
     def build(self, gmsh: ModuleType) -> tuple[dict[str, Any], Any]:
@@ -167,7 +188,8 @@ class DfnGeometry:
         t0 = time.perf_counter()
         network = cfg.make_network()
         t1 = time.perf_counter()
-        clean = clean_network(network, cfg.domain, cfg.tolerance)
+        constraints = cfg.regions.segments if cfg.regions is not None else None
+        clean = clean_network(network, cfg.domain, cfg.tolerance, constraints=constraints)
         t2 = time.perf_counter()
         if len(clean.edges) == 0:
             raise DfnError(
@@ -175,7 +197,9 @@ class DfnGeometry:
                 f"domain after cleaning ({clean.report.summary()}); check the domain, region "
                 "and density"
             )
-        quality = mesh_network(gmsh, clean, cfg.sides, corners=cfg.corners, spec=cfg.mesh)
+        quality = mesh_network(
+            gmsh, clean, cfg.sides, corners=cfg.corners, spec=cfg.mesh, regions=cfg.regions
+        )
         t3 = time.perf_counter()
         area = polygon_area(cfg.domain)
         report = {
@@ -308,6 +332,91 @@ def _fracture_set(file: str, i: int, raw: Any) -> FractureSet:
         raise _error(file, key, str(exc)) from None
 
 
+def _integer(file: str, key: str, value: Any, low: int, high: int) -> int:
+    if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
+        raise _error(file, key, f"must be an integer in [{low}, {high}], got {short(value)}")
+    return value
+
+
+def _point(file: str, key: str, value: Any) -> tuple[float, float]:
+    if not isinstance(value, list) or len(value) != 2:
+        raise _error(file, key, f"must be [x, y], got {short(value)}")
+    return _number(file, f"{key}[0]", value[0]), _number(file, f"{key}[1]", value[1])
+
+
+def _shape(file: str, key: str, kind: str, raw: Any, side: float) -> np.ndarray:
+    """A ``circle`` or ``horseshoe`` table as a polygon (``side``: the default side length)."""
+    t = _check_keys(file, key, raw, CIRCLE_KEYS if kind == "circle" else HORSESHOE_KEYS)
+    needed = ("centre", "radius") if kind == "circle" else ("centre", "width", "wall_height")
+    for name in needed:
+        if name not in t:
+            raise _error(file, f"{key}.{name}", "missing (required)")
+    centre = _point(file, f"{key}.centre", t["centre"])
+    cuts = [k for k in ("above", "below") if k in t]
+    if len(cuts) > 1:
+        raise _error(file, key, "give at most one of 'above', 'below'")
+    level = _number(file, f"{key}.{cuts[0]}", t[cuts[0]]) if cuts else None
+    try:
+        if kind == "circle":
+            radius = _number(file, f"{key}.radius", t["radius"], positive=True)
+            default = min(1000, max(32, 4 * math.ceil(2 * math.pi * radius / (4 * side))))
+            segments = _integer(file, f"{key}.segments", t.get("segments", default), 3, 1000)
+            poly = circle_polygon(centre, radius, segments, level=level)
+        else:
+            width = _number(file, f"{key}.width", t["width"], positive=True)
+            wall = _number(file, f"{key}.wall_height", t["wall_height"], positive=True)
+            default = min(1000, max(16, 2 * math.ceil(math.pi * width / (4 * side))))
+            segments = _integer(file, f"{key}.segments", t.get("segments", default), 2, 1000)
+            poly = horseshoe_polygon(centre, width, wall, segments=segments, level=level)
+        if cuts:
+            poly = cut_polygon(poly, float(level), keep=cuts[0])  # type: ignore[arg-type]
+    except DfnError as exc:
+        raise _error(file, f"{key}.{cuts[0]}" if cuts else key, str(exc)) from None
+    return poly
+
+
+def _regions(
+    file: str, raw: Any, reserved: set[str], *, mesh: MeshSpec, tolerance: float
+) -> list[Region]:
+    """The ``[dfn.regions.NAME]`` tables, in the order given.
+
+    A circle's or horseshoe's default number of sides makes each side about the outline's
+    mesh size, but at least 4 × the cleaning tolerance: a fracture crossing the outline
+    is bent through an outline vertex within the tolerance of it, so short sides would
+    bend (and shorten) more fractures.
+    """
+    if not isinstance(raw, dict) or not raw:
+        raise _error(file, "regions", f"must be a table of named regions, got {short(raw)}")
+    out = []
+    for name, spec in raw.items():
+        key = f"regions.{name}"
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name) or name in reserved:
+            raise _error(
+                file,
+                key,
+                f"region name {name!r} must be an identifier and differ from the groups "
+                f"{sorted(reserved)} and the fracture sets",
+            )
+        t = _check_keys(file, key, spec, REGION_KEYS)
+        size = mesh.fracture_size
+        if "mesh_size" in t:
+            size = _number(file, f"{key}.mesh_size", t["mesh_size"], positive=True)
+            if size > mesh.size:
+                raise _error(
+                    file, f"{key}.mesh_size", f"must not exceed mesh_size ({mesh.size}), got {size}"
+                )
+        shapes = [k for k in ("polygon", "circle", "horseshoe") if k in t]
+        if len(shapes) != 1:
+            raise _error(file, key, "give exactly one of 'polygon', 'circle', 'horseshoe'")
+        if shapes[0] == "polygon":
+            poly = _polygon(file, f"{key}.polygon", t["polygon"], ("polygon",))
+        else:
+            side = max(size, 4.0 * tolerance)
+            poly = _shape(file, f"{key}.{shapes[0]}", shapes[0], t[shapes[0]], side)
+        out.append(Region(name, poly, size))
+    return out
+
+
 def _configure(table: dict[str, Any], file: str) -> DfnConfig:
     t = _check_keys(file, "", table, TABLE_KEYS)
     shapes = [k for k in ("domain", "polygon") if k in t]
@@ -385,6 +494,19 @@ def _configure(table: dict[str, Any], file: str) -> DfnConfig:
     seed = t.get("seed", 0)
     if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed <= MAX_INTEGER:
         raise _error(file, "seed", f"must be an integer in [0, 2^63), got {short(seed)}")
+    spec = MeshSpec(size, fracture_size, transition, algorithm)
+    layout = None
+    if "regions" in t:
+        reserved = {DOMAIN_GROUP, FRACTURE_GROUP, *sides, *corners, *(s.name for s in sets)}
+        regions = _regions(file, t["regions"], reserved, mesh=spec, tolerance=tolerance)
+        outlines = {r.name + OUTLINE_SUFFIX for r in regions}
+        clash = outlines & (reserved | {r.name for r in regions})
+        if clash:
+            raise _error(file, "regions", f"the outline group {sorted(clash)[0]!r} is taken")
+        try:
+            layout = layout_regions(regions, domain, tol=tolerance, margin=size)
+        except DfnError as exc:
+            raise _error(file, "regions", str(exc)) from None
     return DfnConfig(
         domain=domain,
         region=region,
@@ -394,8 +516,9 @@ def _configure(table: dict[str, Any], file: str) -> DfnConfig:
         seed=seed,
         network=network,
         file=path,
-        mesh=MeshSpec(size, fracture_size, transition, algorithm),
+        mesh=spec,
         tolerance=tolerance,
+        regions=layout,
     )
 
 
@@ -403,7 +526,8 @@ def geometry(table: dict[str, Any], file: str) -> tuple[DfnConfig, Any]:
     """Validate ``[dfn]`` and return (config, :class:`~geofrac.model.scene.Geometry`).
 
     The geometry is 2D with physical groups ``domain``, the sides, the corners and
-    ``fractures``; its builder is a :class:`DfnGeometry`.
+    ``fractures``, and per region its name (cells) and ``<name>_outline`` (curves); its
+    builder is a :class:`DfnGeometry`.
 
     Raises:
         SceneError: naming the offending ``dfn.*`` key.
@@ -413,6 +537,8 @@ def geometry(table: dict[str, Any], file: str) -> tuple[DfnConfig, Any]:
     config = _configure(table, file)
     groups = {DOMAIN_GROUP: 2, FRACTURE_GROUP: 1}
     groups |= dict.fromkeys(config.sides, 1) | dict.fromkeys(config.corners, 0)
+    for name in config.regions.names if config.regions is not None else ():
+        groups |= {name: 2, name + OUTLINE_SUFFIX: 1}
     return config, Geometry(
         file=None,
         parameters={},
