@@ -5,9 +5,12 @@ right-hand sides per event (:mod:`~geofrac.fracture.constant`): it solves the va
 load u_v (the loop's unit solution) and the constant load u_c with one factorisation,
 chooses the event by :class:`~geofrac.fracture.constant.ConstantChooser` (λ, or 0 for a
 site over its strength under the constant load alone) and logs the state
-u = u_c + λ u_v: its strain energy, the control group's displacement (λ δ under
-displacement control; f·u / F or the control point's under force control) and force
-(the control DOFs' reaction of u under displacement control; λ F under force control).
+u = u_c + λ u_v: its strain energy E_c + λ u_cᵀ K u_v + λ² E_v (the cross term by
+polarisation, E(u_c + u_v) − E_c − E_v), the control group's displacement (λ δ under
+displacement control; that of u_c plus λ that of u_v, f·u / F or the control point's,
+under force control) and force (the control DOFs' reaction of u_c plus λ that of u_v
+under displacement control; λ F under force control). With u_c = 0 (a zero constant
+load) every number is the proportional run's, bit for bit.
 The scene without ``cracking.constant`` never reaches this module.
 """
 
@@ -64,6 +67,9 @@ class ConstantEventLoop(EventLoop):
         #: sites cracked at λ = 0, and how many were over their strength at the start.
         self.over_cracked = 0
         self.over_at_start: int | None = None
+        #: the constant load's strain energy, control displacement and force, and the
+        #: cross energy u_cᵀ K u_v, of the last solve.
+        self._const = (0.0, 0.0, 0.0, 0.0)
 
     def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
         """Run (a resume is refused: checkpoints keep the variable solution only)."""
@@ -91,15 +97,14 @@ class ConstantEventLoop(EventLoop):
         choice = self._choose(run, event)
         if choice is None:
             return False
-        u = self.u_const + choice.r * run.u_unit
-        _, energy, reaction = parts.units.measures(u)
+        assert run.unit is not None
+        r, (energy_c, disp_c, force_c, cross) = choice.r, self._const
+        energy = energy_c + r * cross + r * r * run.unit[0]
         row = self._log(run, event, choice, solved=solved, energy=energy)
-        disp, force = self.ctx.control.measure(u, reaction)
-        if self.ctx.control.kind == "displacement":
-            disp *= choice.r
-        else:
-            force *= choice.r
-        row["control_displacement"], row["reaction"] = disp, force
+        if self.ctx.control.kind == "displacement":  # δ r; the reaction of u_c + r u_v
+            row["reaction"] = force_c + r * run.unit[2]
+        else:  # the displacement of u_c + r u_v; the force r F
+            row["control_displacement"] = disp_c + r * run.unit[1]
         if choice.r == 0.0:
             self.over_cracked += len(choice.sites)
         parts.crack.apply(choice)
@@ -125,13 +130,19 @@ class ConstantEventLoop(EventLoop):
         """The sites' constant and variable stress and the event of least λ; None: the end."""
         ctx, parts, scales = self.ctx, self.parts, self.ctx.scales
         units = parts.units
-        units.measures(self.u_const)
+        _, energy_c, reaction_c = units.measures(self.u_const)
         sc = units.midpoint_stress.copy()  # type: ignore[attr-defined]
         if self.load.extra_stress is not None:
             sc += self.load.extra_stress
+        cross = 0.0  # u_cᵀ K u_v: 0 when u_c = 0
+        if np.any(self.u_const):
+            cross = units.measures(self.u_const + run.u_unit)[1] - energy_c
         _, energy_v, reaction_v = units.measures(run.u_unit)
         sv = units.midpoint_stress.copy()  # type: ignore[attr-defined]
         run.unit = (energy_v, *ctx.control.measure(run.u_unit, reaction_v))
+        if cross:
+            cross -= energy_v
+        self._const = (energy_c, *ctx.control.measure(self.u_const, reaction_c), cross)
         positive = [row["load_factor"] for row in run.rows if row["load_factor"] > 0.0]
         first_r = positive[0] if positive else None
         run.detail = scales.separated(energy_v, run.first_energy if event > 1 else None)
