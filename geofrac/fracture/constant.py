@@ -248,7 +248,7 @@ class ConstantChooser:
             return traction_factors(tc, tv, ft, floor=floor)
         flat_c, flat_v = sc.reshape(-1, 3), sv.reshape(-1, 3)
         return principal_factors(
-            flat_c[self.slots], flat_v[self.slots], self.weights, ft, floor=floor
+            flat_c[self.slots], flat_v[self.slots], self.weights, tensile_strength=ft, floor=floor
         )
 
     def _shear(self, sc: np.ndarray, sv: np.ndarray, floor: float) -> tuple[np.ndarray, np.ndarray]:

@@ -116,7 +116,7 @@ class LinearEquilibrium:
         keep = x.copy()
         try:
             x.setArray(u_prev[r0:r1])
-            return self.strategy.solve_again(u_prev, x, self.gather, case)
+            return self.strategy.solve_again(u_prev, x, self.gather, case=case)
         finally:
             keep.copy(x)
             keep.destroy()

@@ -88,7 +88,7 @@ class SolverStrategy(Protocol):
         ...
 
     def solve_again(
-        self, u_prev: np.ndarray, x: Vector, gather: Gather, case: LoadCase
+        self, u_prev: np.ndarray, x: Vector, gather: Gather, *, case: LoadCase
     ) -> np.ndarray:
         """The solution of another right-hand side ``case`` of the state just solved.
 
@@ -171,7 +171,7 @@ class RefactorSolver:
         return u, its
 
     def solve_again(
-        self, u_prev: np.ndarray, x: Vector, gather: Gather, case: LoadCase
+        self, u_prev: np.ndarray, x: Vector, gather: Gather, *, case: LoadCase
     ) -> np.ndarray:
         """Assemble ``case``'s right-hand side and solve it with the current factorisation."""
         t = time.perf_counter()
@@ -316,7 +316,7 @@ class UpdateSolver(RefactorSolver):
         return self._new_reference(u_prev, x, gather), 0
 
     def solve_again(
-        self, u_prev: np.ndarray, x: Vector, gather: Gather, case: LoadCase
+        self, u_prev: np.ndarray, x: Vector, gather: Gather, *, case: LoadCase
     ) -> np.ndarray:
         """``case``'s right-hand side, assembled, solved by the corrected reference.
 

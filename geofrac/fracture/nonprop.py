@@ -47,8 +47,8 @@ def principal_factors(
     sc: np.ndarray,
     sv: np.ndarray,
     weights: np.ndarray,
-    tensile_strength: float,
     *,
+    tensile_strength: float,
     floor: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Least λ ≥ 0 at which the weighted mean of σ1 over each site's cells reaches f_t.

@@ -44,12 +44,13 @@ def run(scene: Path, *overrides: str, comm: MPI.Comm = MPI.COMM_SELF) -> tuple[C
         driver.problem.destroy()
 
 
-def cst_stress(scene: Path, *overrides: str) -> tuple[np.ndarray, dict[tuple[float, float], list]]:
+def cst_stress(scene: Path, *overrides: str) -> tuple[np.ndarray, dict, np.ndarray]:
     """A plain elastic solve of ``scene`` (one rank): CST stress per cell and edge cells.
 
     DOLFINx assembles and solves the scene's loads (no crack driver); the stress of each
     triangle follows from its vertex displacements in numpy (plane stress, E, ν of the
-    plate). Returns (stress, shape=(num_cells, 3); edge midpoint (rounded) -> cells).
+    plate). Returns (stress, shape=(num_cells, 3); edge midpoint (rounded) -> cells;
+    cell areas, shape=(num_cells,)).
     """
     scene_ = load_scene_collective(MPI.COMM_SELF, scene, overrides)
     tagged = build_mesh(scene_.geometry, MPI.COMM_SELF)
@@ -74,7 +75,7 @@ def cst_stress(scene: Path, *overrides: str) -> tuple[np.ndarray, dict[tuple[flo
         ends = dolfinx.mesh.entities_to_geometry(mesh, 1, np.arange(n_edges, dtype=np.int32))
         mids = mesh.geometry.x[ends][:, :, :2].mean(axis=1)
         cells = {key(m): list(e2c.links(e)) for e, m in enumerate(mids)}
-        return stress, cells
+        return stress, cells, 0.5 * np.abs(np.linalg.det(d))
     finally:
         problem.destroy()
 
@@ -115,8 +116,8 @@ def independent(scene: Path, constant: list[str], variable: list[str], *override
     that zero each. Returns {edge midpoint: (λ, mean σ1(σ_c)/f_t)} over the edges the
     driver may crack.
     """
-    sc, cells = cst_stress(scene, *overrides, *variable)
-    sv, _ = cst_stress(scene, *overrides, *constant)
+    sc, cells, _ = cst_stress(scene, *overrides, *variable)
+    sv, _, _ = cst_stress(scene, *overrides, *constant)
     driver = scene_driver(load_scene_collective(MPI.COMM_SELF, scene, overrides), MPI.COMM_SELF)
     try:
         state = driver.state
@@ -177,8 +178,26 @@ VARIABLE = ["load.0.value=[0.0, 0.0]", "cracking.constant=[]", "cracking.control
 
 def test_constant_part_is_the_uniform_biaxial_compression():
     """The plain solve of the constant loads alone: σ = (−p, −q, 0) in every cell."""
-    sc, _ = cst_stress(PLATE, *VARIABLE)
+    sc, _, _ = cst_stress(PLATE, *VARIABLE)
     np.testing.assert_allclose(sc, np.tile([-P, -Q, 0.0], (len(sc), 1)), atol=1e-12)
+
+
+def test_event_state_is_the_superposed_one():
+    """The first event's state is σ_c + λ σ_v: its energy and force.
+
+    Energy from the plain solves, E = ½ t Σ A σ·C⁻¹σ; the force is λ F, F = 0.4 × 5 × 2
+    the bottom traction's resultant.
+    """
+    sc, _, area = cst_stress(PLATE, *VARIABLE)
+    sv, _, _ = cst_stress(PLATE, *CONSTANT)
+    driver, _ = run(PLATE, "cracking.max_events=1")
+    row = driver.rows[0]
+    lam = row["load_factor"]
+    s = sc + lam * sv
+    compliance = np.array([[1, -NU, 0], [-NU, 1, 0], [0, 0, 2 * (1 + NU)]]) / E
+    energy = 0.5 * 2.0 * float(np.sum(area * np.einsum("ci,ij,cj->c", s, compliance, s)))
+    assert row["strain_energy"] == pytest.approx(energy, rel=1e-9)
+    assert row["reaction"] == pytest.approx(lam * 0.4 * 5.0 * 2.0, rel=1e-12)
 
 
 def test_plate_cracks_where_the_superposed_field_first_reaches_ft():

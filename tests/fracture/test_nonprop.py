@@ -48,7 +48,7 @@ def two_cells(rng, k):
 def test_zero_constant_stress_gives_the_proportional_factor_exactly():
     rng = np.random.default_rng(1)
     sv, w = two_cells(rng, 200)
-    lam, drive, ratio = principal_factors(np.zeros_like(sv), sv, w, FT)
+    lam, drive, ratio = principal_factors(np.zeros_like(sv), sv, w, tensile_strength=FT)
     d_v = np.sum(w * sigma1(sv), axis=1)
     pos = d_v > 0
     np.testing.assert_array_equal(drive[pos], d_v[pos])  # bit for bit
@@ -63,7 +63,7 @@ def test_hydrostatic_constant_stress_shifts_the_factor():
     p = 1.7
     sc = np.zeros_like(sv)
     sc[..., 0] = sc[..., 1] = -p
-    lam, drive, ratio = principal_factors(sc, sv, w, FT)
+    lam, drive, ratio = principal_factors(sc, sv, w, tensile_strength=FT)
     d_v = np.sum(w * sigma1(sv), axis=1)
     pos = d_v > 0
     np.testing.assert_allclose(lam[pos], (FT + p) / d_v[pos], rtol=1e-14)
@@ -75,18 +75,22 @@ def test_hydrostatic_constant_stress_shifts_the_factor():
 def test_compressive_variable_stress_never_cracks():
     sv = np.array([[[-1.0, -2.0, 0.1], [-1.5, -0.5, 0.0]]])
     sc = np.array([[[0.5, -1.0, 0.3], [0.2, 0.1, 0.0]]])
-    lam, drive, _ = principal_factors(sc, sv, np.array([[0.5, 0.5]]), FT)
+    lam, drive, _ = principal_factors(sc, sv, np.array([[0.5, 0.5]]), tensile_strength=FT)
     assert np.isinf(lam[0]) and drive[0] == 0.0
     # a variable drive at round-off is no drive
     sv = np.array([[[1e-20, 0.0, 0.0], [1e-20, 0.0, 0.0]]])
-    lam, _, _ = principal_factors(np.zeros_like(sv), sv, np.array([[0.5, 0.5]]), FT, floor=1e-12)
+    lam, _, _ = principal_factors(
+        np.zeros_like(sv), sv, np.array([[0.5, 0.5]]), tensile_strength=FT, floor=1e-12
+    )
     assert np.isinf(lam[0])
 
 
 def test_over_strength_at_zero_is_flagged():
     sc = np.array([[[4.0, 0.0, 0.0], [3.0, 0.0, 1.0]], [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0]]])
     sv = np.ones_like(sc)
-    lam, drive, ratio = principal_factors(sc, sv, np.array([[0.5, 0.5], [0.5, 0.5]]), FT)
+    lam, drive, ratio = principal_factors(
+        sc, sv, np.array([[0.5, 0.5], [0.5, 0.5]]), tensile_strength=FT
+    )
     assert lam[0] == 0.0 and np.isinf(drive[0])
     assert ratio[0] == pytest.approx((4.0 + 1.5 + np.hypot(1.5, 1.0)) / 2 / FT, rel=1e-15)
     assert ratio[0] > 1.0 and lam[1] > 0.0 and ratio[1] < 1.0
@@ -97,7 +101,7 @@ def test_general_case_is_the_least_root():
     rng = np.random.default_rng(3)
     sv, w = two_cells(rng, 500)
     sc = rng.normal(size=sv.shape)
-    lam, drive, ratio = principal_factors(sc, sv, w, FT)
+    lam, drive, ratio = principal_factors(sc, sv, w, tensile_strength=FT)
     ok = (ratio < 1.0) & np.isfinite(lam)
     assert ok.sum() > 100
     ref = bisect(sc[ok], sv[ok], w[ok], FT)
@@ -111,7 +115,7 @@ def test_general_case_is_the_least_root():
 
 def test_traction_is_linear():
     tc, tv = np.array([0.0, -1.0, 2.0, 3.5, 1.0]), np.array([2.0, 2.0, 0.5, 1.0, -1.0])
-    lam, drive, ratio = traction_factors(tc, tv, FT)
+    lam, drive, ratio = traction_factors(tc, tv, tensile_strength=FT)
     assert lam[0] == FT / 2.0 and drive[0] == 2.0
     assert lam[1] == pytest.approx((FT + 1.0) / 2.0, rel=1e-15)
     assert lam[2] == pytest.approx((FT - 2.0) / 0.5, rel=1e-15)
