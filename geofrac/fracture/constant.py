@@ -207,13 +207,13 @@ class ConstantChooser:
         lam_s, ratio_s = self._shear(sc, sv, floor)
         ratio = np.maximum(ratio_t, ratio_s)
         self.over_sites = np.flatnonzero(cand & (ratio >= 1.0))
-        if len(self.over_sites):
-            return self._overstressed(ratio_t, ratio_s)
         lam_min = float(np.min(np.where(cand, np.minimum(lam_t, lam_s), np.inf), initial=np.inf))
         # the criterion sees the stress of the event (its directions: σ_v's own when σ_c = 0)
         stress = sc + lam_min * sv if np.isfinite(lam_min) and np.any(sc) else sv
         self.units.midpoint_stress = stress
         self.criterion.set_drive(drive, stress)
+        if len(self.over_sites):
+            return self._overstressed(ratio_t, ratio_s)
         edges, r = self.criterion.select(drive, floor=0.0)
         mode = "tension"
         if self.config.shear_cohesion is not None:
