@@ -30,7 +30,7 @@ from geofrac.fem.post import (
 from geofrac.fem.solution import Solution
 from geofrac.io.checkpoint import RunControl
 from geofrac.io.lines import write_line
-from geofrac.io.xdmf import write_fields, write_meshtags
+from geofrac.io.xdmf import write_fields, write_meshtags, write_steps
 from geofrac.log import format_seconds, sayer
 from geofrac.meshing.distribute import build_mesh, check_fracture_cover
 from geofrac.model.fields import COMPONENT_INDEX, tensor_components
@@ -118,6 +118,7 @@ def solve_scene(
         f"element {element.name}: {element.num_dofs} DOFs on {comm.size} rank(s)"
     )
     driven = effect_registry.driven(scene.effects)
+    staged: dict[str, Any] = {}
     try:
         if driven is not None:  # the effect's loop replaces the single solve (cracking)
             with timings.phase("compile"):
@@ -126,6 +127,12 @@ def solve_scene(
                 loop = effect_registry.load(driven.name).driver(
                     driven.config, solution, say, write=write
                 )
+        elif problem.insitu is not None:  # an initial stress or stages (docs/insitu.md)
+            from geofrac.fem.stages import run_stages
+
+            probes = {"names": names, "points": points, "cells": cells}
+            out = run_stages(problem, timings=timings, say=say, probes=probes)
+            staged, solution.frames = out.results, out.frames
         else:
             _solve_phases(problem, timings, say)
     except BaseException:
@@ -147,6 +154,7 @@ def solve_scene(
             wanted = scene.output.lines[name].fields
             solution.lines[name] = (s, x, {f: values[f][start:stop] for f in wanted})
             start = stop
+        results |= staged
         if driven is not None:
             results[driven.name] = loop
         else:
@@ -287,6 +295,11 @@ def _write_xdmf(solution: Solution) -> None:
     functions = []
     if "displacement" in scene.output.fields:
         functions.append(problem.uh)  # write_fields brings it to the geometry degree
+    if solution.frames:  # a staged run: one time step per stage
+        steps = [frame.functions for frame in solution.frames]
+        write_steps(scene.output.dir / "results.xdmf", mesh, steps)
+        problem.write_extra(scene.output.dir)
+        return
     wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
     fields = problem.tensor_fields(wanted)
     functions += [fields[f] for f in wanted]
