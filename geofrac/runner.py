@@ -38,7 +38,7 @@ from geofrac.model.scene import Scene
 from geofrac.timing import Timings
 from geofrac_forms.elasticity import strain_energy_form
 
-__all__ = ["FEM", "OUTPUT_FILES", "FemMethod", "solve_scene"]
+__all__ = ["FEM", "OUTPUT_FILES", "FemMethod", "initial_balance", "solve_scene"]
 
 #: Files a run writes into its output directory.
 OUTPUT_FILES = (
@@ -180,6 +180,27 @@ def solve_scene(
                 }
     solution.results = results
     return solution
+
+
+def initial_balance(scene: Scene, comm: MPI.Comm) -> float:
+    """The initial state's largest out-of-balance force over the largest applied force.
+
+    Meshes the scene and assembles the initial state's forces (no solve): what ``geofrac
+    check`` reports for a scene with ``[initial_stress]`` (collective;
+    :meth:`geofrac.fem.stages.StagedRun.check`).
+    """
+    from geofrac.fem.stages import initial_balance as balance
+
+    assert scene.geometry is not None and scene.discretization is not None  # a fem scene
+    tagged = build_mesh(scene.geometry, comm)
+    element = make_element(scene.discretization.element, tagged.mesh)
+    problem = make_problem(
+        tagged, element, scene, terms=effect_registry.linear_terms(scene.effects)
+    )
+    try:
+        return balance(problem)
+    finally:
+        problem.destroy()
 
 
 def _exact_stress(exact: ExactSolution, point: np.ndarray) -> dict[str, float]:

@@ -3,14 +3,16 @@
 // meshed whole: the opening's interior is the cell group "hole" (removed by a stage), the
 // rest "rock". The symmetry lines are "left" (x = 0) and "bottom" (y = 0), each through
 // both groups; "right" (x = L) and "top" (y = L) are the far sides; "wall" is the
-// opening's boundary. The cells are curved (second order) so the wall is a circle. The
+// opening's boundary. The cells are curved (order = 2, second order) so the wall is a circle;
+// order = 1 gives straight cells. The
 // mesh size is h_wall on the wall and grows linearly with the distance from it to h_far
 // at 10a and beyond. Parameters come from a scene's [geometry.parameters].
 DefineConstant[
   a = {1.0, Name "Parameters/a"},
   L = {30.0, Name "Parameters/L"},
   h_wall = {0.05, Name "Parameters/h_wall"},
-  h_far = {3.0, Name "Parameters/h_far"}
+  h_far = {3.0, Name "Parameters/h_far"},
+  order = {2, Name "Parameters/order"}
 ];
 
 Point(1) = {0, 0, 0, h_wall};  // centre of the opening
@@ -46,7 +48,7 @@ Background Field = 2;
 Mesh.MeshSizeExtendFromBoundary = 0;
 Mesh.MeshSizeFromPoints = 0;
 Mesh.MeshSizeFromCurvature = 0;
-Mesh.ElementOrder = 2;
+Mesh.ElementOrder = order;
 
 Physical Surface("rock") = {2};
 Physical Surface("hole") = {1};

@@ -48,7 +48,15 @@ from geofrac.solvers import (
 from geofrac.timing import Timings
 from geofrac_forms import elasticity as forms
 
-__all__ = ["TOLERANCE", "Frame", "StagedRun", "initial_balance", "run_stages"]
+__all__ = [
+    "TOLERANCE",
+    "Frame",
+    "StagedResults",
+    "StagedRun",
+    "initial_balance",
+    "refusal",
+    "run_stages",
+]
 
 #: Largest accepted out-of-balance force of the initial state, relative to the largest
 #: applied force. An initial state in equilibrium leaves round-off (about 1e-13 with the
@@ -317,7 +325,8 @@ class StagedRun:
         self.release = self.r0 = None
 
 
-def _refusal(value: float) -> str:
+def refusal(value: float) -> str:
+    """Why a run refuses an initial state out of balance by ``value``, and the fix."""
     return (
         f"initial_stress: the initial state is out of balance: its largest out-of-balance "
         f"force is {value:.3g} of the largest applied force (tolerance {TOLERANCE:g}). "
@@ -380,7 +389,7 @@ def run_stages(
                 f"{balance:.2e} of the applied force (tolerance {TOLERANCE:g})"
             )
         if scene.initial_stress is not None and balance > TOLERANCE:
-            raise RunError(_refusal(balance))
+            raise RunError(refusal(balance))
         results: dict[str, Any] = {
             "initial_stress": {"out_of_balance": balance, "tolerance": TOLERANCE}
         }

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = [
+    "ROUND_OFF",
     "StressField",
     "column_weight",
     "evaluate",
@@ -35,6 +36,11 @@ __all__ = [
     "surface_height",
     "voigt_size",
 ]
+
+
+#: The step, relative to the mesh's width, to which :func:`column_weight` rounds x
+#: coordinates (points pushed forward to interpolation points are off by round-off).
+ROUND_OFF = 1e-9
 
 
 def voigt_size(dim: int) -> int:
@@ -117,7 +123,12 @@ def column_weight(
     The vertical line through a point crosses each triangle in a segment; the part of
     that segment between the point and the surface, times the triangle's density, is
     summed. Between the top of the mesh over the point and the surface the density is
-    ``above``.
+    ``above``. A line along a vertical edge would meet the triangles on both sides of
+    it: the column is taken as the limit from the right (triangles with x in [xmin,
+    xmax)), or from the left where no triangle lies to the right of the point (the
+    mesh's right side). The x coordinates of points and corners are first rounded to
+    :data:`ROUND_OFF` of the mesh's width, so a point or corner that round-off moved off
+    a vertical edge (a pushed-forward interpolation point) is on it again.
 
     Args:
         points: shape=(n, 2).
@@ -130,23 +141,52 @@ def column_weight(
         shape=(n,): the mass per unit area of the column above each point (0 above the
         surface).
     """
+    x = triangles[:, :, 0]
+    step = ROUND_OFF * max(float(x.max() - x.min()), 1e-300) if len(x) else 1.0
+    points = points.copy()
+    points[:, 0] = np.round(points[:, 0] / step) * step
+    triangles = triangles.copy()
+    triangles[:, :, 0] = np.round(x / step) * step
+    args = {"surface": surface, "above": above}
+    right, covered = _column(points, triangles, densities, right=True, **args)
+    left, _ = _column(points, triangles, densities, right=False, **args)
+    return np.where(covered, right, left)
+
+
+def _column(
+    points: np.ndarray,
+    triangles: np.ndarray,
+    densities: np.ndarray,
+    *,
+    surface: np.ndarray,
+    above: float,
+    right: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One side's limit of :func:`column_weight`, and whether a triangle holds each point.
+
+    ``right``: triangles with x in [xmin, xmax); else (xmin, xmax]. Both shape=(n,).
+    """
     n = len(points)
     px, py = points[:, 0], points[:, 1]
     order = np.argsort(px, kind="stable")
     xs = px[order]
     total = np.zeros(n)
+    covered = np.zeros(n, dtype=bool)
     top = np.full(n, -np.inf)  # highest mesh point over each point's x
     xmin, xmax = triangles[:, :, 0].min(axis=1), triangles[:, :, 0].max(axis=1)
-    lo, hi = np.searchsorted(xs, xmin, side="left"), np.searchsorted(xs, xmax, side="right")
+    lo = np.searchsorted(xs, xmin, side="left" if right else "right")
+    hi = np.searchsorted(xs, xmax, side="left" if right else "right")
     for t in np.flatnonzero(hi > lo):
         idx = order[lo[t] : hi[t]]
         bottom, upper = _vertical_span(triangles[t], px[idx])
         top[idx] = np.maximum(top[idx], upper)
+        covered[idx] |= (bottom <= py[idx]) & (py[idx] <= upper)
         a = np.maximum(bottom, py[idx])
         b = np.minimum(upper, surface[idx])
         total[idx] += densities[t] * np.maximum(b - a, 0.0)
     cover = np.maximum(surface - np.maximum(top, py), 0.0)
-    return total + above * np.where(np.isfinite(top), cover, np.maximum(surface - py, 0.0))
+    total += above * np.where(np.isfinite(top), cover, np.maximum(surface - py, 0.0))
+    return total, covered
 
 
 def _vertical_span(corners: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
