@@ -103,7 +103,7 @@ def _sigma0(tagged: TaggedMesh, scene: Scene) -> dolfinx.fem.Function:
     """The initial stress as a 3×3 DG field of the geometry's degree (collective)."""
     mesh = tagged.mesh
     gdim = mesh.geometry.dim
-    degree = max(1, mesh.geometry.cmap.degree)
+    degree = max(1, mesh.geometry.cmaps[0].degree)
     space = dolfinx.fem.functionspace(mesh, ("DG", degree, (3, 3)))
     sigma0 = dolfinx.fem.Function(space, name="initial_stress")
     spec = scene.initial_stress

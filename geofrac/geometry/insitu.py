@@ -94,13 +94,15 @@ def surface_height(field_: StressField, x: np.ndarray) -> np.ndarray:
         heights, shape=(n,).
 
     Raises:
-        ValueError: a 2D point lies outside the polyline's x range.
+        ValueError: a 2D point lies outside the polyline's x range (by more than
+            :data:`ROUND_OFF` of it).
     """
     n = len(x)
     if isinstance(field_.surface, int | float):
         return np.full(n, float(field_.surface))
     line = np.asarray(field_.surface, dtype=float)
-    outside = (x < line[0, 0]) | (x > line[-1, 0])
+    slack = ROUND_OFF * (line[-1, 0] - line[0, 0])  # round-off of pushed-forward points
+    outside = (x < line[0, 0] - slack) | (x > line[-1, 0] + slack)
     if np.any(outside):
         i = int(np.flatnonzero(outside)[0])
         raise ValueError(
