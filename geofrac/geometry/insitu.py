@@ -149,9 +149,8 @@ def column_weight(
     points[:, 0] = np.round(points[:, 0] / step) * step
     triangles = triangles.copy()
     triangles[:, :, 0] = np.round(x / step) * step
-    args = {"surface": surface, "above": above}
-    right, covered = _column(points, triangles, densities, right=True, **args)
-    left, _ = _column(points, triangles, densities, right=False, **args)
+    right, covered = _column(points, triangles, densities, surface=surface, above=above, right=True)
+    left, _ = _column(points, triangles, densities, surface=surface, above=above, right=False)
     return np.where(covered, right, left)
 
 

@@ -34,6 +34,7 @@ from geofrac.model.scene import (
     Output,
     Scene,
     Solver,
+    Stage,
     Units,
     effect_config,
 )
@@ -1148,7 +1149,7 @@ def _validate(
             element=discretization.element,
             specs=specs,
         )
-    stages = ()
+    stages: tuple[Stage, ...] = ()
     if "stages" in data:
         stages = _stages(
             file,
