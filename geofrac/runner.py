@@ -158,8 +158,10 @@ def solve_scene(
         if driven is not None:
             results[driven.name] = loop
         else:
+            t = problem.thickness  # excavated cells (stages) store no energy
+            t = t if problem.insitu is None else t * problem.insitu.alive
             results["strain_energy"] = integrate(
-                strain_energy_form(uh, problem.lam, problem.mu, problem.thickness, problem.dx), comm
+                strain_energy_form(uh, problem.lam, problem.mu, t, problem.dx), comm
             )
             assert problem.solver is not None  # set by the solve
             results["solver"] = problem.solver.describe() | {"iterations": problem.iterations}
@@ -443,6 +445,17 @@ class FemMethod:
                         text += f", σ{key}/σ_nominal = {k:.4f}"
                 suffix = "" if nominal is None else f" (σ_nominal = {nominal:g})"
                 lines.append(f"  stress concentration: {text}{suffix}")
+        if "initial_stress" in results:
+            entry = results["initial_stress"]
+            lines.append(
+                f"initial stress: out of balance {entry['out_of_balance']:.2e} of the applied "
+                f"force (tolerance {entry['tolerance']:g})"
+            )
+        for stage in results.get("stages", []):
+            lines.append(
+                f"stage {stage['index']} '{stage['name']}': max |u| = "
+                f"{stage['max_displacement']:.6g}, out of balance {stage['out_of_balance']:.1e}"
+            )
         for name, entry in results.get("lines", {}).items():
             lines.append(f"line {name}: {entry['points']} points -> {entry['csv']}, {entry['png']}")
         if "errors" in results:

@@ -390,14 +390,16 @@ def run_stages(
             )
         if scene.initial_stress is not None and balance > TOLERANCE:
             raise RunError(refusal(balance))
-        results: dict[str, Any] = {
-            "initial_stress": {"out_of_balance": balance, "tolerance": TOLERANCE}
-        }
+        results: dict[str, Any] = {}
+        if scene.initial_stress is not None:
+            results["initial_stress"] = {"out_of_balance": balance, "tolerance": TOLERANCE}
         frames, entries = [], []
         with timings.phase("solve"):
             run.initial_step()
         entries.append(_record(run, 0, "initial", probes=probes))
-        frames.append(run.frame(0, "initial"))
+        write = scene.output.xdmf
+        if write:
+            frames.append(run.frame(0, "initial"))
         say(
             f"stage 0/{len(scene.stages)} 'initial': max |u| = {entries[0]['max_displacement']:.4g}"
         )
@@ -411,7 +413,8 @@ def run_stages(
                 seconds = run.comm.allreduce(MPI.Wtime() - start, op=MPI.MAX)
             entry |= {"removed": list(stage.remove), "share": share, "released": run.share}
             entries.append(entry)
-            frames.append(run.frame(k, stage.name))
+            if write:
+                frames.append(run.frame(k, stage.name))
             removed = f"removed {', '.join(stage.remove)}; " if stage.remove else ""
             say(
                 f"stage {k}/{len(scene.stages)} '{stage.name}': {removed}share {share:.3g} "

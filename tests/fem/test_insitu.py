@@ -208,3 +208,43 @@ def test_two_ranks_agree_with_one():
         assert a["max_displacement"] == pytest.approx(b["max_displacement"], rel=1e-10)
         for name in a["probes"]:
             np.testing.assert_allclose(a["probes"][name], b["probes"][name], rtol=1e-10, atol=1e-16)
+
+
+BOX = f"""
+effects = ["gravity"]
+[geometry]
+file = "{JOBS.parent / "meshes" / "box.geo"}"
+parameters = {{ n = 2 }}
+[material]
+E = 1.0e9
+nu = 0.2
+density = 2500.0
+[discretization]
+element = "p1"
+[initial_stress]
+kind = "geostatic"
+surface = 1.0
+K0 = {{ domain = 0.0 }}
+[[bc]]
+group = "bottom"
+value = [0.0, 0.0, 0.0]
+[output]
+xdmf = false
+probes = {{ mid = [0.5, 0.5, 0.25] }}
+probe_fields = ["displacement", "stress"]
+"""
+
+
+def test_3d_geostatic_column_is_at_rest_and_free_sides_with_k0_are_refused(tmp_path):
+    path = tmp_path / "box.toml"
+    path.write_text(BOX)
+    solution = _solve(path, [])  # K0 = 0: the free sides carry no horizontal stress
+    try:
+        assert solution.results["initial_stress"]["out_of_balance"] < 1e-12
+        stress = solution.results["probe_fields"]["mid"]["stress"]
+        assert stress["zz"] == pytest.approx(-2500.0 * 9.81 * 0.75, rel=1e-9)
+        assert abs(stress["xx"]) < 1e-9 * abs(stress["zz"])
+    finally:
+        solution.problem.destroy()
+    with pytest.raises(RunError, match="out of balance"):
+        _solve(path, ["initial_stress.K0={}"])  # σh = K0 σv on sides nobody holds
