@@ -248,3 +248,36 @@ def test_3d_geostatic_column_is_at_rest_and_free_sides_with_k0_are_refused(tmp_p
         solution.problem.destroy()
     with pytest.raises(RunError, match="out of balance"):
         _solve(path, ["initial_stress.K0={}"])  # σh = K0 σv on sides nobody holds
+
+
+def test_gravity_loading_stage_then_removing_the_upper_layer(tmp_path):
+    """Without [initial_stress] the initial step loads the weight onto a stress-free body.
+
+    Removing the upper layer then releases its weight: the lower layer ends as a confined
+    column under its own weight alone, σyy = −ρ g (d − y), σxx = ν/(1 − ν) σyy, which P2
+    holds exactly (the field is linear).
+    """
+    text = LAYERS.read_text()
+    head, tail = text.split("[initial_stress]")
+    tail = tail[tail.index("[[bc]]") :]
+    scene = tmp_path / "gravity.toml"
+    scene.write_text(
+        head.replace('file = "layers.geo"', f'file = "{LAYERS.parent / "layers.geo"}"')
+        + tail
+        + '\n[[stages]]\nname = "strip"\nremove = ["upper"]\n'
+    )
+    solution = _solve(scene, ["output.probes={low = [5.0, 1.0]}", "material.density=3000.0"])
+    try:
+        results = solution.results
+        assert "initial_stress" not in results
+        stages = results["stages"]
+        assert stages[0]["max_displacement"] > 0  # the settlement under the full weight
+        assert stages[1]["out_of_balance"] < 1e-8
+        stress = results["probe_fields"]["low"]["stress"]
+        syy = -3000.0 * 9.81 * 1.0
+        assert stress["yy"] == pytest.approx(syy, rel=1e-8)
+        assert stress["xx"] == pytest.approx(0.25 / 0.75 * syy, rel=1e-8)
+        # the bottom carries the lower layer's weight alone: 3000 g × 2 × 10
+        assert stages[1]["reactions"]["bottom"][1] == pytest.approx(3000.0 * 9.81 * 20.0, rel=1e-8)
+    finally:
+        solution.problem.destroy()
