@@ -165,8 +165,10 @@ class ElasticProblem:
         if scene.initial_stress is not None or scene.stages:
             from geofrac.fem.insitu import insitu_fields
 
-            self.insitu = insitu_fields(tagged, scene)
+            degree = V.ufl_element().embedded_superdegree
+            self.insitu = insitu_fields(tagged, scene, lam=lam, mu=mu, degree=degree)
             stiffness_t = self.thickness * self.insitu.alive
+            self.lam, self.mu = self.insitu.lam, self.insitu.mu  # per cell: added groups
         self._a = forms.stiffness_form(u, v, self.lam, self.mu, stiffness_t, self.dx)
         self._L = self._linear_form(v)
         self.point_forces = loads.point_forces(
@@ -193,12 +195,7 @@ class ElasticProblem:
 
     def form_context(self, v: Any) -> FormContext:
         """What the effects' terms see (:class:`FormContext`) for test function ``v``."""
-        density = None
-        if self.insitu is not None:
-            density = self.insitu.density
-            if density is None and self.scene.material is not None:  # stages alone
-                rho = self.scene.material.density or 0.0
-                density = dolfinx.fem.Constant(self.mesh, SCALAR(rho)) * self.insitu.alive
+        density = None if self.insitu is None else self.insitu.density
         return FormContext(self.mesh, v, self.dx, self.thickness, density)
 
     def _load_term(self, load: Load, v: Any) -> ufl.Form:
@@ -311,10 +308,14 @@ class ElasticProblem:
         )
 
     def _initial_state(self) -> dict[str, Any]:
-        """``initial`` (σ0, 3×3) and ``alive`` for the stress fields, if the scene has them."""
+        """σ0 (3×3), ``alive`` and the ``reference`` displacement of added cells."""
         if self.insitu is None:
             return {}
-        return {"initial": self.insitu.sigma0, "alive": self.insitu.alive}
+        return {
+            "initial": self.insitu.sigma0,
+            "alive": self.insitu.alive,
+            "reference": self.insitu.u_ref,
+        }
 
     def point_tensors(
         self, names: Sequence[str], points: np.ndarray, cells: np.ndarray

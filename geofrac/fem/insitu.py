@@ -33,9 +33,15 @@ from geofrac.geometry.insitu import (
 )
 from geofrac.meshing.distribute import TaggedMesh
 from geofrac.model.scene import InitialStress, Scene
-from geofrac.solvers import SCALAR
 
-__all__ = ["InsituFields", "cell_dofs", "in_plane", "insitu_fields", "stress_field"]
+__all__ = [
+    "InsituFields",
+    "cell_dofs",
+    "group_cells",
+    "in_plane",
+    "insitu_fields",
+    "stress_field",
+]
 
 
 @dataclass
@@ -45,13 +51,23 @@ class InsituFields:
     Attributes:
         alive: DG0, 1 on live cells and 0 on removed ones.
         sigma0: the initial stress, 3×3 discontinuous Lagrange (zero without one).
-        density: the density as UFL (times ``alive``), or None without an initial stress
-            (the ``gravity`` effect then uses ``material.density``, times ``alive`` too).
+        density: the density as UFL: ``rho`` times ``alive``.
+        rho: DG0 density per cell (per cell group with an initial stress, else
+            ``material.density`` or 0; an added group's own).
+        lam, mu: DG0 Lamé constants per cell (the scene's material; an added group's own).
+        u_ref: the displacement at installation of added cells (0 elsewhere), in
+            discontinuous Lagrange of the displacement's degree (per cell, so groups
+            installed at different stages keep their own): their stress is
+            C ε(u − u_ref), zero when they are installed.
     """
 
     alive: dolfinx.fem.Function
     sigma0: dolfinx.fem.Function
     density: Any
+    rho: dolfinx.fem.Function
+    lam: dolfinx.fem.Function
+    mu: dolfinx.fem.Function
+    u_ref: dolfinx.fem.Function
 
 
 def stress_field(spec: InitialStress, tagged: TaggedMesh) -> StressField:
@@ -154,21 +170,24 @@ def _as_3x3(voigt: np.ndarray, gdim: int, *, nu: float, plane: str) -> np.ndarra
     return out.reshape(n, 9).T
 
 
-def _density(tagged: TaggedMesh, scene: Scene, alive: dolfinx.fem.Function) -> Any:
-    """ρ per cell group (DG0) times ``alive``; None without an initial stress."""
+def _density(tagged: TaggedMesh, scene: Scene, alive: dolfinx.fem.Function) -> dolfinx.fem.Function:
+    """ρ per cell (DG0): per cell group with an initial stress, else ``material.density``."""
     spec = scene.initial_stress
-    if spec is None:
-        return None
-    mesh = tagged.mesh
-    if not spec.densities:
-        return dolfinx.fem.Constant(mesh, SCALAR(spec.density)) * alive
+    material = scene.material
+    assert material is not None  # a fem scene has one
     rho = dolfinx.fem.Function(alive.function_space, name="density")
-    rho.x.array[:] = spec.density
-    regions = _cell_regions(tagged)
-    for group, value in spec.densities.items():
-        cells = np.flatnonzero(regions == tagged.groups[group][1])
-        rho.x.array[cell_dofs(rho, cells)] = value
-    return rho * alive
+    rho.x.array[:] = spec.density if spec is not None else (material.density or 0.0)
+    if spec is not None:
+        regions = _cell_regions(tagged)
+        for group, value in spec.densities.items():
+            cells = np.flatnonzero(regions == tagged.groups[group][1])
+            rho.x.array[cell_dofs(rho, cells)] = value
+    return rho
+
+
+def group_cells(tagged: TaggedMesh, group: str) -> np.ndarray:
+    """The local cells of a cell group, shape=(n,)."""
+    return tagged.entities(group)[1]
 
 
 def cell_dofs(f: dolfinx.fem.Function, cells: np.ndarray) -> np.ndarray:
@@ -176,12 +195,37 @@ def cell_dofs(f: dolfinx.fem.Function, cells: np.ndarray) -> np.ndarray:
     return f.function_space.dofmap.list[np.asarray(cells, dtype=np.int32), 0]
 
 
-def insitu_fields(tagged: TaggedMesh, scene: Scene) -> InsituFields:
-    """``alive`` (all ones), σ0 and the density field of a staged scene (collective)."""
+def insitu_fields(
+    tagged: TaggedMesh, scene: Scene, *, lam: float, mu: float, degree: int
+) -> InsituFields:
+    """The fields of a staged scene (collective).
+
+    ``alive`` is 1 except on groups that a stage adds before any removed them (absent
+    until added); ``lam``, ``mu``: the scene's Lamé constants; ``degree``: of the
+    displacement space (that of ``u_ref``).
+    """
     mesh = tagged.mesh
-    alive = dolfinx.fem.Function(dolfinx.fem.functionspace(mesh, ("DG", 0)), name="alive")
+    dg0 = dolfinx.fem.functionspace(mesh, ("DG", 0))
+    alive = dolfinx.fem.Function(dg0, name="alive")
     alive.x.array[:] = 1.0
-    return InsituFields(alive, _sigma0(tagged, scene), _density(tagged, scene, alive))
+    seen: set[str] = set()
+    for stage in scene.stages:
+        seen.update(stage.remove)
+        for group in stage.add:
+            if group not in seen:
+                alive.x.array[cell_dofs(alive, group_cells(tagged, group))] = 0.0
+            seen.add(group)
+    alive.x.scatter_forward()
+    rho = _density(tagged, scene, alive)
+    lam_f = dolfinx.fem.Function(dg0, name="lambda")
+    lam_f.x.array[:] = lam
+    mu_f = dolfinx.fem.Function(dg0, name="mu")
+    mu_f.x.array[:] = mu
+    gdim = mesh.geometry.dim
+    u_ref = dolfinx.fem.Function(
+        dolfinx.fem.functionspace(mesh, ("DG", degree, (gdim,))), name="installed_at"
+    )
+    return InsituFields(alive, _sigma0(tagged, scene), rho * alive, rho, lam_f, mu_f, u_ref)
 
 
 def in_plane(sigma0: dolfinx.fem.Function, gdim: int) -> Any:

@@ -192,6 +192,7 @@ def point_tensors(
     cells: np.ndarray,
     initial: Any = None,
     alive: Any = None,
+    reference: Any = None,
 ) -> dict[str, np.ndarray]:
     """3×3 stress and/or strain of ``uh`` at points, in the given cells (collective).
 
@@ -207,7 +208,7 @@ def point_tensors(
     """
     mesh = uh.function_space.mesh
     degree = uh.function_space.ufl_element().embedded_superdegree
-    exprs = _quantities(uh, lam, mu, plane, initial=initial, alive=alive)
+    exprs = _quantities(uh, lam, mu, plane, initial=initial, alive=alive, reference=reference)
     space = dolfinx.fem.functionspace(mesh, ("DG", degree, (3, 3)))
     out = {}
     for name in names:
@@ -269,6 +270,7 @@ def _quantities(
     *,
     initial: Any = None,
     alive: Any = None,
+    reference: Any = None,
 ) -> dict[str, Any]:
     """UFL stress (3×3), strain (3×3) and von Mises stress of ``uh``.
 
@@ -278,15 +280,20 @@ def _quantities(
 
     With an ``initial`` stress σ0 (3×3) the stress is the total σ0 + σ(u) (the strain
     stays relative to the initial state); ``alive`` (1 on live cells, 0 on excavated
-    ones) multiplies every field.
+    ones) multiplies every field. The stress of cells installed later comes from the
+    strain of u − ``reference`` (their displacement at installation, 0 elsewhere).
     """
     gdim = uh.function_space.mesh.geometry.dim
     sig, eps = forms.sigma(uh, lam, mu), forms.epsilon(uh)
+    elastic = eps
+    if reference is not None:
+        elastic = forms.epsilon(uh - reference)
+        sig = 2.0 * mu * elastic + lam * ufl.tr(elastic) * ufl.Identity(gdim)
     szz = ezz = 0.0
     if gdim == 2 and plane == "strain":
-        szz = lam * ufl.tr(eps)
+        szz = lam * ufl.tr(elastic)
     elif gdim == 2:
-        ezz = -lam / (2.0 * mu) * ufl.tr(eps)
+        ezz = -lam / (2.0 * mu) * ufl.tr(elastic)
     if initial is None and alive is None:
         return {
             "stress": forms.stress_3d(sig, szz),
@@ -340,6 +347,7 @@ def tensor_fields(
     names: Sequence[str],
     initial: Any = None,
     alive: Any = None,
+    reference: Any = None,
 ) -> dict[str, dolfinx.fem.Function]:
     """Stress, strain and von Mises fields of ``uh`` for XDMF output.
 
@@ -356,12 +364,13 @@ def tensor_fields(
         names: keys of :data:`TENSOR_FIELDS` to compute.
         initial: an initial stress (3×3) added to the stress, or None.
         alive: a DG0 factor, 0 on excavated cells, or None.
+        reference: a displacement the stress's strain is measured from, or None.
 
     Returns:
         name -> function; tensors shape=(3, 3) per cell or vertex, von Mises scalar.
     """
     mesh = uh.function_space.mesh
-    exprs = _quantities(uh, lam, mu, plane, initial=initial, alive=alive)
+    exprs = _quantities(uh, lam, mu, plane, initial=initial, alive=alive, reference=reference)
     out = {}
     for name in names:
         quantity, recovery = TENSOR_FIELDS[name]

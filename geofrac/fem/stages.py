@@ -15,8 +15,9 @@ initial state, the stress is the total. The vectors, on the unknowns (thickness 
 2. **Step 0** (``initial``): K u = R(0), the loads and prescribed displacements.
 3. **Stages**: removing cells sets ``alive`` to 0 there (their stiffness, weight and
    internal force go), holds the DOFs no live cell touches, and computes the release
-   R(u) of the remaining body from the current stress; a stage solves K Δu = s R for
-   its share s of it (``relaxation``; default: all that remains).
+   R(u) of the remaining body from the current stress; adding cells brings them back
+   with their own material, stress-free in the current state; a stage solves
+   K Δu = s R for its share s of it (``relaxation``; default: all that remains).
 """
 
 from __future__ import annotations
@@ -34,9 +35,11 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.fem.elastic import PREFIX, ElasticProblem
-from geofrac.fem.insitu import InsituFields, cell_dofs, in_plane
+from geofrac.fem.insitu import InsituFields, cell_dofs, group_cells, in_plane
 from geofrac.fem.post import TENSOR_FIELDS, probe
 from geofrac.log import format_seconds
+from geofrac.materials import lame
+from geofrac.model.scene import Material
 from geofrac.solvers import (
     LinearSolver,
     Vector,
@@ -94,7 +97,10 @@ class StagedRun:
         gdim = mesh.geometry.dim
         v = ufl.TestFunction(V)
         u = problem.uh
-        sigma = in_plane(self.insitu.sigma0, gdim) + forms.sigma(u, problem.lam, problem.mu)
+        elastic = forms.epsilon(u - self.insitu.u_ref)  # u_ref: added cells only
+        lam, mu = problem.lam, problem.mu
+        sigma = in_plane(self.insitu.sigma0, gdim) + 2.0 * mu * elastic
+        sigma += lam * ufl.tr(elastic) * ufl.Identity(gdim)
         t, alive = problem.thickness, self.insitu.alive
         internal = t * alive * ufl.inner(sigma, forms.epsilon(v)) * problem.dx
         loaded = self._loaded_terms(v)
@@ -225,6 +231,31 @@ class StagedRun:
         self.release = self._vector(self.residual, points=True)
         self._free(self.release)
         self.share = 0.0
+
+    def add(self, groups: Sequence[str], material: Material) -> None:
+        """Install cell groups with ``material``, stress-free in the current state.
+
+        Their stiffness, weight and internal force come back with their own E, ν and
+        density; their stress is C ε(u − u at installation).
+        """
+        problem = self.problem
+        fields = self.insitu
+        gdim = problem.mesh.geometry.dim
+        lam, mu = lame(material.E, material.nu, gdim, plane=material.plane)
+        for group in groups:
+            cells = np.asarray(group_cells(problem.tagged, group), dtype=np.int32)
+            dofs = cell_dofs(fields.alive, cells)
+            fields.alive.x.array[dofs] = 1.0
+            fields.lam.x.array[dofs] = lam
+            fields.mu.x.array[dofs] = mu
+            fields.rho.x.array[dofs] = material.density or 0.0
+            blocks = fields.sigma0.function_space.dofmap.list[cells].ravel()
+            fields.sigma0.x.array.reshape(-1, 9)[blocks] = 0.0
+            fields.u_ref.interpolate(problem.uh, cells0=cells, cells1=cells)
+        for f in (fields.alive, fields.lam, fields.mu, fields.rho, fields.sigma0, fields.u_ref):
+            f.x.scatter_forward()
+        self._hold_orphans()
+        self._factor()
 
     def _hold_orphans(self) -> None:
         """Hold at their values the DOFs that no live cell touches (collective)."""
@@ -408,14 +439,19 @@ def run_stages(
                 start = MPI.Wtime()
                 if stage.remove:
                     run.remove(stage.remove)
+                if stage.add:
+                    assert stage.material is not None  # the loader requires one
+                    run.add(stage.add, stage.material)
                 share = run.apply(stage.relaxation)
                 entry = _record(run, k, stage.name, probes=probes)
                 seconds = run.comm.allreduce(MPI.Wtime() - start, op=MPI.MAX)
-            entry |= {"removed": list(stage.remove), "share": share, "released": run.share}
+            entry |= {"removed": list(stage.remove), "added": list(stage.add)}
+            entry |= {"share": share, "released": run.share}
             entries.append(entry)
             if write:
                 frames.append(run.frame(k, stage.name))
             removed = f"removed {', '.join(stage.remove)}; " if stage.remove else ""
+            removed += f"added {', '.join(stage.add)}; " if stage.add else ""
             say(
                 f"stage {k}/{len(scene.stages)} '{stage.name}': {removed}share {share:.3g} "
                 f"(released {run.share:.3g}), max |u| = {entry['max_displacement']:.4g}, "

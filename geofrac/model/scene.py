@@ -259,11 +259,17 @@ class Stage:
         relaxation: the share of the pending release applied in this stage (the
             release is the out-of-balance force of the remaining body, computed when
             cells are removed); None: all that remains of it.
+        add: cell groups installed at the start of the stage (support, backfill), after
+            ``remove``: stress-free in the current deformed state, with ``material``.
+            A group added before any stage removed it is absent until then.
+        material: the added groups' material (E, ν, density; the scene's plane).
     """
 
     name: str
     remove: tuple[str, ...] = ()
     relaxation: float | None = None
+    add: tuple[str, ...] = ()
+    material: Material | None = None
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ __all__ = [
     "KINDS",
     "MAX_K0",
     "STAGE_KEYS",
+    "STAGE_MATERIAL_KEYS",
     "initial_stress",
     "stages",
 ]
@@ -27,7 +28,9 @@ __all__ = [
 #: Keys of ``[initial_stress]``.
 INITIAL_STRESS_KEYS = ("kind", "stress", "surface", "density", "K0", "tectonic", "loaded")
 #: Keys of one ``[[stages]]`` entry.
-STAGE_KEYS = ("name", "remove", "relaxation")
+STAGE_KEYS = ("name", "remove", "relaxation", "add", "material")
+#: Keys of a stage's ``material`` (the added groups').
+STAGE_MATERIAL_KEYS = ("E", "nu", "density")
 #: Kinds of initial stress.
 KINDS = ("constant", "geostatic")
 #: Largest K0 accepted (the horizontal stress at most this many times the vertical).
@@ -252,13 +255,20 @@ def _loaded(t: Table, geometry: Geometry) -> tuple[str, ...]:
 
 
 def stages(
-    file: Path, raw: Any, *, geometry: Geometry, element: str, declared: Sequence[str]
+    file: Path,
+    raw: Any,
+    *,
+    geometry: Geometry,
+    element: str,
+    declared: Sequence[str],
+    material: Material | None = None,
 ) -> tuple[Stage, ...]:
     """The validated ``[[stages]]`` entries.
 
     The relaxation shares are checked in order: a removal starts a new release (share
     0); each stage applies ``relaxation`` of it, or, without ``relaxation``, all that
-    remains; the shares of one release must not add up to more than 1.
+    remains; the shares of one release must not add up to more than 1. A stage that
+    only adds groups may apply nothing.
 
     Raises:
         SceneError: naming the stage and key.
@@ -270,7 +280,8 @@ def stages(
     _element(file, "stages", element)
     _no_driver(file, "stages", declared)
     cells = [g for g, d in geometry.groups.items() if d == geometry.dim]
-    removed: set[str] = set()
+    absent = _absent_at_start(raw)
+    removed: set[str] = set(absent)
     names: set[str] = set()
     share: float | None = None  # of the pending release; None: nothing removed yet
     out = []
@@ -281,19 +292,25 @@ def stages(
             raise t.error("name", f"stage '{name}' is named twice")
         names.add(name)
         remove = _removed(t, geometry, removed)
+        removed.update(remove)
+        add = _added(t, geometry, removed)
+        removed.difference_update(add)
+        if all(g in removed for g in cells):
+            raise t.error("remove", "removes every cell group: no body would be left")
+        support = _stage_material(t, material) if add else None
+        if t.has("material") and not add:
+            raise t.error("material", "is the material of the groups in 'add'; add some")
         if remove:
-            removed.update(remove)
-            if all(g in removed for g in cells):
-                raise t.error("remove", "removes every cell group: no body would be left")
             share = 0.0
         relaxation = t.number("relaxation", minimum=0.0, maximum=1.0)
         if share is None:
-            raise t.error(
-                "relaxation" if relaxation is not None else "remove",
-                "no cells have been removed yet: a stage releases the forces of removed cells",
-            )
-        if relaxation is None:
-            if share >= 1.0 - SHARE_SLACK and not remove:
+            if relaxation is not None or not add:
+                raise t.error(
+                    "relaxation" if relaxation is not None else "remove",
+                    "no cells have been removed yet: a stage releases the forces of removed cells",
+                )
+        elif relaxation is None:
+            if share >= 1.0 - SHARE_SLACK and not remove and not add:
                 raise t.error(
                     "relaxation", "the release of the last removal is already fully applied"
                 )
@@ -307,8 +324,57 @@ def stages(
                     "relaxation",
                     f"the shares of the release since the last removal add up to {share:.6g} > 1",
                 )
-        out.append(Stage(name, remove, None if relaxation is None else float(relaxation)))
+        rel = None if relaxation is None else float(relaxation)
+        out.append(Stage(name, remove, rel, add, support))
     return tuple(out)
+
+
+def _absent_at_start(raw: list[Any]) -> set[str]:
+    """Groups a stage adds before any stage removed them: absent until they are added."""
+    seen: set[str] = set()
+    absent: set[str] = set()
+    for entry in raw:
+        if not isinstance(entry, dict):
+            continue
+        for group in entry.get("remove", []) if isinstance(entry.get("remove"), list) else []:
+            seen.add(group)
+        for group in entry.get("add", []) if isinstance(entry.get("add"), list) else []:
+            if group not in seen and isinstance(group, str):
+                absent.add(group)
+            seen.add(group)
+    return absent
+
+
+def _added(t: Table, geometry: Geometry, removed: set[str]) -> tuple[str, ...]:
+    """``add``: distinct cell groups not in the body at this stage."""
+    value = t.data.get("add", [])
+    if (
+        not isinstance(value, list)
+        or not all(isinstance(g, str) for g in value)
+        or len(set(value)) != len(value)
+    ):
+        raise t.error("add", f"must be a list of distinct cell group names, got {short(value)}")
+    for group in value:
+        _cell_group(t, group, geometry, key="add")
+        if group not in removed:
+            raise t.error("add", f"group '{group}' is in the body already (remove it first)")
+    return tuple(value)
+
+
+def _stage_material(t: Table, scene_material: Material | None) -> Material:
+    """A stage's ``material``: E and ν required, density optional (0: weightless)."""
+    if not t.has("material"):
+        raise t.error("material", "missing (required with 'add': the added groups' E and nu)")
+    m = Table(t.file, t.path("material"), t.data["material"], allowed=STAGE_MATERIAL_KEYS)
+    E = m.number("E", required=True, positive=True, maximum=1e15)
+    nu = m.number("nu", required=True)
+    assert E is not None and nu is not None
+    if not -1.0 < nu < 0.5:
+        raise m.error("nu", f"must lie in (-1, 0.5), got {nu!r}")
+    plane = scene_material.plane if scene_material is not None else "stress"
+    thickness = scene_material.thickness if scene_material is not None else 1.0
+    density = m.number("density", positive=True, maximum=1e6)
+    return Material(E=float(E), nu=float(nu), plane=plane, thickness=thickness, density=density)
 
 
 def _removed(t: Table, geometry: Geometry, removed: set[str]) -> tuple[str, ...]:

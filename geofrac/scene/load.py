@@ -1157,6 +1157,7 @@ def _validate(
             geometry=geometry,
             element=discretization.element,
             declared=declared,
+            material=material,
         )
     return Scene(
         initial_stress=initial,

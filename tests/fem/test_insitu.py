@@ -281,3 +281,46 @@ def test_gravity_loading_stage_then_removing_the_upper_layer(tmp_path):
         assert stages[1]["reactions"]["bottom"][1] == pytest.approx(3000.0 * 9.81 * 20.0, rel=1e-8)
     finally:
         solution.problem.destroy()
+
+
+LINED = JOBS.parent / "tests" / "fem" / "lined.toml"
+
+
+def test_lining_installed_after_forty_percent_takes_the_closed_form_pressure():
+    """Ground-support interaction under hydrostatic p (Brady and Brown 2004, §7.3).
+
+    The opening (radius a) is excavated with a share λ = 0.4 of the release, then a ring
+    b < r < a (E_l, ν_l) is installed stress-free and the rest is released. Rock, an
+    infinite plate with a hole: its wall moves by −λ p a/(2 G) first, then by
+    −((1 − λ) p − p_s) a/(2 G). Ring, Lamé's cylinder under external pressure p_s, plane
+    strain: u(a) = −p_s a k, k = (1 + ν_l)/E_l ((1 − 2ν_l) a² + b²)/(a² − b²). Equal
+    displacements give p_s = (1 − λ) p/(1 + 2 G k); the ring's hoop stress is
+    −p_s a² (1 + b²/r²)/(a² − b²), the rock's on the wall −2p + p_s.
+    """
+    p, lam, a, b = 10.0, 0.4, 1.0, 0.9
+    g_rock = 10000.0 / (2 * 1.25)
+    e_l, nu_l = 30000.0, 0.2
+    k = (1 + nu_l) / e_l * ((1 - 2 * nu_l) * a * a + b * b) / (a * a - b * b)
+    ps = (1 - lam) * p / (1 + 2 * g_rock * k)
+    probes = (
+        "output.probes={ring_in = [0.9001, 0.0], ring_out = [0.9999, 0.0], rock = [1.0001, 0.0]}"
+    )
+    solution = _solve(LINED, [probes])
+    try:
+        results = solution.results
+        stages = results["stages"]
+        assert stages[1]["probes"]["rock"][0] == pytest.approx(
+            -lam * p * a / (2 * g_rock), rel=0.01
+        )
+        u_wall = -lam * p * a / (2 * g_rock) - ps * a * k
+        assert stages[2]["probes"]["rock"][0] == pytest.approx(u_wall, rel=0.01)
+        fields = results["probe_fields"]
+        hoop = -ps * a * a / (a * a - b * b)
+        assert fields["ring_in"]["stress"]["yy"] == pytest.approx(hoop * 2, rel=0.01)
+        assert fields["ring_out"]["stress"]["yy"] == pytest.approx(hoop * (1 + b * b), rel=0.01)
+        assert fields["ring_out"]["stress"]["xx"] == pytest.approx(-ps, rel=0.01)
+        assert fields["rock"]["stress"]["yy"] == pytest.approx(-2 * p + ps, rel=0.01)
+        assert stages[2]["out_of_balance"] < 1e-8
+        assert stages[2]["added"] == ["ring"]
+    finally:
+        solution.problem.destroy()
