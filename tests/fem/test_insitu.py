@@ -32,6 +32,7 @@ from tests.conftest import JOBS
 
 KIRSCH = JOBS / "kirsch_stages.toml"
 LAYERS = JOBS.parent / "tests" / "fem" / "layers.toml"
+LINED = JOBS.parent / "tests" / "fem" / "lined.toml"
 P = 10.0  # the scene's vertical in-situ stress magnitude (σyy = -p)
 E, NU = 10000.0, 0.25
 G = E / (2 * (1 + NU))
@@ -191,14 +192,19 @@ def test_run_writes_one_time_step_per_stage(tmp_path):
     assert 'Name="alive"' in text
 
 
+LINED_COARSE = ["geometry.parameters.L=20.0", "geometry.parameters.h=0.15"]
+
+
 @pytest.mark.mpi(min_size=2)
-def test_two_ranks_agree_with_one():
+@pytest.mark.parametrize("case", ["kirsch", "lined"])
+def test_two_ranks_agree_with_one(case):
     comm = MPI.COMM_WORLD
-    many = _solve(KIRSCH, COARSE, comm=comm)
+    path, overrides = (KIRSCH, COARSE) if case == "kirsch" else (LINED, LINED_COARSE)
+    many = _solve(path, overrides, comm=comm)
     stages = many.results["stages"]
     many.problem.destroy()
     if comm.rank == 0:
-        one = _solve(KIRSCH, COARSE, comm=MPI.COMM_SELF)
+        one = _solve(path, overrides, comm=MPI.COMM_SELF)
         ref = one.results["stages"]
         one.problem.destroy()
     else:
@@ -281,9 +287,6 @@ def test_gravity_loading_stage_then_removing_the_upper_layer(tmp_path):
         assert stages[1]["reactions"]["bottom"][1] == pytest.approx(3000.0 * 9.81 * 20.0, rel=1e-8)
     finally:
         solution.problem.destroy()
-
-
-LINED = JOBS.parent / "tests" / "fem" / "lined.toml"
 
 
 def test_lining_installed_after_forty_percent_takes_the_closed_form_pressure():

@@ -219,3 +219,56 @@ def test_an_mpm_scene_refuses_the_fem_tables(tmp_path):
     with pytest.raises(SceneError) as info:
         load_scene(path)
     assert info.value.key == "initial_stress"
+
+
+ADD_BAD = [
+    (
+        "[[stages]]\nname = 'a'\nremove = ['hole']\n[[stages]]\nname = 'b'\nadd = ['hole']\n",
+        "stages[1].material",
+        "missing",
+    ),
+    (
+        "[[stages]]\nname = 'a'\nremove = ['hole']\n[[stages]]\nname = 'b'\nadd = ['hole']\n"
+        "material = { E = 1.0, nu = 0.2 }\n[[stages]]\nname = 'c'\nadd = ['hole']\n"
+        "material = { E = 1.0, nu = 0.2 }\n",
+        "stages[2].add",
+        "in the body already",
+    ),
+    (
+        "[[stages]]\nname = 'a'\nremove = ['hole']\nmaterial = { E = 1.0, nu = 0.2 }\n",
+        "stages[0].material",
+        "add some",
+    ),
+    (
+        "[[stages]]\nname = 'a'\nremove = ['hole']\n[[stages]]\nname = 'b'\nadd = ['hole']\n"
+        "material = { E = 1.0, nu = 0.7 }\n",
+        "stages[1].material.nu",
+        "(-1, 0.5)",
+    ),
+    (
+        "[[stages]]\nname = 'a'\nremove = ['hole']\n[[stages]]\nname = 'b'\nadd = ['hole']\n"
+        "material = { E = 1.0, nu = 0.2, G = 3.0 }\n",
+        "stages[1].material.G",
+        "unknown key",
+    ),
+]
+
+
+@pytest.mark.parametrize(("text", "key", "message"), ADD_BAD, ids=[b[1] for b in ADD_BAD])
+def test_bad_add_keys_name_the_key(tmp_path, text, key, message):
+    with pytest.raises(SceneError) as info:
+        _load(tmp_path, text)
+    assert info.value.key == key
+    assert message in info.value.message
+
+
+def test_a_group_added_before_any_removal_is_absent_until_then(tmp_path):
+    text = (
+        "[[stages]]\nname = 'dig'\nremove = ['rock']\nrelaxation = 0.5\n"
+        "[[stages]]\nname = 'fill'\nadd = ['rock']\nmaterial = { E = 5.0, nu = 0.3 }\n"
+    )
+    scene = _load(tmp_path, text)
+    assert scene.stages[1].add == ("rock",) and scene.stages[1].material.E == 5.0
+    absent = "[[stages]]\nname = 'place'\nadd = ['hole']\nmaterial = { E = 5.0, nu = 0.3 }\n"
+    scene = _load(tmp_path, absent)
+    assert scene.stages[0].add == ("hole",) and scene.stages[0].relaxation is None
