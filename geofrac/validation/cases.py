@@ -30,6 +30,7 @@ CHAPTERS = (
     "EFMM",
     "Fracture networks",
     "Cracking",
+    "In-situ stress and stages",
     "MPM dynamics",
     "MPM under gravity and friction",
     "Blocks",
@@ -262,6 +263,36 @@ def jaeger_slip_stress(beta_deg: float, c: float, mu: float) -> float:
     return 2.0 * c / ((1.0 - mu / math.tan(b)) * math.sin(2.0 * b))
 
 
+#: The Kirsch scene refined as in tests/fem/test_insitu.py: a block of 40 radii (the
+#: finite block's error goes as (a/L)², 0.45 % at most here), h = 0.04a on the wall.
+KIRSCH_FINE = (
+    "geometry.parameters.L=40.0",
+    "geometry.parameters.h_wall=0.04",
+    "geometry.parameters.h_far=2.0",
+    "output.lines={}",
+)
+
+
+def kirsch_wall_hoop(p: float, k: float, theta_deg: float) -> float:
+    """σθθ on the wall of a circular opening under σyy = −p, σxx = −K p (tension positive).
+
+    Kirsch (1898): σθθ(a, θ) = −p (1 + K) − 2 p (1 − K) cos 2θ, θ from the x axis.
+    """
+    return -p * (1 + k) - 2 * p * (1 - k) * math.cos(2 * math.radians(theta_deg))
+
+
+def kirsch_wall_displacement(p: float, k: float, theta_deg: float, *, E: float, nu: float) -> float:
+    """Radial displacement of the wall that the excavation causes, plane strain.
+
+    u_r(a, θ) = a/(4G) [(S_x + S_y) + (S_x − S_y)(3 − 4ν) cos 2θ] with a = 1, S_x = −K p,
+    S_y = −p (Brady and Brown (2004), §7.1); negative: towards the opening.
+    """
+    g = E / (2 * (1 + nu))
+    sx, sy = -k * p, -p
+    c2 = math.cos(2 * math.radians(theta_deg))
+    return ((sx + sy) + (sx - sy) * (3 - 4 * nu) * c2) / (4 * g)
+
+
 # -- measures ----------------------------------------------------------------------------
 
 
@@ -275,6 +306,24 @@ def _patch_error(summary: dict[str, Any], out: Path) -> float:
 
 def _scf(summary: dict[str, Any], out: Path) -> float:
     return _results(summary)["stress_concentration"]["hole_edge"]["principal"]
+
+
+def _probe_stress(probe: str, component: str) -> Callable[[dict[str, Any], Path], float]:
+    """A probe's total stress component (``output.probe_fields`` with ``stress``)."""
+
+    def measure(summary: dict[str, Any], out: Path) -> float:
+        return float(_results(summary)["probe_fields"][probe]["stress"][component])
+
+    return measure
+
+
+def _probe_displacement(probe: str, axis: int) -> Callable[[dict[str, Any], Path], float]:
+    """A probe's displacement component (relative to the initial state)."""
+
+    def measure(summary: dict[str, Any], out: Path) -> float:
+        return float(_results(summary)["probes"][probe][axis])
+
+    return measure
 
 
 def _bore_displacement(summary: dict[str, Any], out: Path) -> float:
@@ -525,6 +574,37 @@ CASES: tuple[Case, ...] = (
         ),
         _scf,
         scene="jobs/validation/plate_hole_elastic.toml",
+        ci=True,
+    ),
+    Case(
+        "kirsch_sidewall",
+        "In-situ stress and stages",
+        "circular opening under σv = 10, σh = 5 (K = 0.5), excavated in two stages (0.4 + 0.6), "
+        "P2: hoop stress on the sidewall",
+        "σθθ at (a, 0) (MPa, compression negative)",
+        Reference(
+            kirsch_wall_hoop(10.0, 0.5, 0.0),
+            "closed form: Kirsch (1898); Jaeger, Cook and Zimmerman (2007), §8.4",
+            rtol=0.01,
+        ),
+        _probe_stress("sidewall", "yy"),
+        scene="jobs/validation/kirsch_stages.toml",
+        overrides=KIRSCH_FINE,
+        ci=True,
+    ),
+    Case(
+        "kirsch_crown",
+        "In-situ stress and stages",
+        "the same opening: radial wall displacement at the crown caused by the excavation",
+        "u_y at (0, a)",
+        Reference(
+            kirsch_wall_displacement(10.0, 0.5, 90.0, E=10000.0, nu=0.25),
+            "closed form: Kirsch (1898); Brady and Brown (2004), §7.1",
+            rtol=0.01,
+        ),
+        _probe_displacement("crown", 1),
+        scene="jobs/validation/kirsch_stages.toml",
+        overrides=KIRSCH_FINE,
         ci=True,
     ),
     Case(
