@@ -127,6 +127,29 @@ def _check(args: argparse.Namespace, comm: MPI.Comm) -> int:
     echo(comm, f"ok: {args.scene}: {_describe(scene)}")
     if scene.size is not None:
         echo(comm, f"size: {scene.size.summary()} (estimate; caps in docs/scenes.md)")
+    if scene.initial_stress is not None:
+        return _check_balance(scene, comm)
+    return 0
+
+
+def _check_balance(scene: Scene, comm: MPI.Comm) -> int:
+    """Mesh and report the initial stress's out-of-balance force; 1 if a run would refuse it."""
+    from geofrac.fem.stages import TOLERANCE, refusal
+    from geofrac.runner import initial_balance
+
+    try:
+        value = initial_balance(scene, comm)
+    except RunError as exc:
+        echo(comm, f"error: {exc}", err=True)
+        return 1
+    echo(
+        comm,
+        f"initial stress ({scene.initial_stress.kind}): out of balance {value:.2e} of the "  # type: ignore[union-attr]
+        f"applied force (tolerance {TOLERANCE:g})",
+    )
+    if value > TOLERANCE:
+        echo(comm, f"error: {refusal(value)}", err=True)
+        return 1
     return 0
 
 

@@ -30,7 +30,7 @@ from geofrac.fem.post import (
 from geofrac.fem.solution import Solution
 from geofrac.io.checkpoint import RunControl
 from geofrac.io.lines import write_line
-from geofrac.io.xdmf import write_fields, write_meshtags
+from geofrac.io.xdmf import write_fields, write_meshtags, write_steps
 from geofrac.log import format_seconds, sayer
 from geofrac.meshing.distribute import build_mesh, check_fracture_cover
 from geofrac.model.fields import COMPONENT_INDEX, tensor_components
@@ -38,7 +38,7 @@ from geofrac.model.scene import Scene
 from geofrac.timing import Timings
 from geofrac_forms.elasticity import strain_energy_form
 
-__all__ = ["FEM", "OUTPUT_FILES", "FemMethod", "solve_scene"]
+__all__ = ["FEM", "OUTPUT_FILES", "FemMethod", "initial_balance", "solve_scene"]
 
 #: Files a run writes into its output directory.
 OUTPUT_FILES = (
@@ -118,6 +118,7 @@ def solve_scene(
         f"element {element.name}: {element.num_dofs} DOFs on {comm.size} rank(s)"
     )
     driven = effect_registry.driven(scene.effects)
+    staged: dict[str, Any] = {}
     try:
         if driven is not None:  # the effect's loop replaces the single solve (cracking)
             with timings.phase("compile"):
@@ -126,6 +127,12 @@ def solve_scene(
                 loop = effect_registry.load(driven.name).driver(
                     driven.config, solution, say, write=write
                 )
+        elif problem.insitu is not None:  # an initial stress or stages (docs/insitu.md)
+            from geofrac.fem.stages import run_stages
+
+            probes = {"names": names, "points": points, "cells": cells}
+            out = run_stages(problem, timings=timings, say=say, probes=probes)
+            staged, solution.frames = out.results, out.frames
         else:
             _solve_phases(problem, timings, say)
     except BaseException:
@@ -147,11 +154,14 @@ def solve_scene(
             wanted = scene.output.lines[name].fields
             solution.lines[name] = (s, x, {f: values[f][start:stop] for f in wanted})
             start = stop
+        results |= staged
         if driven is not None:
             results[driven.name] = loop
         else:
+            t = problem.thickness  # excavated cells (stages) store no energy
+            t = t if problem.insitu is None else t * problem.insitu.alive
             results["strain_energy"] = integrate(
-                strain_energy_form(uh, problem.lam, problem.mu, problem.thickness, problem.dx), comm
+                strain_energy_form(uh, problem.lam, problem.mu, t, problem.dx), comm
             )
             assert problem.solver is not None  # set by the solve
             results["solver"] = problem.solver.describe() | {"iterations": problem.iterations}
@@ -172,6 +182,27 @@ def solve_scene(
                 }
     solution.results = results
     return solution
+
+
+def initial_balance(scene: Scene, comm: MPI.Comm) -> float:
+    """The initial state's largest out-of-balance force over the largest applied force.
+
+    Meshes the scene and assembles the initial state's forces (no solve): what ``geofrac
+    check`` reports for a scene with ``[initial_stress]`` (collective;
+    :meth:`geofrac.fem.stages.StagedRun.check`).
+    """
+    from geofrac.fem.stages import initial_balance as balance
+
+    assert scene.geometry is not None and scene.discretization is not None  # a fem scene
+    tagged = build_mesh(scene.geometry, comm)
+    element = make_element(scene.discretization.element, tagged.mesh)
+    problem = make_problem(
+        tagged, element, scene, terms=effect_registry.linear_terms(scene.effects)
+    )
+    try:
+        return balance(problem)
+    finally:
+        problem.destroy()
 
 
 def _exact_stress(exact: ExactSolution, point: np.ndarray) -> dict[str, float]:
@@ -287,6 +318,11 @@ def _write_xdmf(solution: Solution) -> None:
     functions = []
     if "displacement" in scene.output.fields:
         functions.append(problem.uh)  # write_fields brings it to the geometry degree
+    if solution.frames:  # a staged run: one time step per stage
+        steps = [frame.functions for frame in solution.frames]
+        write_steps(scene.output.dir / "results.xdmf", mesh, steps)
+        problem.write_extra(scene.output.dir)
+        return
     wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
     fields = problem.tensor_fields(wanted)
     functions += [fields[f] for f in wanted]
@@ -409,6 +445,17 @@ class FemMethod:
                         text += f", σ{key}/σ_nominal = {k:.4f}"
                 suffix = "" if nominal is None else f" (σ_nominal = {nominal:g})"
                 lines.append(f"  stress concentration: {text}{suffix}")
+        if "initial_stress" in results:
+            entry = results["initial_stress"]
+            lines.append(
+                f"initial stress: out of balance {entry['out_of_balance']:.2e} of the applied "
+                f"force (tolerance {entry['tolerance']:g})"
+            )
+        for stage in results.get("stages", []):
+            lines.append(
+                f"stage {stage['index']} '{stage['name']}': max |u| = "
+                f"{stage['max_displacement']:.6g}, out of balance {stage['out_of_balance']:.1e}"
+            )
         for name, entry in results.get("lines", {}).items():
             lines.append(f"line {name}: {entry['points']} points -> {entry['csv']}, {entry['png']}")
         if "errors" in results:

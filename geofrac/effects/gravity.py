@@ -108,9 +108,12 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> GravityConfig:
 
 
 def linear_form(config: GravityConfig, ctx: FormContext) -> ufl.Form:
-    """Right-hand side t·∫ ρ g·v dx (``ctx`` is a :class:`geofrac.fem.elastic.FormContext`)."""
+    """Right-hand side t·∫ ρ g·v dx (``ctx`` is a :class:`geofrac.fem.elastic.FormContext`).
+
+    ρ is ``material.density``, or the context's density field when it has one (a scene
+    with an initial stress or stages: a density per cell group, zero in excavated cells).
+    """
     from geofrac_forms.elasticity import body_force_form
 
-    return body_force_form(
-        ctx.v, ctx.constant(config.density) * ctx.vector(config.acceleration), ctx.thickness, ctx.dx
-    )
+    density = ctx.density if ctx.density is not None else ctx.constant(config.density)
+    return body_force_form(ctx.v, density * ctx.vector(config.acceleration), ctx.thickness, ctx.dx)

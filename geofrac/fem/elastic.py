@@ -41,6 +41,7 @@ from geofrac_forms.gradient_dofs import penalty_forms
 
 if TYPE_CHECKING:
     from geofrac.elements.gradient import GradientDofElement
+    from geofrac.fem.insitu import InsituFields
 
 __all__ = [
     "ElasticProblem",
@@ -64,12 +65,15 @@ class FormContext:
         v: test function.
         dx: cell measure.
         thickness: thickness constant t.
+        density: the mass density as UFL (per cell group, zero in excavated cells) in a
+            scene with an initial stress or stages, or None (``material.density``).
     """
 
     mesh: dolfinx.mesh.Mesh
     v: Any
     dx: Any
     thickness: Any
+    density: Any = None
 
     def constant(self, value: float) -> dolfinx.fem.Constant:
         """A scalar DOLFINx constant on the mesh."""
@@ -154,7 +158,16 @@ class ElasticProblem:
             else None
         )
         u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-        self._a = forms.stiffness_form(u, v, self.lam, self.mu, self.thickness, self.dx)
+        #: a scene with an initial stress or stages: the live cells, σ0 and the density
+        #: (:mod:`geofrac.fem.insitu`); None otherwise.
+        self.insitu: InsituFields | None = None
+        stiffness_t: Any = self.thickness
+        if scene.initial_stress is not None or scene.stages:
+            from geofrac.fem.insitu import insitu_fields
+
+            self.insitu = insitu_fields(tagged, scene)
+            stiffness_t = self.thickness * self.insitu.alive
+        self._a = forms.stiffness_form(u, v, self.lam, self.mu, stiffness_t, self.dx)
         self._L = self._linear_form(v)
         self.point_forces = loads.point_forces(
             tagged, V, scene.loads, thickness=float(self.thickness.value)
@@ -172,12 +185,21 @@ class ElasticProblem:
         """The distributed loads (:mod:`geofrac.fem.loads`) and the effects' terms as one form."""
         mesh, gdim = self.mesh, self.mesh.geometry.dim
         terms = [self._load_term(load, v) for load in self.scene.loads if load.type != "point"]
-        ctx = FormContext(mesh, v, self.dx, self.thickness)
-        terms += [term(ctx) for term in self.terms]
+        terms += [term(self.form_context(v)) for term in self.terms]
         if not terms:
             zero = dolfinx.fem.Constant(mesh, np.zeros(gdim, dtype=SCALAR))
             terms.append(ufl.inner(zero, v) * self.dx)
         return sum(terms[1:], terms[0])
+
+    def form_context(self, v: Any) -> FormContext:
+        """What the effects' terms see (:class:`FormContext`) for test function ``v``."""
+        density = None
+        if self.insitu is not None:
+            density = self.insitu.density
+            if density is None and self.scene.material is not None:  # stages alone
+                rho = self.scene.material.density or 0.0
+                density = dolfinx.fem.Constant(self.mesh, SCALAR(rho)) * self.insitu.alive
+        return FormContext(self.mesh, v, self.dx, self.thickness, density)
 
     def _load_term(self, load: Load, v: Any) -> ufl.Form:
         """The linear form of one distributed load (not ``point``)."""
@@ -284,7 +306,15 @@ class ElasticProblem:
 
         assert self.scene.material is not None  # a fem scene has one
         plane = self.scene.material.plane
-        return tensor_fields(self.uh, self.lam, self.mu, plane=plane, names=names)
+        return tensor_fields(
+            self.uh, self.lam, self.mu, plane=plane, names=names, **self._initial_state()
+        )
+
+    def _initial_state(self) -> dict[str, Any]:
+        """``initial`` (σ0, 3×3) and ``alive`` for the stress fields, if the scene has them."""
+        if self.insitu is None:
+            return {}
+        return {"initial": self.insitu.sigma0, "alive": self.insitu.alive}
 
     def point_tensors(
         self, names: Sequence[str], points: np.ndarray, cells: np.ndarray
@@ -304,7 +334,14 @@ class ElasticProblem:
         assert self.scene.material is not None  # a fem scene has one
         plane = self.scene.material.plane
         return point_tensors(
-            self.uh, self.lam, self.mu, plane=plane, names=names, points=points, cells=cells
+            self.uh,
+            self.lam,
+            self.mu,
+            plane=plane,
+            names=names,
+            points=points,
+            cells=cells,
+            **self._initial_state(),
         )
 
     def write_extra(self, directory: Path) -> list[Path]:

@@ -190,8 +190,13 @@ def point_tensors(
     names: Sequence[str],
     points: np.ndarray,
     cells: np.ndarray,
+    initial: Any = None,
+    alive: Any = None,
 ) -> dict[str, np.ndarray]:
     """3×3 stress and/or strain of ``uh`` at points, in the given cells (collective).
+
+    ``initial``: an initial stress (3×3) added to the stress; ``alive``: a factor of the
+    fields, 0 on excavated cells (:func:`_quantities`).
 
     The cell's field (:func:`_quantities`) is interpolated into discontinuous Lagrange
     of the degree of ``uh`` and evaluated at the point: exact on affine cells, where the
@@ -202,7 +207,7 @@ def point_tensors(
     """
     mesh = uh.function_space.mesh
     degree = uh.function_space.ufl_element().embedded_superdegree
-    exprs = _quantities(uh, lam, mu, plane)
+    exprs = _quantities(uh, lam, mu, plane, initial=initial, alive=alive)
     space = dolfinx.fem.functionspace(mesh, ("DG", degree, (3, 3)))
     out = {}
     for name in names:
@@ -256,12 +261,24 @@ TENSOR_FIELDS = {
 }
 
 
-def _quantities(uh: dolfinx.fem.Function, lam: Any, mu: Any, plane: str) -> dict[str, Any]:
+def _quantities(
+    uh: dolfinx.fem.Function,
+    lam: Any,
+    mu: Any,
+    plane: str,
+    *,
+    initial: Any = None,
+    alive: Any = None,
+) -> dict[str, Any]:
     """UFL stress (3×3), strain (3×3) and von Mises stress of ``uh``.
 
     In 2D the out-of-plane components are those of the analysis plane: plane strain
     has εzz = 0 and σzz = λ tr(ε); plane stress has σzz = 0 and εzz = -λ*/(2μ) tr(ε)
     = -ν/(1-ν) tr(ε) (λ* the plane-stress λ of :func:`geofrac.materials.lame`).
+
+    With an ``initial`` stress σ0 (3×3) the stress is the total σ0 + σ(u) (the strain
+    stays relative to the initial state); ``alive`` (1 on live cells, 0 on excavated
+    ones) multiplies every field.
     """
     gdim = uh.function_space.mesh.geometry.dim
     sig, eps = forms.sigma(uh, lam, mu), forms.epsilon(uh)
@@ -270,10 +287,18 @@ def _quantities(uh: dolfinx.fem.Function, lam: Any, mu: Any, plane: str) -> dict
         szz = lam * ufl.tr(eps)
     elif gdim == 2:
         ezz = -lam / (2.0 * mu) * ufl.tr(eps)
+    if initial is None and alive is None:
+        return {
+            "stress": forms.stress_3d(sig, szz),
+            "strain": forms.stress_3d(eps, ezz),
+            "von_mises": forms.von_mises(sig, szz),
+        }
+    stress = forms.stress_3d(sig, szz) + (0 if initial is None else initial)
+    factor = 1.0 if alive is None else alive
     return {
-        "stress": forms.stress_3d(sig, szz),
-        "strain": forms.stress_3d(eps, ezz),
-        "von_mises": forms.von_mises(sig, szz),
+        "stress": factor * stress,
+        "strain": factor * forms.stress_3d(eps, ezz),
+        "von_mises": factor * forms.von_mises(stress),
     }
 
 
@@ -307,7 +332,14 @@ def _nodal_average(expr: Any, mesh: dolfinx.mesh.Mesh, shape: tuple[int, ...], n
 
 
 def tensor_fields(
-    uh: dolfinx.fem.Function, lam: Any, mu: Any, *, plane: str, names: Sequence[str]
+    uh: dolfinx.fem.Function,
+    lam: Any,
+    mu: Any,
+    *,
+    plane: str,
+    names: Sequence[str],
+    initial: Any = None,
+    alive: Any = None,
 ) -> dict[str, dolfinx.fem.Function]:
     """Stress, strain and von Mises fields of ``uh`` for XDMF output.
 
@@ -322,12 +354,14 @@ def tensor_fields(
         mu: shear modulus μ.
         plane: ``"stress"`` or ``"strain"`` (ignored in 3D).
         names: keys of :data:`TENSOR_FIELDS` to compute.
+        initial: an initial stress (3×3) added to the stress, or None.
+        alive: a DG0 factor, 0 on excavated cells, or None.
 
     Returns:
         name -> function; tensors shape=(3, 3) per cell or vertex, von Mises scalar.
     """
     mesh = uh.function_space.mesh
-    exprs = _quantities(uh, lam, mu, plane)
+    exprs = _quantities(uh, lam, mu, plane, initial=initial, alive=alive)
     out = {}
     for name in names:
         quantity, recovery = TENSOR_FIELDS[name]

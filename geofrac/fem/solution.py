@@ -37,6 +37,9 @@ class Solution:
     #: the sampled ``output.lines``: name -> (s, points, field -> values), written by the run
     #: pipeline (:func:`geofrac.io.lines.write_line`).
     lines: dict[str, Any] = field(default_factory=dict)
+    #: a staged run's steps for ``results.xdmf`` (:class:`geofrac.fem.stages.Frame`), one
+    #: time step each; empty: the single solve's fields.
+    frames: list[Any] = field(default_factory=list)
 
     def mesh_counts(self) -> dict[str, int]:
         """Global numbers of cells and vertices, and the topological dimension."""

@@ -27,7 +27,7 @@ from dolfinx.io import XDMFFile
 
 from geofrac.io.series import write_xml
 
-__all__ = ["on_geometry", "regroup_xdmf", "write_fields", "write_meshtags"]
+__all__ = ["on_geometry", "regroup_xdmf", "write_fields", "write_meshtags", "write_steps"]
 
 
 def on_geometry(fn: dolfinx.fem.Function) -> dolfinx.fem.Function:
@@ -78,6 +78,31 @@ def write_fields(
         f.write_mesh(mesh)
         for fn in functions:
             f.write_function(on_geometry(fn), t)
+    mesh.comm.barrier()
+    if mesh.comm.rank == 0:
+        regroup_xdmf(path)
+    mesh.comm.barrier()
+    return path
+
+
+def write_steps(
+    path: Path,
+    mesh: dolfinx.mesh.Mesh,
+    steps: Sequence[Sequence[dolfinx.fem.Function]],
+) -> Path:
+    """Write one time step per entry of ``steps`` (time = its index), as :func:`write_fields`.
+
+    Every step has functions of the same names (a staged run's displacement and stresses
+    after each stage).
+
+    Returns:
+        ``path``.
+    """
+    with XDMFFile(mesh.comm, str(path), "w") as f:
+        f.write_mesh(mesh)
+        for t, functions in enumerate(steps):
+            for fn in functions:
+                f.write_function(on_geometry(fn), float(t))
     mesh.comm.barrier()
     if mesh.comm.rank == 0:
         regroup_xdmf(path)

@@ -22,6 +22,7 @@ __all__ = [
     "ExactSpec",
     "Geometry",
     "GeometryBuilder",
+    "InitialStress",
     "Line",
     "Load",
     "Material",
@@ -30,6 +31,7 @@ __all__ = [
     "ParticleSource",
     "Scene",
     "Solver",
+    "Stage",
     "Units",
     "effect_config",
 ]
@@ -211,6 +213,57 @@ class Load:
     type: Literal["traction", "body_force", "pressure", "point"]
     value: tuple[float | str, ...] | Literal["exact"]
     group: str | None = None
+
+
+@dataclass(frozen=True)
+class InitialStress:
+    """``[initial_stress]``: the stress state before any load or stage (docs/insitu.md).
+
+    Tension positive. Displacements, strains and reactions are reported relative to this
+    state; stresses are totals.
+
+    Attributes:
+        kind: ``"constant"`` or ``"geostatic"``.
+        stress: constant: the tensor in Voigt order, 2D (xx, yy, xy), 3D (xx, yy, zz,
+            xy, yz, xz).
+        surface: geostatic: the ground level (y in 2D, z in 3D), or in 2D a polyline of
+            (x, y) points with x strictly increasing.
+        gravity: geostatic: g, the magnitude of the ``gravity`` effect's acceleration.
+        density: default density (``material.density``).
+        densities: cell group -> density.
+        k0: default K0 (ν/(1 − ν)).
+        k0s: cell group -> K0.
+        tectonic: a tensor added to the field (Voigt order), or None.
+        loaded: side groups carrying σ0·n as a constant traction through all stages.
+    """
+
+    kind: Literal["constant", "geostatic"]
+    stress: tuple[float, ...] = ()
+    surface: float | tuple[tuple[float, float], ...] = 0.0
+    gravity: float = 0.0
+    density: float = 0.0
+    densities: dict[str, float] = field(default_factory=dict)
+    k0: float = 0.0
+    k0s: dict[str, float] = field(default_factory=dict)
+    tectonic: tuple[float, ...] | None = None
+    loaded: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One ``[[stages]]`` entry: a construction stage (docs/insitu.md).
+
+    Attributes:
+        name: the stage's name (unique).
+        remove: cell groups excavated at the start of the stage.
+        relaxation: the share of the pending release applied in this stage (the
+            release is the out-of-balance force of the remaining body, computed when
+            cells are removed); None: all that remains of it.
+    """
+
+    name: str
+    remove: tuple[str, ...] = ()
+    relaxation: float | None = None
 
 
 @dataclass(frozen=True)
@@ -503,6 +556,8 @@ class Scene:
         size: the :class:`~geofrac.scene.size.SizeEstimate` of the scene's work (None
             only for a scene built by hand).
         units: the ``[units]`` of the scene's numbers, for the pictures' axes.
+        initial_stress: the ``[initial_stress]`` of an FEM scene, or None (stress-free).
+        stages: the ``[[stages]]`` of an FEM scene in order (empty: one solve).
     """
 
     path: Path
@@ -527,6 +582,8 @@ class Scene:
     size: Any = None
     overrides: tuple[str, ...] = ()
     units: Units = Units()
+    initial_stress: InitialStress | None = None
+    stages: tuple[Stage, ...] = ()
 
     def effect_config[C](self, name: str, kind: type[C]) -> C | None:
         """The configuration of effect ``name``, a ``kind``, or None (:func:`effect_config`)."""

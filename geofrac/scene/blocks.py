@@ -33,7 +33,17 @@ BLOCKS_KEYS = (
 #: Keys of ``[output]`` in a block scene.
 BLOCKS_OUTPUT_KEYS = ("dir", "vtu", "block_file", "histogram")
 #: Tables of other methods that a block scene must not have.
-FEM_ONLY_TABLES = ("material", "discretization", "exact", "bc", "load", "solver", "mpm")
+FEM_ONLY_TABLES = (
+    "material",
+    "discretization",
+    "exact",
+    "bc",
+    "load",
+    "solver",
+    "mpm",
+    "initial_stress",
+    "stages",
+)
 #: ``[blocks.terrain]`` keys that are lists of numbers, with their lengths.
 _TERRAIN_VECTORS = {"extent": 4, "footprint_centre": 2, "footprint_axes": 2}
 #: Most gmsh threads ``blocks.terrain.threads`` may ask for (0 and negative crash OpenMP).

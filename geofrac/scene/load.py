@@ -34,6 +34,7 @@ from geofrac.model.scene import (
     Output,
     Scene,
     Solver,
+    Stage,
     Units,
     effect_config,
 )
@@ -48,6 +49,9 @@ from geofrac.model.table import (
 )
 from geofrac.model.table import Table as _Table
 from geofrac.model.table import output_directory as _output_directory
+from geofrac.scene.insitu import INITIAL_STRESS_KEYS, STAGE_KEYS
+from geofrac.scene.insitu import initial_stress as _initial_stress
+from geofrac.scene.insitu import stages as _stages
 from geofrac.scene.size import Extent, check_size, estimate
 
 __all__ = [
@@ -82,6 +86,8 @@ TOP_LEVEL_KEYS = (
     "blocks",
     "allow_large",
     "units",
+    "initial_stress",
+    "stages",
 )
 #: ``[discretization]`` keys that every element takes (the others are element options).
 ELEMENT_INDEPENDENT = ("renumber",)
@@ -126,6 +132,8 @@ SECTION_KEYS: dict[str, tuple[str, ...]] = {
         "checkpoint_every",
         "checkpoint_minutes",
     ),
+    "initial_stress": INITIAL_STRESS_KEYS,
+    "stages": STAGE_KEYS,
 }
 #: Field names ``output.fields`` may list.
 OUTPUT_FIELDS = ("displacement", "stress", "strain", "von_mises", "stress_nodal", "strain_nodal")
@@ -1131,7 +1139,28 @@ def _validate(
     specs = _effects(
         file, data, declared, geometry, material, discretization, bcs, configured, loads
     )
+    initial = None
+    if "initial_stress" in data:
+        initial = _initial_stress(
+            file,
+            data["initial_stress"],
+            geometry=geometry,
+            material=material,
+            element=discretization.element,
+            specs=specs,
+        )
+    stages: tuple[Stage, ...] = ()
+    if "stages" in data:
+        stages = _stages(
+            file,
+            data["stages"],
+            geometry=geometry,
+            element=discretization.element,
+            declared=declared,
+        )
     return Scene(
+        initial_stress=initial,
+        stages=stages,
         warnings=_warnings(file, material, discretization, geometry.dim),
         path=file.resolve(),
         sha256=digest,

@@ -95,7 +95,7 @@ MPM_OUTPUT_FIELDS = (
 #: Effects an MPM scene may declare (a material model's effect from the model registry).
 MPM_EFFECTS = ("gravity", "mls_smoothing", *model_effects(), "friction")
 #: Tables of finite-element scenes that an MPM scene must not have.
-FEM_ONLY_TABLES = ("discretization", "exact", "bc", "load", "solver")
+FEM_ONLY_TABLES = ("discretization", "exact", "bc", "load", "solver", "initial_stress", "stages")
 #: Kinds of ``mpm.damping``: Cundall's local (non-viscous) damping of the nodal forces.
 DAMPING_KINDS = ("local",)
 #: Default Courant number (the benchmarks of Edo (2016) use 0.1, eq. 4.72).

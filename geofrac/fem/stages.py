@@ -1,0 +1,437 @@
+"""An elastic run from an initial stress through construction stages (docs/insitu.md).
+
+The stress is σ = σ0 + C ε(u): u (and the strains and reactions) are measured from the
+initial state, the stress is the total. The vectors, on the unknowns (thickness t in 2D):
+
+- internal force I(σ) = t ∫_live Bᵀ σ dx (``alive`` × the integrand);
+- external force F = the scene's loads, the effects' terms (gravity, ρ per cell group,
+  zero on removed cells) and the ``loaded`` sides' traction t ∫ σ0·n v ds;
+- out of balance R(u) = F − I(σ0 + C ε(u)).
+
+1. **Check**: r0 = F_init − I(σ0) on the free DOFs, F_init = gravity + ``loaded``
+   sides (the scene's ``[[load]]`` entries are the analysis loads, applied on top);
+   its largest entry over the largest entry of F_init and I(σ0) must be at most
+   :data:`TOLERANCE`, or the run stops naming the fix.
+2. **Step 0** (``initial``): K u = R(0), the loads and prescribed displacements.
+3. **Stages**: removing cells sets ``alive`` to 0 there (their stiffness, weight and
+   internal force go), holds the DOFs no live cell touches, and computes the release
+   R(u) of the remaining body from the current stress; a stage solves K Δu = s R for
+   its share s of it (``relaxation``; default: all that remains).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+import numpy as np
+import ufl
+from mpi4py import MPI
+
+from geofrac.errors import RunError
+from geofrac.fem.elastic import PREFIX, ElasticProblem
+from geofrac.fem.insitu import InsituFields, cell_dofs, in_plane
+from geofrac.fem.post import TENSOR_FIELDS, probe
+from geofrac.log import format_seconds
+from geofrac.solvers import (
+    LinearSolver,
+    Vector,
+    assemble_matrix,
+    assemble_vector,
+    function_vector,
+    set_bc,
+)
+from geofrac.timing import Timings
+from geofrac_forms import elasticity as forms
+
+__all__ = [
+    "TOLERANCE",
+    "Frame",
+    "StagedResults",
+    "StagedRun",
+    "initial_balance",
+    "refusal",
+    "run_stages",
+]
+
+#: Largest accepted out-of-balance force of the initial state, relative to the largest
+#: applied force. An initial state in equilibrium leaves round-off (about 1e-13 with the
+#: exact quadrature of :mod:`geofrac.fem.insitu`); an imbalance of 1e-6 of the load
+#: moves the body by 1e-6 of the load's displacements, below anything reported. A state
+#: that is not in equilibrium (K0 under a slope) is off by O(1).
+TOLERANCE = 1e-6
+
+
+@dataclass
+class Frame:
+    """One time step of ``results.xdmf``: a step's name and the fields written."""
+
+    index: int
+    name: str
+    functions: list[dolfinx.fem.Function] = field(default_factory=list)
+
+
+class StagedRun:
+    """The vectors and the stage loop of a staged elastic problem.
+
+    Args:
+        problem: a compiled :class:`ElasticProblem` with ``insitu`` fields.
+        say: progress printer (rank 0).
+    """
+
+    def __init__(self, problem: ElasticProblem, say: Callable[[str], None]) -> None:
+        assert problem.insitu is not None
+        self.problem, self.say = problem, say
+        self.insitu: InsituFields = problem.insitu
+        self.comm = problem.comm
+        mesh, V = problem.mesh, problem.element.space
+        self.V, self.bs = V, V.dofmap.index_map_bs
+        self.owned = V.dofmap.index_map.size_local * self.bs
+        gdim = mesh.geometry.dim
+        v = ufl.TestFunction(V)
+        u = problem.uh
+        sigma = in_plane(self.insitu.sigma0, gdim) + forms.sigma(u, problem.lam, problem.mu)
+        t, alive = problem.thickness, self.insitu.alive
+        internal = t * alive * ufl.inner(sigma, forms.epsilon(v)) * problem.dx
+        loaded = self._loaded_terms(v)
+        initial = loaded + [term(problem.form_context(v)) for term in problem.terms]
+        if not initial:
+            zero = dolfinx.fem.Constant(mesh, np.zeros(gdim))
+            initial = [ufl.inner(zero, v) * problem.dx]
+        self.residual = dolfinx.fem.form(sum(loaded, problem._L) - internal)
+        self.initial = dolfinx.fem.form(sum(initial[1:], initial[0]))
+        self.internal = dolfinx.fem.form(internal)
+        self.du = dolfinx.fem.Function(V)
+        self.bcs = list(problem.bcs)
+        rows, _ = problem.dirichlet()
+        start = V.dofmap.index_map.local_range[0] * self.bs
+        self.held = (rows - start).astype(np.int32)  # owned local rows of [[bc]]
+        self.orphans = np.empty(0, dtype=np.int32)  # owned local rows no live cell touches
+        self.release: Vector | None = None
+        self.share = 1.0  # of the pending release applied so far
+        self.scale = 0.0  # the largest applied force (of the initial check)
+        self.r0: Vector | None = None  # F_init - I(σ0), every row (reactions' origin)
+
+    def _loaded_terms(self, v: Any) -> list[Any]:
+        """The traction terms t ∫ (σ0 n)·v ds of the ``loaded`` sides."""
+        problem = self.problem
+        spec = problem.scene.initial_stress
+        if spec is None:
+            return []
+        gdim = problem.mesh.geometry.dim
+        traction = in_plane(self.insitu.sigma0, gdim) * ufl.FacetNormal(problem.mesh)
+        return [
+            forms.traction_form(
+                v, traction, problem.thickness, problem.ds(problem.tagged.groups[g][1])
+            )
+            for g in spec.loaded
+        ]
+
+    def _max(self, b: Vector, rows: np.ndarray | None = None) -> float:
+        """Largest |entry| of ``b`` over all ranks, on the owned ``rows`` (default all)."""
+        a = b.array_r if rows is None else b.array_r[rows]
+        return float(self.comm.allreduce(float(np.max(np.abs(a), initial=0.0)), op=MPI.MAX))
+
+    def _free(self, b: Vector) -> None:
+        """Zero the rows of held and orphaned DOFs of ``b`` (owned entries)."""
+        b.array_w[self.held] = 0.0
+        b.array_w[self.orphans] = 0.0
+
+    def _vector(self, form: dolfinx.fem.Form, *, points: bool = False) -> Vector:
+        b = assemble_vector(form)
+        if points:
+            self.problem._add_point_forces(b)
+        return b
+
+    def check(self) -> float:
+        """The largest |r0| on the free DOFs over the force scale (collective; before step 0).
+
+        r0 = F_init − I(σ0); the scale is the largest entry of F_init, I(σ0) and F (the
+        loads included), and is kept for :meth:`out_of_balance`. Without an initial
+        stress the state is stress-free and r0 is not kept (reactions are totals).
+        """
+        f_init = self._vector(self.initial)
+        i0 = self._vector(self.internal)
+        f_ext = self._vector(self.residual, points=True)  # F − I(σ0) at u = 0
+        f_ext.axpy(1.0, i0)
+        self.scale = max(self._max(f_init), self._max(i0), self._max(f_ext))
+        f_ext.destroy()
+        r0 = f_init.copy()
+        r0.axpy(-1.0, i0)
+        i0.destroy()
+        f_init.destroy()
+        if self.problem.scene.initial_stress is not None:
+            self.r0 = r0.copy()
+        self._free(r0)
+        value = self._max(r0)
+        r0.destroy()
+        return value / self.scale if self.scale > 0 else 0.0
+
+    def _factor(self) -> None:
+        """Assemble K with the conditions (held and orphaned DOFs) and set up the solver."""
+        problem = self.problem
+        problem._free_operators()
+        assert problem.a is not None
+        problem.A = assemble_matrix(problem.a, self.bcs)
+        s = problem.scene.solver
+        problem.solver = LinearSolver(
+            problem.A,
+            PREFIX,
+            s.preset,
+            options=s.options,
+            num_dofs=problem.element.num_dofs,
+            near_nullspace=problem._near_nullspace,
+        )
+
+    def _solve(self, b: Vector) -> None:
+        """Add K⁻¹ b to the displacement."""
+        problem = self.problem
+        assert problem.solver is not None
+        self.du.x.array[:] = 0.0
+        problem.iterations = problem.solver.solve(b, function_vector(self.du))
+        self.du.x.scatter_forward()
+        problem.uh.x.array[:] += self.du.x.array
+        problem.uh.x.scatter_forward()
+
+    def initial_step(self) -> None:
+        """Step 0: the scene's loads and prescribed displacements on the initial state."""
+        self._factor()
+        problem = self.problem
+        assert problem.a is not None
+        b = assemble_vector(self.residual, (problem.a, self.bcs))
+        problem._add_point_forces(b)
+        set_bc(b, self.bcs)
+        try:
+            self._solve(b)
+        finally:
+            b.destroy()
+
+    def remove(self, groups: Sequence[str]) -> None:
+        """Excavate cell groups: no stiffness, weight or internal force; the release R(u)."""
+        problem = self.problem
+        alive = self.insitu.alive
+        for group in groups:
+            _, cells = problem.tagged.entities(group)
+            alive.x.array[cell_dofs(alive, cells)] = 0.0
+        alive.x.scatter_forward()
+        self._hold_orphans()
+        self._factor()
+        if self.release is not None:
+            self.release.destroy()
+        self.release = self._vector(self.residual, points=True)
+        self._free(self.release)
+        self.share = 0.0
+
+    def _hold_orphans(self) -> None:
+        """Hold at their values the DOFs that no live cell touches (collective)."""
+        V, mesh = self.V, self.problem.mesh
+        imap = V.dofmap.index_map
+        tdim = mesh.topology.dim
+        cmap = mesh.topology.index_map(tdim)
+        cells = np.arange(cmap.size_local + cmap.num_ghosts, dtype=np.int32)
+        live = cells[self.insitu.alive.x.array[cell_dofs(self.insitu.alive, cells)] > 0.5]
+        touched = dolfinx.la.vector(imap, 1)
+        np.add.at(touched.array, V.dofmap.list[live].ravel(), 1.0)
+        touched.scatter_reverse(dolfinx.la.InsertMode.add)
+        touched.scatter_forward()
+        blocks = np.flatnonzero(touched.array == 0.0).astype(np.int32)
+        zero = dolfinx.fem.Function(V)
+        self.bcs = [*self.problem.bcs, dolfinx.fem.dirichletbc(zero, blocks)]
+        owned = blocks[blocks < imap.size_local]
+        self.orphans = (owned[:, None] * self.bs + np.arange(self.bs)).ravel().astype(np.int32)
+
+    def apply(self, relaxation: float | None) -> float:
+        """Apply ``relaxation`` of the pending release (None: all that remains); the share."""
+        share = 1.0 - self.share if relaxation is None else relaxation
+        if self.release is None or share <= 0.0:
+            return 0.0
+        b = self.release.copy()
+        try:
+            b.scale(share)
+            self._solve(b)
+        finally:
+            b.destroy()
+        self.share += share
+        return share
+
+    def out_of_balance(self) -> float:
+        """The largest |R(u)| on the free DOFs over the check's force scale (collective)."""
+        r = self._vector(self.residual, points=True)
+        self._free(r)
+        value = self._max(r)
+        r.destroy()
+        scale = self.scale if self.scale > 0 else 1.0
+        return value / scale
+
+    def reactions(self) -> dict[str, list[float]]:
+        """Per [[bc]] group, the reaction force per component relative to the initial state.
+
+        The sum over the group's held DOFs of I(σ) − F minus its value in the initial
+        state (I(σ0) − F_init); held components only, others 0 (collective).
+        """
+        problem = self.problem
+        r = self._vector(self.residual, points=True)
+        if self.r0 is not None:
+            r.axpy(-1.0, self.r0)
+        out: dict[str, list[float]] = {}
+        gdim = problem.mesh.geometry.dim
+        for i, bc in enumerate(problem.scene.bcs):
+            dim, entities = problem._bc_entities(i)
+            sums = np.zeros(gdim)
+            for c in bc.components:
+                dofs = dolfinx.fem.locate_dofs_topological(self.V.sub(c), dim, entities)
+                dofs = np.unique(dofs[dofs < self.owned])
+                sums[c] = -float(np.sum(r.array_r[dofs]))
+            total = np.empty_like(sums)
+            self.comm.Allreduce(sums, total, op=MPI.SUM)
+            out[bc.group] = [float(x) + 0.0 for x in total]
+        r.destroy()
+        return out
+
+    def max_displacement(self) -> float:
+        """Largest |u| over the nodes of live cells (collective)."""
+        u = self.problem.uh.x.array[: self.owned].reshape(-1, self.bs).copy()
+        if len(self.orphans):
+            u[self.orphans[:: self.bs] // self.bs] = 0.0
+        local = float(np.max(np.linalg.norm(u, axis=1), initial=0.0))
+        return float(self.comm.allreduce(local, op=MPI.MAX))
+
+    def frame(self, index: int, name: str) -> Frame:
+        """The fields of the current state for ``results.xdmf``."""
+        problem = self.problem
+        scene = problem.scene
+        functions = []
+        if "displacement" in scene.output.fields:
+            u = problem.uh.copy()
+            u.name = "displacement"
+            functions.append(u)
+        wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
+        fields = problem.tensor_fields(wanted)
+        functions += [fields[f] for f in wanted]
+        alive = self.insitu.alive.copy()
+        alive.name = "alive"
+        functions.append(alive)
+        return Frame(index, name, functions)
+
+    def destroy(self) -> None:
+        """Free the vectors this run made (the problem frees its operators)."""
+        for vec in (self.release, self.r0):
+            if vec is not None:
+                vec.destroy()
+        self.release = self.r0 = None
+
+
+def refusal(value: float) -> str:
+    """Why a run refuses an initial state out of balance by ``value``, and the fix."""
+    return (
+        f"initial_stress: the initial state is out of balance: its largest out-of-balance "
+        f"force is {value:.3g} of the largest applied force (tolerance {TOLERANCE:g}). "
+        "A K0 or constant stress is in equilibrium only under a level ground surface with "
+        "its far sides held ([[bc]]) or loaded by σ0·n (initial_stress.loaded); otherwise "
+        "use a gravity-loading stage: remove [initial_stress] and let the initial step load "
+        "the body's weight (docs/insitu.md)"
+    )
+
+
+@dataclass
+class StagedResults:
+    """What :func:`run_stages` hands back: the summary entries and the XDMF frames."""
+
+    results: dict[str, Any]
+    frames: list[Frame]
+
+
+def _record(run: StagedRun, index: int, name: str, *, probes: dict[str, Any]) -> dict[str, Any]:
+    """The summary entry of a step (collective)."""
+    entry: dict[str, Any] = {"index": index, "name": name}
+    entry["max_displacement"] = run.max_displacement()
+    names, points, cells = probes["names"], probes["points"], probes["cells"]
+    if len(names):
+        values = probe(run.problem.uh, points, cells)
+        entry["probes"] = {n: values[i].tolist() for i, n in enumerate(names)}
+    entry["reactions"] = run.reactions()
+    entry["out_of_balance"] = run.out_of_balance()
+    return entry
+
+
+def run_stages(
+    problem: ElasticProblem,
+    *,
+    timings: Timings,
+    say: Callable[[str], None],
+    probes: dict[str, Any],
+) -> StagedResults:
+    """Check the initial state, solve step 0 and every stage (collective).
+
+    Args:
+        problem: the scene's problem, with ``insitu`` fields.
+        timings: per-phase wall times.
+        say: progress (rank 0).
+        probes: ``names``, ``points`` shape=(n, 3), ``cells`` (:func:`locate_points`).
+
+    Raises:
+        RunError: collectively, when the initial state is out of balance.
+    """
+    scene = problem.scene
+    with timings.phase("compile"):
+        problem.compile()
+    run = StagedRun(problem, say)
+    try:
+        with timings.phase("assemble"):
+            balance = run.check()
+        if scene.initial_stress is not None:
+            say(
+                f"initial stress ({scene.initial_stress.kind}): out of balance "
+                f"{balance:.2e} of the applied force (tolerance {TOLERANCE:g})"
+            )
+        if scene.initial_stress is not None and balance > TOLERANCE:
+            raise RunError(refusal(balance))
+        results: dict[str, Any] = {}
+        if scene.initial_stress is not None:
+            results["initial_stress"] = {"out_of_balance": balance, "tolerance": TOLERANCE}
+        frames, entries = [], []
+        with timings.phase("solve"):
+            run.initial_step()
+        entries.append(_record(run, 0, "initial", probes=probes))
+        write = scene.output.xdmf
+        if write:
+            frames.append(run.frame(0, "initial"))
+        say(
+            f"stage 0/{len(scene.stages)} 'initial': max |u| = {entries[0]['max_displacement']:.4g}"
+        )
+        for k, stage in enumerate(scene.stages, start=1):
+            with timings.phase("stages"):
+                start = MPI.Wtime()
+                if stage.remove:
+                    run.remove(stage.remove)
+                share = run.apply(stage.relaxation)
+                entry = _record(run, k, stage.name, probes=probes)
+                seconds = run.comm.allreduce(MPI.Wtime() - start, op=MPI.MAX)
+            entry |= {"removed": list(stage.remove), "share": share, "released": run.share}
+            entries.append(entry)
+            if write:
+                frames.append(run.frame(k, stage.name))
+            removed = f"removed {', '.join(stage.remove)}; " if stage.remove else ""
+            say(
+                f"stage {k}/{len(scene.stages)} '{stage.name}': {removed}share {share:.3g} "
+                f"(released {run.share:.3g}), max |u| = {entry['max_displacement']:.4g}, "
+                f"out of balance {entry['out_of_balance']:.1e} ({format_seconds(seconds)})"
+            )
+        results["stages"] = entries
+        return StagedResults(results, frames)
+    finally:
+        run.destroy()
+
+
+def initial_balance(problem: ElasticProblem) -> float:
+    """The initial state's out-of-balance ratio of :meth:`StagedRun.check` (collective)."""
+    problem.compile()
+    run = StagedRun(problem, lambda _: None)
+    try:
+        return run.check()
+    finally:
+        run.destroy()
