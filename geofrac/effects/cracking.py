@@ -41,7 +41,8 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
   (displacement control), or a ``[[load]]`` group of type traction, pressure or point
   (force control; a body force cannot). Default: the first ``[[bc]]`` with a non-zero
   value, else the first such ``[[load]]``. Every load and prescribed displacement of the
-  scene scales with r either way (docs/cracking.md, "Loads that drive the events").
+  scene scales with r either way, except those named in ``constant``
+  (docs/cracking.md, "Loads that drive the events").
 - ``control_point``: ``[x, y]``, force control only: report the displacement of the
   mesh node nearest to this point along the control load's resultant instead of the
   load's work-conjugate displacement.
@@ -79,6 +80,12 @@ across its faces that soften over a saw-tooth dissipating G_f per unit area, one
 without it every run is brittle as before.
 
 - ``teeth`` (10; with ``fracture_energy`` only): teeth N ≥ 2 of the saw-tooth.
+- ``constant`` ([]): ``[[load]]`` groups (traction, pressure, point; ``"body_force"``
+  for the body-force loads) and ``[[bc]]`` groups whose loads and prescribed
+  displacements stay at their full value through the run while the others (the
+  control group's among them) scale with the event's factor λ (DeJong, Hendriks and
+  Rots (2008); docs/cracking.md, "Loads that do not scale together"). Not the control
+  group; element edges only; not with ``contact`` or ``fracture_energy``.
 
 The event loop is :class:`geofrac.fracture.driver.CrackDriver`, composed of the edge or
 grain variant by the element's ``cracking`` mode; this module only validates, and is
@@ -153,6 +160,7 @@ KEYS = (
     "contact",
     *CONTACT_KEYS,
     "teeth",
+    "constant",
 )
 
 #: Keys of a ``[cracking.joints.NAME]`` table.
@@ -326,6 +334,58 @@ def _control(table: dict[str, Any], ctx: ConfigureContext) -> tuple[str, str]:
         "cracking.control",
         f"must name {either}" + did_you_mean(control, [*bc_groups, *forces]),
     )
+
+
+def _constant(
+    table: dict[str, Any], ctx: ConfigureContext, control: str, refused: str | None
+) -> tuple[str, ...]:
+    """``constant``: the groups whose loads and displacements stay at their full value.
+
+    Each must be a ``[[bc]]`` group or the group of a traction, pressure or point
+    ``[[load]]``, or ``"body_force"`` (the body-force loads); not the control group.
+    ``refused``: why the scene cannot take constant loads (contact, cohesive faces,
+    grain interfaces), or None.
+    """
+    file = ctx.file
+    groups = table.get("constant", [])
+    if not isinstance(groups, list) or not all(isinstance(g, str) for g in groups):
+        raise SceneError(
+            file, "cracking.constant", f"must be a list of group names, got {short(groups)}"
+        )
+    if not groups:
+        return ()
+    if refused is not None:
+        raise SceneError(file, "cracking.constant", refused)
+    bc_groups = [bc.group for bc in ctx.bcs]
+    load_groups = [ld.group for ld in ctx.loads if ld.type in FORCE_LOADS]
+    known = [*bc_groups, *load_groups]
+    if any(ld.type == "body_force" for ld in ctx.loads):
+        known.append("body_force")
+    for g in groups:
+        if g == control:
+            raise SceneError(
+                file,
+                "cracking.constant",
+                f"'{g}' is the control group (cracking.control), whose load each event "
+                "scales: it cannot be constant",
+            )
+        if g == "gravity":
+            raise SceneError(
+                file,
+                "cracking.constant",
+                "'gravity': the gravity effect's load cannot be held constant yet (it is "
+                "not a [[load]]); use a body_force [[load]] and name 'body_force'",
+            )
+        if g not in known:
+            raise SceneError(
+                file,
+                "cracking.constant",
+                f"'{g}' has no [[bc]] and no traction, pressure, point or body_force "
+                "[[load]]" + did_you_mean(g, known),
+            )
+    if len(set(groups)) != len(groups):
+        raise SceneError(file, "cracking.constant", f"names a group twice: {short(groups)}")
+    return tuple(groups)
 
 
 def _control_point(table: dict[str, Any], file: str, kind: str) -> tuple[float, float] | None:
@@ -519,6 +579,14 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "'reuse' (CG) does not take the cohesive faces' springs (they use the "
             "contact machinery): use 'update' or 'refactor' with fracture_energy",
         )
+    refused = None
+    if contact["contact"]:
+        refused = "crack-face contact (cracking.contact) does not take constant loads yet"
+    elif gf is not None:
+        refused = "cohesive faces (material.fracture_energy) do not take constant loads yet"
+    elif spec.cracking != "edges":
+        refused = f"applies to elements cracked at edges, not '{ctx.element}'"
+    constant = _constant(table, ctx, control, refused)
     return CrackingConfig(
         method=method,
         max_events=max_events,
@@ -549,6 +617,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         shear_friction_angle=float(getattr(ctx.material, "friction_angle", 0.0)),
         fracture_energy=None if gf is None else float(gf),
         teeth=_number(table, file, "teeth", 10, int, 2),
+        constant=constant,
         **contact,
     )
 

@@ -4,7 +4,8 @@ Pure numpy modules: :mod:`~geofrac.fracture.topology`, :mod:`~geofrac.fracture.v
 :mod:`~geofrac.fracture.cells`, :mod:`~geofrac.fracture.state`,
 :mod:`~geofrac.fracture.grains`, :mod:`~geofrac.fracture.criterion`,
 :mod:`~geofrac.fracture.direction`,
-:mod:`~geofrac.fracture.woodbury`. The driver (:mod:`~geofrac.fracture.driver`) composes
+:mod:`~geofrac.fracture.woodbury`, :mod:`~geofrac.fracture.nonprop`. The driver
+(:mod:`~geofrac.fracture.driver`) composes
 parts behind protocols: :mod:`~geofrac.fracture.units` (the crack state's
 discretisation), :mod:`~geofrac.fracture.event_criterion`,
 :mod:`~geofrac.fracture.linear` (solver strategies, with
@@ -14,7 +15,9 @@ over its parts :mod:`~geofrac.fracture.equilibrium` (solve),
 :mod:`~geofrac.fracture.modes` (choose), :mod:`~geofrac.fracture.crack_update` (crack,
 update), :mod:`~geofrac.fracture.record`, :mod:`~geofrac.fracture.replay` (checkpoints)
 and :mod:`~geofrac.fracture.summary` (results); the grain variant is
-:mod:`~geofrac.fracture.grain_driver`.
+:mod:`~geofrac.fracture.grain_driver`. Loads that stay constant while the others scale
+(``cracking.constant``): :mod:`~geofrac.fracture.constant` and
+:mod:`~geofrac.fracture.constant_loop`.
 """
 
 __all__ = ["CRITERION_NAMES", "SOLVERS"]

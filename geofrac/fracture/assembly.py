@@ -9,6 +9,7 @@ cracks and the DOFs pinned to stop a supported piece's free rigid motion.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -31,7 +32,23 @@ from geofrac.solvers import (
 if TYPE_CHECKING:
     from geofrac.fracture.faces import Faces
 
-__all__ = ["Assembler"]
+__all__ = ["Assembler", "LoadCase"]
+
+
+@dataclass(frozen=True)
+class LoadCase:
+    """A right-hand side of the crack state's system other than the scene's whole load.
+
+    Attributes:
+        load: the load vector on the unknowns, without Dirichlet conditions (the
+            caller owns and destroys it).
+        bc_vals: the values of the Dirichlet DOFs ``ctx.bc_rows``, shape=(k,).
+        bc_full: the same on all DOFs (0 elsewhere), shape=(n_global,).
+    """
+
+    load: Vector
+    bc_vals: np.ndarray
+    bc_full: np.ndarray
 
 
 class Assembler:
@@ -55,16 +72,30 @@ class Assembler:
         self.pinned_dofs = np.zeros(0, dtype=np.int64)
         self.pinned_nodes = np.zeros(0, dtype=np.int64)
         self._b0: Vector | None = None
+        #: the right-hand side :meth:`assemble` uses by default: None, the scene's loads
+        #: and prescribed displacements as given; a :class:`LoadCase` (the variable part
+        #: of a run with constant loads, docs/cracking.md "Loads that do not scale
+        #: together").
+        self.case: LoadCase | None = None
         #: crack-face contact (:class:`~geofrac.fracture.faces.Faces`), or None.
         self.contact = contact
 
-    def assemble(self, held_values: np.ndarray) -> tuple[Matrix, Vector, np.ndarray]:
+    @property
+    def bc_full(self) -> np.ndarray:
+        """The prescribed values of the default right-hand side on all DOFs, shape=(n_global,)."""
+        return self.ctx.bc_full if self.case is None else self.case.bc_full
+
+    def assemble(
+        self, held_values: np.ndarray, case: LoadCase | None = None
+    ) -> tuple[Matrix, Vector, np.ndarray]:
         """Stiffness and load vector of the current crack state; returns (A, b, held DOFs).
 
         Dirichlet DOFs and held DOFs (no stiffness, or in a cut-free fragment) are
         applied with ``MatZeroRowsColumns``; held DOFs keep ``held_values``,
-        shape=(n_global,). The caller destroys A and b.
+        shape=(n_global,). The right-hand side is ``case``'s, else :attr:`case`'s, else
+        the scene's. The caller destroys A and b.
         """
+        case = self.case if case is None else case
         ctx, units = self.ctx, self.units
         state = units.state
         is_mls = state.is_mls()
@@ -92,11 +123,15 @@ class Assembler:
         used[ctx.bc_rows] = True
         held = np.flatnonzero(~used)
         fixed = np.concatenate([ctx.bc_rows, held])
-        values = np.concatenate([ctx.bc_vals, held_values[held]])
+        bc_vals = ctx.bc_vals if case is None else case.bc_vals
+        values = np.concatenate([bc_vals, held_values[held]])
         mine = (fixed >= ctx.row0) & (fixed < ctx.row0 + ctx.n_local)
-        if self._b0 is None:
-            self._b0 = ctx.problem.load_vector()
-        b = self._b0.copy()
+        if case is not None:
+            b = case.load.copy()
+        else:
+            if self._b0 is None:
+                self._b0 = ctx.problem.load_vector()
+            b = self._b0.copy()
         zero_rows_columns(A, fixed[mine], values[mine], b=b)
         return A, b, held
 

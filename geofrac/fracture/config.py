@@ -79,6 +79,10 @@ class CrackingConfig:
     fracture_energy: float | None = None
     #: teeth of the saw-tooth (with ``fracture_energy``).
     teeth: int = 10
+    #: ``[[load]]`` and ``[[bc]]`` groups (``"body_force"``: the body-force loads) whose
+    #: loads and prescribed displacements stay at their full value while the others
+    #: scale (docs/cracking.md, "Loads that do not scale together"); () scales all.
+    constant: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -50,7 +50,7 @@ from geofrac.fracture.context import (
 )
 from geofrac.fracture.crack_update import CrackUpdate
 from geofrac.fracture.equilibrium import ContactEquilibrium, Equilibrium, LinearEquilibrium
-from geofrac.fracture.event_criterion import CRITERIA, EventCriterion
+from geofrac.fracture.event_criterion import CRITERIA, EdgeCriterion, EventCriterion
 from geofrac.fracture.faces import Faces, Softening, joint_properties
 from geofrac.fracture.linear import SolverStrategy, Timing, make_strategy
 from geofrac.fracture.loop import EventLoop, LoopParts
@@ -106,7 +106,9 @@ class EdgeVariant:
             ctx,
             mls=mls_settings(cfg),
             cut=cfg.contact or cfg.criterion != "principal",
-            keep_stress=cfg.shear_cohesion is not None or CRITERIA[cfg.criterion].needs_stress,
+            keep_stress=cfg.shear_cohesion is not None
+            or CRITERIA[cfg.criterion].needs_stress
+            or bool(cfg.constant),
         )
 
     def criterion(self, ctx: CrackContext, units: Units) -> EventCriterion:
@@ -209,17 +211,36 @@ class CrackDriver:
         self.timing = Timing()
         self.strategy: SolverStrategy = make_strategy(ctx, self.assembler, self.timing)
         self.drawing: SiteDrawing = variant.drawing(ctx, self.units, self.sites)
-        self.loop = EventLoop(
-            ctx,
-            self._parts(write=write),
+        settings = LoopSettings(
+            max_events=config.max_events,
+            output_every=config.output_every,
+            energy_drop=config.energy_drop,
+            contact=config.contact,
+        )
+        parts = self._parts(write=write)
+        self.loop: EventLoop
+        if config.constant:  # loads that do not scale together
+            self.loop = self._constant_loop(parts, settings)
+        else:
+            self.loop = EventLoop(ctx, parts, self.sites, settings=settings, control=self.control)
+
+    def _constant_loop(self, parts: LoopParts, settings: LoopSettings) -> EventLoop:
+        """The loop of a run with ``cracking.constant`` (two right-hand sides per event)."""
+        from geofrac.fracture.constant import ConstantChooser, constant_load
+        from geofrac.fracture.constant_loop import ConstantEventLoop
+
+        if not isinstance(self.units, EdgeUnits) or not isinstance(self.criterion, EdgeCriterion):
+            raise RunError("cracking.constant: element edges only (not grain interfaces)")
+        load = constant_load(self.ctx, self.config)
+        self.assembler.case = load.variable
+        return ConstantEventLoop(
+            self.ctx,
+            parts,
             self.sites,
-            settings=LoopSettings(
-                max_events=config.max_events,
-                output_every=config.output_every,
-                energy_drop=config.energy_drop,
-                contact=config.contact,
-            ),
+            settings=settings,
             control=self.control,
+            load=load,
+            chooser=ConstantChooser(self.criterion, self.units, self.config),
         )
 
     def _parts(self, *, write: bool) -> LoopParts:

@@ -17,6 +17,7 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 import dolfinx
 import numpy as np
 
+from geofrac.fracture.assembly import LoadCase
 from geofrac.fracture.faces import Faces
 from geofrac.fracture.incremental import Gather
 from geofrac.fracture.linear import SolverStrategy
@@ -102,6 +103,23 @@ class LinearEquilibrium:
     def settle(self, solved: Solved) -> Solved:
         """Nothing to settle: ``solved`` itself."""
         return solved
+
+    def solve_again(self, u_prev: np.ndarray, case: LoadCase) -> np.ndarray:
+        """Another right-hand side of the state just solved (constant loads; collective).
+
+        The work vector starts from ``u_prev`` (CG's guess; held DOFs keep it) and holds
+        the last :meth:`solve`'s solution again afterwards (the next guess of that one).
+        """
+        assert self._work is not None and self.gather is not None
+        x = self._work.x.petsc_vec
+        r0, r1 = x.getOwnershipRange()
+        keep = x.copy()
+        try:
+            x.setArray(u_prev[r0:r1])
+            return self.strategy.solve_again(u_prev, x, self.gather, case=case)
+        finally:
+            keep.copy(x)
+            keep.destroy()
 
     def destroy(self) -> None:
         """Free the gather."""

@@ -162,6 +162,14 @@ class EdgeCriterion(StatelessCriterion):
         """The edges of least r (:func:`next_sites`)."""
         return next_sites(self.state, self.config, sigma1, floor=floor, points=self.points)
 
+    def set_drive(self, drive: np.ndarray, cell_stress: np.ndarray) -> None:
+        """Take ``drive`` per edge as :meth:`site_stress` would have given it (constant loads).
+
+        ``drive``: the equivalent drive f_t/λ per edge (:mod:`~geofrac.fracture.nonprop`),
+        shape=(num_edges,); ``cell_stress``: the cells' stress at the event, per local
+        edge midpoint, shape=(num_cells, 3, 3).
+        """
+
 
 class TractionCriterion(EdgeCriterion):
     """The traction across each edge, n·σ·n, with σ the mean of its cells' at the midpoint.
@@ -185,6 +193,10 @@ class TractionCriterion(EdgeCriterion):
         """n·σ·n per edge, shape=(num_edges,)."""
         self.edge_stress = edge_means(self.state.mesh, self.units.midpoint_stress)
         return normal_stress(self.edge_stress, self.normals)
+
+    def set_drive(self, drive: np.ndarray, cell_stress: np.ndarray) -> None:
+        """Keep the edges' mean of ``cell_stress`` (see :meth:`EdgeCriterion.set_drive`)."""
+        self.edge_stress = edge_means(self.state.mesh, cell_stress)
 
 
 class DirectionCriterion(TractionCriterion):
@@ -220,6 +232,12 @@ class DirectionCriterion(TractionCriterion):
         self._s1 = edge_principal(self.state.mesh, unit_s1)
         self.edge_stress = edge_means(self.state.mesh, self.units.midpoint_stress)
         return self._s1
+
+    def set_drive(self, drive: np.ndarray, cell_stress: np.ndarray) -> None:
+        """The drive of new cracks and tips' zones, the stress of their directions."""
+        super().set_drive(drive, cell_stress)
+        self._s1 = drive
+        self._grown = {}
 
     def select(self, sigma1: np.ndarray, *, floor: float) -> tuple[np.ndarray, float]:
         """The edges of least r once the tips' zones have chosen their edges.

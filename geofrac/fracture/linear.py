@@ -29,7 +29,7 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 import numpy as np
 
 from geofrac.errors import RunError
-from geofrac.fracture.assembly import Assembler
+from geofrac.fracture.assembly import Assembler, LoadCase
 from geofrac.fracture.context import CrackContext
 from geofrac.fracture.incremental import Gather, IncrementalSolver, Stale
 from geofrac.fracture.units import Block, Fit
@@ -85,6 +85,17 @@ class SolverStrategy(Protocol):
 
     def solve_system(self, A: Matrix, b: Vector, x: Vector) -> int:
         """Solve one assembled system A x = b; returns CG iterations (0: direct)."""
+        ...
+
+    def solve_again(
+        self, u_prev: np.ndarray, x: Vector, gather: Gather, *, case: LoadCase
+    ) -> np.ndarray:
+        """The solution of another right-hand side ``case`` of the state just solved.
+
+        Called after :meth:`solve`, before any change: the same matrix, held DOFs and
+        factorisation; held DOFs keep ``u_prev``, shape=(n_global,). Returns the
+        solution on every rank, shape=(n_global,). Collective.
+        """
         ...
 
     def changed(self, units: np.ndarray) -> None:
@@ -159,6 +170,29 @@ class RefactorSolver:
         self.timing.add("solve", t)
         return u, its
 
+    def solve_again(
+        self, u_prev: np.ndarray, x: Vector, gather: Gather, *, case: LoadCase
+    ) -> np.ndarray:
+        """Assemble ``case``'s right-hand side and solve it with the current factorisation."""
+        t = time.perf_counter()
+        A, b, _ = self.assembler.assemble(u_prev, case)
+        t = self.timing.add("assemble", t)
+        try:
+            self._again(A, b, x)
+        finally:
+            A.destroy()
+            b.destroy()
+        u = gather(x)
+        self.timing.add("solve", t)
+        return u
+
+    def _again(self, A: Matrix, b: Vector, x: Vector) -> None:
+        """Solve A x = b with the factorisation of the last :meth:`solve` (A: its matrix)."""
+        if self.solver is None:  # no factorisation kept: make one
+            self.solve_system(A, b, x)
+        else:
+            self.solver.solve(b, x)
+
     def changed(self, units: np.ndarray) -> None:
         """Nothing to note: every event assembles afresh."""
 
@@ -208,6 +242,10 @@ class ReuseSolver(RefactorSolver):
             if iterations is not None:
                 return iterations
         return super().solve_system(A, b, x)
+
+    def _again(self, A: Matrix, b: Vector, x: Vector) -> None:
+        """CG preconditioned by the factorisation, from the guess in ``x``."""
+        self.timing.iterations += self.solve_system(A, b, x)
 
     def _free(self) -> None:
         """Free the factorisation and the CG solver."""
@@ -277,6 +315,36 @@ class UpdateSolver(RefactorSolver):
                 self._drop_reference(exc)
         return self._new_reference(u_prev, x, gather), 0
 
+    def solve_again(
+        self, u_prev: np.ndarray, x: Vector, gather: Gather, *, case: LoadCase
+    ) -> np.ndarray:
+        """``case``'s right-hand side, assembled, solved by the corrected reference.
+
+        The current system's matrix is the reference's corrected by the changes applied
+        in :meth:`solve` (:meth:`~geofrac.fracture.incremental.IncrementalSolver.solve_rhs`);
+        a reference that misses the residual check for it is replaced and both
+        right-hand sides are solved again by the caller (:class:`Stale` is not raised
+        here: the new reference solves this one directly).
+        """
+        t = time.perf_counter()
+        A, b, _ = self.assembler.assemble(u_prev, case)
+        t = self.timing.add("assemble", t)
+        try:
+            if self.inc is not None:
+                try:
+                    u = self.inc.solve_rhs(b, x)
+                    self.timing.add("solve", t)
+                    return u
+                except Stale as exc:
+                    self._drop_reference(exc)
+            self._refactor(A).solve(b, x)
+        finally:
+            A.destroy()
+            b.destroy()
+        u = gather(x)
+        self.timing.add("solve", t)
+        return u
+
     def _new_reference(self, u_prev: np.ndarray, x: Vector, gather: Gather) -> np.ndarray:
         """Assemble, factorise and solve the current state; it becomes the reference."""
         ctx, assembler = self.ctx, self.assembler
@@ -296,7 +364,7 @@ class UpdateSolver(RefactorSolver):
                     b,
                     fixed=fixed,
                     bc_mask=bc,
-                    bc_values=ctx.bc_full,
+                    bc_values=assembler.bc_full,
                     solver=solver,
                     x=x,
                     gather=gather,

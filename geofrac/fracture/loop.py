@@ -292,7 +292,7 @@ class EventLoop:
         """Frame, row and progress of a computed event; checkpoint, stop; False: the end."""
         cfg, output, timing, r = self.settings, self.parts.output, self.parts.timing, row["r"]
         if event % cfg.output_every == 0 or event == 1:
-            output.frame(event, r * run.u_unit, self._edge_data(r))
+            output.frame(event, self._state(run, r), self._edge_data(r))
         output.row(row)  # flushed: a killed run keeps every completed event
         if event % max(1, cfg.max_events // 20) == 0:
             rate = (event - run.first + 1) / (time.perf_counter() - run.started)
@@ -372,8 +372,10 @@ class EventLoop:
             # the final pattern; it replaces a frame already written for this event, so
             # each time appears once in the series
             r_last = rows[-1]["load_factor"]
-            parts.output.frame(int(rows[-1]["event"]), r_last * u_unit, self._edge_data(r_last))
-        self._finish_field(unknown, rows[-1]["load_factor"] * u_unit if rows else u_unit)
+            parts.output.frame(
+                int(rows[-1]["event"]), self._state(run, r_last), self._edge_data(r_last)
+            )
+        self._finish_field(unknown, self._state(run, rows[-1]["load_factor"]) if rows else u_unit)
         self.rows = rows
         parts.output.finish(rows, self.modes, parts.summary.slipping())
         self.destroy()
@@ -398,6 +400,10 @@ class EventLoop:
             + ("" if run.detail is None else f" ({run.detail})")
         )
         return results
+
+    def _state(self, run: _Run, r: float) -> np.ndarray:
+        """The displacement at load factor ``r`` of the last solve, shape=(n_global,)."""
+        return r * run.u_unit
 
     def _edge_data(self, r: float) -> dict[str, np.ndarray]:
         return self.parts.record.edge_data(r, self.modes)
