@@ -35,23 +35,30 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.fem.insitu import in_plane, stress_field
+from geofrac.fem.solution import Solution
 from geofrac.fem.stages import TOLERANCE, refusal
 from geofrac.fracture.cells import MIDPOINTS, strain_operator
-from geofrac.fracture.config import LoopSettings
+from geofrac.fracture.config import CrackingConfig, LoopSettings
 from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_load
 from geofrac.fracture.constant_loop import ConstantEventLoop
-from geofrac.fracture.context import CrackContext, JsonValue, Sites
+from geofrac.fracture.context import CrackContext, JsonValue, Sites, crack_context
 from geofrac.fracture.equilibrium import Solved
 from geofrac.fracture.event_criterion import EdgeCriterion
 from geofrac.fracture.loop import LoopParts, _Run
-from geofrac.fracture.units import GAUSS_6, EdgeUnits
+from geofrac.fracture.units import GAUSS_6, EdgeUnits, mls_settings
 from geofrac.geometry.insitu import column_weight, evaluate, surface_height
 from geofrac.io.checkpoint import RunControl
 from geofrac.mls.shape import LinearFit, strain_matrix
 from geofrac.solvers import Vector, assemble_vector
 from geofrac_forms import elasticity as forms
 
-__all__ = ["InitialStressLoad", "InsituEventLoop", "initial_stress_at", "insitu_loop"]
+__all__ = [
+    "InitialStressLoad",
+    "InsituEventLoop",
+    "initial_balance",
+    "initial_stress_at",
+    "insitu_loop",
+]
 
 
 def _cell_regions(ctx: CrackContext) -> np.ndarray:
@@ -292,3 +299,16 @@ def insitu_loop(
         chooser=ConstantChooser(criterion, units, ctx.config),
         insitu=insitu,
     )
+
+
+def initial_balance(config: object, solution: Solution) -> float:
+    """The intact state's out-of-balance ratio of :class:`InitialStressLoad` (collective).
+
+    What ``geofrac check`` reports for a cracking scene: the crack driver's own cell
+    operators (the RGNT/GNT vertex DOFs included), no solve. ``config``: the
+    validated ``[cracking]`` settings (a :class:`CrackingConfig`).
+    """
+    assert isinstance(config, CrackingConfig)
+    ctx = crack_context(config, solution, lambda _: None)
+    units = EdgeUnits(ctx, mls=mls_settings(config), cut=False, keep_stress=False)
+    return InitialStressLoad(ctx, units).balance

@@ -107,6 +107,24 @@ def test_layered_geostatic_state_is_in_balance_with_the_crack_cells(element):
     assert row["load_factor"] > 0.0 and row["y"] > 4.0  # the top layer (y ≤ 5)
 
 
+def test_check_reports_the_crack_cells_balance():
+    """``geofrac check``'s number for a cracking scene is the crack driver's (RGNT too)."""
+    from geofrac.runner import initial_balance
+
+    sets = [
+        'effects=["gravity", "cracking"]',
+        "discretization.element=rgnt",
+        'output.probe_fields=["displacement"]',
+        "material.tensile_strength=1e4",
+        "bc.2.value=[1e-5]",
+        "cracking.control=right",
+    ]
+    scene = load_scene_collective(MPI.COMM_SELF, LAYERS, sets)
+    assert initial_balance(scene, MPI.COMM_SELF) < 1e-12
+    unloaded = load_scene_collective(MPI.COMM_SELF, LAYERS, [*sets, "initial_stress.loaded=[]"])
+    assert initial_balance(unloaded, MPI.COMM_SELF) > 1e-3  # the cover's weight is missing
+
+
 def test_initial_state_out_of_balance_is_refused():
     with pytest.raises(RunError, match="out of balance"):
         run(INSITU, 'initial_stress.loaded=["right"]')
