@@ -45,6 +45,7 @@ from geofrac.fracture.context import CrackContext, JsonValue, Sites, crack_conte
 from geofrac.fracture.equilibrium import Solved
 from geofrac.fracture.event_criterion import EdgeCriterion
 from geofrac.fracture.loop import LoopParts, _Run
+from geofrac.fracture.modes import Choice
 from geofrac.fracture.units import GAUSS_6, EdgeUnits, mls_settings
 from geofrac.geometry.insitu import column_weight, evaluate, surface_height
 from geofrac.io.checkpoint import RunControl
@@ -233,12 +234,29 @@ class InsituEventLoop(ConstantEventLoop):
         #: the constant groups' loads (owned entries), shape=(n_local,).
         self.named = np.array(load.constant.load.getArray(readonly=True), dtype=float)
         self._rows = slice(lo, hi)
+        self._sigma0_reaction = 0.0
 
     def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
         """Reassemble F0 on the current crack state, then solve both loads."""
         force = self.insitu.force()
         self.load.constant.load.setArray(self.named + force[self._rows])
+        # the control DOFs' share of I(σ0) that cracks moved: −(F0 − F0 of the intact mesh)
+        sign = self.ctx.control_sign[:-1]
+        self._sigma0_reaction = -float(sign @ (force - self.insitu.base))
         return super()._solve(run, event, replay=replay)
+
+    def _choose(self, run: _Run, event: int) -> Choice | None:
+        """The constant load's reaction, relative to the initial state, includes σ0's change.
+
+        Under displacement control the reaction is I(σ) − I(σ0 on the intact mesh) on the
+        control DOFs: the cells' K u plus I(σ0) on the current crack state minus on the
+        intact mesh (an MLS fit that reaches a control node carries σ0 there).
+        """
+        choice = super()._choose(run, event)
+        if self.ctx.control.kind == "displacement":
+            energy, disp, force, cross = self._const
+            self._const = (energy, disp, force + self._sigma0_reaction, cross)
+        return choice
 
     def _finish(self, run: _Run, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
         """The results, with ``initial_stress``: its kind and the intact state's balance."""

@@ -10,6 +10,8 @@
 - A hydrostatic σ0 = −p on the beam of scenes/beam_axial.toml (RGNT): σ1(−p I + λ σ_v)
   = −p + λ σ1(σ_v), so the first crack's factor is exactly λ_0 (1 + p/f_t).
 - σ0 = 0 repeats the run without an initial stress, bit for bit.
+- Under displacement control the reaction is relative to the initial state: the total
+  one of the same physics posed by constant loads, minus σ_xx0 × height × t.
 - A layered geostatic state under gravity (tests/fem/layers.toml) is in balance with
   the crack driver's own cell operators to round-off (CST, RGNT).
 - An initial state out of balance, contact, grain interfaces and a scene without a
@@ -66,6 +68,51 @@ def test_hydrostatic_initial_stress_raises_the_first_crack_by_p_over_ft():
         assert row["edge"] == base.rows[0]["edge"] and row["mode"] == "tension"
         assert row["load_factor"] == pytest.approx(lam0 * (1.0 + p), rel=1e-12)
         assert res["initial_stress"]["out_of_balance"] < 1e-12
+
+
+def _held_right(name: str, tmp: Path) -> Path:
+    """``name`` with its right side held in x by a [[bc]] (prescribed 0.01: the control)."""
+    bc = '[[bc]]\ngroup = "right"\ncomponents = ["x"]\nvalue = [0.01]\n\n[[load]]'
+    text = (SCENES / name).read_text().replace("../../../meshes", str(SCENES.parents[2] / "meshes"))
+    path = tmp / name
+    path.write_text(text.replace("[[load]]", bc, 1))
+    return path
+
+
+def test_reaction_is_relative_to_the_initial_state(tmp_path):
+    """Displacement control on the held right side; MLS cells next to it from the start.
+
+    The plate confined by a constant top traction −2 with its left and right sides held
+    carries σ = (ν (−2), −2, 0) = (−0.5, −2, 0) (plane stress, ε_xx = 0); the same
+    plate given that state as σ0 (top `loaded`) is the same physics, so the events agree
+    and its reaction, relative to the initial state, is the total one minus the initial
+    state's, σ_xx0 × height × t = −0.5 × 5 × 2 = −5. The MLS cells of ``mls_region``
+    reach the control nodes: their share of I(σ0) differs from the element cells'
+    (without it the difference drifts from −4.4 to −9.7 over the events).
+    """
+    common = (
+        "cracking.mls_region=[2.9, -0.1, 5.1, 5.1]",
+        "cracking.control=right",
+        "load.0.value=[0.0, 0.0]",
+        "cracking.max_events=8",
+    )
+    total, _ = run(
+        _held_right("plate_confined.toml", tmp_path),
+        *common,
+        "load.1.value=[0.0, 0.0]",
+        'cracking.constant=["top"]',
+    )
+    relative, _ = run(
+        _held_right("plate_insitu.toml", tmp_path),
+        *common,
+        'initial_stress.loaded=["top"]',
+        "initial_stress.stress=[-0.5, -2.0, 0.0]",
+    )
+    assert len(total.rows) == len(relative.rows) == 8
+    assert [r["edge"] for r in relative.rows] == [r["edge"] for r in total.rows]
+    for a, b in zip(total.rows, relative.rows, strict=True):
+        assert b["load_factor"] == pytest.approx(a["load_factor"], rel=1e-9)
+        assert a["reaction"] - b["reaction"] == pytest.approx(-5.0, rel=1e-9)
 
 
 @pytest.mark.parametrize("criterion", ["principal", "direction"])
