@@ -51,9 +51,15 @@ def test_initial_stress_and_constant_tractions_give_the_same_events():
     assert res["constant"] == {"groups": [], "overstressed_at_start": 0, "cracked_at_zero": 0}
 
 
-def test_hydrostatic_initial_stress_raises_the_first_crack_by_p_over_ft():
-    """RGNT beam: λ_p = (f_t + p)/D_v = λ_0 (1 + p/f_t) (f_t = 1), same site."""
-    sets = ("discretization.element=rgnt", "cracking.max_events=1", "cracking.constant=[]")
+@pytest.mark.parametrize("element", ["rgnt", "gnt"])
+def test_hydrostatic_initial_stress_raises_the_first_crack_by_p_over_ft(element):
+    """RGNT and GNT beams: λ_p = (f_t + p)/D_v = λ_0 (1 + p/f_t) (f_t = 1), same site."""
+    sets = (
+        f"discretization.element={element}",
+        "discretization.gradient_bc=fixed",  # GNT's held lines (docs/elements.md)
+        "cracking.max_events=1",
+        "cracking.constant=[]",
+    )
     base, _ = run(BEAM, *sets)
     lam0 = base.rows[0]["load_factor"]
     for p in (0.5, 2.0):
