@@ -200,6 +200,12 @@ def initial_balance(scene: Scene, comm: MPI.Comm) -> float:
         tagged, element, scene, terms=effect_registry.linear_terms(scene.effects)
     )
     try:
+        driven = effect_registry.driven(scene.effects)
+        if driven is not None and driven.name == "cracking":  # the crack cells' operators
+            from geofrac.fracture.insitu import initial_balance as crack_balance
+
+            problem.compile()
+            return crack_balance(driven.config, Solution(scene, tagged, problem))
         return balance(problem)
     finally:
         problem.destroy()

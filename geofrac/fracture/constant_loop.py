@@ -78,10 +78,11 @@ class ConstantEventLoop(EventLoop):
                 "--resume: a run with cracking.constant cannot be resumed yet (its "
                 "checkpoints keep the variable load's solution only); run it again"
             )
-        self.ctx.say(
-            f"cracking: constant loads on {', '.join(self.load.groups)}; the other loads "
-            "and prescribed displacements scale with λ"
-        )
+        if self.load.groups:  # (an initial stress alone has none)
+            self.ctx.say(
+                f"cracking: constant loads on {', '.join(self.load.groups)}; the other loads "
+                "and prescribed displacements scale with λ"
+            )
         return super().run(unknown)
 
     def _event(self, run: _Run, event: int) -> bool:

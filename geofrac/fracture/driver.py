@@ -108,7 +108,8 @@ class EdgeVariant:
             cut=cfg.contact or cfg.criterion != "principal",
             keep_stress=cfg.shear_cohesion is not None
             or CRITERIA[cfg.criterion].needs_stress
-            or bool(cfg.constant),
+            or bool(cfg.constant)
+            or ctx.scene.initial_stress is not None,
         )
 
     def criterion(self, ctx: CrackContext, units: Units) -> EventCriterion:
@@ -219,7 +220,11 @@ class CrackDriver:
         )
         parts = self._parts(write=write)
         self.loop: EventLoop
-        if config.constant:  # loads that do not scale together
+        if ctx.scene.initial_stress is not None:  # σ0 joins the constant load
+            from geofrac.fracture.insitu import insitu_loop
+
+            self.loop = insitu_loop(ctx, parts, self.sites, settings=settings, control=self.control)
+        elif config.constant:  # loads that do not scale together
             self.loop = self._constant_loop(parts, settings)
         else:
             self.loop = EventLoop(ctx, parts, self.sites, settings=settings, control=self.control)

@@ -21,6 +21,7 @@ __all__ = [
     "MAX_K0",
     "STAGE_KEYS",
     "STAGE_MATERIAL_KEYS",
+    "cracking_variable",
     "initial_stress",
     "stages",
 ]
@@ -169,6 +170,69 @@ def _no_driver(file: Path, key: str, declared: Sequence[str]) -> None:
         )
 
 
+def _cracking(file: Path, element: str, specs: Sequence[EffectSpec[object]]) -> None:
+    """A cracking scene takes an initial stress at element edges, without contact (yet).
+
+    The initial stress joins the constant load of the event loop (docs/cracking.md,
+    "An initial stress"); the other effects that drive a run do not take it.
+    """
+    from geofrac.fracture.config import CrackingConfig
+
+    others = [s.name for s in specs if s.name != "cracking"]
+    _no_driver(file, "initial_stress", others)
+    spec = elements.get(element)
+    if spec.cracking != "edges":
+        able = [n for n, s in elements.REGISTRY.items() if s.cracking == "edges"]
+        raise SceneError(
+            file,
+            "initial_stress",
+            f"cracking with an initial stress needs an element cracked at its edges "
+            f"({', '.join(able)}); '{element}' cracks grain interfaces, which do not take "
+            "an initial stress yet",
+        )
+    config = effect_config(specs, "cracking", CrackingConfig)
+    assert config is not None
+    if config.contact:
+        raise SceneError(
+            file,
+            "initial_stress",
+            "crack-face contact (cracking.contact) does not start from an initial stress "
+            "yet: closed faces would have to carry σ0 from the start; remove one of them",
+        )
+    if config.fracture_energy is not None:
+        raise SceneError(
+            file,
+            "initial_stress",
+            "cohesive faces (material.fracture_energy) do not take an initial stress yet",
+        )
+
+
+def cracking_variable(
+    file: Path, declared: Sequence[str], *, bcs: Sequence[Any], loads: Sequence[Any]
+) -> None:
+    """A cracking scene with an initial stress needs a load that scales.
+
+    The initial stress (and gravity) stay constant through the events; each event scales
+    the control group's load, a non-zero prescribed displacement or a traction, pressure
+    or point load. Called before the effects are configured, so that the message names
+    the initial stress.
+    """
+    if "cracking" not in declared:
+        return
+    moving = any(bc.value == "exact" or any(v != 0 for v in bc.value) for bc in bcs)
+    forces = any(ld.type in ("traction", "pressure", "point") for ld in loads)
+    if not moving and not forces:
+        raise SceneError(
+            file,
+            "initial_stress",
+            "a cracking scene with an initial stress needs a variable load: the initial "
+            "stress (and gravity) is held constant and each event scales the control "
+            "group's load; add a [[bc]] with a non-zero displacement or a traction, "
+            "pressure or point [[load]] (an excavation's release, [[stages]], is not "
+            "available with cracking yet)",
+        )
+
+
 def initial_stress(
     file: Path,
     raw: Any,
@@ -185,8 +249,11 @@ def initial_stress(
     """
     t = Table(file, "initial_stress", raw, allowed=INITIAL_STRESS_KEYS)
     dim = geometry.dim
-    _element(file, "initial_stress", element)
-    _no_driver(file, "initial_stress", [s.name for s in specs])
+    if any(s.name == "cracking" for s in specs):
+        _cracking(file, element, specs)
+    else:
+        _element(file, "initial_stress", element)
+        _no_driver(file, "initial_stress", [s.name for s in specs])
     kind = t.string("kind", choices=KINDS)
     loaded = _loaded(t, geometry)
     tectonic = _tensor(t, "tectonic", dim) if t.has("tectonic") else None

@@ -50,6 +50,7 @@ from geofrac.model.table import (
 from geofrac.model.table import Table as _Table
 from geofrac.model.table import output_directory as _output_directory
 from geofrac.scene.insitu import INITIAL_STRESS_KEYS, STAGE_KEYS
+from geofrac.scene.insitu import cracking_variable as _cracking_variable
 from geofrac.scene.insitu import initial_stress as _initial_stress
 from geofrac.scene.insitu import stages as _stages
 from geofrac.scene.size import Extent, check_size, estimate
@@ -1136,6 +1137,8 @@ def _validate(
         trusted,
         next((e for e in declared if effects.drives(e)), None),
     )
+    if "initial_stress" in data:
+        _cracking_variable(file, declared, bcs=bcs, loads=loads)
     specs = _effects(
         file, data, declared, geometry, material, discretization, bcs, configured, loads
     )
