@@ -165,8 +165,14 @@ def _no_driver(file: Path, key: str, declared: Sequence[str]) -> None:
         raise SceneError(
             file,
             key,
-            f"effect '{owners[0]}' drives the run with its own loop, which does not start "
-            "from an initial stress or run stages yet; remove one of them",
+            f"effect '{owners[0]}' drives the run with its own loop, which "
+            + (
+                "does not run construction stages yet (a cracking scene takes an "
+                "[initial_stress] and a scaled load instead: docs/insitu.md)"
+                if key == "stages"
+                else "does not start from an initial stress yet"
+            )
+            + "; remove one of them",
         )
 
 
