@@ -141,6 +141,8 @@ class ElasticProblem:
         assert mat is not None and scene.discretization is not None  # a fem scene has both
         gdim = mesh.geometry.dim
         lam, mu = lame(mat.E, mat.nu, gdim, plane=mat.plane)
+        #: the scene material's shear modulus (``mu`` is per cell in a staged scene).
+        self.shear_modulus = float(mu)
         self.lam = dolfinx.fem.Constant(mesh, SCALAR(lam))
         self.mu = dolfinx.fem.Constant(mesh, SCALAR(mu))
         self.thickness = dolfinx.fem.Constant(mesh, SCALAR(mat.thickness if gdim == 2 else 1.0))
@@ -499,7 +501,7 @@ class GradientDofProblem(ElasticProblem):
         u, v = ufl.TrialFunction(element.space), ufl.TestFunction(element.space)
         assert scene.discretization is not None  # a fem scene has one
         alpha = scene.discretization.zero_mode_penalty
-        self.penalty_scale = dolfinx.fem.Constant(self.mesh, SCALAR(alpha * float(self.mu.value)))
+        self.penalty_scale = dolfinx.fem.Constant(self.mesh, SCALAR(alpha * self.shear_modulus))
         pen_vv, self._a_wv, self._a_ww = penalty_forms(
             u, v, g, h, element.kind.basis, self.penalty_scale * self.thickness, self.dx
         )
