@@ -131,7 +131,7 @@ def solve_scene(
             from geofrac.fem.stages import run_stages
 
             probes = {"names": names, "points": points, "cells": cells}
-            out = run_stages(problem, timings=timings, say=say, probes=probes)
+            out = run_stages(problem, timings=timings, say=say, probes=probes, control=control)
             staged, solution.frames = out.results, out.frames
         else:
             _solve_phases(problem, timings, say)

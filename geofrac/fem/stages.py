@@ -23,7 +23,7 @@ initial state, the stress is the total. The vectors, on the unknowns (thickness 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -34,12 +34,15 @@ import ufl
 from mpi4py import MPI
 
 from geofrac.errors import RunError
+from geofrac.fem import stage_checkpoint
 from geofrac.fem.elastic import PREFIX, ElasticProblem
 from geofrac.fem.insitu import InsituFields, cell_dofs, group_cells, in_plane
 from geofrac.fem.post import TENSOR_FIELDS, probe
+from geofrac.fem.stage_checkpoint import Frame
+from geofrac.io.checkpoint import RunControl
 from geofrac.log import format_seconds
 from geofrac.materials import lame
-from geofrac.model.scene import Material
+from geofrac.model.scene import Material, Stage
 from geofrac.solvers import (
     LinearSolver,
     Vector,
@@ -52,6 +55,7 @@ from geofrac.timing import Timings
 from geofrac_forms import elasticity as forms
 
 __all__ = [
+    "STATE_FIELDS",
     "TOLERANCE",
     "Frame",
     "StagedResults",
@@ -67,15 +71,8 @@ __all__ = [
 #: moves the body by 1e-6 of the load's displacements, below anything reported. A state
 #: that is not in equilibrium (K0 under a slope) is off by O(1).
 TOLERANCE = 1e-6
-
-
-@dataclass
-class Frame:
-    """One time step of ``results.xdmf``: a step's name and the fields written."""
-
-    index: int
-    name: str
-    functions: list[dolfinx.fem.Function] = field(default_factory=list)
+#: The staged fields a checkpoint saves (:class:`~geofrac.fem.insitu.InsituFields`).
+STATE_FIELDS = ("alive", "lam", "mu", "rho", "sigma0", "u_ref")
 
 
 class StagedRun:
@@ -331,6 +328,34 @@ class StagedRun:
         local = float(np.max(np.linalg.norm(u, axis=1), initial=0.0))
         return float(self.comm.allreduce(local, op=MPI.MAX))
 
+    def state(self) -> dict[str, np.ndarray]:
+        """This rank's arrays of the state (:mod:`geofrac.fem.stage_checkpoint`).
+
+        ``u`` and the staged fields (local, with ghosts), ``release`` (owned rows, when
+        a removal is pending).
+        """
+        arrays = {"u": self.problem.uh.x.array}
+        for name in STATE_FIELDS:
+            arrays[name] = getattr(self.insitu, name).x.array
+        if self.release is not None:
+            arrays["release"] = np.asarray(self.release.array_r).copy()
+        return arrays
+
+    def set_state(self, arrays: dict[str, np.ndarray], share: float) -> None:
+        """Put back a :meth:`state` and the applied ``share``; factorise (collective)."""
+        self.problem.uh.x.array[:] = arrays["u"]
+        self.problem.uh.x.scatter_forward()
+        for name in STATE_FIELDS:
+            f = getattr(self.insitu, name)
+            f.x.array[:] = arrays[name]
+            f.x.scatter_forward()
+        self._hold_orphans()
+        self._factor()
+        if "release" in arrays:
+            self.release = self._vector(self.residual, points=True)
+            self.release.array_w[:] = arrays["release"]
+        self.share = share
+
     def frame(self, index: int, name: str) -> Frame:
         """The fields of the current state for ``results.xdmf``."""
         problem = self.problem
@@ -395,6 +420,7 @@ def run_stages(
     timings: Timings,
     say: Callable[[str], None],
     probes: dict[str, Any],
+    control: RunControl | None = None,
 ) -> StagedResults:
     """Check the initial state, solve step 0 and every stage (collective).
 
@@ -403,9 +429,13 @@ def run_stages(
         timings: per-phase wall times.
         say: progress (rank 0).
         probes: ``names``, ``points`` shape=(n, 3), ``cells`` (:func:`locate_points`).
+        control: checkpoints and the stop signal, polled after step 0 and each stage
+            but the last (:mod:`geofrac.fem.stage_checkpoint`); with ``control.resume``
+            the run continues at the stage after the checkpoint's.
 
     Raises:
         RunError: collectively, when the initial state is out of balance.
+        Interrupted: after a signal, once the checkpoint is written.
     """
     scene = problem.scene
     with timings.phase("compile"):
@@ -424,43 +454,80 @@ def run_stages(
         results: dict[str, Any] = {}
         if scene.initial_stress is not None:
             results["initial_stress"] = {"out_of_balance": balance, "tolerance": TOLERANCE}
-        frames, entries = [], []
-        with timings.phase("solve"):
-            run.initial_step()
-        entries.append(_record(run, 0, "initial", probes=probes))
-        write = scene.output.xdmf
-        if write:
-            frames.append(run.frame(0, "initial"))
-        say(
-            f"stage 0/{len(scene.stages)} 'initial': max |u| = {entries[0]['max_displacement']:.4g}"
-        )
-        for k, stage in enumerate(scene.stages, start=1):
-            with timings.phase("stages"):
-                start = MPI.Wtime()
-                if stage.remove:
-                    run.remove(stage.remove)
-                if stage.add:
-                    assert stage.material is not None  # the loader requires one
-                    run.add(stage.add, stage.material)
-                share = run.apply(stage.relaxation)
-                entry = _record(run, k, stage.name, probes=probes)
-                seconds = run.comm.allreduce(MPI.Wtime() - start, op=MPI.MAX)
-            entry |= {"removed": list(stage.remove), "added": list(stage.add)}
-            entry |= {"share": share, "released": run.share}
-            entries.append(entry)
-            if write:
-                frames.append(run.frame(k, stage.name))
-            removed = f"removed {', '.join(stage.remove)}; " if stage.remove else ""
-            removed += f"added {', '.join(stage.add)}; " if stage.add else ""
+        resume = control.resume if control is not None else None
+        if resume is not None:
+            assert control is not None
+            control.check_resume()  # the same scene, loop and number of ranks
+            done, entries, frames = stage_checkpoint.restore(run, resume)
+            say(f"stages: resuming after step {done} of {len(scene.stages)} from {resume.path}")
+        else:
+            done, entries, frames = 0, [], []
+            with timings.phase("solve"):
+                run.initial_step()
+            entries.append(_record(run, 0, "initial", probes=probes))
+            if scene.output.xdmf:
+                frames.append(run.frame(0, "initial"))
             say(
-                f"stage {k}/{len(scene.stages)} '{stage.name}': {removed}share {share:.3g} "
-                f"(released {run.share:.3g}), max |u| = {entry['max_displacement']:.4g}, "
-                f"out of balance {entry['out_of_balance']:.1e} ({format_seconds(seconds)})"
+                f"stage 0/{len(scene.stages)} 'initial': "
+                f"max |u| = {entries[0]['max_displacement']:.4g}"
             )
+            _poll(run, control, 0, entries=entries, frames=frames)
+        for k, stage in enumerate(scene.stages, start=1):
+            if k <= done:
+                continue
+            entries.append(_stage(run, k, stage, timings=timings, probes=probes))
+            if scene.output.xdmf:
+                frames.append(run.frame(k, stage.name))
+            if k < len(scene.stages):
+                _poll(run, control, k, entries=entries, frames=frames)
         results["stages"] = entries
         return StagedResults(results, frames)
     finally:
         run.destroy()
+
+
+def _stage(
+    run: StagedRun, k: int, stage: Stage, *, timings: Timings, probes: dict[str, Any]
+) -> dict[str, Any]:
+    """Run stage ``k``: remove, add, apply its share; its summary row (collective)."""
+    with timings.phase("stages"):
+        start = MPI.Wtime()
+        if stage.remove:
+            run.remove(stage.remove)
+        if stage.add:
+            assert stage.material is not None  # the loader requires one
+            run.add(stage.add, stage.material)
+        share = run.apply(stage.relaxation)
+        entry = _record(run, k, stage.name, probes=probes)
+        seconds = run.comm.allreduce(MPI.Wtime() - start, op=MPI.MAX)
+    entry |= {"removed": list(stage.remove), "added": list(stage.add)}
+    entry |= {"share": share, "released": run.share}
+    removed = f"removed {', '.join(stage.remove)}; " if stage.remove else ""
+    removed += f"added {', '.join(stage.add)}; " if stage.add else ""
+    run.say(
+        f"stage {k}/{len(run.problem.scene.stages)} '{stage.name}': {removed}share {share:.3g} "
+        f"(released {run.share:.3g}), max |u| = {entry['max_displacement']:.4g}, "
+        f"out of balance {entry['out_of_balance']:.1e} ({format_seconds(seconds)})"
+    )
+    return entry
+
+
+def _poll(
+    run: StagedRun,
+    control: RunControl | None,
+    k: int,
+    *,
+    entries: list[dict[str, Any]],
+    frames: list[Frame],
+) -> None:
+    """After step ``k``: checkpoint when due or signalled; stop on a signal (collective)."""
+    if control is None:
+        return
+    save, stop = control.poll(k)
+    if save:
+        stage_checkpoint.save(run, control, k, entries=entries, frames=frames)
+    if stop:
+        control.interrupt(f"stage {k}")
 
 
 def initial_balance(problem: ElasticProblem) -> float:
