@@ -420,20 +420,25 @@ class ElasticProblem:
             self.assemble()
         assert self.A is not None and self.b is not None
         if self.solver is None:
-            s = self.scene.solver
-            self.solver = LinearSolver(
-                self.A,
-                PREFIX,
-                s.preset,
-                options=s.options,
-                num_dofs=self.element.num_dofs,
-                near_nullspace=self._near_nullspace,
-            )
+            self.solver = self.make_solver()
         unknown = self.unknown()
         self.iterations = self.solver.solve(self.b, function_vector(unknown))
         unknown.x.scatter_forward()
         self.to_field()
         return self.uh
+
+    def make_solver(self) -> LinearSolver:
+        """The scene's ``[solver]`` on the assembled matrix, with the elastic options prefix."""
+        assert self.A is not None
+        s = self.scene.solver
+        return LinearSolver(
+            self.A,
+            PREFIX,
+            s.preset,
+            options=s.options,
+            num_dofs=self.element.num_dofs,
+            near_nullspace=self._near_nullspace,
+        )
 
     def unknown(self) -> dolfinx.fem.Function:
         """The function the linear system is solved for."""

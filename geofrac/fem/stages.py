@@ -35,7 +35,7 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.fem import stage_checkpoint
-from geofrac.fem.elastic import PREFIX, ElasticProblem
+from geofrac.fem.elastic import ElasticProblem
 from geofrac.fem.insitu import InsituFields, cell_dofs, group_cells, in_plane
 from geofrac.fem.post import TENSOR_FIELDS, probe
 from geofrac.fem.stage_checkpoint import Frame
@@ -44,7 +44,6 @@ from geofrac.log import format_seconds
 from geofrac.materials import lame
 from geofrac.model.scene import Material, Stage
 from geofrac.solvers import (
-    LinearSolver,
     Vector,
     assemble_matrix,
     assemble_vector,
@@ -180,15 +179,7 @@ class StagedRun:
         problem._free_operators()
         assert problem.a is not None
         problem.A = assemble_matrix(problem.a, self.bcs)
-        s = problem.scene.solver
-        problem.solver = LinearSolver(
-            problem.A,
-            PREFIX,
-            s.preset,
-            options=s.options,
-            num_dofs=problem.element.num_dofs,
-            near_nullspace=problem._near_nullspace,
-        )
+        problem.solver = problem.make_solver()
 
     def _solve(self, b: Vector) -> None:
         """Add K⁻¹ b to the displacement."""
