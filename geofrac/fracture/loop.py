@@ -377,7 +377,7 @@ class EventLoop:
             )
         self._finish_field(unknown, self._state(run, rows[-1]["load_factor"]) if rows else u_unit)
         self.rows = rows
-        parts.output.finish(rows, self.modes, parts.summary.slipping())
+        parts.output.finish(rows, self.modes, parts.summary.face_states())
         self.destroy()
         results = parts.summary.results(
             rows,

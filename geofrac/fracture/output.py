@@ -20,7 +20,7 @@ from typing import IO, TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from geofrac.fracture.contact import STATES
+from geofrac.fracture.contact import NO_PAIR, OPEN, SLIP, STATES, STICK
 from geofrac.fracture.context import CrackContext, Sites
 from geofrac.fracture.units import SiteState
 from geofrac.io.series import XdmfSeries
@@ -74,6 +74,8 @@ CHANGE_COLUMNS = ("event", "edge", "x", "y", "from", "to", "gap", "slip")
 #: Colours of new cracks in ``cracks.png`` by mode (tension, shear), of slipping faces.
 MODE_COLOURS = ("tab:red", "tab:blue")
 SLIP_COLOUR = "tab:orange"
+#: Colour of open joints in ``cracks.png`` (with contact).
+OPEN_COLOUR = "tab:purple"
 
 #: One event's row of ``events.csv`` (keys :data:`EVENT_COLUMNS`).
 Row = dict[str, int | float]
@@ -216,11 +218,13 @@ class OutputWriter(Protocol):
         """Close the event log."""
         ...
 
-    def finish(self, rows: list[Row], modes: np.ndarray, slipping: np.ndarray) -> None:
+    def finish(self, rows: list[Row], modes: np.ndarray, faces: np.ndarray | None) -> None:
         """The pictures and the variant's files of the final state.
 
         ``modes``: per site, 0 or 1 + the index of its crack mode in
-        :data:`~geofrac.fracture.loop.MODES`; ``slipping``: sites whose faces slip.
+        :data:`~geofrac.fracture.loop.MODES`; ``faces``: per site, its face pair's
+        contact state (:data:`~geofrac.fracture.contact.NO_PAIR`, OPEN, STICK, SLIP),
+        shape=(num_sites,), or None without crack-face contact.
         """
         ...
 
@@ -363,7 +367,7 @@ class EventOutput:
             self._changes[0].close()
         self._changes = None
 
-    def finish(self, rows: list[Row], modes: np.ndarray, slipping: np.ndarray) -> None:
+    def finish(self, rows: list[Row], modes: np.ndarray, faces: np.ndarray | None) -> None:
         """``load_displacement.png``, ``cracks.png`` and the drawing's own files."""
         if not self.on or not rows:
             return
@@ -391,18 +395,21 @@ class EventOutput:
         fig.tight_layout()
         fig.savefig(self.out_dir / "load_displacement.png", dpi=90)
         plt.close(fig)
-        self._plot_cracks(modes, slipping, len(rows))
+        self._plot_cracks(modes, faces, len(rows))
         self.drawing.write_extra(self.out_dir)
 
-    def _plot_cracks(self, modes: np.ndarray, slipping: np.ndarray, events: int) -> None:
-        """``cracks.png``: the outline, pre-existing (grey) and new cracks by mode.
+    def _plot_cracks(self, modes: np.ndarray, faces: np.ndarray | None, events: int) -> None:
+        """``cracks.png``: the outline, pre-existing cracks and joints, new cracks by mode.
 
-        New cracks are red (tension) or blue (shear); faces slipping in the final state
-        are drawn over them in orange, thicker. The axes keep a margin around the
-        specimen so that its outline is drawn whole; the legend sits below them.
+        New cracks are red (tension) or blue (shear). Without contact, pre-existing
+        cracks are grey; with contact, joints (pre-existing cracks) are drawn by the
+        state of their faces at the end: stuck grey, open purple, slipping orange (thicker),
+        and new cracks whose faces slip are drawn orange over their mode's colour. Void
+        cells (excavated or fallen out) are filled light grey. The axes keep a margin
+        around the specimen so that its outline is drawn whole; the legend sits below.
         """
         import matplotlib.pyplot as plt
-        from matplotlib.collections import LineCollection
+        from matplotlib.collections import LineCollection, PolyCollection
 
         state = self.state
         m = state.mesh
@@ -416,18 +423,35 @@ class EventOutput:
         size = 7.0  # inches of the longer side of the specimen's box
         box = (size, size * aspect) if aspect <= 1.0 else (size / aspect, size)
         fig, ax = plt.subplots(figsize=(max(box[0], 3.5) + 0.8, max(box[1], 2.0) + 1.2))
+        void = state.void_cells()
+        if len(void):
+            ax.add_collection(
+                PolyCollection(
+                    m.coords[m.cells[void]], facecolors="0.88", edgecolors="none", label="void"
+                )
+            )
         outline = m.coords[m.edges[m.boundary_edges]]
         ax.add_collection(LineCollection(outline, colors="k", linewidths=0.6))
         self.drawing.draw_extra(ax)
         shear = new & (modes == 2) if len(modes) == len(new) else np.zeros_like(new)
-        slip = np.zeros_like(new)
-        slip[slipping] = True
-        for mask, colour, width_, label in (
-            (pre, "0.6", 0.5, "pre-existing crack"),
+        layers: list[tuple[np.ndarray, str, float, str]] = []
+        if faces is None:
+            layers.append((pre, "0.6", 0.5, "pre-existing crack"))
+        else:
+            for code, colour, width_, label in (
+                (STICK, "0.55", 0.5, "joint, stuck"),
+                (OPEN, OPEN_COLOUR, 1.0, "joint, open"),
+            ):
+                layers.append((pre & (faces == code), colour, width_, label))
+            layers.append((pre & (faces == NO_PAIR), "0.6", 0.5, "joint"))
+        layers += [
             (new & ~shear, MODE_COLOURS[0], 1.0, "new crack, tension"),
             (shear, MODE_COLOURS[1], 1.0, "new crack, shear"),
-            (slip, SLIP_COLOUR, 1.8, "faces slipping"),
-        ):
+        ]
+        if faces is not None:
+            layers.append((pre & (faces == SLIP), SLIP_COLOUR, 1.8, "joint, slipping"))
+            layers.append((new & (faces == SLIP), SLIP_COLOUR, 1.8, "new crack, slipping"))
+        for mask, colour, width_, label in layers:
             if mask.any():
                 segments = self.drawing.segments(mask)
                 ax.add_collection(

@@ -8,7 +8,6 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.fracture.assembly import Assembler
-from geofrac.fracture.contact import SLIP
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
 from geofrac.fracture.faces import Faces, contact_summary
 from geofrac.fracture.linear import Timing
@@ -154,10 +153,12 @@ class Summary:
             out["min_gap"] = min(float(pairs.gap[act].min()), 0.0) if len(act) else 0.0
         return out
 
-    def slipping(self) -> np.ndarray:
-        """Edges whose faces slip in the last state, shape=(k,)."""
+    def face_states(self) -> np.ndarray | None:
+        """Each edge's face-pair state in the last state, shape=(num_edges,) int8.
+
+        :data:`~geofrac.fracture.contact.NO_PAIR` where an edge has no pair, else one of
+        OPEN, STICK, SLIP; None without crack-face contact.
+        """
         if self.contact is None or not self.contact_on:
-            return np.zeros(0, dtype=np.int64)
-        pairs = self.contact.pairs
-        act = pairs.active()
-        return act[pairs.state[act] == SLIP]
+            return None
+        return self.contact.pairs.state.copy()

@@ -276,7 +276,12 @@ def initial_stress(
         raise t.error("stress", "applies to kind 'constant' only (use 'tectonic' to add one)")
     surface = _surface(t, dim)
     densities = _group_numbers(t, "density", geometry, maximum=1e6, positive=True)
-    k0s = _group_numbers(t, "K0", geometry, maximum=MAX_K0, positive=False)
+    k0 = material.nu / (1.0 - material.nu)
+    if isinstance(t.data.get("K0"), int | float) and not isinstance(t.data.get("K0"), bool):
+        k0s: dict[str, float] = {}  # one K0 for every group
+        k0 = float(t.number("K0", required=True, minimum=0.0, maximum=MAX_K0))  # type: ignore[arg-type]
+    else:
+        k0s = _group_numbers(t, "K0", geometry, maximum=MAX_K0, positive=False)
     cells = [g for g, d in geometry.groups.items() if d == dim]
     if material.density is None and any(g not in densities for g in cells):
         raise SceneError(
@@ -296,7 +301,7 @@ def initial_stress(
         gravity=_gravity(file, specs, dim),
         density=float(density),
         densities=densities,
-        k0=material.nu / (1.0 - material.nu),
+        k0=k0,
         k0s=k0s,
         tectonic=tectonic,
         loaded=loaded,

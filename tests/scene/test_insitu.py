@@ -90,6 +90,20 @@ tectonic = [-1e6, 0.0, 0.0]
     assert spec.k0 == pytest.approx(0.25 / 0.75) and spec.k0s == {"rock": 0.8}
 
 
+def test_one_K0_number_holds_for_every_cell_group():
+    base = BASE.replace("effects = []", 'effects = ["gravity"]')
+    text = '\n[initial_stress]\nkind = "geostatic"\nsurface = 40.0\nK0 = 1.5\n'
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as d:
+        scene = _load(Path(d), text, base=base)
+    spec = scene.initial_stress
+    assert spec.k0 == 1.5 and spec.k0s == {}
+    with tempfile.TemporaryDirectory() as d, pytest.raises(SceneError, match=r"initial_stress\.K0"):
+        _load(Path(d), text.replace("1.5", "11.0"), base=base)
+
+
 BAD = [
     (
         "[initial_stress]\nkind = 'constant'\nstress = [1.0, 2.0, 0.0]\nsurfce = 1.0\n",
