@@ -150,7 +150,7 @@ class ConstantEventLoop(EventLoop):
             changes, blocks = faces.update(self._state(run, choice.r))
             if not changes:
                 return choice, Solved(solved.u, solved.iterations, made)
-            equilibrium.absorb(changes, blocks, history, made, last=it == limit)
+            equilibrium.absorb(changes, blocks, history=history, made=made, last=it == limit)
             if it == limit:
                 break
             again = self._solve(run, event, replay=False)

@@ -170,7 +170,7 @@ class ContactEquilibrium(LinearEquilibrium):
             changes, blocks = contact.update(u)
             if not changes:
                 return Solved(u, solved.iterations, made)
-            self.absorb(changes, blocks, history, made, last=it == limit)
+            self.absorb(changes, blocks, history=history, made=made, last=it == limit)
             if it == limit:
                 break
             u = self.solve(u).u
@@ -181,9 +181,9 @@ class ContactEquilibrium(LinearEquilibrium):
         self,
         changes: list[tuple[int, int, int]],
         blocks: list[Block],
+        *,
         history: Visited,
         made: list[tuple[int, int, int]],
-        *,
         last: bool,
     ) -> None:
         """Note one active-set step's ``changes``; unless ``last``, put them into the system.
