@@ -14,7 +14,8 @@ displacement scales with λ (the variable stress σ_v = (0, −s, 0), s = E δ /
   pair's faces' stress is p0 + λ p_v): tested to 1e-9. λ itself is 5.3 % below the law on
   this mesh (the MLS cells' patch-test error of docs/validation.md, the −6 % of the
   Jaeger test): held as a strict xfail at the Jaeger test's 3 %.
-- σ0 = 0 repeats the proportional contact run (jobs/jaeger_joint.toml) event by event.
+- σ0 = 0, and a zero ``cracking.constant`` part without σ0, repeat the proportional
+  contact run (jobs/jaeger_joint.toml) event by event.
 - A joint under compression with zero release stays closed and stuck: no event at λ = 0
   and the constant load's solution is zero (the pre-cracked closed state is in balance).
 - A joint whose initial shear exceeds c + μ p0 slips before any release (the count is
@@ -66,6 +67,23 @@ def test_zero_initial_stress_repeats_the_proportional_contact_run():
         [r["load_factor"] for r in zero.rows], [r["load_factor"] for r in prop.rows], rtol=1e-12
     )
     assert res["contact_initial"]["open"] == res["contact_initial"]["slipping"] == 0
+
+
+def test_zero_constant_load_repeats_the_proportional_contact_run():
+    """``cracking.constant`` naming the held bottom (a zero constant part): the same 3 events.
+
+    The loop of constant loads with contact (no initial stress) settles the states at
+    u_c + λ u_v = λ u_v: the proportional run's slips, λ and reactions to 1e-12.
+    """
+    sets = ("geometry.parameters.h=5", "cracking.max_events=3")
+    prop, _ = run(JAEGER, *sets)
+    const, res = run(JAEGER, *sets, "cracking.constant=['bottom']")
+    assert res["constant"]["groups"] == ["bottom"] and len(const.rows) == 3
+    assert [r["edge"] for r in const.rows] == [r["edge"] for r in prop.rows]
+    for key in ("load_factor", "reaction"):
+        np.testing.assert_allclose(
+            [r[key] for r in const.rows], [r[key] for r in prop.rows], rtol=1e-12, err_msg=key
+        )
 
 
 @pytest.mark.parametrize(("a", "b"), [(2.0, 2.0), (1.0, 2.0)])
