@@ -29,9 +29,10 @@ the pre-cracked state with every pair closed is the initial state, in balance:
   F = F0 + F_p − R,   R = F0 + F_p of the pre-cracked state with every pair stuck,
 
 so a joint that stays closed and stuck moves nothing at λ = 0. R is, for a uniform σ0,
-only the MLS cells' patch-test residual on the edges around the joint (the joint's own
-share of F0 is −F_p exactly: a linear fit's t A Bᵀ σ0 is t ∮ N σ0·n ds over the cell's
-sides); it is reported (``contact_initial.residual``) and not released. A pair that
+mostly the MLS cells' patch-test residual on the edges around the joint (a linear fit's
+t A Bᵀ σ0 is t ∮ N σ0·n ds over the cell's sides, so on the joint's own edges F0 is
+−F_p; measured, F_p takes the largest |F0| of docs/cracking.md's joint from 17.3 to
+5.1); it is reported (``contact_initial.residual``) and not released. A pair that
 opens (or slips) releases its initial traction (or the shear beyond friction) through
 F_p; a new crack's release through F0 as without contact.
 """
