@@ -343,7 +343,7 @@ def _constant(
 
     Each must be a ``[[bc]]`` group or the group of a traction, pressure or point
     ``[[load]]``, or ``"body_force"`` (the body-force loads); not the control group.
-    ``refused``: why the scene cannot take constant loads (contact, cohesive faces,
+    ``refused``: why the scene cannot take constant loads (cohesive faces,
     grain interfaces), or None.
     """
     file = ctx.file
@@ -580,9 +580,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "contact machinery): use 'update' or 'refactor' with fracture_energy",
         )
     refused = None
-    if contact["contact"]:
-        refused = "crack-face contact (cracking.contact) does not take constant loads yet"
-    elif gf is not None:
+    if gf is not None:
         refused = "cohesive faces (material.fracture_energy) do not take constant loads yet"
     elif spec.cracking != "edges":
         refused = f"applies to elements cracked at edges, not '{ctx.element}'"

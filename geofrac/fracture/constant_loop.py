@@ -12,6 +12,13 @@ under force control) and force (the control DOFs' reaction of u_c plus λ that o
 under displacement control; λ F under force control). With u_c = 0 (a zero constant
 load) every number is the proportional run's, bit for bit.
 The scene without ``cracking.constant`` never reaches this module.
+
+With crack-face contact (``cracking.contact``) the pairs' tractions are not proportional
+to λ: each event solves both loads with the current states, chooses λ (the sites and the
+slip of bonded pairs, :class:`~geofrac.fracture.constant_contact.ConstantFaces`), judges
+the states at u_c + λ u_v and, if any changed, solves and chooses again, until none
+changes (at most ``contact_iterations`` times; cycling pairs are held as
+:meth:`~geofrac.fracture.equilibrium.ContactEquilibrium.settle` holds them).
 """
 
 from __future__ import annotations
@@ -26,8 +33,9 @@ import numpy as np
 from geofrac.errors import RunError
 from geofrac.fracture.config import LoopSettings
 from geofrac.fracture.constant import ConstantChooser, ConstantLoad
+from geofrac.fracture.constant_contact import ConstantFaces
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
-from geofrac.fracture.equilibrium import LinearEquilibrium, Solved
+from geofrac.fracture.equilibrium import ContactEquilibrium, LinearEquilibrium, Solved, Visited
 from geofrac.fracture.loop import EventLoop, LoopParts, _Run
 from geofrac.fracture.modes import Choice
 from geofrac.fracture.scales import TENSION_FLOOR
@@ -41,8 +49,8 @@ class ConstantEventLoop(EventLoop):
 
     Args:
         ctx, parts, sites, settings, control: as :class:`~geofrac.fracture.loop.EventLoop`
-            (``parts.equilibrium`` a :class:`~geofrac.fracture.equilibrium.LinearEquilibrium`:
-            no crack-face contact).
+            (``parts.equilibrium`` a :class:`~geofrac.fracture.equilibrium.LinearEquilibrium`,
+            a :class:`~geofrac.fracture.equilibrium.ContactEquilibrium` with contact).
         load: the two right-hand sides; the assembler's default is ``load.variable``.
         chooser: the event's sites, λ and mode.
     """
@@ -70,6 +78,12 @@ class ConstantEventLoop(EventLoop):
         #: the constant load's strain energy, control displacement and force, and the
         #: cross energy u_cᵀ K u_v, of the last solve.
         self._const = (0.0, 0.0, 0.0, 0.0)
+        #: the crack faces in contact (``cracking.contact``), or None.
+        self.faces: ConstantFaces | None = None
+        if settings.contact and parts.contact is not None:
+            assert isinstance(parts.equilibrium, ContactEquilibrium)
+            self.faces = ConstantFaces(parts.contact, ctx)
+            parts.record.proportional = False  # the pairs' values are the event's own
 
     def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
         """Run (a resume is refused: checkpoints keep the variable solution only)."""
@@ -98,6 +112,11 @@ class ConstantEventLoop(EventLoop):
         choice = self._choose(run, event)
         if choice is None:
             return False
+        if self.faces is not None:
+            settled = self._settle(run, event, choice, solved)
+            if settled is None:
+                return False
+            choice, solved = settled
         assert run.unit is not None
         r, (energy_c, disp_c, force_c, cross) = choice.r, self._const
         energy = energy_c + r * cross + r * r * run.unit[0]
@@ -106,15 +125,68 @@ class ConstantEventLoop(EventLoop):
             row["reaction"] = force_c + r * run.unit[2]
         else:  # the displacement of u_c + r u_v; the force r F
             row["control_displacement"] = disp_c + r * run.unit[1]
-        if choice.r == 0.0:
+        if choice.r == 0.0 and choice.mode != "slip":
             self.over_cracked += len(choice.sites)
         parts.crack.apply(choice)
         self._after_crack(run, event, choice, row=row, energy=energy)
         return self._publish(run, event, row=row, energy=energy)
 
+    def _settle(
+        self, run: _Run, event: int, choice: Choice, solved: Solved
+    ) -> tuple[Choice, Solved] | None:
+        """Judge the pair states at u_c + λ u_v; solve and choose again until none changes.
+
+        Returns the event's choice and its solution with every state change made; None
+        when the run ends here (states unsettled after ``contact_iterations``, a failed
+        solve, no event).
+        """
+        assert self.faces is not None
+        equilibrium, faces = self.parts.equilibrium, self.faces.faces
+        assert isinstance(equilibrium, ContactEquilibrium)
+        limit = equilibrium.iterations
+        history: Visited = {}
+        made: list[tuple[int, int, int]] = []
+        for it in range(limit + 1):
+            changes, blocks = faces.update(self._state(run, choice.r))
+            if not changes:
+                return choice, Solved(solved.u, solved.iterations, made)
+            equilibrium.absorb(changes, blocks, history=history, made=made, last=it == limit)
+            if it == limit:
+                break
+            again = self._solve(run, event, replay=False)
+            if again is None:
+                return None
+            faces.iterations += 1
+            solved = Solved(again.u, solved.iterations)
+            chosen = self._choose(run, event)
+            if chosen is None:
+                return None
+            choice = chosen
+        run.end = "contact"
+        self.ctx.say(f"cracking: event {event}: {equilibrium.unsettled(changes)}")
+        return None
+
+    def _solve_variable(self, run: _Run, event: int) -> Solved | None:
+        """The variable load's solution with the current pair states (no settling)."""
+        try:
+            solved = self.equilibrium.solve(run.u_unit)
+        except RunError as exc:
+            run.end = "singular"
+            self.ctx.say(f"cracking: event {event}: the system is singular ({exc})")
+            return None
+        run.u_unit = solved.u
+        return solved
+
     def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
-        """The variable load's solution (the loop's), then the constant load's."""
-        solved = super()._solve(run, event, replay=replay)
+        """The variable load's solution (the loop's), then the constant load's.
+
+        With contact the states are settled at the event's state (:meth:`_settle`), not
+        on the variable load alone.
+        """
+        if self.faces is None:
+            solved = super()._solve(run, event, replay=replay)
+        else:
+            solved = self._solve_variable(run, event)
         if solved is None:
             return None
         t = time.perf_counter()
@@ -153,6 +225,11 @@ class ConstantEventLoop(EventLoop):
             return None
         floor = TENSION_FLOOR * scales.rms_stress(energy_v)
         choice = self.chooser.choose(sc, sv, floor=floor)
+        if self.faces is not None:  # the slip of bonded joints
+            points = self.chooser.criterion.points
+            choice = self.faces.with_slip(
+                choice, self.u_const, run.u_unit, floor=floor, points=points
+            )
         self._count_start(len(self.chooser.over_sites))
         run.clock = parts.timing.add("criterion", run.clock)
         if len(choice.sites) == 0:

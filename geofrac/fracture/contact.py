@@ -75,6 +75,7 @@ __all__ = [
     "constraint_terms",
     "edge_frames",
     "edge_tractions",
+    "initial_force",
     "pair_block",
     "pair_links",
     "shear_factors",
@@ -290,6 +291,10 @@ class FacePairs:
         self.slip = np.zeros(ne)
         self.pressure = np.zeros(ne)
         self.shear = np.zeros(ne)
+        #: the initial (in-situ) tractions p0, τ0 on every edge that the faces' stress of a
+        #: solution adds to (zero without an initial stress), shape=(num_edges,) each.
+        self.p0 = np.zeros(ne)
+        self.tau0 = np.zeros(ne)
         #: pairs held in their state after a cycle (:meth:`update` leaves them), and the
         #: violation they were held at.
         self.frozen = np.zeros(ne, dtype=bool)
@@ -440,6 +445,9 @@ class FacePairs:
     def update(self, u_nodes: np.ndarray) -> list[tuple[int, int, int]]:
         """One active-set step from the solution; returns (edge, old, new) per change.
 
+        The faces' stress is that of the solution plus the initial tractions
+        (:attr:`p0`, :attr:`tau0`; zero without an initial stress).
+
         Pairs in :attr:`frozen` keep their state, unless the solution violates it by more
         than twice the violation they were held at (then they are released).
 
@@ -449,6 +457,7 @@ class FacePairs:
         if not self.ops:
             return []
         edges, g, s, p, tau = self.measure(u_nodes)
+        p, tau = p + self.p0[edges], tau + self.tau0[edges]
         self.gap[edges], self.slip[edges] = g, s
         self.pressure[edges], self.shear[edges] = p, tau
         # violations in units of the largest jump and traction; the springs' traction of
@@ -575,6 +584,27 @@ def pair_block(pairs: FacePairs, edge: int) -> tuple[np.ndarray, np.ndarray] | N
         cohesive = springs * (np.outer(Bn, Bn) + np.outer(Bt, Bt))
         out = cohesive if out is None else out + cohesive
     return op.nodes, out
+
+
+def initial_force(pairs: FacePairs, edge: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """(nodes, shape=(q,); load, shape=(2q,)) of a closed pair's initial traction.
+
+    Per unit thickness, on (u_x, u_y) of ``nodes`` interleaved: the pair's force is its
+    initial traction plus the penalty's, t L (−p Bₙ + τ Bₜ) with p = p0 − k g; the
+    constant part t L (−p0 Bₙ + τ0 Bₜ) goes to the right-hand side with its sign
+    flipped. A sticking pair carries (p0, τ0): L (p0 Bₙ − τ0 Bₜ); a slipping one
+    Coulomb's τ = μ p sgn: L p0 (Bₙ − μ sgn Bₜ). None: an open or inactive pair.
+    """
+    op = pairs.ops.get(edge)
+    st = int(pairs.state[edge])
+    if op is None or st not in (STICK, SLIP):
+        return None
+    p0 = float(pairs.p0[edge])
+    tau = float(pairs.tau0[edge])
+    if st == SLIP:
+        tau = float(pairs.friction[edge] * pairs.sign[edge]) * p0
+    Bn, Bt = _jump_row(op, pairs.normal[edge]), _jump_row(op, pairs.tangent[edge])
+    return op.nodes, float(pairs.length[edge]) * (p0 * Bn - tau * Bt)
 
 
 def pair_links(pairs: FacePairs) -> tuple[np.ndarray, np.ndarray]:

@@ -21,6 +21,7 @@ from geofrac.fracture.assembly import LoadCase
 from geofrac.fracture.faces import Faces
 from geofrac.fracture.incremental import Gather
 from geofrac.fracture.linear import SolverStrategy
+from geofrac.fracture.units import Block
 
 __all__ = [
     "ContactEquilibrium",
@@ -28,7 +29,12 @@ __all__ = [
     "Equilibrium",
     "LinearEquilibrium",
     "Solved",
+    "Visited",
 ]
+
+
+#: Per pair, the states it left during an event: state -> (violation, slip direction).
+Visited = dict[int, dict[int, tuple[float, float]]]
 
 
 class ContactUnsettled(Exception):
@@ -159,35 +165,59 @@ class ContactEquilibrium(LinearEquilibrium):
         """
         contact, limit, u = self.contact, self.iterations, solved.u
         made: list[tuple[int, int, int]] = []
-        history: dict[int, dict[int, tuple[float, float]]] = {}
-        pairs = contact.pairs
+        history: Visited = {}
         for it in range(limit + 1):
             changes, blocks = contact.update(u)
             if not changes:
                 return Solved(u, solved.iterations, made)
-            cycling = []
-            for e, old, new in changes:
-                left = history.setdefault(e, {})
-                left[old] = (float(pairs.violation[e]), float(pairs.sign[e]))
-                if new in left:
-                    cycling.append(e)
-            made += changes
+            self.absorb(changes, blocks, history=history, made=made, last=it == limit)
             if it == limit:
                 break
-            if cycling:
-                entered = {e: new for e, _, new in changes}
-                contact.freeze_least_violated({e: history[e] for e in cycling})
-                blocks += contact.resync(cycling)
-                made += [
-                    (e, entered[e], int(pairs.state[e]))
-                    for e in cycling
-                    if pairs.state[e] != entered[e]
-                ]
-            self.strategy.contact_changed(blocks)
             u = self.solve(u).u
             contact.iterations += 1
-        raise ContactUnsettled(
-            f"the crack faces' contact states did not settle in {limit} "
+        raise self.unsettled(changes)
+
+    def absorb(
+        self,
+        changes: list[tuple[int, int, int]],
+        blocks: list[Block],
+        *,
+        history: Visited,
+        made: list[tuple[int, int, int]],
+        last: bool,
+    ) -> None:
+        """Note one active-set step's ``changes``; unless ``last``, put them into the system.
+
+        ``history``: per pair, the states it left in this event (their violation and slip
+        direction); a pair that returns to one of them is held (see :meth:`settle`).
+        ``made`` gathers every change (edge, old, new). ``blocks``: the step's block
+        changes, handed to the solver strategy with those of the held pairs.
+        """
+        contact, pairs = self.contact, self.contact.pairs
+        cycling = []
+        for e, old, new in changes:
+            left = history.setdefault(e, {})
+            left[old] = (float(pairs.violation[e]), float(pairs.sign[e]))
+            if new in left:
+                cycling.append(e)
+        made += changes
+        if last:
+            return
+        if cycling:
+            entered = {e: new for e, _, new in changes}
+            contact.freeze_least_violated({e: history[e] for e in cycling})
+            blocks += contact.resync(cycling)
+            made += [
+                (e, entered[e], int(pairs.state[e]))
+                for e in cycling
+                if pairs.state[e] != entered[e]
+            ]
+        self.strategy.contact_changed(blocks)
+
+    def unsettled(self, changes: list[tuple[int, int, int]]) -> ContactUnsettled:
+        """The error of states that still change after ``iterations`` solves."""
+        return ContactUnsettled(
+            f"the crack faces' contact states did not settle in {self.iterations} "
             f"iterations ({len(changes)} pairs still changed state, e.g. edge "
             f"{changes[0][0]}); raise cracking.contact_iterations or contact_penalty"
         )

@@ -20,6 +20,21 @@ cell. On the intact mesh F0 is round-off for an equilibrated σ0 (checked, as th
 does); once edges crack, it is the release of the traction σ0·n that the new crack
 faces no longer carry. I is kept as the intact cells' sum plus, per event, the change of
 the cracked cells, so only those are reassembled.
+
+With crack-face contact (``cracking.contact``) a closed pair carries the initial traction
+σ0·n of its edge (:class:`~geofrac.fracture.constant_contact.ConstantFaces`): the
+constant right-hand side holds, besides F0, the closed pairs' initial tractions F_p, and
+the pre-cracked state with every pair closed is the initial state, in balance:
+
+  F = F0 + F_p − R,   R = F0 + F_p of the pre-cracked state with every pair stuck,
+
+so a joint that stays closed and stuck moves nothing at λ = 0. R is, for a uniform σ0,
+mostly the MLS cells' patch-test residual on the edges around the joint (a linear fit's
+t A Bᵀ σ0 is t ∮ N σ0·n ds over the cell's sides, so on the joint's own edges F0 is
+−F_p; measured, F_p takes the largest |F0| of docs/cracking.md's joint from 17.3 to
+5.1); it is reported (``contact_initial.residual``) and not released. A pair that
+opens (or slips) releases its initial traction (or the shear beyond friction) through
+F_p; a new crack's release through F0 as without contact.
 """
 
 from __future__ import annotations
@@ -41,7 +56,9 @@ from geofrac.fracture.cells import MIDPOINTS, strain_operator
 from geofrac.fracture.config import CrackingConfig, LoopSettings
 from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_load
 from geofrac.fracture.constant_loop import ConstantEventLoop
+from geofrac.fracture.contact import ROUNDOFF
 from geofrac.fracture.context import CrackContext, JsonValue, Sites, crack_context
+from geofrac.fracture.criterion import edge_means
 from geofrac.fracture.equilibrium import Solved
 from geofrac.fracture.event_criterion import EdgeCriterion
 from geofrac.fracture.loop import LoopParts, _Run
@@ -154,6 +171,9 @@ class InitialStressLoad:
         free[ctx.bc_rows] = False
         worst = float(np.max(np.abs(self.base[free]), initial=0.0))
         self.balance = worst / scale if scale > 0.0 else 0.0
+        #: the larger of |F_ext,0| and |I(σ0)| (the balance's scale).
+        self.scale = scale
+        self.free = free
         self.position = {int(c): i for i, c in enumerate(own)}
 
     def _external(self) -> tuple[np.ndarray, np.ndarray]:
@@ -235,14 +255,44 @@ class InsituEventLoop(ConstantEventLoop):
         self.named = np.array(load.constant.load.getArray(readonly=True), dtype=float)
         self._rows = slice(lo, hi)
         self._sigma0_reaction = 0.0
+        #: with contact: F0 + F_p of the pre-cracked state with every pair stuck (the
+        #: module docstring's R), shape=(n_global,); its largest free entry over the scale.
+        self._reference: np.ndarray | None = None
+        self.residual = 0.0
+
+    def _begin(self, space: dolfinx.fem.FunctionSpace) -> _Run:
+        """The pre-cracked state; with contact, σ0 on the pairs and their initial states."""
+        run = super()._begin(space)
+        if self.faces is not None:
+            insitu, faces = self.insitu, self.faces
+            edge_stress = edge_means(self.parts.units.state.mesh, insitu.site_stress)
+            faces.set_initial(edge_stress)
+            self._reference = insitu.force() + faces.force()
+            units = self.parts.units
+            used = insitu.free & (units.use_counts(units.state.is_mls()) > 0)
+            worst = float(np.max(np.abs(self._reference[used]), initial=0.0))
+            self.residual = worst / insitu.scale if insitu.scale > 0.0 else 0.0
+            faces.start_states(ROUNDOFF * float(np.max(np.abs(edge_stress), initial=0.0)))
+            self.ctx.say(
+                f"cracking: the initial stress on {len(faces.faces.pairs.active())} face "
+                f"pairs: {faces.started_open} open (tension), {faces.started_slipping} slip "
+                "before any release (initial shear beyond c + μ p0); the closed joints' "
+                f"residual {self.residual:.2e} of the applied force is not released"
+            )
+        return run
 
     def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
-        """Reassemble F0 on the current crack state, then solve both loads."""
-        force = self.insitu.force()
+        """Reassemble F0 (and the closed pairs' σ0·n) on the current state; solve both loads."""
+        force, base = self.insitu.force(), self.insitu.base
+        if self.faces is not None:
+            assert self._reference is not None
+            force = force + self.faces.force() - self._reference
+            base = np.zeros_like(force)
         self.load.constant.load.setArray(self.named + force[self._rows])
-        # the control DOFs' share of I(σ0) that cracks moved: −(F0 − F0 of the intact mesh)
+        # the control DOFs' share of I(σ0) that cracks moved: −(F0 − F0 of the initial
+        # state: the intact mesh, or the pre-cracked one with contact)
         sign = self.ctx.control_sign[:-1]
-        self._sigma0_reaction = -float(sign @ (force - self.insitu.base))
+        self._sigma0_reaction = -float(sign @ (force - base))
         return super()._solve(run, event, replay=replay)
 
     def _choose(self, run: _Run, event: int) -> Choice | None:
@@ -268,6 +318,12 @@ class InsituEventLoop(ConstantEventLoop):
             "out_of_balance": self.insitu.balance,
             "tolerance": TOLERANCE,
         }
+        if self.faces is not None:
+            results["contact_initial"] = {
+                "open": self.faces.started_open,
+                "slipping": self.faces.started_slipping,
+                "residual": self.residual,
+            }
         return results
 
 

@@ -36,6 +36,9 @@ class Recorder:
     ) -> None:
         self.ctx, self.units, self.output = ctx, units, output
         self.contact, self.contact_on = contact, contact_on
+        #: the faces' gaps, slips and tractions are those of the unit load, scaled by r
+        #: (False: of the event's state itself, the constant-load loop's).
+        self.proportional = True
 
     def row(
         self,
@@ -77,12 +80,13 @@ class Recorder:
         if contact is not None and contact.softening:
             row["dissipated_energy"] = 0.0  # set after the event (:meth:`dissipation`)
         if contact is not None and self.contact_on:
-            row |= contact.record(r)
+            f = r if self.proportional else 1.0
+            row |= contact.record(f)
             row["contact_changes"] = len(solved.changes)
             pairs = contact.pairs
             self.output.contact_changes(
                 event,
-                [(e, a, b, r * pairs.gap[e], r * pairs.slip[e]) for e, a, b in solved.changes],
+                [(e, a, b, f * pairs.gap[e], f * pairs.slip[e]) for e, a, b in solved.changes],
             )
         return row
 
@@ -95,5 +99,5 @@ class Recorder:
         """Per-edge fields of the crack series beside ``crack``: mode, contact at load r."""
         out = {"mode": modes.astype(float)}
         if self.contact is not None and self.contact_on:
-            out |= contact_frame(self.contact.pairs, r)
+            out |= contact_frame(self.contact.pairs, r if self.proportional else 1.0)
         return out

@@ -177,7 +177,7 @@ def _no_driver(file: Path, key: str, declared: Sequence[str]) -> None:
 
 
 def _cracking(file: Path, element: str, specs: Sequence[EffectSpec[object]]) -> None:
-    """A cracking scene takes an initial stress at element edges, without contact (yet).
+    """A cracking scene takes an initial stress at element edges (with contact too).
 
     The initial stress joins the constant load of the event loop (docs/cracking.md,
     "An initial stress"); the other effects that drive a run do not take it.
@@ -198,13 +198,6 @@ def _cracking(file: Path, element: str, specs: Sequence[EffectSpec[object]]) -> 
         )
     config = effect_config(specs, "cracking", CrackingConfig)
     assert config is not None
-    if config.contact:
-        raise SceneError(
-            file,
-            "initial_stress",
-            "crack-face contact (cracking.contact) does not start from an initial stress "
-            "yet: closed faces would have to carry σ0 from the start; remove one of them",
-        )
     if config.fracture_energy is not None:
         raise SceneError(
             file,

@@ -322,7 +322,6 @@ def test_overstressed_sites_crack_first_most_overstressed_first():
         ("cracking.constant=['nowhere']", "has no [[bc]]"),
         ("cracking.constant=['gravity']", "gravity"),
         ("cracking.constant='top'", "must be a list"),
-        ("cracking.contact=true", "contact"),
     ],
 )
 def test_bad_constant_is_refused(override, message):

@@ -14,7 +14,7 @@
   one of the same physics posed by constant loads, minus σ_xx0 × height × t.
 - A layered geostatic state under gravity (tests/fem/layers.toml) is in balance with
   the crack driver's own cell operators to round-off (CST, RGNT).
-- An initial state out of balance, contact, grain interfaces and a scene without a
+- An initial state out of balance, grain interfaces and a scene without a
   variable load are refused with messages; 1 and 2 ranks give the same events.
 """
 
@@ -186,7 +186,6 @@ def test_initial_state_out_of_balance_is_refused():
 @pytest.mark.parametrize(
     ("overrides", "message"),
     [
-        (("cracking.contact=true",), "contact"),
         (("discretization.element=efmm",), "grain interfaces"),
     ],
 )
