@@ -20,7 +20,7 @@ import numpy as np
 
 from geofrac.fem import loads
 from geofrac.fem.elastic import ElasticProblem
-from geofrac.scene.switches import active
+from geofrac.model.scene import BoundaryCondition, Load, acts
 from geofrac.solvers import SCALAR, Vector
 
 __all__ = ["Switches", "owned_rows"]
@@ -53,7 +53,7 @@ class Switches:
     def __init__(self, problem: ElasticProblem) -> None:
         scene = problem.scene
         self.problem, self.names = problem, [stage.name for stage in scene.stages]
-        entries = (*scene.bcs, *scene.loads)
+        entries: list[BoundaryCondition | Load] = [*scene.bcs, *scene.loads]
         self.enabled = any(e.switch_on is not None or e.switch_off is not None for e in entries)
         self.step = 0
         counts = [1 if bc.value == "exact" else len(bc.components) for bc in scene.bcs]
@@ -71,11 +71,11 @@ class Switches:
 
     def load_on(self, i: int, step: int) -> bool:
         """Whether load ``i`` acts in ``step``."""
-        return active(self.problem.scene.loads[i], step, self.names)
+        return acts(self.problem.scene.loads[i], step, self.names)
 
     def bc_on(self, i: int, step: int) -> bool:
         """Whether ``[[bc]]`` ``i`` acts in ``step``."""
-        return active(self.problem.scene.bcs[i], step, self.names)
+        return acts(self.problem.scene.bcs[i], step, self.names)
 
     def load_terms(self, v: Any) -> list[Any]:
         """Each distributed load's form times its factor (enabled runs)."""

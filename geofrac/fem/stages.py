@@ -115,7 +115,7 @@ class StagedRun:
         self.residual = dolfinx.fem.form(external - internal)
         self.initial = dolfinx.fem.form(sum(initial[1:], initial[0]))
         self.internal = dolfinx.fem.form(internal)
-        self.zero = dolfinx.fem.form(zero)  # the lifting of an installed support's increment
+        self._zero = zero  # a zero load: the lifting of an installed support's increment
         self.du = dolfinx.fem.Function(V)
         self.bcs = self._supports()
         self.held = owned_rows(self.bcs, V)  # owned local rows of [[bc]]
@@ -362,7 +362,7 @@ class StagedRun:
         if not bcs:  # the same on every rank (the scene's)
             return None
         assert self.problem.a is not None
-        b = assemble_vector(self.zero, (self.problem.a, bcs))
+        b = assemble_vector(dolfinx.fem.form(self._zero), (self.problem.a, bcs))
         self._free(b)
         set_bc(b, bcs)
         return b

@@ -33,6 +33,7 @@ __all__ = [
     "Solver",
     "Stage",
     "Units",
+    "acts",
     "effect_config",
 ]
 
@@ -281,6 +282,18 @@ class Stage:
     relaxation: float | None = None
     add: tuple[str, ...] = ()
     material: Material | None = None
+
+
+def acts(entry: BoundaryCondition | Load, step: int, names: Sequence[str]) -> bool:
+    """Whether a support or load acts in ``step`` (0: the initial step, k: stage k).
+
+    ``names``: the stages' names in order; ``entry.switch_on``/``switch_off`` name
+    stages among them (docs/insitu.md, "Loads and supports per stage").
+    """
+    order = list(names)
+    on = 0 if entry.switch_on is None else order.index(entry.switch_on) + 1
+    off = len(order) + 1 if entry.switch_off is None else order.index(entry.switch_off) + 1
+    return on <= step < off
 
 
 @dataclass(frozen=True)

@@ -14,10 +14,10 @@ from typing import Any
 
 from geofrac import effects
 from geofrac.model.errors import SceneError, did_you_mean
-from geofrac.model.scene import BoundaryCondition, Load
+from geofrac.model.scene import BoundaryCondition, Load, acts
 from geofrac.model.table import Table
 
-__all__ = ["SWITCH_KEYS", "active", "stage_names", "switch_keys", "switched", "switches"]
+__all__ = ["SWITCH_KEYS", "stage_names", "switch_keys", "switched", "switches"]
 
 #: Keys of a ``[[load]]`` or ``[[bc]]`` entry that switch it per stage.
 SWITCH_KEYS = ("from", "until")
@@ -32,21 +32,12 @@ def switch_keys(t: Table) -> tuple[str | None, str | None]:
 
 def switched(bcs: Sequence[BoundaryCondition], loads: Sequence[Load]) -> frozenset[str]:
     """The stage names some load or support is switched at (a stage may do only that)."""
-    names = [x for e in (*bcs, *loads) for x in (e.switch_on, e.switch_off)]
+    entries: list[BoundaryCondition | Load] = [*bcs, *loads]
+    names = [x for e in entries for x in (e.switch_on, e.switch_off)]
     return frozenset(n for n in names if n is not None)
 
 
-def active(entry: BoundaryCondition | Load, step: int, names: Sequence[str]) -> bool:
-    """Whether ``entry`` acts in step ``step`` (0: the initial step, k: stage k).
-
-    ``names``: the stages' names in order.
-    """
-    on = 0 if entry.switch_on is None else names.index(entry.switch_on) + 1
-    off = len(names) + 1 if entry.switch_off is None else names.index(entry.switch_off) + 1
-    return on <= step < off
-
-
-def _index(file: Path, key: str, name: str, names: list[str]) -> int:
+def _index(file: Path, key: str, name: str, names: Sequence[str]) -> int:
     """The step of stage ``name`` (1 for the first stage)."""
     if not names:
         raise SceneError(
@@ -54,7 +45,7 @@ def _index(file: Path, key: str, name: str, names: list[str]) -> int:
         )
     if name not in names:
         raise SceneError(file, key, f"unknown stage '{name}'" + did_you_mean(name, names))
-    return names.index(name) + 1
+    return list(names).index(name) + 1
 
 
 def stage_names(raw: Any) -> list[str]:
@@ -85,7 +76,8 @@ def switches(
     Raises:
         SceneError: naming the entry's key.
     """
-    entries = [(f"bc[{i}]", e) for i, e in enumerate(bcs)]
+    entries: list[tuple[str, BoundaryCondition | Load]] = []
+    entries += [(f"bc[{i}]", e) for i, e in enumerate(bcs)]
     entries += [(f"load[{i}]", e) for i, e in enumerate(loads)]
     for where, e in entries:
         if e.switch_on is None and e.switch_off is None:
@@ -116,7 +108,7 @@ def switches(
                 "holds its current displacement plus a number value (an increment)",
             )
     for step in range(len(names) + 1):
-        if not any(active(bc, step, names) for bc in bcs):
+        if not any(acts(bc, step, names) for bc in bcs):
             when = "the initial step" if step == 0 else f"stage '{names[step - 1]}'"
             raise SceneError(
                 file,
