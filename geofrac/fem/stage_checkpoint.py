@@ -11,7 +11,9 @@ the run has reported so far (:class:`~geofrac.io.checkpoint.RunControl`, kind ``
   the pending release applied so far, the summary rows of the steps and the frames'
   names and field names.
 
-The arrays are this rank's part of a mesh distributed the same way, so a checkpoint
+The loads and supports that act (``from``/``until``) are those of step ``done``: they
+follow from the scene, so they are not stored. The arrays are this rank's part of a
+mesh distributed the same way, so a checkpoint
 resumes on the number of ranks that wrote it only (as the crack loops'). The initial
 check is recomputed on resume (it depends on the initial fields only).
 """

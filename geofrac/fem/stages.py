@@ -18,6 +18,11 @@ initial state, the stress is the total. The vectors, on the unknowns (thickness 
    R(u) of the remaining body from the current stress; adding cells brings them back
    with their own material, stress-free in the current state; a stage solves
    K Δu = s R for its share s of it (``relaxation``; default: all that remains).
+4. **Switches** (``from``/``until`` of a load or support, :mod:`.stage_switches`): a
+   stage releases the supports it removes (−their reaction, before its removal), holds
+   those it installs (their ``value`` an increment, lifted) and adds the change of the
+   loads, all in full: K Δu = s R + ΔF + R_s + lifting (docs/insitu.md, "Loads and
+   supports per stage").
 """
 
 from __future__ import annotations
