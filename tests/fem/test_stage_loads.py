@@ -221,11 +221,60 @@ def test_uniaxial_pull_then_an_installed_support_pushes_by_its_increment(tmp_pat
     assert stages[2]["supports_on"] == ["bc[2]"] and stages[2]["loads_off"] == ["load[0]"]
 
 
+LAYERS = JOBS.parent / "tests" / "fem" / "layers.toml"
+G = 9.81  # the gravity effect's default
+
+
+def _layers(stages: str) -> str:
+    """tests/fem/layers.toml with its right roller removed at stage 'free', and ``stages``."""
+    text = LAYERS.read_text()
+    text = text.replace('file = "layers.geo"', f'file = "{LAYERS.parent / "layers.geo"}"')
+    right = 'group = "right"\nvalue = [0.0]\ncomponents = ["x"]\n'
+    assert right in text
+    return text.replace(right, right + 'until = "free"\n') + stages
+
+
+def test_a_support_removed_with_an_excavation_is_released_once_in_full(tmp_path):
+    """The geostatic two-layer column of test_insitu.py, its right roller removed.
+
+    The roller carried the initial state's σxx0 = K0 σv on x = W: released, it applies
+    −∫ σxx0 dy = g [K0_u (3·2000·3 + 2200·3²/2) + K0_l (2·(2000·3 + 2200·3) + 3000·2²/2)]
+    (cover 3 m at 2000, upper 3 m at 2200 with K0 = ν/(1 − ν) = 1/3, lower 2 m at 3000
+    with K0 = 0.6). Removed in the same stage as the upper layer, with a share 0.4 of
+    the excavation's release and then the rest, the end state equals removing the roller
+    first and the layer after (linear elasticity: the end state does not depend on the
+    path); a double-counted release would move it.
+    """
+    together = _layers(
+        '[[stages]]\nname = "free"\nremove = ["upper"]\nrelaxation = 0.4\n'
+        '[[stages]]\nname = "rest"\n'
+    )
+    apart = _layers('[[stages]]\nname = "free"\n[[stages]]\nname = "cut"\nremove = ["upper"]\n')
+    a = _results(_scene(tmp_path, together, "together"))["stages"]
+    b = _results(_scene(tmp_path, apart, "apart"))["stages"]
+    released = G * (1 / 3 * (2000.0 * 3 * 3 + 2200.0 * 9 / 2) + 0.6 * (2 * 12600.0 + 3000.0 * 2))
+    for stages in (a, b):
+        _close(stages[1]["released_supports"]["right"], [released, 0.0], rel=1e-10)
+        # gone: 0 minus the force it carried in the initial state (−released)
+        _close(stages[2]["reactions"]["right"], [released, 0.0], rel=1e-10)
+    assert a[1]["share"] == pytest.approx(0.4)
+    _close(a[2]["probes"]["low"], b[2]["probes"]["low"])  # ('high' is in the removed layer)
+    _close(a[2]["reactions"]["bottom"], b[2]["reactions"]["bottom"])
+    # the release moved the body: the lower layer expands to the right
+    assert b[1]["probes"]["low"][0] > 1e-6
+
+
 @pytest.mark.mpi(min_size=2)
-@pytest.mark.parametrize("case", ["switched", "propped"])
+@pytest.mark.parametrize("case", ["switched", "propped", "square", "together"])
 def test_two_ranks_agree_with_one(tmp_path, case):
     comm = MPI.COMM_WORLD
-    text = SWITCHED if case == "switched" else PROPPED
+    together = '[[stages]]\nname = "free"\nremove = ["upper"]\nrelaxation = 0.4\n'
+    text = {
+        "switched": SWITCHED,
+        "propped": PROPPED,
+        "square": SQUARE,
+        "together": _layers(together + '[[stages]]\nname = "rest"\n'),
+    }[case]
     many = _results(_scene(tmp_path, text, case), comm)["stages"]
     if comm.rank == 0:
         one = _results(_scene(tmp_path, text, case + "1", MPI.COMM_SELF), MPI.COMM_SELF)["stages"]
@@ -233,11 +282,14 @@ def test_two_ranks_agree_with_one(tmp_path, case):
         one = None
     one = comm.bcast(one, root=0)
     worst = 0.0
-    for a, b in zip(many, one, strict=True):
-        for key in ("probes", "reactions", "released_supports"):
-            for name in b.get(key, {}):
-                x, y = np.asarray(a[key][name]), np.asarray(b[key][name])
-                worst = max(worst, float(np.max(np.abs(x - y)) / max(np.max(np.abs(y)), 1e-300)))
+    for key in ("probes", "reactions", "released_supports"):  # scale: the key's largest
+        pairs = [
+            (a[key][n], b[key][n]) for a, b in zip(many, one, strict=True) for n in b.get(key, {})
+        ]
+        if not pairs:
+            continue
+        x, y = (np.concatenate([np.ravel(p[i]) for p in pairs]) for i in (0, 1))
+        worst = max(worst, float(np.max(np.abs(x - y))) / max(float(np.max(np.abs(y))), 1e-300))
     worst = comm.allreduce(worst, op=MPI.MAX)
     assert worst <= 1e-10
 
@@ -280,6 +332,16 @@ def test_bad_switches_are_refused_naming_the_key(tmp_path, text, message):
 
 
 def test_a_run_stopped_after_the_switch_resumes_to_the_whole_run(tmp_path, monkeypatch):
+    _stop_and_resume(tmp_path, monkeypatch)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_two_ranks_resume_across_the_switch(tmp_path, monkeypatch):
+    _stop_and_resume(tmp_path, monkeypatch)
+
+
+def _stop_and_resume(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Stop the first case after stage 'on' (SIGTERM), resume: the whole run's numbers."""
     comm = MPI.COMM_WORLD
     path = _scene(tmp_path, SWITCHED.replace("xdmf = false", "xdmf = true"))
     root = _shared(tmp_path, comm)
@@ -298,6 +360,7 @@ def test_a_run_stopped_after_the_switch_resumes_to_the_whole_run(tmp_path, monke
         monkeypatch.undo()
     comm.barrier()
     run(root / "stopped", resume=True)
+    comm.barrier()  # rank 0 writes the summaries
     a = json.loads((root / "stopped" / "summary.json").read_text())["results"]["stages"]
     b = json.loads((root / "whole" / "summary.json").read_text())["results"]["stages"]
     assert [s["name"] for s in a] == ["initial", "on", "off"]
