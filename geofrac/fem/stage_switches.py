@@ -63,7 +63,7 @@ class Switches:
         t = float(problem.thickness.value)
         self.factors: dict[int, dolfinx.fem.Constant] = {}
         self.points: dict[int, loads.PointForces] = {}
-        for i, load in enumerate(scene.loads):
+        for i, load in enumerate(scene.loads if self.enabled else ()):
             if load.type == "point":
                 self.points[i] = loads.point_forces(problem.tagged, V, (load,), thickness=t)
             else:
