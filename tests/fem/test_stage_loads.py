@@ -61,7 +61,8 @@ xdmf = false
 probes = {{ middle = [5.0, 0.0], tip = [10.0, 0.0] }}
 """
 
-#: Test 1: a weight always, an end traction from stage 'on' until stage 'off'.
+#: Test 1: a weight always, an end traction and a point force at the end's middle from
+#: stage 'on' until stage 'off'.
 SWITCHED = (
     BEAM
     + """
@@ -72,6 +73,12 @@ value = [0.0, -0.02]
 type = "traction"
 group = "end"
 value = [0.3, -0.1]
+from = "on"
+until = "off"
+[[load]]
+type = "point"
+group = "tip"
+value = [0.0, -0.05]
 from = "on"
 until = "off"
 [[stages]]
@@ -166,9 +173,11 @@ def _close(a: list[float], b: list[float], rel: float = 1e-10) -> None:
 def test_a_load_on_then_off_returns_and_equals_the_one_step_solution(tmp_path):
     stages = _results(_scene(tmp_path, SWITCHED))["stages"]
     assert [s["name"] for s in stages] == ["initial", "on", "off"]
-    assert stages[1]["loads_on"] == ["load[1]"] and stages[2]["loads_off"] == ["load[1]"]
+    switched = ["load[1]", "load[2]"]
+    assert stages[1]["loads_on"] == switched and stages[2]["loads_off"] == switched
     # both loads at once, no stages: the one-step elastic solution
     both = SWITCHED.replace('from = "on"\nuntil = "off"\n', "")
+    assert "from" not in both
     both = both[: both.index("[[stages]]")]
     one = _results(_scene(tmp_path, both, "both"))
     for name in ("middle", "tip"):
@@ -179,8 +188,9 @@ def test_a_load_on_then_off_returns_and_equals_the_one_step_solution(tmp_path):
             0.1 * np.max(np.abs(stages[0]["probes"][name]))
         )
     _close(stages[2]["reactions"]["fixed"], stages[0]["reactions"]["fixed"])
-    # the clamp carries the weight and the traction: −(body force × area + traction × D)
-    _close(stages[1]["reactions"]["fixed"], [-0.3, 0.02 * 10.0 + 0.1], rel=1e-10)
+    # the clamp carries the weight first, then the traction and the point force too
+    _close(stages[0]["reactions"]["fixed"], [0.0, 0.02 * 10.0], rel=1e-10)
+    _close(stages[1]["reactions"]["fixed"], [-0.3, 0.02 * 10.0 + 0.1 + 0.05], rel=1e-10)
     assert stages[2]["out_of_balance"] < 1e-10
 
 
