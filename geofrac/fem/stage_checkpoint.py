@@ -11,7 +11,9 @@ the run has reported so far (:class:`~geofrac.io.checkpoint.RunControl`, kind ``
   the pending release applied so far, the summary rows of the steps and the frames'
   names and field names.
 
-The arrays are this rank's part of a mesh distributed the same way, so a checkpoint
+The loads and supports that act (``from``/``until``) are those of step ``done``: they
+follow from the scene, so they are not stored. The arrays are this rank's part of a
+mesh distributed the same way, so a checkpoint
 resumes on the number of ranks that wrote it only (as the crack loops'). The initial
 check is recomputed on resume (it depends on the initial fields only).
 """
@@ -52,8 +54,8 @@ class Staged(Protocol):
         """This rank's arrays of the state (local, with ghosts; the release's owned rows)."""
         ...
 
-    def set_state(self, arrays: dict[str, np.ndarray], share: float) -> None:
-        """Put a saved state back and factorise its operator (collective)."""
+    def set_state(self, arrays: dict[str, np.ndarray], share: float, *, step: int = 0) -> None:
+        """Put a saved state after ``step`` back and factorise its operator (collective)."""
         ...
 
     def frame(self, index: int, name: str) -> Frame:
@@ -115,7 +117,7 @@ def restore(run: Staged, ck: Checkpoint) -> tuple[int, list[dict[str, Any]], lis
     errors = comm.allgather(error)
     if any(errors):
         raise RunError(next(e for e in errors if e))
-    run.set_state(arrays, float(data["share"]))
+    run.set_state(arrays, float(data["share"]), step=int(data["done"]))
     frames = []
     for i, (index, name, names) in enumerate(data["frames"]):
         frame = run.frame(int(index), str(name))

@@ -18,6 +18,11 @@ initial state, the stress is the total. The vectors, on the unknowns (thickness 
    R(u) of the remaining body from the current stress; adding cells brings them back
    with their own material, stress-free in the current state; a stage solves
    K Δu = s R for its share s of it (``relaxation``; default: all that remains).
+4. **Switches** (``from``/``until`` of a load or support, :mod:`.stage_switches`): a
+   stage releases the supports it removes (−their reaction, before its removal), holds
+   those it installs (their ``value`` an increment, lifted) and adds the change of the
+   loads, all in full: K Δu = s R + ΔF + R_s + lifting (docs/insitu.md, "Loads and
+   supports per stage").
 """
 
 from __future__ import annotations
@@ -39,6 +44,7 @@ from geofrac.fem.elastic import ElasticProblem
 from geofrac.fem.insitu import InsituFields, cell_dofs, group_cells, in_plane
 from geofrac.fem.post import TENSOR_FIELDS, probe
 from geofrac.fem.stage_checkpoint import Frame
+from geofrac.fem.stage_switches import Switches, owned_rows
 from geofrac.io.checkpoint import RunControl
 from geofrac.log import format_seconds
 from geofrac.materials import lame
@@ -101,17 +107,23 @@ class StagedRun:
         internal = t * alive * ufl.inner(sigma, forms.epsilon(v)) * problem.dx
         loaded = self._loaded_terms(v)
         initial = loaded + [term(problem.form_context(v)) for term in problem.terms]
+        zero = ufl.inner(dolfinx.fem.Constant(mesh, np.zeros(gdim)), v) * problem.dx
         if not initial:
-            zero = dolfinx.fem.Constant(mesh, np.zeros(gdim))
-            initial = [ufl.inner(zero, v) * problem.dx]
-        self.residual = dolfinx.fem.form(sum(loaded, problem._L) - internal)
+            initial = [zero]
+        #: the loads and supports of each step (``from``/``until``).
+        self.switches = Switches(problem)
+        self.step = 0  # the step whose loads and supports act
+        external = sum(loaded, problem._L)
+        if self.switches.enabled:  # each load's form times its factor
+            terms = self.switches.load_terms(v) + initial
+            external = sum(terms[1:], terms[0]) if terms else zero
+        self.residual = dolfinx.fem.form(external - internal)
         self.initial = dolfinx.fem.form(sum(initial[1:], initial[0]))
         self.internal = dolfinx.fem.form(internal)
+        self._zero = zero  # a zero load: the lifting of an installed support's increment
         self.du = dolfinx.fem.Function(V)
-        self.bcs = list(problem.bcs)
-        rows, _ = problem.dirichlet()
-        start = V.dofmap.index_map.local_range[0] * self.bs
-        self.held = (rows - start).astype(np.int32)  # owned local rows of [[bc]]
+        self.bcs = self._supports()
+        self.held = owned_rows(self.bcs, V)  # owned local rows of [[bc]]
         self.orphans = np.empty(0, dtype=np.int32)  # owned local rows no live cell touches
         self.release: Vector | None = None
         self.share = 1.0  # of the pending release applied so far
@@ -145,9 +157,17 @@ class StagedRun:
 
     def _vector(self, form: dolfinx.fem.Form, *, points: bool = False) -> Vector:
         b = assemble_vector(form)
-        if points:
+        if points and self.switches.enabled:
+            self.switches.add_points(b)
+        elif points:
             self.problem._add_point_forces(b)
         return b
+
+    def _supports(self) -> list[dolfinx.fem.DirichletBC]:
+        """The DOLFINx conditions of the supports acting in the current step."""
+        if not self.switches.enabled:
+            return list(self.problem.bcs)
+        return self.switches.conditions(self.step)
 
     def check(self) -> float:
         """The largest |r0| on the free DOFs over the force scale (collective; before step 0).
@@ -158,7 +178,9 @@ class StagedRun:
         """
         f_init = self._vector(self.initial)
         i0 = self._vector(self.internal)
+        self.switches.all_on()  # the scale: every load, whenever it acts
         f_ext = self._vector(self.residual, points=True)  # F − I(σ0) at u = 0
+        self.switches.set_step(self.step)
         f_ext.axpy(1.0, i0)
         self.scale = max(self._max(f_init), self._max(i0), self._max(f_ext))
         f_ext.destroy()
@@ -197,7 +219,10 @@ class StagedRun:
         problem = self.problem
         assert problem.a is not None
         b = assemble_vector(self.residual, (problem.a, self.bcs))
-        problem._add_point_forces(b)
+        if self.switches.enabled:
+            self.switches.add_points(b)
+        else:
+            problem._add_point_forces(b)
         set_bc(b, self.bcs)
         try:
             self._solve(b)
@@ -259,23 +284,93 @@ class StagedRun:
         touched.scatter_forward()
         blocks = np.flatnonzero(touched.array == 0.0).astype(np.int32)
         zero = dolfinx.fem.Function(V)
-        self.bcs = [*self.problem.bcs, dolfinx.fem.dirichletbc(zero, blocks)]
+        self.bcs = [*self._supports(), dolfinx.fem.dirichletbc(zero, blocks)]
         owned = blocks[blocks < imap.size_local]
         self.orphans = (owned[:, None] * self.bs + np.arange(self.bs)).ravel().astype(np.int32)
 
-    def apply(self, relaxation: float | None) -> float:
-        """Apply ``relaxation`` of the pending release (None: all that remains); the share."""
+    def apply(self, relaxation: float | None, *, extra: Vector | None = None) -> float:
+        """Apply ``relaxation`` of the pending release (None: all that remains); the share.
+
+        ``extra``: forces applied in full with it (loads and released supports).
+        """
         share = 1.0 - self.share if relaxation is None else relaxation
         if self.release is None or share <= 0.0:
+            if extra is not None:
+                self._solve(extra)
             return 0.0
         b = self.release.copy()
         try:
             b.scale(share)
+            if extra is not None:
+                b.axpy(1.0, extra)
             self._solve(b)
         finally:
             b.destroy()
         self.share += share
         return share
+
+    def free_supports(self, step: int) -> tuple[Vector | None, dict[str, list[float]]]:
+        """The release of the supports switched off at the start of ``step`` (collective).
+
+        R(u) = F − I(σ) of the state at the end of the previous step on the rows that no
+        support acting in ``step`` holds: minus the total force the supports carried
+        (their reaction, the initial state's included), zero elsewhere; and its sum per
+        component for each such support's group (what the release applies). Call before
+        the step's removal and switch.
+        """
+        off = self.switches.changed(step)[3]
+        if not off:
+            return None, {}
+        freed = np.setdiff1d(self.held, owned_rows(self.switches.conditions(step), self.V))
+        b = self._vector(self.residual, points=True)
+        values = b.array_r[freed].copy()
+        b.array_w[:] = 0.0
+        b.array_w[freed] = values
+        forces: dict[str, list[float]] = {}
+        for i in off:
+            rows = np.intersect1d(owned_rows(self.switches.supports[i], self.V), freed)
+            sums = np.zeros(self.problem.mesh.geometry.dim)
+            np.add.at(sums, rows % self.bs, b.array_r[rows])
+            total = np.empty_like(sums)
+            self.comm.Allreduce(sums, total, op=MPI.SUM)
+            forces[self.problem.scene.bcs[i].group] = [float(x) + 0.0 for x in total]
+        return b, forces
+
+    def set_supports(self, step: int) -> None:
+        """Hold the DOFs of the supports acting in ``step`` (no factorisation here)."""
+        self.step = step
+        self.held = owned_rows(self._supports(), self.V)
+
+    def switch_loads(self, step: int) -> Vector | None:
+        """Set the loads of ``step``; their change F_step − F_before, or None (collective)."""
+        on, off, _, _ = self.switches.changed(step)
+        if not on and not off:
+            self.switches.set_step(step)
+            return None
+        before = self._vector(self.residual, points=True)
+        self.switches.set_step(step)
+        after = self._vector(self.residual, points=True)
+        after.axpy(-1.0, before)
+        before.destroy()
+        return after
+
+    def lift(self, step: int) -> Vector | None:
+        """The increments of the supports installed at ``step`` (collective).
+
+        −K g on the free rows and g on the rows of the installed supports (g: their
+        ``value``), or None when every installed support holds its DOFs where they are.
+        """
+        on = self.switches.changed(step)[2]
+        scene = self.problem.scene
+        moved = [i for i in on if any(x != 0 for x in scene.bcs[i].value)]
+        bcs = [c for i in moved for c in self.switches.supports[i]]
+        if not bcs:  # the same on every rank (the scene's)
+            return None
+        assert self.problem.a is not None
+        b = assemble_vector(dolfinx.fem.form(self._zero), (self.problem.a, bcs))
+        self._free(b)
+        set_bc(b, bcs)
+        return b
 
     def out_of_balance(self) -> float:
         """The largest |R(u)| on the free DOFs over the check's force scale (collective)."""
@@ -290,10 +385,13 @@ class StagedRun:
         """Per [[bc]] group, the reaction force per component relative to the initial state.
 
         The sum over the group's held DOFs of I(σ) − F minus its value in the initial
-        state (I(σ0) − F_init); held components only, others 0 (collective).
+        state (I(σ0) − F_init); held components only, others 0 (collective). A support
+        installed in a stage had none in the initial state; one not acting now has
+        none now (its value is minus the initial one).
         """
         problem = self.problem
         r = self._vector(self.residual, points=True)
+        total_r = r.copy() if self.switches.enabled else None
         if self.r0 is not None:
             r.axpy(-1.0, self.r0)
         out: dict[str, list[float]] = {}
@@ -301,14 +399,22 @@ class StagedRun:
         for i, bc in enumerate(problem.scene.bcs):
             dim, entities = problem._bc_entities(i)
             sums = np.zeros(gdim)
+            acting = not self.switches.enabled or self.switches.bc_on(i, self.step)
+            rel = r if acting and bc.switch_on is None else total_r
             for c in bc.components:
                 dofs = dolfinx.fem.locate_dofs_topological(self.V.sub(c), dim, entities)
                 dofs = np.unique(dofs[dofs < self.owned])
-                sums[c] = -float(np.sum(r.array_r[dofs]))
+                if acting:
+                    assert rel is not None
+                    sums[c] = -float(np.sum(rel.array_r[dofs]))
+                elif bc.switch_on is None and self.r0 is not None:
+                    sums[c] = float(np.sum(self.r0.array_r[dofs]))
             total = np.empty_like(sums)
             self.comm.Allreduce(sums, total, op=MPI.SUM)
             out[bc.group] = [float(x) + 0.0 for x in total]
         r.destroy()
+        if total_r is not None:
+            total_r.destroy()
         return out
 
     def max_displacement(self) -> float:
@@ -332,8 +438,13 @@ class StagedRun:
             arrays["release"] = np.asarray(self.release.array_r).copy()
         return arrays
 
-    def set_state(self, arrays: dict[str, np.ndarray], share: float) -> None:
-        """Put back a :meth:`state` and the applied ``share``; factorise (collective)."""
+    def set_state(self, arrays: dict[str, np.ndarray], share: float, *, step: int = 0) -> None:
+        """Put back a :meth:`state` after ``step`` and the applied ``share``; factorise.
+
+        The loads and supports are those of ``step`` (collective).
+        """
+        self.set_supports(step)
+        self.switches.set_step(step)
         self.problem.uh.x.array[:] = arrays["u"]
         self.problem.uh.x.scatter_forward()
         for name in STATE_FIELDS:
@@ -480,27 +591,98 @@ def run_stages(
 def _stage(
     run: StagedRun, k: int, stage: Stage, *, timings: Timings, probes: dict[str, Any]
 ) -> dict[str, Any]:
-    """Run stage ``k``: remove, add, apply its share; its summary row (collective)."""
+    """Run stage ``k``: remove, add, switch, apply its share; its summary row (collective).
+
+    A support switched off releases what it carried (:meth:`StagedRun.free_supports`,
+    before the removal, so that the removal's release is the excavation's alone); the
+    loads switched on or off and the released supports are applied in full with the
+    stage's share of the release.
+    """
+    switching = run.switches.enabled
     with timings.phase("stages"):
         start = MPI.Wtime()
+        freed, forces = run.free_supports(k) if switching else (None, {})
+        if switching:
+            run.set_supports(k)
         if stage.remove:
             run.remove(stage.remove)
+            if freed is not None and run.release is not None:
+                run.release.axpy(-1.0, freed)  # the excavation's part on the freed rows
         if stage.add:
             assert stage.material is not None  # the loader requires one
             run.add(stage.add, stage.material)
-        share = run.apply(stage.relaxation)
+        extra = _switch(run, k, freed, refactor=not (stage.remove or stage.add))
+        try:
+            share = run.apply(stage.relaxation, extra=extra)
+        finally:
+            for vec in (extra, freed):
+                if vec is not None:
+                    vec.destroy()
         entry = _record(run, k, stage.name, probes=probes)
         seconds = run.comm.allreduce(MPI.Wtime() - start, op=MPI.MAX)
     entry |= {"removed": list(stage.remove), "added": list(stage.add)}
     entry |= {"share": share, "released": run.share}
     removed = f"removed {', '.join(stage.remove)}; " if stage.remove else ""
     removed += f"added {', '.join(stage.add)}; " if stage.add else ""
+    if switching:
+        switched = _switched(run, k)
+        entry |= switched | {"released_supports": forces}
+        removed += "".join(
+            f"{key.replace('_', ' ')} {', '.join(v)}; " for key, v in switched.items() if v
+        )
     run.say(
         f"stage {k}/{len(run.problem.scene.stages)} '{stage.name}': {removed}share {share:.3g} "
         f"(released {run.share:.3g}), max |u| = {entry['max_displacement']:.4g}, "
         f"out of balance {entry['out_of_balance']:.1e} ({format_seconds(seconds)})"
     )
     return entry
+
+
+def _switch(run: StagedRun, k: int, freed: Vector | None, *, refactor: bool) -> Vector | None:
+    """Switch the loads of stage ``k``; the forces it applies in full (collective).
+
+    The loads' change, the released supports' forces ``freed`` and the lifting of the
+    installed supports' increments; None when stage ``k`` switches nothing.
+    ``refactor``: the stage neither removed nor added cells, so the supports' change
+    still needs a new operator.
+    """
+    if not run.switches.enabled:
+        return None
+    _, _, bc_on, bc_off = run.switches.changed(k)
+    if (bc_on or bc_off) and refactor:
+        run._hold_orphans()
+        run._factor()
+    delta = run.switch_loads(k)
+    lift = run.lift(k)
+    b = None
+    for part in (delta, freed):
+        if part is None:
+            continue
+        if b is None:
+            b = part.copy()
+        else:
+            b.axpy(1.0, part)
+    if delta is not None:
+        delta.destroy()
+    if b is not None:
+        run._free(b)
+    if lift is not None and b is not None:
+        b.axpy(1.0, lift)
+        lift.destroy()
+    elif lift is not None:
+        b = lift
+    return b
+
+
+def _switched(run: StagedRun, k: int) -> dict[str, list[str]]:
+    """The loads and supports switched at the start of stage ``k``, as scene keys."""
+    on, off, bc_on, bc_off = run.switches.changed(k)
+    return {
+        "loads_on": [f"load[{i}]" for i in on],
+        "loads_off": [f"load[{i}]" for i in off],
+        "supports_on": [f"bc[{i}]" for i in bc_on],
+        "supports_off": [f"bc[{i}]" for i in bc_off],
+    }
 
 
 def _poll(

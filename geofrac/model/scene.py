@@ -33,6 +33,7 @@ __all__ = [
     "Solver",
     "Stage",
     "Units",
+    "acts",
     "effect_config",
 ]
 
@@ -186,12 +187,18 @@ class BoundaryCondition:
         symmetry: the group is a mirror-symmetry line/plane: the one held component is
             its normal, and vertex-DOF elements (RGNT, GNT, RGNQ) also hold what mirror
             symmetry implies for their gradient DOFs (docs/elements.md).
+        switch_on: the stage at whose start the support is installed (``from``),
+            holding its DOFs at their current displacement plus ``value``; None: from
+            the initial step (docs/insitu.md, "Loads and supports per stage").
+        switch_off: the stage at whose start it is removed (``until``), or None.
     """
 
     group: str
     value: tuple[float, ...] | Literal["exact"]
     components: tuple[int, ...]
     symmetry: bool = False
+    switch_on: str | None = None
+    switch_off: str | None = None
 
 
 @dataclass(frozen=True)
@@ -208,11 +215,16 @@ class Load:
             (:mod:`geofrac.model.expr`; not for ``point``); or ``"exact"`` (traction
             σ_exact·n, body force -div σ_exact).
         group: physical group (traction, pressure, point), or None (body force).
+        switch_on: the stage at whose start the load is switched on (``from``); None:
+            from the initial step (docs/insitu.md, "Loads and supports per stage").
+        switch_off: the stage at whose start it is switched off (``until``), or None.
     """
 
     type: Literal["traction", "body_force", "pressure", "point"]
     value: tuple[float | str, ...] | Literal["exact"]
     group: str | None = None
+    switch_on: str | None = None
+    switch_off: str | None = None
 
 
 @dataclass(frozen=True)
@@ -270,6 +282,18 @@ class Stage:
     relaxation: float | None = None
     add: tuple[str, ...] = ()
     material: Material | None = None
+
+
+def acts(entry: BoundaryCondition | Load, step: int, names: Sequence[str]) -> bool:
+    """Whether a support or load acts in ``step`` (0: the initial step, k: stage k).
+
+    ``names``: the stages' names in order; ``entry.switch_on``/``switch_off`` name
+    stages among them (docs/insitu.md, "Loads and supports per stage").
+    """
+    order = list(names)
+    on = 0 if entry.switch_on is None else order.index(entry.switch_on) + 1
+    off = len(order) + 1 if entry.switch_off is None else order.index(entry.switch_off) + 1
+    return on <= step < off
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ Every key is checked here, before any mesh is built; the physics is in
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -333,13 +333,15 @@ def stages(
     element: str,
     declared: Sequence[str],
     material: Material | None = None,
+    switched: Collection[str] = (),
 ) -> tuple[Stage, ...]:
     """The validated ``[[stages]]`` entries.
 
     The relaxation shares are checked in order: a removal starts a new release (share
     0); each stage applies ``relaxation`` of it, or, without ``relaxation``, all that
     remains; the shares of one release must not add up to more than 1. A stage that
-    only adds groups may apply nothing.
+    only adds groups, or only switches loads or supports (its name is in ``switched``,
+    :mod:`geofrac.scene.switches`), may apply nothing.
 
     Raises:
         SceneError: naming the stage and key.
@@ -375,13 +377,13 @@ def stages(
             share = 0.0
         relaxation = t.number("relaxation", minimum=0.0, maximum=1.0)
         if share is None:
-            if relaxation is not None or not add:
+            if relaxation is not None or not (add or name in switched):
                 raise t.error(
                     "relaxation" if relaxation is not None else "remove",
                     "no cells have been removed yet: a stage releases the forces of removed cells",
                 )
         elif relaxation is None:
-            if share >= 1.0 - SHARE_SLACK and not remove and not add:
+            if share >= 1.0 - SHARE_SLACK and not (remove or add or name in switched):
                 raise t.error(
                     "relaxation", "the release of the last removal is already fully applied"
                 )

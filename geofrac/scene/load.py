@@ -54,6 +54,11 @@ from geofrac.scene.insitu import cracking_variable as _cracking_variable
 from geofrac.scene.insitu import initial_stress as _initial_stress
 from geofrac.scene.insitu import stages as _stages
 from geofrac.scene.size import Extent, check_size, estimate
+from geofrac.scene.switches import SWITCH_KEYS
+from geofrac.scene.switches import stage_names as _stage_names
+from geofrac.scene.switches import switch_keys as _switch_keys
+from geofrac.scene.switches import switched as _switched
+from geofrac.scene.switches import switches as _switches
 
 __all__ = [
     "DEFAULT_OUTPUT_FIELDS",
@@ -119,8 +124,8 @@ SECTION_KEYS: dict[str, tuple[str, ...]] = {
         "domain_seed",
         "renumber",
     ),
-    "bc": ("group", "value", "components", "symmetry"),
-    "load": ("type", "group", "value"),
+    "bc": ("group", "value", "components", "symmetry", *SWITCH_KEYS),
+    "load": ("type", "group", "value", *SWITCH_KEYS),
     "solver": ("preset", "options"),
     "output": (
         "dir",
@@ -520,7 +525,8 @@ def _bcs(
                 f"{geometry.groups[group]}",
             )
         components = tuple(axes.index(c) for c in comps)
-        out.append(BoundaryCondition(group, value, components, bool(symmetry)))  # type: ignore[arg-type]
+        on, off = _switch_keys(t)
+        out.append(BoundaryCondition(group, value, components, bool(symmetry), on, off))  # type: ignore[arg-type]
     return tuple(out)
 
 
@@ -560,7 +566,7 @@ def _loads(file: Path, raw: Any, geometry: Geometry, exact: ExactSpec | None) ->
             value = _value(t, dim, None)
         else:
             value = _value(t, dim, exact, names)
-        out.append(Load(kind, value, group))  # type: ignore[arg-type]
+        out.append(Load(kind, value, group, *_switch_keys(t)))  # type: ignore[arg-type]
     return tuple(out)
 
 
@@ -1152,6 +1158,7 @@ def _validate(
             element=discretization.element,
             specs=specs,
         )
+    _switches(file, _stage_names(data.get("stages")), bcs=bcs, loads=loads, declared=declared)
     stages: tuple[Stage, ...] = ()
     if "stages" in data:
         stages = _stages(
@@ -1161,6 +1168,7 @@ def _validate(
             element=discretization.element,
             declared=declared,
             material=material,
+            switched=_switched(bcs, loads),
         )
     return Scene(
         initial_stress=initial,
