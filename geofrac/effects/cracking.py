@@ -668,7 +668,7 @@ def make_driver(
     elif spec.cracking != "edges":
         raise ValueError(f"element {spec.name!r} does not support cracking")
     elif solution.scene.stages:  # removed cells stay void (docs/insitu.md)
-        from geofrac.fracture.staged_state import STAGED_EDGES
+        from geofrac.fracture.staged_variant import STAGED_EDGES
 
         variant = STAGED_EDGES
     return CrackDriver(config, solution, say, write=write, variant=variant)

@@ -8,13 +8,13 @@ wall (one live cell; only interior edges crack, the rule of the mesh's own bound
 The new wall bounds the MLS fits' visibility as the mesh boundary does, so a fit near it
 takes no satellite inside the opening, and a node on it counts as a boundary node for
 the cut cells. :class:`StagedCrackState` keeps removed cells void through every refit;
-:data:`STAGED_EDGES` is the edge variant whose units carry it.
+:data:`~geofrac.fracture.staged_variant.STAGED_EDGES` is the edge variant whose units
+carry it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import cast
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -22,18 +22,11 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.fracture.context import CrackContext
-from geofrac.fracture.driver import EdgeVariant
 from geofrac.fracture.state import CrackState
-from geofrac.fracture.units import EdgeUnits, Units
+from geofrac.fracture.units import EdgeUnits
 from geofrac.mls.shape import LinearFit
 
-__all__ = [
-    "STAGED_EDGES",
-    "StagedCrackState",
-    "StagedEdgeVariant",
-    "group_cells",
-    "internal_force",
-]
+__all__ = ["StagedCrackState", "group_cells", "internal_force"]
 
 
 @dataclass
@@ -84,24 +77,6 @@ class StagedCrackState(CrackState):
         ]
         refitted = self.refit(np.array(sorted(near), dtype=np.int64))
         return np.union1d(cells, refitted)
-
-
-@dataclass(frozen=True)
-class StagedEdgeVariant(EdgeVariant):
-    """Element edges with cells that stages remove (:class:`StagedCrackState`)."""
-
-    def units(self, ctx: CrackContext) -> Units:
-        """:class:`~geofrac.fracture.units.EdgeUnits` on a :class:`StagedCrackState`."""
-        units = cast(EdgeUnits, super().units(ctx))
-        old = units.state
-        units.state = StagedCrackState(
-            old.mesh, old.frozen, old.forced, old.settings, old.mapper, cut=old.cut
-        )
-        return units
-
-
-#: The edge variant of a staged cracking scene.
-STAGED_EDGES = StagedEdgeVariant()
 
 
 def group_cells(ctx: CrackContext, groups: tuple[str, ...]) -> np.ndarray:

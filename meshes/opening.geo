@@ -1,5 +1,5 @@
-// A square plate [-L/2, L/2]² with a circular opening of radius a at its centre, for
-// the staged cracking test (tests/fracture/test_staged_cracking.py). The opening's
+// A square block [-L/2, L/2]² with a circular opening of radius a at its centre, meshed
+// whole (tests/fracture/test_staged_cracking.py, jobs/tunnel_staged_cracking.toml). The opening's
 // interior is the cell group "hole" (removed by a stage), the rest "rock"; the sides
 // are "left", "right", "bottom", "top". Straight cells. The mesh size is h_wall on the
 // wall and grows linearly with the distance from it to h_far at 4a and beyond.
