@@ -167,8 +167,7 @@ def _no_driver(file: Path, key: str, declared: Sequence[str]) -> None:
             key,
             f"effect '{owners[0]}' drives the run with its own loop, which "
             + (
-                "does not run construction stages yet (a cracking scene takes an "
-                "[initial_stress] and a scaled load instead: docs/insitu.md)"
+                "does not run construction stages yet"
                 if key == "stages"
                 else "does not start from an initial stress yet"
             )
