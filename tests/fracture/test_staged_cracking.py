@@ -16,8 +16,10 @@ root by bisection).
   share ends below λ*: its least λ is the one-stage run's) and cracks the same site at
   the same cumulative release in the second; with shares 0.4 and 0.05 neither stage
   cracks and the run ends after the stages.
-- Bad staged cracking scenes are refused naming the key; 1 and 2 ranks give the same
-  events (MPI test).
+- Heading then bench (the opening's halves, two removals) without cracks ends in the
+  whole opening's elastic state (to 1e-9); with cracks the three solver strategies
+  give the same events. Bad staged cracking scenes are refused naming the key; 1 and 2
+  ranks give the same events (MPI test).
 """
 
 from pathlib import Path
@@ -69,9 +71,11 @@ def kirsch_release(x: float, y: float) -> float:
     return 0.5 * (lo + hi)
 
 
-def _staged(tmp: Path, stages: str) -> Path:
-    """The plate scene with other ``[[stages]]`` in ``tmp``."""
+def _staged(tmp: Path, stages: str, *, split: bool = False) -> Path:
+    """The plate scene with other ``[[stages]]`` in ``tmp``; ``split``: heading and bench."""
     text = PLATE.read_text().replace("../../../meshes", str(SCENES.parents[2] / "meshes"))
+    if split:
+        text = text.replace("h_far = 1.5 }", "h_far = 1.5, split = 1 }")
     start, end = text.index("[[stages]]"), text.index("[cracking]")
     path = tmp / "staged.toml"
     path.write_text(text[:start] + stages + "\n" + text[end:])
@@ -132,6 +136,61 @@ def test_stages_below_the_first_crack_do_not_crack(tmp_path):
     # the crown moves into the opening, more in the second stage
     crown = [s["probes"]["crown"][1] for s in res["stages"]]
     assert crown[1] < crown[0] < 0.0
+
+
+#: the opening excavated as a heading (its upper half) and a bench (its lower half).
+HEADING_BENCH = """[[stages]]
+name = "heading"
+remove = ["heading"]
+relaxation = {share}
+
+[[stages]]
+name = "bench"
+remove = ["bench"]
+"""
+
+
+@pytest.mark.parametrize("solver", ["refactor", "reuse"])
+def test_solver_strategies_give_the_same_events(tmp_path, solver):
+    """Heading (0.3, no crack), then bench: the bench's release needs a new reference.
+
+    The update solver's reference keeps the right-hand side it was made with; without a
+    new one after the second removal the bench's first crack comes at λ = 0.311, not 0.457.
+    """
+    path = _staged(tmp_path, HEADING_BENCH.format(share=0.3), split=True)
+    update, res = run(path, "cracking.max_events=4")
+    other, _ = run(path, "cracking.max_events=4", f"cracking.solver={solver}")
+    assert [s["events"] for s in res["stages"]] == [0, 4]
+    assert [r["edge"] for r in other.rows] == [r["edge"] for r in update.rows]
+    np.testing.assert_allclose(
+        [r["load_factor"] for r in other.rows],
+        [r["load_factor"] for r in update.rows],
+        rtol=1e-7,
+        atol=1e-12,
+    )
+
+
+def test_heading_then_bench_ends_where_one_excavation_does(tmp_path):
+    """Without cracks (f_t = 100) the elastic states follow from linearity.
+
+    The bench's release P = F0 − K u_e starts from the state u_e the heading left, so half
+    of it gives (u_e + u_full)/2, u_full the whole opening's state, and all of it u_full
+    (the end state does not depend on the sequence). Crown displacements to 1e-9.
+    """
+    strong = "material.tensile_strength=100.0"
+    stages = HEADING_BENCH.format(share=1.0) + 'relaxation = 0.5\n[[stages]]\nname = "rest"\n'
+    staged, res = run(_staged(tmp_path, stages, split=True), strong)
+    once = '[[stages]]\nname = "all"\nremove = ["heading", "bench"]\n'
+    whole, ref = run(_staged(tmp_path, once, split=True), strong)
+    assert not staged.rows and not whole.rows and res["end_reason"] == "stages_done"
+    heading, half, end = (np.array(s["probes"]["crown"]) for s in res["stages"])
+    full = np.array(ref["stages"][0]["probes"]["crown"])
+    np.testing.assert_allclose(half, 0.5 * (heading + full), rtol=1e-9)
+    np.testing.assert_allclose(end, full, rtol=1e-9)
+    assert res["stages"][-1]["max_displacement"] == pytest.approx(
+        ref["stages"][0]["max_displacement"], rel=1e-9
+    )
+    assert 0.0 > heading[1] > full[1]  # the heading alone moves the crown less
 
 
 ONE = '[[stages]]\nname = "a"\nremove = ["hole"]\n'
