@@ -336,11 +336,16 @@ class StagedEventLoop(InsituEventLoop):
         return results
 
 
+#: The least stress of the release's a-priori scale, as a fraction of E: a σ0 of zero
+#: releases nothing, and its run ends ``separated`` against this scale.
+MIN_RELEASE_STRESS = 1e-6
+
+
 def _release_scale(ctx: CrackContext, insitu: InitialStressLoad) -> None:
     """The release's a-priori displacement |σ0|max L / E: the control and the scales."""
     sigma = float(np.max(np.abs(insitu.site_stress), initial=0.0))
     mat = ctx.scene.material
-    scale = max(sigma, TOLERANCE * mat.E) * ctx.scales.length / mat.E
+    scale = max(sigma, MIN_RELEASE_STRESS * mat.E) * ctx.scales.length / mat.E
     ctx.control = release_control(scale)
     ctx.control_unit = scale
     ctx.scales = dataclasses.replace(ctx.scales, displacement=scale)
