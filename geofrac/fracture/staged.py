@@ -208,6 +208,7 @@ class StagedEventLoop(InsituEventLoop):
     def _end_stage(self, run: _Run, *, complete: bool) -> None:
         """Close the running stage at its share (or, not complete, at its last event)."""
         stage, share = self.stages[self.k], self._share()
+        beyond = self.staged_chooser.beyond  # inf: no site ever cracks in this release
         if complete:
             self.u_end = self.u_const + share * run.u_unit
         elif run.rows and self._events:
@@ -222,7 +223,7 @@ class StagedEventLoop(InsituEventLoop):
             "events": len(self._events),
             "event_ids": list(self._events),
             "first_event": self._first,
-            "next_load_factor": self.staged_chooser.beyond if complete else None,
+            "next_load_factor": beyond if complete and np.isfinite(beyond) else None,
             "probes": self._probes(self.u_end),
             "max_displacement": self._max_displacement(self.u_end),
         }
