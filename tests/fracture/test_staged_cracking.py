@@ -16,12 +16,14 @@ root by bisection).
   share ends below λ*: its least λ is the one-stage run's) and cracks the same site at
   the same cumulative release in the second; with shares 0.4 and 0.05 neither stage
   cracks and the run ends after the stages.
-- Heading then bench (the opening's halves, two removals) without cracks ends in the
+- K = 1 (hydrostatic) does not crack within the release (σr tensile only beyond λ =
+  r²/a²). Heading then bench (the opening's halves, two removals) without cracks ends in the
   whole opening's elastic state (to 1e-9); with cracks the three solver strategies
   give the same events. Bad staged cracking scenes are refused naming the key; 1 and 2
   ranks give the same events (MPI test).
 """
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -168,6 +170,17 @@ def test_solver_strategies_give_the_same_events(tmp_path, solver):
         rtol=1e-7,
         atol=1e-12,
     )
+
+
+def test_hydrostatic_release_does_not_crack():
+    """K = 1: σr = −p (1 − λ a²/r²), tensile only for λ > r²/a² > 1 (beyond the release)."""
+    driver, res = run(PLATE, "initial_stress.stress=[-10.0, -10.0, 0.0]")
+    assert res["end_reason"] == "stages_done" and not driver.rows
+    stage = res["stages"][0]
+    assert stage["complete"] and stage["released"] == 1.0
+    # the least λ of any site: σr = f_t at r ≈ a + h/2, λ = (f_t + p) r²/(p a²) ≈ 1.2
+    assert 1.1 < stage["next_load_factor"] < 1.3
+    json.dumps(res["stages"], allow_nan=False)
 
 
 def test_heading_then_bench_ends_where_one_excavation_does(tmp_path):
