@@ -346,6 +346,7 @@ def _release_scale(ctx: CrackContext, insitu: InitialStressLoad) -> None:
     """The release's a-priori displacement |σ0|max L / E: the control and the scales."""
     sigma = float(np.max(np.abs(insitu.site_stress), initial=0.0))
     mat = ctx.scene.material
+    assert mat is not None  # a fem scene has one
     scale = max(sigma, MIN_RELEASE_STRESS * mat.E) * ctx.scales.length / mat.E
     ctx.control = release_control(scale)
     ctx.control_unit = scale

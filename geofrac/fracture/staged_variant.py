@@ -29,7 +29,7 @@ class StagedEdgeVariant(EdgeVariant):
         units.state = StagedCrackState(
             old.mesh, old.frozen, old.forced, old.settings, old.mapper, cut=old.cut
         )
-        return units
+        return cast(Units, units)  # (EdgeUnits' state is the protocol's CrackState)
 
 
 #: The edge variant of a staged cracking scene.
