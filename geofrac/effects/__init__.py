@@ -77,6 +77,8 @@ class ConfigureContext:
             (``cracking`` reads the ``dfn`` fracture sets' names).
         loads: the validated loads (:class:`geofrac.model.scene.Load`; ``cracking``
             reads the one its ``control`` names).
+        staged: the scene has ``[[stages]]`` (``cracking``: the stages' release is the
+            control).
     """
 
     file: str
@@ -89,6 +91,7 @@ class ConfigureContext:
     gradient_bc: str = "consistent"
     previous: dict[str, object] = field(default_factory=dict)
     loads: tuple[Load, ...] = ()
+    staged: bool = False
 
 
 def available() -> tuple[str, ...]:

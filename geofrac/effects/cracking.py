@@ -42,7 +42,9 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
   (force control; a body force cannot). Default: the first ``[[bc]]`` with a non-zero
   value, else the first such ``[[load]]``. Every load and prescribed displacement of the
   scene scales with r either way, except those named in ``constant``
-  (docs/cracking.md, "Loads that drive the events").
+  (docs/cracking.md, "Loads that drive the events"). With ``[[stages]]``: ``"release"``,
+  the default and only value: λ scales each stage's excavation release (docs/insitu.md,
+  "Stages in a cracking scene").
 - ``control_point``: ``[x, y]``, force control only: report the displacement of the
   mesh node nearest to this point along the control load's resultant instead of the
   load's work-conjugate displacement.
@@ -102,7 +104,7 @@ from geofrac.effects import ConfigureContext
 from geofrac.elements.kinematics import KINDS
 from geofrac.fracture import CRITERION_NAMES, SOLVERS
 from geofrac.fracture.config import CrackingConfig, JointProperties
-from geofrac.fracture.control import FORCE_LOADS
+from geofrac.fracture.control import FORCE_LOADS, RELEASE
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import finite, short
 
@@ -273,9 +275,21 @@ def _control(table: dict[str, Any], ctx: ConfigureContext) -> tuple[str, str]:
 
     A ``[[bc]]`` group with a non-zero (or ``exact``) prescribed displacement, else a
     ``[[load]]`` group of a type in :data:`FORCE_LOADS` with a non-zero value. Default:
-    the first non-zero ``[[bc]]``, else the first such ``[[load]]``.
+    the first non-zero ``[[bc]]``, else the first such ``[[load]]``. A scene with
+    ``[[stages]]`` is driven by the stages' release: ``"release"`` (the default and the
+    only value; the stages' validation refuses its loads and moving conditions).
     """
     file = ctx.file
+    if ctx.staged:
+        control = table.get("control", RELEASE)
+        if control != RELEASE:
+            raise SceneError(
+                file,
+                "cracking.control",
+                f"with [[stages]] the events are driven by the stages' release: "
+                f"'{RELEASE}' (the default), not {short(control)}",
+            )
+        return RELEASE, RELEASE
     bc_groups = [bc.group for bc in ctx.bcs]
     nonzero = [bc.group for bc in ctx.bcs if bc.value != "exact" and any(v != 0 for v in bc.value)]
     moving = [*nonzero, *(bc.group for bc in ctx.bcs if bc.value == "exact")]
@@ -584,6 +598,11 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         refused = "cohesive faces (material.fracture_energy) do not take constant loads yet"
     elif spec.cracking != "edges":
         refused = f"applies to elements cracked at edges, not '{ctx.element}'"
+    elif ctx.staged:
+        refused = (
+            "does not apply with [[stages]]: the initial stress and the applied part of "
+            "the release are the constant load"
+        )
     constant = _constant(table, ctx, control, refused)
     return CrackingConfig(
         method=method,
@@ -646,6 +665,10 @@ def make_driver(
         variant = GRAINS
     elif spec.cracking != "edges":
         raise ValueError(f"element {spec.name!r} does not support cracking")
+    elif solution.scene.stages:  # removed cells stay void (docs/insitu.md)
+        from geofrac.fracture.staged_variant import STAGED_EDGES
+
+        variant = STAGED_EDGES
     return CrackDriver(config, solution, say, write=write, variant=variant)
 
 

@@ -28,9 +28,11 @@ from geofrac.fem.solution import Solution
 from geofrac.fracture.config import CrackingConfig
 from geofrac.fracture.control import (
     FORCE_LOADS,
+    RELEASE,
     Control,
     displacement_control,
     force_control,
+    release_control,
 )
 from geofrac.fracture.scales import Scales
 from geofrac.materials import d_matrix, lame
@@ -347,9 +349,13 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
     bc_rows, bc_vals, bc_mask, bc_full = _dirichlet(problem, comm, n_global)
     order = np.argsort(gm.node_block)
     bc_row_nodes = order[np.searchsorted(gm.node_block[order], bc_rows // bs)]
-    # the control group: its prescribed, non-zero DOFs (none under force control)
-    control_nodes = np.unique(facet_nodes(tagged, gm, config.control))
-    on = np.isin(bc_row_nodes, control_nodes) & (bc_vals != 0)
+    # the control group: its prescribed, non-zero DOFs (none under force control or
+    # the stages' release, which controls no group)
+    if config.control_kind == RELEASE:
+        on = np.zeros(len(bc_rows), dtype=bool)
+    else:
+        control_nodes = np.unique(facet_nodes(tagged, gm, config.control))
+        on = np.isin(bc_row_nodes, control_nodes) & (bc_vals != 0)
     if config.control_kind == "force":
         on[:] = False
     control_sign = np.zeros(n_global + 1)
@@ -359,6 +365,8 @@ def crack_context(config: CrackingConfig, solution: Solution, say: Say) -> Crack
         face_nodes = np.unique(facet_nodes(tagged, gm, config.face))
     if config.control_kind == "force":
         control = _force(config, problem, gm, bs=bs, say=say)
+    elif config.control_kind == RELEASE:  # the staged loop sets the release's scale
+        control = release_control(1.0 / mat.E)
     else:
         control = displacement_control(config.control, bc_vals[on])
     if not control.unit > 0.0:

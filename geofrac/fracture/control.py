@@ -16,7 +16,11 @@ how, for the two kinds of ``cracking.control``:
   ``control_point``, the displacement of the node nearest to that point along the
   resultant. A self-equilibrated load (a pressure in a hole: |resultant| below
   :data:`SELF_EQUILIBRATED` of Σ|f_i|) has F = Σ|f_i|, the sum of the nodal forces'
-  magnitudes, so that δ_u is then the mean displacement along the load.
+  magnitudes, so that δ_u is then the mean displacement along the load;
+- *release*, a cracking scene with ``[[stages]]`` (docs/insitu.md, "Stages in a cracking
+  scene"): λ is the share of a stage's excavation release; no group is controlled, so
+  the control displacement and force are 0 and the stages' summary reports the release
+  (:mod:`~geofrac.fracture.staged`).
 
 Pure numpy: the caller assembles f (:meth:`~geofrac.fem.elastic.ElasticProblem.load_part`).
 """
@@ -30,14 +34,19 @@ import numpy as np
 __all__ = [
     "FORCE_LOADS",
     "KINDS",
+    "RELEASE",
     "SELF_EQUILIBRATED",
     "Control",
     "displacement_control",
     "force_control",
+    "release_control",
 ]
 
 #: The kinds of ``cracking.control``.
-KINDS = ("displacement", "force")
+KINDS = ("displacement", "force", "release")
+
+#: The ``cracking.control`` of a cracking scene with ``[[stages]]``: the stages' release.
+RELEASE = "release"
 
 #: ``[[load]]`` types whose group may be the control (force control); a body force acts
 #: on no group.
@@ -90,6 +99,8 @@ class Control:
         """
         if self.kind == "displacement":
             return self.unit, reaction
+        if self.kind == RELEASE:  # no group: the stages' summary reports the release
+            return 0.0, 0.0
         if self.node_dofs is not None:
             assert self.direction is not None
             return float(u[self.node_dofs] @ self.direction), self.unit
@@ -106,6 +117,9 @@ class Control:
         out: dict[str, object] = {"group": self.group, "kind": self.kind}
         if self.kind == "displacement":
             out["unit_displacement"] = self.unit
+            return out
+        if self.kind == RELEASE:
+            out["displacement_scale"] = self.scale
             return out
         assert self.resultant is not None
         out |= {
@@ -182,3 +196,11 @@ def force_control(
         node_dofs=dofs,
         resultant=resultant,
     )
+
+
+def release_control(scale: float) -> Control:
+    """The control of a staged cracking run: λ scales a stage's release.
+
+    ``scale``: the release's a-priori displacement (|σ0| L / E), > 0.
+    """
+    return Control(RELEASE, RELEASE, 1.0, float(scale))

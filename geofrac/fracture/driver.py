@@ -220,7 +220,13 @@ class CrackDriver:
         )
         parts = self._parts(write=write)
         self.loop: EventLoop
-        if ctx.scene.initial_stress is not None:  # σ0 joins the constant load
+        if ctx.scene.stages:  # the stages' release drives the events
+            from geofrac.fracture.staged import staged_loop
+
+            self.loop = staged_loop(
+                ctx, parts, self.sites, settings=settings, control=self.control, solution=solution
+            )
+        elif ctx.scene.initial_stress is not None:  # σ0 joins the constant load
             from geofrac.fracture.insitu import insitu_loop
 
             self.loop = insitu_loop(ctx, parts, self.sites, settings=settings, control=self.control)

@@ -50,7 +50,8 @@ from geofrac.log import format_seconds
 
 __all__ = ["END_REASONS", "MODES", "ContactUnsettled", "EventLoop", "LoopParts"]
 
-#: Why an event loop ends ("contact": the crack faces' states did not settle).
+#: Why an event loop ends ("contact": the crack faces' states did not settle;
+#: "stages_done": a staged run, :mod:`~geofrac.fracture.staged`, ran its last stage).
 END_REASONS = (
     "max_events",
     "energy_drop",
@@ -58,6 +59,7 @@ END_REASONS = (
     "separated",
     "singular",
     "contact",
+    "stages_done",
 )
 
 

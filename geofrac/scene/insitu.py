@@ -167,8 +167,7 @@ def _no_driver(file: Path, key: str, declared: Sequence[str]) -> None:
             key,
             f"effect '{owners[0]}' drives the run with its own loop, which "
             + (
-                "does not run construction stages yet (a cracking scene takes an "
-                "[initial_stress] and a scaled load instead: docs/insitu.md)"
+                "does not run construction stages yet"
                 if key == "stages"
                 else "does not start from an initial stress yet"
             )
@@ -227,8 +226,8 @@ def cracking_variable(
             "a cracking scene with an initial stress needs a variable load: the initial "
             "stress (and gravity) is held constant and each event scales the control "
             "group's load; add a [[bc]] with a non-zero displacement or a traction, "
-            "pressure or point [[load]] (an excavation's release, [[stages]], is not "
-            "available with cracking yet)",
+            "pressure or point [[load]], or excavate with [[stages]] (the release drives "
+            "the events)",
         )
 
 
@@ -325,6 +324,42 @@ def _loaded(t: Table, geometry: Geometry) -> tuple[str, ...]:
     return tuple(value)
 
 
+def _staged_cracking(
+    file: Path, raw: list[Any], *, initial: bool, bcs: Sequence[Any], loads: Sequence[Any]
+) -> None:
+    """A cracking scene takes stages that remove cells, from an initial stress.
+
+    The stages' release is the only load that varies (docs/insitu.md, "Stages in a
+    cracking scene"); the element and the crack settings were checked with
+    ``[initial_stress]``.
+    """
+    if not initial:
+        raise SceneError(
+            file,
+            "stages",
+            "a cracking scene with [[stages]] needs an [initial_stress]: the events are "
+            "driven by the release of the stress that the removed cells carried",
+        )
+    moving = [bc.group for bc in bcs if bc.value == "exact" or any(v != 0 for v in bc.value)]
+    if moving or loads:
+        what = f"[[bc]] '{moving[0]}' prescribes a displacement" if moving else "[[load]]"
+        raise SceneError(
+            file,
+            "stages",
+            f"a cracking scene with [[stages]] is driven by the stages' release only; its {what}, "
+            "which staged cracking does not take yet (hold the far sides or load them by "
+            "σ0·n with initial_stress.loaded)",
+        )
+    for i, entry in enumerate(raw):
+        if isinstance(entry, dict) and "add" in entry:
+            raise SceneError(
+                file,
+                f"stages[{i}].add",
+                "installing support (cells added by a stage) is for elastic scenes only so "
+                "far; a cracking scene's stages remove cells",
+            )
+
+
 def stages(
     file: Path,
     raw: Any,
@@ -334,6 +369,9 @@ def stages(
     declared: Sequence[str],
     material: Material | None = None,
     switched: Collection[str] = (),
+    initial: bool = False,
+    bcs: Sequence[Any] = (),
+    loads: Sequence[Any] = (),
 ) -> tuple[Stage, ...]:
     """The validated ``[[stages]]`` entries.
 
@@ -341,7 +379,9 @@ def stages(
     0); each stage applies ``relaxation`` of it, or, without ``relaxation``, all that
     remains; the shares of one release must not add up to more than 1. A stage that
     only adds groups, or only switches loads or supports (its name is in ``switched``,
-    :mod:`geofrac.scene.switches`), may apply nothing.
+    :mod:`geofrac.scene.switches`), may apply nothing. A cracking scene (``declared``
+    has ``cracking``) needs ``initial`` (an ``[initial_stress]``), no ``bcs`` that move
+    and no ``loads``, and its stages may not add cells.
 
     Raises:
         SceneError: naming the stage and key.
@@ -350,8 +390,11 @@ def stages(
         raise SceneError(file, "stages", "must be a non-empty array of tables ([[stages]])")
     if len(raw) > MAX_STAGES:
         raise SceneError(file, "stages", f"at most {MAX_STAGES} stages, got {len(raw)}")
-    _element(file, "stages", element)
-    _no_driver(file, "stages", declared)
+    if "cracking" in declared:
+        _staged_cracking(file, raw, initial=initial, bcs=bcs, loads=loads)
+    else:
+        _element(file, "stages", element)
+        _no_driver(file, "stages", declared)
     cells = [g for g, d in geometry.groups.items() if d == geometry.dim]
     absent = _absent_at_start(raw)
     removed: set[str] = set(absent)

@@ -696,6 +696,8 @@ def _effects(
     bcs: tuple[BoundaryCondition, ...],
     configured: dict[str, Any],
     loads: tuple[Load, ...] = (),
+    *,
+    staged: bool = False,
 ) -> tuple[EffectSpec, ...]:
     """Configure each declared effect (``configured``: those already done, by name)."""
     ctx = effects.ConfigureContext(
@@ -707,6 +709,7 @@ def _effects(
         bcs,
         gradient_bc=discretization.gradient_bc,
         loads=loads,
+        staged=staged,
     )
     _check_methods(file, declared, "fem")
     _check_drivers(file, declared)
@@ -1143,10 +1146,19 @@ def _validate(
         trusted,
         next((e for e in declared if effects.drives(e)), None),
     )
-    if "initial_stress" in data:
+    if "initial_stress" in data and "stages" not in data:
         _cracking_variable(file, declared, bcs=bcs, loads=loads)
     specs = _effects(
-        file, data, declared, geometry, material, discretization, bcs, configured, loads
+        file,
+        data,
+        declared,
+        geometry,
+        material,
+        discretization,
+        bcs,
+        configured,
+        loads,
+        staged="stages" in data,
     )
     initial = None
     if "initial_stress" in data:
@@ -1169,6 +1181,9 @@ def _validate(
             declared=declared,
             material=material,
             switched=_switched(bcs, loads),
+            initial=initial is not None,
+            bcs=bcs,
+            loads=loads,
         )
     return Scene(
         initial_stress=initial,

@@ -1,0 +1,400 @@
+"""Construction stages in a cracking run: each stage's release drives the events.
+
+A cracking scene with ``[initial_stress]`` and ``[[stages]]`` (docs/insitu.md, "Stages in
+a cracking scene") runs :class:`StagedEventLoop`, the loop of an initial stress
+(:class:`~geofrac.fracture.insitu.InsituEventLoop`; DeJong, Hendriks and Rots (2008))
+whose variable load is the release of the running stage:
+
+- a stage that removes cell groups makes them void (:mod:`~geofrac.fracture.staged_state`)
+  and forms the release P = F0 − K u_e: the out-of-balance force of the remaining body
+  in the state u_e where the last stage ended, F0 = F_ext,0 − I(σ0) on the new crack and
+  void state (what the removed cells carried across the new wall, plus any part of an
+  earlier release not yet applied); a stage without ``remove`` goes on with the pending
+  release;
+- the constant load is F0 − (1 − a) P, a the share of P applied by the earlier stages
+  (0 after a removal), and the variable load is P: the state is u = u_c + λ u_v, both
+  solved on the current crack state each event, with λ from 0 up to the stage's share
+  s (``relaxation``; all that remains without it); at λ = 0 the constant solve gives
+  u_e back;
+- each event the least λ of the sites (:class:`~geofrac.fracture.constant.ConstantChooser`):
+  λ ≤ s cracks the sites; λ > s ends the stage at λ = s without an event (a += s, and
+  u_c + s u_v is the state the next stage starts from). After the last stage the run
+  ends (``stages_done``).
+
+Each stage's end is a step of ``results.xdmf`` (step 0 the initial state), and
+``summary.json`` has a ``stages`` entry per stage (its events, share, the first event's
+release and the probes' displacement at the nearest node).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+import numpy as np
+
+from geofrac.errors import RunError
+from geofrac.fem.insitu import cell_dofs
+from geofrac.fem.insitu import group_cells as local_group_cells
+from geofrac.fem.post import TENSOR_FIELDS
+from geofrac.fem.solution import Solution
+from geofrac.fem.stage_checkpoint import Frame
+from geofrac.fem.stages import TOLERANCE, refusal
+from geofrac.fracture.config import LoopSettings
+from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_load
+from geofrac.fracture.constant_loop import ConstantEventLoop
+from geofrac.fracture.context import CrackContext, JsonValue, Sites
+from geofrac.fracture.control import release_control
+from geofrac.fracture.equilibrium import Solved
+from geofrac.fracture.event_criterion import EdgeCriterion
+from geofrac.fracture.insitu import InitialStressLoad, InsituEventLoop
+from geofrac.fracture.loop import LoopParts, _Run
+from geofrac.fracture.modes import Choice
+from geofrac.fracture.staged_state import StagedCrackState, group_cells, internal_force
+from geofrac.fracture.units import EdgeUnits
+from geofrac.io.checkpoint import RunControl
+from geofrac.model.scene import Stage
+
+__all__ = ["StagedChooser", "StagedEventLoop", "StagedInitialStress", "staged_loop"]
+
+
+class StagedChooser(ConstantChooser):
+    """:class:`ConstantChooser` that chooses no site beyond the running stage's share.
+
+    Attributes:
+        share: the largest λ of the running stage.
+        beyond: the least λ of the last choice that came out beyond it (inf: none).
+    """
+
+    share = 1.0
+    beyond = float("inf")
+
+    def choose(self, sc: np.ndarray, sv: np.ndarray, *, floor: float) -> Choice:
+        """The event of :meth:`ConstantChooser.choose`, or no site when its λ > share."""
+        choice = super().choose(sc, sv, floor=floor)
+        self.beyond = float("inf") if len(choice.sites) == 0 else choice.r
+        if choice.r > self.share:
+            return Choice(np.zeros(0, dtype=np.int64), choice.r, choice.mode)
+        return choice
+
+
+class StagedInitialStress(InitialStressLoad):
+    """σ0 and its out-of-balance force, with the removed cells' weight gone.
+
+    F_ext,0 includes the effects' terms (gravity: ρ of the live cells, ``alive``);
+    :meth:`refresh` reassembles it after a removal.
+    """
+
+    def __init__(self, ctx: CrackContext, units: EdgeUnits) -> None:
+        super().__init__(ctx, units)
+        self.external = self._external()[0] if ctx.problem.terms else None
+
+    def refresh(self) -> None:
+        """F0 of the intact mesh with the current ``alive`` cells' weight (collective)."""
+        if self.external is None:
+            return
+        external = self._external()[0]
+        self.base = self.base + (external - self.external)
+        self.external = external
+
+
+class StagedEventLoop(InsituEventLoop):
+    """The initial-stress loop whose variable load is the running stage's release.
+
+    Args:
+        ctx, parts, sites, settings, control, load, chooser, insitu: as
+            :class:`~geofrac.fracture.insitu.InsituEventLoop` (``chooser`` a
+            :class:`StagedChooser`, ``insitu`` a :class:`StagedInitialStress`).
+        solution: where the stages' ``results.xdmf`` steps go (``frames``).
+    """
+
+    def __init__(
+        self,
+        ctx: CrackContext,
+        parts: LoopParts,
+        sites: Sites,
+        *,
+        settings: LoopSettings,
+        control: RunControl | None,
+        load: ConstantLoad,
+        chooser: StagedChooser,
+        insitu: StagedInitialStress,
+        solution: Solution,
+    ) -> None:
+        super().__init__(
+            ctx,
+            parts,
+            sites,
+            settings=settings,
+            control=control,
+            load=load,
+            chooser=chooser,
+            insitu=insitu,
+        )
+        self.staged_chooser, self.staged_insitu = chooser, insitu
+        self.solution = solution
+        self.stages: tuple[Stage, ...] = ctx.scene.stages
+        #: the running stage (0-based; len(stages) when done) and whether it has begun.
+        self.k, self.begun = 0, False
+        #: the pending release P and the share of it applied before the running stage.
+        self.release, self.applied = np.zeros(ctx.n_global), 0.0
+        #: the state where the last stage ended, shape=(n_global,).
+        self.u_end = np.zeros(ctx.n_global)
+        self.entries: list[dict[str, JsonValue]] = []
+        self.frames: list[Frame] = []
+        self._events: list[int] = []  # events of the running stage
+        self._first: dict[str, JsonValue] | None = None
+        self._unknown: dolfinx.fem.Function | None = None
+        self._final: np.ndarray | None = None
+
+    def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
+        """Run the stages (a resume is refused: the stages' state is not in checkpoints)."""
+        if self.control is not None and self.control.resume is not None:
+            raise RunError(
+                "--resume: a cracking run with [[stages]] cannot be resumed yet (its "
+                "checkpoints keep neither the release nor the stage's state); run it again"
+            )
+        self._unknown = unknown
+        if self.solution.scene.output.xdmf:
+            self.frames.append(self._frame(0, "initial", self.u_end))
+        return super().run(unknown)
+
+    # -- the stages ----------------------------------------------------------------------
+    def _share(self) -> float:
+        """The running stage's share s: its relaxation, or all that remains of P."""
+        relaxation = self.stages[self.k].relaxation
+        return max(1.0 - self.applied, 0.0) if relaxation is None else relaxation
+
+    def _begin_stage(self) -> None:
+        """Remove the stage's cells and form its release P = F0 − K u_e (collective)."""
+        ctx, stage = self.ctx, self.stages[self.k]
+        units = self.parts.units
+        assert isinstance(units, EdgeUnits)
+        if stage.remove:
+            state = units.state
+            assert isinstance(state, StagedCrackState)
+            cells = group_cells(ctx, stage.remove)
+            changed = state.remove(cells)
+            units.reset()  # the MLS table of the measures: rebuilt
+            self.parts.strategy.reset()
+            self.parts.strategy.drop()  # a new factorisation with the new release
+            assert self.load.extra_stress is not None
+            self.load.extra_stress[cells] = 0.0  # no σ0 in the opening
+            self._kill(stage.remove)
+            self.staged_insitu.refresh()
+            self.release = self.insitu.force() - internal_force(ctx, units, self.u_end)
+            self.release[ctx.bc_rows] = 0.0
+            self.applied = 0.0
+            self.load.variable.load.setArray(self.release[self._rows])
+            ctx.say(
+                f"stage {self.k + 1}/{len(self.stages)} '{stage.name}': removed "
+                f"{', '.join(stage.remove)} ({len(cells)} cells, {len(changed)} changed)"
+            )
+        self.staged_chooser.share = self._share()
+        self.begun, self._events, self._first = True, [], None
+
+    def _kill(self, groups: tuple[str, ...]) -> None:
+        """``alive`` = 0 on the removed groups (their weight and the stress output)."""
+        insitu = self.ctx.problem.insitu
+        assert insitu is not None
+        for group in groups:
+            cells = np.asarray(local_group_cells(self.ctx.tagged, group), dtype=np.int32)
+            insitu.alive.x.array[cell_dofs(insitu.alive, cells)] = 0.0
+        insitu.alive.x.scatter_forward()
+
+    def _end_stage(self, run: _Run, *, complete: bool) -> None:
+        """Close the running stage at its share (or, not complete, at its last event)."""
+        stage, share = self.stages[self.k], self._share()
+        beyond = self.staged_chooser.beyond  # inf: no site ever cracks in this release
+        if complete:
+            self.u_end = self.u_const + share * run.u_unit
+        elif run.rows and self._events:
+            self.u_end = self._state(run, run.rows[-1]["load_factor"])
+        entry: dict[str, JsonValue] = {
+            "index": self.k + 1,
+            "name": stage.name,
+            "removed": list(stage.remove),
+            "share": share,
+            "released": self.applied + share if complete else None,
+            "complete": complete,
+            "events": len(self._events),
+            "event_ids": list(self._events),
+            "first_event": self._first,
+            "next_load_factor": beyond if complete and np.isfinite(beyond) else None,
+            "probes": self._probes(self.u_end),
+            "max_displacement": self._max_displacement(self.u_end),
+        }
+        self.entries.append(entry)
+        if self.solution.scene.output.xdmf:
+            self.frames.append(self._frame(self.k + 1, stage.name, self.u_end))
+        self.ctx.say(
+            f"stage {self.k + 1}/{len(self.stages)} '{stage.name}': {len(self._events)} events, "
+            f"share {share:.4g} (released {self.applied + share:.4g} of the pending release)"
+            + ("" if complete else ", not completed")
+        )
+        if complete:
+            self.applied += share
+        self.k, self.begun = self.k + 1, False
+
+    # -- an event ------------------------------------------------------------------------
+    def _event(self, run: _Run, event: int) -> bool:
+        """Solve, choose; crack when λ ≤ s, else end the stage and go on with the next."""
+        parts = self.parts
+        while self.k < len(self.stages):
+            if not self.begun:
+                self._begin_stage()
+            start = parts.replay.start(event, run.u_unit, run.face_hit)
+            solved = self._solve(run, event, replay=False)
+            if solved is None:
+                return False
+            self._keep_reference(run, start)
+            parts.timing.iterations += solved.iterations
+            run.clock = time.perf_counter()
+            choice = self._choose(run, event)
+            if choice is not None:
+                return self._crack(run, event, choice, solved)
+            if run.end != "no_tensile_edge":  # separated
+                return False
+            run.end, run.detail = "max_events", None
+            self._end_stage(run, complete=True)
+        run.end = "stages_done"
+        return False
+
+    def _crack(self, run: _Run, event: int, choice: Choice, solved: Solved) -> bool:
+        """Log the state u_c + λ u_v, crack the sites, publish (ConstantEventLoop's event)."""
+        assert run.unit is not None
+        r, (energy_c, _, _, cross) = choice.r, self._const
+        energy = energy_c + r * cross + r * r * run.unit[0]
+        row = self._log(run, event, choice, solved=solved, energy=energy)
+        row["control_displacement"] = 0.0
+        if choice.r == 0.0:
+            self.over_cracked += len(choice.sites)
+        if not self._events:
+            self._first = {"event": event, "load_factor": r, "release": self.applied + r}
+        self._events.append(event)
+        self.parts.crack.apply(choice)
+        self._after_crack(run, event, choice, row=row, energy=energy)
+        return self._publish(run, event, row=row, energy=energy)
+
+    def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
+        """The constant load F0 − (1 − a) P on the current crack state, then both solves."""
+        force = self.insitu.force() - (1.0 - self.applied) * self.release
+        self.load.constant.load.setArray(force[self._rows])
+        return ConstantEventLoop._solve(self, run, event, replay=replay)
+
+    # -- results -------------------------------------------------------------------------
+    def _probes(self, u: np.ndarray) -> dict[str, JsonValue]:
+        """Each probe's displacement at the mesh node nearest to it."""
+        gm, out = self.ctx.gm, {}
+        for name, point in self.solution.scene.output.probes.items():
+            node = int(np.argmin(np.hypot(*(gm.coords - np.asarray(point)[:2]).T)))
+            out[name] = [float(v) for v in u[self.ctx.node_dofs(np.array([node]), 2)]]
+        return out  # type: ignore[return-value]
+
+    def _max_displacement(self, u: np.ndarray) -> float:
+        """Largest |u| over the nodes of live cells."""
+        gm, state = self.ctx.gm, self.parts.units.state
+        live = np.zeros(len(gm.coords), dtype=bool)
+        assert isinstance(state, StagedCrackState)
+        live[gm.cells[~state.removed].ravel()] = True
+        uv = u[self.ctx.node_dofs(np.flatnonzero(live), 2)].reshape(-1, 2)
+        return float(np.max(np.hypot(uv[:, 0], uv[:, 1]), initial=0.0))
+
+    def _frame(self, index: int, name: str, u: np.ndarray) -> Frame:
+        """The fields of the state u for ``results.xdmf`` (displacement, stresses, alive)."""
+        assert self._unknown is not None
+        problem, scene = self.ctx.problem, self.solution.scene
+        self._finish_field(self._unknown, u)
+        functions = []
+        if "displacement" in scene.output.fields:
+            disp = problem.uh.copy()
+            disp.name = "displacement"
+            functions.append(disp)
+        wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
+        fields = problem.tensor_fields(wanted)
+        functions += [fields[f] for f in wanted]
+        assert problem.insitu is not None
+        alive = problem.insitu.alive.copy()
+        alive.name = "alive"
+        functions.append(alive)
+        return Frame(index, name, functions)
+
+    def _state(self, run: _Run, r: float) -> np.ndarray:
+        """u_c + r u_v, or after the stages the state where the last one ended."""
+        return self._final if self._final is not None else super()._state(run, r)
+
+    def _finish(self, run: _Run, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
+        """The results, with ``stages``; the stages' steps go to the solution's frames."""
+        if self.k < len(self.stages) and self.begun:  # ended within a stage
+            self._end_stage(run, complete=False)
+        self._final = self.u_end
+        results = super()._finish(run, unknown)
+        results["stages"] = self.entries  # type: ignore[assignment]
+        self.solution.frames = self.frames
+        return results
+
+
+#: The least stress of the release's a-priori scale, as a fraction of E: a σ0 of zero
+#: releases nothing, and its run ends ``separated`` against this scale.
+MIN_RELEASE_STRESS = 1e-6
+
+
+def _release_scale(ctx: CrackContext, insitu: InitialStressLoad) -> None:
+    """The release's a-priori displacement |σ0|max L / E: the control and the scales."""
+    sigma = float(np.max(np.abs(insitu.site_stress), initial=0.0))
+    mat = ctx.scene.material
+    assert mat is not None  # a fem scene has one
+    scale = max(sigma, MIN_RELEASE_STRESS * mat.E) * ctx.scales.length / mat.E
+    ctx.control = release_control(scale)
+    ctx.control_unit = scale
+    ctx.scales = dataclasses.replace(ctx.scales, displacement=scale)
+
+
+def staged_loop(
+    ctx: CrackContext,
+    parts: LoopParts,
+    sites: Sites,
+    *,
+    settings: LoopSettings,
+    control: RunControl | None,
+    solution: Solution,
+) -> StagedEventLoop:
+    """The loop of a cracking scene with ``[[stages]]`` (collective).
+
+    Checks the initial state's balance as :func:`~geofrac.fracture.insitu.insitu_loop`
+    does, sets σ0 at the sites and the release's scales.
+
+    Raises:
+        RunError: collectively, when the initial state is out of balance.
+    """
+    units, criterion = parts.units, parts.criterion
+    if not isinstance(units, EdgeUnits) or not isinstance(criterion, EdgeCriterion):
+        raise RunError("stages: cracking at element edges only (not grain interfaces)")
+    insitu = StagedInitialStress(ctx, units)
+    spec = ctx.scene.initial_stress
+    assert spec is not None
+    ctx.say(
+        f"initial stress ({spec.kind}): out of balance {insitu.balance:.2e} of the applied "
+        f"force (tolerance {TOLERANCE:g}); {len(ctx.scene.stages)} stages release it"
+    )
+    if insitu.balance > TOLERANCE:
+        raise RunError(refusal(insitu.balance))
+    _release_scale(ctx, insitu)
+    load = constant_load(ctx, ctx.config)
+    load.variable.load.set(0.0)
+    load.extra_stress = insitu.site_stress.copy()
+    parts.assembler.case = load.variable
+    return StagedEventLoop(
+        ctx,
+        parts,
+        sites,
+        settings=settings,
+        control=control,
+        load=load,
+        chooser=StagedChooser(criterion, units, ctx.config),
+        insitu=insitu,
+        solution=solution,
+    )

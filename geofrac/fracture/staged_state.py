@@ -1,0 +1,113 @@
+"""Cells removed by construction stages in a cracking run (docs/insitu.md).
+
+A stage of a cracking scene removes cell groups (an excavation). A removed cell is
+*void*, as a fragment's cell is (:class:`~geofrac.fracture.state.CrackState`): it carries
+no stiffness, and :class:`~geofrac.fracture.insitu.InitialStressLoad` gives it no
+internal force of σ0. Its edges are no crack sites, and neither are the edges of the new
+wall (one live cell; only interior edges crack, the rule of the mesh's own boundary).
+The new wall bounds the MLS fits' visibility as the mesh boundary does, so a fit near it
+takes no satellite inside the opening, and a node on it counts as a boundary node for
+the cut cells. :class:`StagedCrackState` keeps removed cells void through every refit;
+:data:`~geofrac.fracture.staged_variant.STAGED_EDGES` is the edge variant whose units
+carry it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import numpy as np
+from mpi4py import MPI
+
+from geofrac.fracture.context import CrackContext
+from geofrac.fracture.state import CrackState
+from geofrac.fracture.units import EdgeUnits
+from geofrac.mls.shape import LinearFit
+
+__all__ = ["StagedCrackState", "group_cells", "internal_force"]
+
+
+@dataclass
+class StagedCrackState(CrackState):
+    """A crack state whose removed cells stay void.
+
+    Attributes:
+        removed: whether each cell has been removed by a stage, shape=(num_cells,).
+    """
+
+    def __post_init__(self) -> None:  # noqa: D105
+        super().__post_init__()
+        self.removed = np.zeros(self.mesh.num_cells, dtype=bool)
+
+    def refit(self, cells: np.ndarray) -> np.ndarray:
+        """:meth:`CrackState.refit` of the cells that are not removed."""
+        cells = np.asarray(cells, dtype=np.int64)
+        return super().refit(cells[~self.removed[cells]])
+
+    def remove(self, cells: np.ndarray) -> np.ndarray:
+        """Remove ``cells`` (shape=(k,)); return the cells whose field changed, sorted.
+
+        The removed cells become void; their edges stop being crack sites; the wall
+        edges (a removed and a live cell) join the boundary that blocks visibility and
+        their nodes count as boundary nodes. Fits that used a node of a removed cell
+        are refitted against the new wall.
+        """
+        m = self.mesh
+        cells = np.unique(np.asarray(cells, dtype=np.int64))
+        cells = cells[~self.removed[cells]]
+        self.removed[cells] = True
+        edges = np.unique(m.cell_edges[cells])
+        self.crackable[edges] = False
+        ec = m.edge_cells[edges]  # shape=(k, 2), -1: no cell
+        live = (ec >= 0) & ~self.removed[np.maximum(ec, 0)]
+        wall = edges[live.any(axis=1)]
+        for e in wall.tolist():
+            a, b = self.segments[e]
+            self.boundary_bins.add(e, np.minimum(a, b), np.maximum(a, b))
+        self._on_boundary[m.edges[wall].ravel()] = True
+        for c in cells.tolist():
+            self.fits[c] = None
+        self._h[cells] = 0.0
+        inside = np.zeros(len(m.coords), dtype=bool)
+        inside[m.cells[cells].ravel()] = True
+        near = [
+            c for c, fit in self.fits.items() if fit is not None and bool(inside[fit.nodes].any())
+        ]
+        refitted = self.refit(np.array(sorted(near), dtype=np.int64))
+        return np.union1d(cells, refitted)
+
+
+def group_cells(ctx: CrackContext, groups: tuple[str, ...]) -> np.ndarray:
+    """The gathered-mesh cells of cell groups, from every rank, sorted, shape=(k,)."""
+    n_own = ctx.tagged.mesh.topology.index_map(2).size_local
+    mine = [np.zeros(0, dtype=np.int64)]
+    for group in groups:
+        _, local = ctx.tagged.entities(group)
+        mine.append(ctx.gm.local_cell[local[local < n_own]].astype(np.int64))
+    return np.unique(np.concatenate(ctx.comm.allgather(np.concatenate(mine))))
+
+
+def internal_force(ctx: CrackContext, units: EdgeUnits, u: np.ndarray) -> np.ndarray:
+    """K u of the current crack state, gathered on every rank, shape=(n_global,).
+
+    The owned cells' element matrices (intact cells) and MLS stiffness (2.19) (fitted
+    cells), the matrices the assembly uses; void cells give nothing. ``u``:
+    shape=(n_global,). Collective.
+    """
+    state = units.state
+    f = np.zeros(ctx.n_global)
+    fe = ~state.is_mls()[units.own]
+    dofs = units.fe_dofs[fe]
+    np.add.at(f, dofs, np.einsum("cij,cj->ci", units.K_fe[fe], u[dofs]))
+    for c, fit in state.fits.items():
+        if fit is None or not units.owned[c]:
+            continue
+        assert isinstance(fit, LinearFit)
+        block = units.fit_block(c, fit)
+        assert block is not None
+        d, k = block
+        np.add.at(f, d, k @ u[d])
+    ctx.comm.Allreduce(MPI.IN_PLACE, f, op=MPI.SUM)
+    return f
