@@ -239,6 +239,9 @@ def _contact(table: dict[str, Any], ctx: ConfigureContext, precracked: list[str]
         raise SceneError(file, "cracking.joints", "must be a table of [cracking.joints.NAME]")
     dfn = ctx.previous.get("dfn")
     sets = [s.name for s in getattr(dfn, "sets", ())]
+    network = getattr(dfn, "network", None)
+    if network is not None:  # a network read from dfn.file: its sets
+        sets += list(network.set_names)
     joints = []
     for name, entry in raw.items():
         if name not in precracked and name not in sets:

@@ -230,6 +230,7 @@ class ConstantEventLoop(EventLoop):
             choice = self.faces.with_slip(
                 choice, self.u_const, run.u_unit, floor=floor, points=points
             )
+        choice = self._limit(choice)
         self._count_start(len(self.chooser.over_sites))
         run.clock = parts.timing.add("criterion", run.clock)
         if len(choice.sites) == 0:
@@ -242,6 +243,10 @@ class ConstantEventLoop(EventLoop):
             if run.detail is not None:
                 run.end = "separated"
                 return None
+        return choice
+
+    def _limit(self, choice: Choice) -> Choice:
+        """The event as chosen (a subclass may refuse events beyond a largest λ)."""
         return choice
 
     def _count_start(self, over: int) -> None:

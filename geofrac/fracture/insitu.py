@@ -281,13 +281,22 @@ class InsituEventLoop(ConstantEventLoop):
             )
         return run
 
-    def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
-        """Reassemble F0 (and the closed pairs' σ0·n) on the current state; solve both loads."""
-        force, base = self.insitu.force(), self.insitu.base
+    def _initial_force(self) -> np.ndarray:
+        """σ0's force on the current state, shape=(n_global,) (collective).
+
+        F0 of the current crack state; with contact, plus the closed pairs' σ0·n minus
+        the pre-cracked state's R (module docstring): zero while nothing changed.
+        """
+        force = self.insitu.force()
         if self.faces is not None:
             assert self._reference is not None
             force = force + self.faces.force() - self._reference
-            base = np.zeros_like(force)
+        return force
+
+    def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
+        """Reassemble F0 (and the closed pairs' σ0·n) on the current state; solve both loads."""
+        force = self._initial_force()
+        base = self.insitu.base if self.faces is None else np.zeros_like(force)
         self.load.constant.load.setArray(self.named + force[self._rows])
         # the control DOFs' share of I(σ0) that cracks moved: −(F0 − F0 of the initial
         # state: the intact mesh, or the pre-cracked one with contact)

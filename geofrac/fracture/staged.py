@@ -48,7 +48,7 @@ from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_lo
 from geofrac.fracture.constant_loop import ConstantEventLoop
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
 from geofrac.fracture.control import release_control
-from geofrac.fracture.equilibrium import Solved
+from geofrac.fracture.equilibrium import ContactEquilibrium, Solved, Visited
 from geofrac.fracture.event_criterion import EdgeCriterion
 from geofrac.fracture.insitu import InitialStressLoad, InsituEventLoop
 from geofrac.fracture.loop import LoopParts, _Run
@@ -149,6 +149,9 @@ class StagedEventLoop(InsituEventLoop):
         self._first: dict[str, JsonValue] | None = None
         self._unknown: dolfinx.fem.Function | None = None
         self._final: np.ndarray | None = None
+        #: active-set steps judged at the running stage's end, and the states they left.
+        self._share_settles = 0
+        self._share_history: Visited = {}
 
     def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
         """Run the stages (a resume is refused: the stages' state is not in checkpoints)."""
@@ -178,6 +181,8 @@ class StagedEventLoop(InsituEventLoop):
             assert isinstance(state, StagedCrackState)
             cells = group_cells(ctx, stage.remove)
             changed = state.remove(cells)
+            if self.faces is not None:  # pairs beside a void cell are no pairs any more
+                self.faces.faces.cracked(np.zeros(0, dtype=np.int64), changed)
             units.reset()  # the MLS table of the measures: rebuilt
             self.parts.strategy.reset()
             self.parts.strategy.drop()  # a new factorisation with the new release
@@ -185,7 +190,10 @@ class StagedEventLoop(InsituEventLoop):
             self.load.extra_stress[cells] = 0.0  # no σ0 in the opening
             self._kill(stage.remove)
             self.staged_insitu.refresh()
-            self.release = self.insitu.force() - internal_force(ctx, units, self.u_end)
+            pairs = None if self.faces is None else self.faces.faces.owned_blocks()
+            self.release = self._initial_force() - internal_force(
+                ctx, units, self.u_end, pairs=pairs
+            )
             self.release[ctx.bc_rows] = 0.0
             self.applied = 0.0
             self.load.variable.load.setArray(self.release[self._rows])
@@ -195,6 +203,7 @@ class StagedEventLoop(InsituEventLoop):
             )
         self.staged_chooser.share = self._share()
         self.begun, self._events, self._first = True, [], None
+        self._share_settles, self._share_history = 0, {}
 
     def _kill(self, groups: tuple[str, ...]) -> None:
         """``alive`` = 0 on the removed groups (their weight and the stress output)."""
@@ -254,14 +263,54 @@ class StagedEventLoop(InsituEventLoop):
             parts.timing.iterations += solved.iterations
             run.clock = time.perf_counter()
             choice = self._choose(run, event)
+            if choice is not None and self.faces is not None:
+                settled = self._settle(run, event, choice, solved)
+                if settled is None and run.end != "no_tensile_edge":
+                    return False  # unsettled, singular or separated
+                choice, solved = settled if settled is not None else (None, solved)
             if choice is not None:
                 return self._crack(run, event, choice, solved)
             if run.end != "no_tensile_edge":  # separated
                 return False
+            if self.faces is not None:
+                moved = self._settle_at_share(run, event)
+                if moved is None:
+                    return False
+                if moved:  # other states at the stage's end: solve and choose again
+                    continue
             run.end, run.detail = "max_events", None
             self._end_stage(run, complete=True)
         run.end = "stages_done"
         return False
+
+    def _limit(self, choice: Choice) -> Choice:
+        """No event beyond the running stage's share (a joint's slip included)."""
+        chooser = self.staged_chooser
+        if len(choice.sites) and choice.r > chooser.share:
+            chooser.beyond = min(chooser.beyond, choice.r)
+            return Choice(np.zeros(0, dtype=np.int64), choice.r, choice.mode)
+        return choice
+
+    def _settle_at_share(self, run: _Run, event: int) -> bool | None:
+        """Judge the pair states at the stage's end u_c + s u_v (with contact).
+
+        Returns whether a state changed (the caller solves and chooses again), None when
+        the states do not settle within ``contact_iterations`` (the run ends).
+        """
+        assert self.faces is not None
+        faces = self.faces.faces
+        equilibrium = self.parts.equilibrium
+        assert isinstance(equilibrium, ContactEquilibrium)
+        changes, blocks = faces.update(self._state(run, self.staged_chooser.share))
+        if not changes:
+            return False
+        self._share_settles += 1
+        if self._share_settles > equilibrium.iterations:
+            run.end = "contact"
+            self.ctx.say(f"cracking: event {event}: {equilibrium.unsettled(changes)}")
+            return None
+        equilibrium.absorb(changes, blocks, history=self._share_history, made=[], last=False)
+        return True
 
     def _crack(self, run: _Run, event: int, choice: Choice, solved: Solved) -> bool:
         """Log the state u_c + λ u_v, crack the sites, publish (ConstantEventLoop's event)."""
@@ -281,7 +330,7 @@ class StagedEventLoop(InsituEventLoop):
 
     def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
         """The constant load F0 − (1 − a) P on the current crack state, then both solves."""
-        force = self.insitu.force() - (1.0 - self.applied) * self.release
+        force = self._initial_force() - (1.0 - self.applied) * self.release
         self.load.constant.load.setArray(force[self._rows])
         return ConstantEventLoop._solve(self, run, event, replay=replay)
 

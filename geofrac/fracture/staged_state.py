@@ -23,7 +23,7 @@ from mpi4py import MPI
 
 from geofrac.fracture.context import CrackContext
 from geofrac.fracture.state import CrackState
-from geofrac.fracture.units import EdgeUnits
+from geofrac.fracture.units import Block, EdgeUnits
 from geofrac.mls.shape import LinearFit
 
 __all__ = ["StagedCrackState", "group_cells", "internal_force"]
@@ -89,11 +89,14 @@ def group_cells(ctx: CrackContext, groups: tuple[str, ...]) -> np.ndarray:
     return np.unique(np.concatenate(ctx.comm.allgather(np.concatenate(mine))))
 
 
-def internal_force(ctx: CrackContext, units: EdgeUnits, u: np.ndarray) -> np.ndarray:
+def internal_force(
+    ctx: CrackContext, units: EdgeUnits, u: np.ndarray, *, pairs: list[Block] | None = None
+) -> np.ndarray:
     """K u of the current crack state, gathered on every rank, shape=(n_global,).
 
     The owned cells' element matrices (intact cells) and MLS stiffness (2.19) (fitted
-    cells), the matrices the assembly uses; void cells give nothing. ``u``:
+    cells), the matrices the assembly uses; void cells give nothing; ``pairs``: the
+    owned crack-face pairs' blocks in their current states (with contact). ``u``:
     shape=(n_global,). Collective.
     """
     state = units.state
@@ -108,6 +111,8 @@ def internal_force(ctx: CrackContext, units: EdgeUnits, u: np.ndarray) -> np.nda
         block = units.fit_block(c, fit)
         assert block is not None
         d, k = block
+        np.add.at(f, d, k @ u[d])
+    for d, k in pairs or ():
         np.add.at(f, d, k @ u[d])
     ctx.comm.Allreduce(MPI.IN_PLACE, f, op=MPI.SUM)
     return f

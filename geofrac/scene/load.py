@@ -715,8 +715,9 @@ def _effects(
     _check_drivers(file, declared)
     specs = []
     for name in declared:
-        if name in configured:
+        if name in configured:  # (dfn: configured with the geometry)
             specs.append(EffectSpec(name, configured[name]))
+            ctx.previous[name] = configured[name]
             continue
         config = effects.load(name).configure(_effect_table(file, data, name), ctx)
         specs.append(EffectSpec(name, config))
