@@ -404,8 +404,8 @@ class EventOutput:
         New cracks are red (tension) or blue (shear). Without contact, pre-existing
         cracks are grey; with contact, joints (pre-existing cracks) are drawn by the
         state of their faces at the end: stuck grey, open purple, slipping orange (thicker),
-        and new cracks whose faces slip are drawn orange over their mode's colour. Void
-        cells (excavated or fallen out) are filled light grey. The axes keep a margin
+        and new cracks whose faces slip are drawn orange over their mode's colour. Cells a
+        stage removed are filled grey, other void cells (fragments) sand. The axes keep a margin
         around the specimen so that its outline is drawn whole; the legend sits below.
         """
         import matplotlib.pyplot as plt
@@ -424,12 +424,17 @@ class EventOutput:
         box = (size, size * aspect) if aspect <= 1.0 else (size / aspect, size)
         fig, ax = plt.subplots(figsize=(max(box[0], 3.5) + 0.8, max(box[1], 2.0) + 1.2))
         void = state.void_cells()
-        if len(void):
-            ax.add_collection(
-                PolyCollection(
-                    m.coords[m.cells[void]], facecolors="0.88", edgecolors="none", label="void"
+        removed = getattr(state, "removed", np.zeros(m.num_cells, dtype=bool))
+        for cells, colour, label in (
+            (void[removed[void]], "0.75", "excavated"),
+            (void[~removed[void]], "#f3d9a4", "fragment (void)"),
+        ):
+            if len(cells):
+                ax.add_collection(
+                    PolyCollection(
+                        m.coords[m.cells[cells]], facecolors=colour, edgecolors="none", label=label
+                    )
                 )
-            )
         outline = m.coords[m.edges[m.boundary_edges]]
         ax.add_collection(LineCollection(outline, colors="k", linewidths=0.6))
         self.drawing.draw_extra(ax)

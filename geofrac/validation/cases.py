@@ -412,6 +412,30 @@ def _first_slip_stress(width: float, thickness: float) -> Callable[[dict[str, An
     return measure
 
 
+def _joint_slip_ratio(summary: dict[str, Any], out: Path) -> float:
+    """The first slip's release share over the closed form's at its pair's midpoint.
+
+    jobs/joint_slip_opening.toml: p = 10 hydrostatic, a = 1, joints dipping 30°, c = 1,
+    φ = 30° (:mod:`geofrac.analytic_joints`); NaN unless the first event is a slip.
+    """
+    from geofrac.analytic_joints import JointedOpening
+
+    rows = _events(out)
+    if not rows or rows[0]["mode"] != "slip":
+        return math.nan
+    opening = JointedOpening(
+        sigma_v=10.0,
+        k=1.0,
+        radius=1.0,
+        dip=30.0,
+        cohesion=1.0,
+        friction=math.tan(math.radians(30.0)),
+    )
+    x, y = float(rows[0]["x"]), float(rows[0]["y"])
+    alpha = float(opening.slip_fraction(math.hypot(x, y), math.degrees(math.atan2(y, x))))
+    return float(rows[0]["load_factor"]) / alpha
+
+
 def _bar_stress_error(summary: dict[str, Any], out: Path) -> float:
     """RMS stress error over the bar against Edo (2016), eq. 4.73, over ρ₀ |b| L₀."""
     frame = _last_frame(out)
@@ -606,6 +630,24 @@ CASES: tuple[Case, ...] = (
         scene="jobs/validation/kirsch_stages.toml",
         overrides=KIRSCH_FINE,
         ci=True,
+    ),
+    Case(
+        "joint_slip_opening",
+        "In-situ stress and stages",
+        "joints dipping 30° (c = 1, φ = 30°) around a circular opening in a hydrostatic "
+        "in-situ stress, excavated in one stage with the joints in contact: the release "
+        "share of the first slip",
+        "λ / closed-form α at the slipping pair",
+        Reference(
+            1.0,
+            "closed form: Kirsch's stresses with Coulomb's criterion on the plane of weakness "
+            "(Brady and Brown (2004); Jaeger, Cook and Zimmerman (2007), §4.7)",
+            rtol=0.03,
+        ),
+        _joint_slip_ratio,
+        scene="jobs/validation/joint_slip_opening.toml",
+        overrides=("cracking.max_events=1",),
+        estimate_s=20.0,
     ),
     Case(
         "lame_cylinder",

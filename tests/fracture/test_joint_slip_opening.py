@@ -2,7 +2,8 @@
 
 A circular opening (a = 1) in a hydrostatic in-situ stress p = 10 (plane strain), one set
 of straight joints dipping δ = 30° with spacing 0.3 (none through the centre), clipped to
-a 4 × 4 square around the opening, cohesion c = 1 and friction φ = 30°; the joints are
+a 4 × 4 square around the opening (jobs/joint_slip_opening.toml and its network file),
+cohesion c = 1 and friction φ = 30°; the joints are
 cracked edges from the start whose faces are in contact and carry σ0; one stage removes
 the opening and its release drives the events. Closed form (Kirsch with Coulomb on the
 plane of weakness: Brady and Brown (2004); Jaeger, Cook and Zimmerman (2007);
@@ -24,16 +25,17 @@ the discrete joints meet the wall elsewhere, and their least α is 0.637 (θ = 1
 
 import csv
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
 from geofrac.analytic_joints import JointedOpening
+from tests.conftest import REPO
 from tests.fracture.test_constant_loads import run
 
-SCENE = Path(__file__).resolve().parent / "scenes" / "joint_slip_opening.toml"
+SCENE = REPO / "jobs" / "joint_slip_opening.toml"
+JOINTS = REPO / "jobs" / "joint_slip_opening_joints.csv"
 #: in-situ pressure, radius, joint dip (degrees), spacing, half-width of the jointed box.
 P, A, DIP, SPACING, BOX = 10.0, 1.0, 30.0, 0.3, 2.0
 COHESION, PHI = 1.0, 30.0
@@ -56,18 +58,6 @@ def joints() -> list[tuple[float, float, float, float]]:
         if hi - lo > 0.5:
             out.append((px + lo * t[0], py + lo * t[1], px + hi * t[0], py + hi * t[1]))
     return out
-
-
-def scene(tmp: Path) -> Path:
-    """The scene and its joints.csv in ``tmp``."""
-    with open(tmp / "joints.csv", "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["set", "x0", "y0", "x1", "y1"])
-        for j in joints():
-            w.writerow(["J", *(repr(v) for v in j)])
-    path = tmp / SCENE.name
-    path.write_text(SCENE.read_text())
-    return path
 
 
 def least_on_joints(samples: int = 8001) -> tuple[float, list[float]]:
@@ -95,6 +85,15 @@ def least_on_joints(samples: int = 8001) -> tuple[float, list[float]]:
     return float(alpha.min()), angles
 
 
+def test_the_job_has_these_joints():
+    """The job's network file holds the joints the references are computed for."""
+    with open(JOINTS, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["set"] for r in rows] == ["J"] * len(joints())
+    got = np.array([[float(r[k]) for k in ("x0", "y0", "x1", "y1")] for r in rows])
+    assert np.array_equal(got, np.array(joints()))
+
+
 def test_the_closed_form_of_the_discrete_joints():
     """The hand-derived wall value and the discrete joints' least share (the references)."""
     phi = math.radians(PHI)
@@ -105,8 +104,8 @@ def test_the_closed_form_of_the_discrete_joints():
     assert sorted(round(t) for t in where) == [-101, -19, 79, 161]
 
 
-def test_joints_first_slip_where_and_when_the_closed_form_says(tmp_path):
-    driver, results = run(scene(tmp_path))
+def test_joints_first_slip_where_and_when_the_closed_form_says():
+    driver, results = run(SCENE)
     assert driver.rows, results["end_reason"]
     first = driver.rows[0]
     assert first["mode"] == "slip"
@@ -125,9 +124,9 @@ def test_joints_first_slip_where_and_when_the_closed_form_says(tmp_path):
 
 
 @pytest.mark.mpi(min_size=2)
-def test_two_ranks_slip_the_same_pairs(tmp_path):
+def test_two_ranks_slip_the_same_pairs():
     comm = MPI.COMM_WORLD
-    path = comm.bcast(scene(tmp_path) if comm.rank == 0 else None)
+    path = SCENE
     parallel, _ = run(path, comm=comm)
     serial, _ = run(path)
     assert [r["edge"] for r in parallel.rows] == [r["edge"] for r in serial.rows]
