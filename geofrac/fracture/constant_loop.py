@@ -36,6 +36,7 @@ from geofrac.fracture.constant import ConstantChooser, ConstantLoad
 from geofrac.fracture.constant_contact import ConstantFaces
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
 from geofrac.fracture.equilibrium import ContactEquilibrium, LinearEquilibrium, Solved, Visited
+from geofrac.fracture.linear import PiecesHeld
 from geofrac.fracture.loop import EventLoop, LoopParts, _Run
 from geofrac.fracture.modes import Choice
 from geofrac.fracture.scales import TENSION_FLOOR
@@ -183,21 +184,25 @@ class ConstantEventLoop(EventLoop):
         With contact the states are settled at the event's state (:meth:`_settle`), not
         on the variable load alone.
         """
-        if self.faces is None:
-            solved = super()._solve(run, event, replay=replay)
-        else:
-            solved = self._solve_variable(run, event)
-        if solved is None:
-            return None
-        t = time.perf_counter()
-        try:
-            self.u_const = self.equilibrium.solve_again(self.u_const, self.load.constant)
-        except RunError as exc:
-            run.end = "singular"
-            self.ctx.say(f"cracking: event {event}: the constant load's system failed ({exc})")
-            return None
-        self.parts.timing.add("solve", t)
-        return solved
+        for attempt in range(2):  # again once when the constant solve held pieces
+            if self.faces is None:
+                solved = super()._solve(run, event, replay=replay)
+            else:
+                solved = self._solve_variable(run, event)
+            if solved is None:
+                return None
+            t = time.perf_counter()
+            try:
+                self.u_const = self.equilibrium.solve_again(self.u_const, self.load.constant)
+            except RunError as exc:
+                if isinstance(exc, PiecesHeld) and not attempt:
+                    continue
+                run.end = "singular"
+                self.ctx.say(f"cracking: event {event}: the constant load's system failed ({exc})")
+                return None
+            self.parts.timing.add("solve", t)
+            return solved
+        return None
 
     def _choose(self, run: _Run, event: int) -> Choice | None:
         """The sites' constant and variable stress and the event of least λ; None: the end."""

@@ -37,6 +37,7 @@ from geofrac.solvers import LinearSolver, Matrix, PreconditionedCG, Vector, tran
 
 __all__ = [
     "PREFIX",
+    "PiecesHeld",
     "RefactorSolver",
     "ReuseSolver",
     "SolverStrategy",
@@ -47,6 +48,14 @@ __all__ = [
 
 #: Options prefix of the crack solver.
 PREFIX = "geofrac_crack_"
+
+
+class PiecesHeld(RunError):
+    """Pieces cut free were held while solving another right-hand side.
+
+    :meth:`UpdateSolver.solve_again` found its matrix singular: the system changed, so
+    every right-hand side of the event must be solved again.
+    """
 
 
 @dataclass
@@ -337,7 +346,15 @@ class UpdateSolver(RefactorSolver):
                     return u
                 except Stale as exc:
                     self._drop_reference(exc)
-            self._refactor(A).solve(b, x)
+            try:
+                self._refactor(A).solve(b, x)
+            except RunError:
+                # a piece the corrected reference still held is free in this matrix:
+                # hold it (as a new reference does) and let the caller solve both again
+                self._drop_reference()
+                if not self.assembler.find_fragments():
+                    raise
+                raise PiecesHeld("pieces cut free are held; solve both loads again") from None
         finally:
             A.destroy()
             b.destroy()
