@@ -74,6 +74,7 @@ __all__ = [
     "RESIDUAL_WARNING",
     "InitialStressLoad",
     "InsituEventLoop",
+    "checked_initial_stress",
     "initial_balance",
     "initial_stress_at",
     "insitu_loop",
@@ -353,6 +354,38 @@ class InsituEventLoop(ConstantEventLoop):
         return results
 
 
+def checked_initial_stress[L: InitialStressLoad](
+    ctx: CrackContext,
+    parts: LoopParts,
+    kind: type[L],
+    *,
+    key: str,
+    role: str,
+) -> tuple[L, EdgeCriterion]:
+    """σ0 at the sites of an edge-cracking run, its balance said and checked (collective).
+
+    ``kind`` builds the load from (ctx, units); ``key`` names the scene key in the
+    refusal of grain interfaces; ``role`` ends the line said about the balance.
+
+    Raises:
+        RunError: collectively, for grain interfaces or an initial state out of balance
+            (beyond :data:`~geofrac.fem.stages.TOLERANCE`, as the FEM path).
+    """
+    units, criterion = parts.units, parts.criterion
+    if not isinstance(units, EdgeUnits) or not isinstance(criterion, EdgeCriterion):
+        raise RunError(f"{key}: cracking at element edges only (not grain interfaces)")
+    insitu = kind(ctx, units)
+    spec = ctx.scene.initial_stress
+    assert spec is not None
+    ctx.say(
+        f"initial stress ({spec.kind}): out of balance {insitu.balance:.2e} of the applied "
+        f"force (tolerance {TOLERANCE:g}); {role}"
+    )
+    if insitu.balance > TOLERANCE:
+        raise RunError(refusal(insitu.balance))
+    return insitu, criterion
+
+
 def insitu_loop(
     ctx: CrackContext,
     parts: LoopParts,
@@ -370,18 +403,13 @@ def insitu_loop(
     Raises:
         RunError: collectively, when the initial state is out of balance.
     """
-    units, criterion = parts.units, parts.criterion
-    if not isinstance(units, EdgeUnits) or not isinstance(criterion, EdgeCriterion):
-        raise RunError("initial_stress: cracking at element edges only (not grain interfaces)")
-    insitu = InitialStressLoad(ctx, units)
-    spec = ctx.scene.initial_stress
-    assert spec is not None
-    ctx.say(
-        f"initial stress ({spec.kind}): out of balance {insitu.balance:.2e} of the applied "
-        f"force (tolerance {TOLERANCE:g}); it is held constant while the control load scales"
+    insitu, criterion = checked_initial_stress(
+        ctx,
+        parts,
+        InitialStressLoad,
+        key="initial_stress",
+        role="it is held constant while the control load scales",
     )
-    if insitu.balance > TOLERANCE:
-        raise RunError(refusal(insitu.balance))
     load = constant_load(ctx, ctx.config)
     if np.any(insitu.held_terms):
         owned = insitu.held_terms[ctx.row0 : ctx.row0 + ctx.n_local]
@@ -396,7 +424,7 @@ def insitu_loop(
         settings=settings,
         control=control,
         load=load,
-        chooser=ConstantChooser(criterion, units, ctx.config),
+        chooser=ConstantChooser(criterion, insitu.units, ctx.config),
         insitu=insitu,
     )
 

@@ -42,15 +42,13 @@ from geofrac.fem.insitu import group_cells as local_group_cells
 from geofrac.fem.post import TENSOR_FIELDS
 from geofrac.fem.solution import Solution
 from geofrac.fem.stage_checkpoint import Frame
-from geofrac.fem.stages import TOLERANCE, refusal
 from geofrac.fracture.config import LoopSettings
 from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_load
 from geofrac.fracture.constant_loop import ConstantEventLoop
 from geofrac.fracture.context import CrackContext, JsonValue, Sites
 from geofrac.fracture.control import release_control
 from geofrac.fracture.equilibrium import ContactEquilibrium, Solved, Visited
-from geofrac.fracture.event_criterion import EdgeCriterion
-from geofrac.fracture.insitu import InitialStressLoad, InsituEventLoop
+from geofrac.fracture.insitu import InitialStressLoad, InsituEventLoop, checked_initial_stress
 from geofrac.fracture.loop import LoopParts, _Run
 from geofrac.fracture.modes import Choice
 from geofrac.fracture.staged_state import StagedCrackState, group_cells, internal_force
@@ -419,18 +417,13 @@ def staged_loop(
     Raises:
         RunError: collectively, when the initial state is out of balance.
     """
-    units, criterion = parts.units, parts.criterion
-    if not isinstance(units, EdgeUnits) or not isinstance(criterion, EdgeCriterion):
-        raise RunError("stages: cracking at element edges only (not grain interfaces)")
-    insitu = StagedInitialStress(ctx, units)
-    spec = ctx.scene.initial_stress
-    assert spec is not None
-    ctx.say(
-        f"initial stress ({spec.kind}): out of balance {insitu.balance:.2e} of the applied "
-        f"force (tolerance {TOLERANCE:g}); {len(ctx.scene.stages)} stages release it"
+    insitu, criterion = checked_initial_stress(
+        ctx,
+        parts,
+        StagedInitialStress,
+        key="stages",
+        role=f"{len(ctx.scene.stages)} stages release it",
     )
-    if insitu.balance > TOLERANCE:
-        raise RunError(refusal(insitu.balance))
     _release_scale(ctx, insitu)
     load = constant_load(ctx, ctx.config)
     load.variable.load.set(0.0)
@@ -443,7 +436,7 @@ def staged_loop(
         settings=settings,
         control=control,
         load=load,
-        chooser=StagedChooser(criterion, units, ctx.config),
+        chooser=StagedChooser(criterion, insitu.units, ctx.config),
         insitu=insitu,
         solution=solution,
     )
