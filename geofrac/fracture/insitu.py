@@ -83,8 +83,8 @@ __all__ = [
 
 #: The closed joints' residual R (module docstring), relative to the largest applied force,
 #: above which a run warns: the discretisation error σ0 leaves on the pre-cracked mesh is
-#: then larger than the loads (measured: 0.10 on jobs/joint_slip_opening.toml,
-#: 0.51 on Jaeger's specimen, 45 on the two-set DFN tunnel of docs/insitu.md at 1 m).
+#: then larger than the loads (measured: 0.056 on jobs/joint_slip_opening.toml,
+#: 0.51 on tests/fracture/scenes/joint_insitu.toml, 45 on the DFN tunnel of docs/insitu.md).
 RESIDUAL_WARNING = 1.0
 
 
