@@ -68,6 +68,7 @@ __all__ = [
     "initial_balance",
     "refusal",
     "run_stages",
+    "state_frame",
 ]
 
 #: Largest accepted out-of-balance force of the initial state, relative to the largest
@@ -460,20 +461,7 @@ class StagedRun:
 
     def frame(self, index: int, name: str) -> Frame:
         """The fields of the current state for ``results.xdmf``."""
-        problem = self.problem
-        scene = problem.scene
-        functions = []
-        if "displacement" in scene.output.fields:
-            u = problem.uh.copy()
-            u.name = "displacement"
-            functions.append(u)
-        wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
-        fields = problem.tensor_fields(wanted)
-        functions += [fields[f] for f in wanted]
-        alive = self.insitu.alive.copy()
-        alive.name = "alive"
-        functions.append(alive)
-        return Frame(index, name, functions)
+        return state_frame(self.problem, self.insitu.alive, index, name)
 
     def destroy(self) -> None:
         """Free the vectors this run made (the problem frees its operators)."""
@@ -493,6 +481,30 @@ def refusal(value: float) -> str:
         "use a gravity-loading stage: remove [initial_stress] and let the initial step load "
         "the body's weight (docs/insitu.md)"
     )
+
+
+def state_frame(
+    problem: ElasticProblem, alive: dolfinx.fem.Function, index: int, name: str
+) -> Frame:
+    """The fields of ``problem.uh`` for ``results.xdmf``: step ``index`` named ``name``.
+
+    The displacement and the tensor fields ``output.fields`` asks for (stresses as
+    totals, :meth:`ElasticProblem.tensor_fields`), and ``alive`` (0 on removed cells):
+    the steps of the elastic and of the cracking stages alike.
+    """
+    fields = problem.scene.output.fields
+    functions = []
+    if "displacement" in fields:
+        u = problem.uh.copy()
+        u.name = "displacement"
+        functions.append(u)
+    wanted = [f for f in fields if f in TENSOR_FIELDS]
+    tensors = problem.tensor_fields(wanted)
+    functions += [tensors[f] for f in wanted]
+    kept = alive.copy()
+    kept.name = "alive"
+    functions.append(kept)
+    return Frame(index, name, functions)
 
 
 @dataclass

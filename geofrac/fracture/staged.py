@@ -39,9 +39,9 @@ import numpy as np
 from geofrac.errors import RunError
 from geofrac.fem.insitu import cell_dofs
 from geofrac.fem.insitu import group_cells as local_group_cells
-from geofrac.fem.post import TENSOR_FIELDS
 from geofrac.fem.solution import Solution
 from geofrac.fem.stage_checkpoint import Frame
+from geofrac.fem.stages import state_frame
 from geofrac.fracture.config import LoopSettings
 from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_load
 from geofrac.fracture.constant_loop import ConstantEventLoop
@@ -353,21 +353,10 @@ class StagedEventLoop(InsituEventLoop):
     def _frame(self, index: int, name: str, u: np.ndarray) -> Frame:
         """The fields of the state u for ``results.xdmf`` (displacement, stresses, alive)."""
         assert self._unknown is not None
-        problem, scene = self.ctx.problem, self.solution.scene
+        problem = self.ctx.problem
         self._finish_field(self._unknown, u)
-        functions = []
-        if "displacement" in scene.output.fields:
-            disp = problem.uh.copy()
-            disp.name = "displacement"
-            functions.append(disp)
-        wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
-        fields = problem.tensor_fields(wanted)
-        functions += [fields[f] for f in wanted]
         assert problem.insitu is not None
-        alive = problem.insitu.alive.copy()
-        alive.name = "alive"
-        functions.append(alive)
-        return Frame(index, name, functions)
+        return state_frame(problem, problem.insitu.alive, index, name)
 
     def _state(self, run: _Run, r: float) -> np.ndarray:
         """u_c + r u_v, or after the stages the state where the last one ended."""
