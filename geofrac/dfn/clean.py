@@ -294,6 +294,32 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
+def _interior_crossings(
+    a: np.ndarray, b: np.ndarray, eps: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which segments a[k] and b[k] cross at interior points, and where.
+
+    Args:
+        a: the first segment of each pair, shape=(k, 2, 2) (pair, endpoint, xy).
+        b: the second segment of each pair, shape=(k, 2, 2).
+        eps: the least distance of the crossing from either segment's ends.
+
+    Returns:
+        (hit, shape=(k,) bool; t, u: the crossing's parameters along a and b, shape=(k,)).
+        Parallel pairs (|a × b| ≤ 1e-14 |a| |b|) never hit.
+    """
+    a0, b0 = a[:, 0], b[:, 0]
+    r, s = a[:, 1] - a0, b[:, 1] - b0
+    den = _cross(r, s)
+    ok = np.abs(den) > 1e-14 * np.hypot(*r.T) * np.hypot(*s.T)
+    den = np.where(ok, den, 1.0)
+    t = _cross(b0 - a0, s) / den
+    u = _cross(b0 - a0, r) / den
+    la, lb = np.hypot(*r.T), np.hypot(*s.T)
+    hit = ok & (t * la > eps) & ((1 - t) * la > eps) & (u * lb > eps) & ((1 - u) * lb > eps)
+    return hit, t, u
+
+
 class _Fixed:
     """Lines the cleaning cannot move: the domain's sides, then the constraint segments.
 
@@ -582,16 +608,8 @@ class _Pass:
     def split_crossings(self, i: np.ndarray, j: np.ndarray) -> None:
         """X-junctions: proper intersections split both segments."""
         segs = self.segs
-        a0, a1, b0, b1 = segs[i, 0], segs[i, 1], segs[j, 0], segs[j, 1]
-        r, s = a1 - a0, b1 - b0
-        den = _cross(r, s)
-        ok = np.abs(den) > 1e-14 * np.hypot(*r.T) * np.hypot(*s.T)
-        den = np.where(ok, den, 1.0)
-        t = _cross(b0 - a0, s) / den
-        u = _cross(b0 - a0, r) / den
-        la, lb = np.hypot(*r.T), np.hypot(*s.T)
-        eps = self.exact  # shared endpoints give t = 1 - 1e-16, not a crossing
-        hit = ok & (t * la > eps) & ((1 - t) * la > eps) & (u * lb > eps) & ((1 - u) * lb > eps)
+        # shared endpoints give t = 1 - 1e-16, not a crossing: self.exact
+        hit, t, _ = _interior_crossings(segs[i], segs[j], self.exact)
         for a, b, tt in zip(i[hit], j[hit], t[hit], strict=True):
             if (int(a), int(b)) in self.tee_pairs or (int(b), int(a)) in self.tee_pairs:
                 continue  # an endpoint overshooting the other edge by < tol: the tee cut it
@@ -611,16 +629,7 @@ class _Pass:
         """
         segs, cons = self.segs, self.fixed.constraints
         i, j = box_pairs(_boxes(segs), _boxes(cons), pad=self.tol)
-        a0, b0 = segs[i, 0], cons[j, 0]
-        r, s = segs[i, 1] - a0, cons[j, 1] - b0
-        den = _cross(r, s)
-        ok = np.abs(den) > 1e-14 * np.hypot(*r.T) * np.hypot(*s.T)
-        den = np.where(ok, den, 1.0)
-        t = _cross(b0 - a0, s) / den
-        u = _cross(b0 - a0, r) / den
-        la, lb = np.hypot(*r.T), np.hypot(*s.T)
-        eps = self.exact
-        hit = ok & (t * la > eps) & ((1 - t) * la > eps) & (u * lb > eps) & ((1 - u) * lb > eps)
+        hit, _, u = _interior_crossings(segs[i], cons[j], self.exact)
         for a, b, uu in zip(i[hit], j[hit], u[hit], strict=True):
             c = len(self.crossings)
             self.crossings.append(cons[b, 0] + uu * (cons[b, 1] - cons[b, 0]))
