@@ -461,7 +461,7 @@ class StagedRun:
 
     def frame(self, index: int, name: str) -> Frame:
         """The fields of the current state for ``results.xdmf``."""
-        return state_frame(self.problem, self.insitu.alive, index, name)
+        return state_frame(self.problem, self.insitu.alive, index=index, name=name)
 
     def destroy(self) -> None:
         """Free the vectors this run made (the problem frees its operators)."""
@@ -484,7 +484,7 @@ def refusal(value: float) -> str:
 
 
 def state_frame(
-    problem: ElasticProblem, alive: dolfinx.fem.Function, index: int, name: str
+    problem: ElasticProblem, alive: dolfinx.fem.Function, *, index: int, name: str
 ) -> Frame:
     """The fields of ``problem.uh`` for ``results.xdmf``: step ``index`` named ``name``.
 
