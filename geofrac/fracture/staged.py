@@ -56,27 +56,7 @@ from geofrac.fracture.units import EdgeUnits
 from geofrac.io.checkpoint import RunControl
 from geofrac.model.scene import Stage
 
-__all__ = ["StagedChooser", "StagedEventLoop", "StagedInitialStress", "staged_loop"]
-
-
-class StagedChooser(ConstantChooser):
-    """:class:`ConstantChooser` that chooses no site beyond the running stage's share.
-
-    Attributes:
-        share: the largest λ of the running stage.
-        beyond: the least λ of the last choice that came out beyond it (inf: none).
-    """
-
-    share = 1.0
-    beyond = float("inf")
-
-    def choose(self, sc: np.ndarray, sv: np.ndarray, *, floor: float) -> Choice:
-        """The event of :meth:`ConstantChooser.choose`, or no site when its λ > share."""
-        choice = super().choose(sc, sv, floor=floor)
-        self.beyond = float("inf") if len(choice.sites) == 0 else choice.r
-        if choice.r > self.share:
-            return Choice(np.zeros(0, dtype=np.int64), choice.r, choice.mode)
-        return choice
+__all__ = ["StagedEventLoop", "StagedInitialStress", "staged_loop"]
 
 
 class StagedInitialStress(InitialStressLoad):
@@ -104,8 +84,8 @@ class StagedEventLoop(InsituEventLoop):
 
     Args:
         ctx, parts, sites, settings, control, load, chooser, insitu: as
-            :class:`~geofrac.fracture.insitu.InsituEventLoop` (``chooser`` a
-            :class:`StagedChooser`, ``insitu`` a :class:`StagedInitialStress`).
+            :class:`~geofrac.fracture.insitu.InsituEventLoop` (``insitu`` a
+            :class:`StagedInitialStress`).
         solution: where the stages' ``results.xdmf`` steps go (``frames``).
     """
 
@@ -118,7 +98,7 @@ class StagedEventLoop(InsituEventLoop):
         settings: LoopSettings,
         control: RunControl | None,
         load: ConstantLoad,
-        chooser: StagedChooser,
+        chooser: ConstantChooser,
         insitu: StagedInitialStress,
         solution: Solution,
     ) -> None:
@@ -132,7 +112,10 @@ class StagedEventLoop(InsituEventLoop):
             chooser=chooser,
             insitu=insitu,
         )
-        self.staged_chooser, self.staged_insitu = chooser, insitu
+        self.staged_insitu = insitu
+        #: the running stage's share s (no event beyond it), and the least λ of the
+        #: last choice (inf: no site or slip in this release).
+        self.share, self.beyond = 1.0, float("inf")
         self.solution = solution
         self.stages: tuple[Stage, ...] = ctx.scene.stages
         #: the running stage (0-based; len(stages) when done) and whether it has begun.
@@ -199,7 +182,7 @@ class StagedEventLoop(InsituEventLoop):
                 f"stage {self.k + 1}/{len(self.stages)} '{stage.name}': removed "
                 f"{', '.join(stage.remove)} ({len(cells)} cells, {len(changed)} changed)"
             )
-        self.staged_chooser.share = self._share()
+        self.share = self._share()
         self.begun, self._events, self._first = True, [], None
         self._share_settles, self._share_history = 0, {}
 
@@ -215,7 +198,7 @@ class StagedEventLoop(InsituEventLoop):
     def _end_stage(self, run: _Run, *, complete: bool) -> None:
         """Close the running stage at its share (or, not complete, at its last event)."""
         stage, share = self.stages[self.k], self._share()
-        beyond = self.staged_chooser.beyond  # inf: no site ever cracks in this release
+        beyond = self.beyond  # inf: no site ever cracks in this release
         if complete:
             self.u_end = self.u_const + share * run.u_unit
         elif run.rows and self._events:
@@ -283,9 +266,8 @@ class StagedEventLoop(InsituEventLoop):
 
     def _limit(self, choice: Choice) -> Choice:
         """No event beyond the running stage's share (a joint's slip included)."""
-        chooser = self.staged_chooser
-        if len(choice.sites) and choice.r > chooser.share:
-            chooser.beyond = min(chooser.beyond, choice.r)
+        self.beyond = choice.r if len(choice.sites) else float("inf")
+        if choice.r > self.share:
             return Choice(np.zeros(0, dtype=np.int64), choice.r, choice.mode)
         return choice
 
@@ -299,7 +281,7 @@ class StagedEventLoop(InsituEventLoop):
         faces = self.faces.faces
         equilibrium = self.parts.equilibrium
         assert isinstance(equilibrium, ContactEquilibrium)
-        changes, blocks = faces.update(self._state(run, self.staged_chooser.share))
+        changes, blocks = faces.update(self._state(run, self.share))
         if not changes:
             return False
         self._share_settles += 1
@@ -356,7 +338,7 @@ class StagedEventLoop(InsituEventLoop):
         problem = self.ctx.problem
         self._finish_field(self._unknown, u)
         assert problem.insitu is not None
-        return state_frame(problem, problem.insitu.alive, index, name)
+        return state_frame(problem, problem.insitu.alive, index=index, name=name)
 
     def _state(self, run: _Run, r: float) -> np.ndarray:
         """u_c + r u_v, or after the stages the state where the last one ended."""
@@ -425,7 +407,7 @@ def staged_loop(
         settings=settings,
         control=control,
         load=load,
-        chooser=StagedChooser(criterion, insitu.units, ctx.config),
+        chooser=ConstantChooser(criterion, insitu.units, ctx.config),
         insitu=insitu,
         solution=solution,
     )
