@@ -10,8 +10,8 @@ plane of weakness: Brady and Brown (2004); Jaeger, Cook and Zimmerman (2007);
 :mod:`geofrac.analytic_joints`): at release share α the stress is σ0 + α (σ_K − σ0); a
 point of a joint slips at the least α with |τ| = c + μ σn. On the wall it is
 α* = c cos φ / p + sin φ = 0.587 where the joint meets the wall at 30° to its tangent;
-the discrete joints meet the wall elsewhere, and their least α is 0.637 (θ = 161.4° and
-−101.4°, the two points symmetric about the centre).
+the discrete joints meet the wall elsewhere, and their least α is 0.637 (θ = −101°, −19°,
+79° and 161°: two joints, each at both ends of its chord of the wall).
 
 - The first event is a slip, on the joint and at the wall point of the closed form's
   least α over the discrete joints (within 3°), and its release share is the closed
@@ -19,7 +19,8 @@ the discrete joints meet the wall elsewhere, and their least α is 0.637 (θ = 1
   size 0.025 on the wall and the joints). With 0.05 on the joints the first slip is a
   pair in the thin wedge between a joint and the wall (θ = −82°, r = 1.13), 15 % before
   the closed form at its midpoint: the MLS cells of a wedge bounded by the joint and the
-  wall have few satellites, and their stress is poor (docs/insitu.md).
+  wall have few satellites, and their stress is poor (docs/insitu.md). The default mesher
+  (frontal-delaunay) only: with `delaunay` the first slip is such a wedge pair, 11 % early.
 - 1 and 2 ranks slip the same pairs at the same shares (MPI test).
 """
 
