@@ -11,13 +11,9 @@ Run from the repository root: ``PYTHONPATH=$PWD .venv/bin/python docs/jaeger_cau
 2. *band*: the specimen uncracked, without contact, with a band of MLS cells across it
    (``mls_region``, y = 38-42): the stress σ_yy of the MLS cells relative to the uniform
    −E δ / H, and of the element cells within 5 mm of the band;
-3. with ``--consistent``, both again with a *prototype* (this script only, not what
-   geofrac runs) of integration-consistent MLS cells: each MLS cell's gradient is the
-   divergence theorem's average (1/A) Σ_edges L n ⊗ u_e(midpoint) of one trace per edge,
-   the same for both cells of the edge: the element cell's nodal interpolation beside an
-   element cell, the mean of the two fits beside another MLS cell, the cell's own fit on
-   the boundary and on cracked edges; the face pairs' jumps use those own fits too. Such
-   cells pass the patch test by construction (interior edges cancel in Σ_c A_c ∇φ).
+3. with ``--consistent``, both again with ``cracking.mls_gradient = "consistent"``
+   (docs/cracking.md, "Integration-consistent MLS cells"): the joint's faces read the
+   uniform field and the band carries it to round-off.
 
 ``--set KEY=VALUE`` (repeatable) passes further overrides, e.g.
 ``--set geometry.parameters.h=1.25`` or ``--set geometry.algorithm=delaunay``.
@@ -36,8 +32,6 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.effects.cracking import scene_driver
-from geofrac.fracture import contact, state
-from geofrac.mls.shape import LinearFit
 from geofrac.scene import load_scene_collective
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -110,80 +104,6 @@ def band(overrides: list[str]) -> str:
     )
 
 
-# -- the prototype of consistent MLS cells (--consistent) -------------------------------
-_RAW: dict[int, LinearFit | None] = {}
-
-
-def _trace(fit: LinearFit, point: np.ndarray) -> dict[int, float]:
-    return dict(zip(fit.nodes.tolist(), fit.shape_functions(point[None])[0].tolist(), strict=True))
-
-
-def _edge_trace(st: Any, c: int, e: int, point: np.ndarray) -> dict[int, float]:
-    """The one trace of edge e seen from MLS cell c (module docstring)."""
-    m, fit = st.mesh, _RAW[c]
-    o = m.edge_cells[e, 0] if m.edge_cells[e, 1] == c else m.edge_cells[e, 1]
-    if st.cracked[e] or o < 0 or (o in _RAW and _RAW[o] is None):
-        return _trace(fit, point)
-    if o in _RAW:
-        a, b = _trace(fit, point), _trace(_RAW[o], point)
-        return {k: 0.5 * (a.get(k, 0.0) + b.get(k, 0.0)) for k in set(a) | set(b)}
-    n0, n1 = m.edges[e]
-    return {int(n0): 0.5, int(n1): 0.5}
-
-
-def _consistent(st: Any) -> None:
-    """Replace every MLS fit's gradient by the divergence-consistent one."""
-    _RAW.clear()
-    _RAW.update(st.fits)
-    x = st.mesh.coords
-    for c, fit in list(_RAW.items()):
-        if fit is None:
-            continue
-        grad: dict[int, np.ndarray] = {}
-        for j in range(3):
-            e = st.mesh.cell_edges[c, j]
-            a, b = x[st.mesh.edges[e]]
-            mid, d = 0.5 * (a + b), b - a
-            n = np.array([d[1], -d[0]])
-            n = n if n @ (mid - st.centroids[c]) > 0 else -n  # outward, times L
-            for k, w in _edge_trace(st, c, e, mid).items():
-                grad[k] = grad.get(k, np.zeros(2)) + n * w / st.areas[c]
-        nodes = np.array(sorted(set(grad) | set(fit.nodes.tolist())), dtype=np.int64)
-        pos = {k: i for i, k in enumerate(nodes.tolist())}
-        coef = np.zeros((3, len(nodes)))
-        coef[0, [pos[k] for k in fit.nodes.tolist()]] = fit.coefficients[0]
-        for k, g in grad.items():
-            coef[1:, pos[k]] = g
-        st.fits[c] = LinearFit(fit.centre, fit.h, nodes, coef)
-
-
-def _install_prototype() -> None:
-    start, refresh = state.CrackState.start, contact.FacePairs.refresh
-
-    def start_consistent(self: Any, precracked: np.ndarray) -> np.ndarray:
-        out = start(self, precracked)
-        _consistent(self)
-        return out
-
-    def refresh_own_fits(self: Any, edges: np.ndarray, fits: Any) -> np.ndarray:
-        changed = refresh(self, edges, fits)
-        for e in np.asarray(edges, dtype=np.int64).tolist():
-            op = self.ops.get(e)
-            if op is None:
-                continue
-            pos = {k: i for i, k in enumerate(op.nodes.tolist())}
-            w = np.zeros(len(op.nodes))
-            for cell, sign in ((self.plus[e], 1.0), (self.minus[e], -1.0)):
-                for k, v in _trace(_RAW[int(cell)], self.midpoint[e]).items():
-                    w[pos[k]] += sign * v
-            self.ops[e] = contact.PairOperator(op.nodes, w, op.traction)
-        self._table = None
-        return changed
-
-    state.CrackState.start = start_consistent  # type: ignore[method-assign]
-    contact.FacePairs.refresh = refresh_own_fits  # type: ignore[method-assign]
-
-
 def main() -> None:
     """Print the two tables (with ``--consistent``: of the prototype)."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -192,7 +112,7 @@ def main() -> None:
     parser.add_argument("--betas", default="30,45,60")
     args = parser.parse_args()
     if args.consistent:
-        _install_prototype()
+        args.overrides.append("cracking.mls_gradient=consistent")
     print("| β (°) | faces' p / σn | faces' \\|τ\\| / τ | springs' mean k g, k s | first slip |")
     print("|---:|---|---|---|---:|")
     for beta in (float(b) for b in args.betas.split(",")):

@@ -15,6 +15,11 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
   peak so far (Edo (2016): "until the strain energy of the whole body decreases"); off if absent.
 - ``neighbours`` (10), ``margin`` (1.1), ``max_radius_factor`` (8): MLS neighbourhood
   (docs/cracking.md).
+- ``mls_gradient`` (``"fit"``): the MLS cells' strain: ``"fit"``, the gradient of each
+  cell's own fit (Edo (2016), eq. 2.19); ``"consistent"``, the gradient of the divergence
+  theorem over the cell's edges, with one trace per edge shared by its two cells, which
+  passes the patch test in stress (:mod:`geofrac.fracture.consistent`; docs/cracking.md,
+  "Integration-consistent MLS cells"). CST (``p1``) only.
 - ``precracked`` ([]): facet groups cracked before loading (a notch, DFN ``fractures``).
   With ``efmm`` a group is a straight line of edges (an embedded notch): the interfaces
   between its nodes and the nodes on its left side crack, so the grains on the two sides
@@ -104,6 +109,7 @@ from geofrac.effects import ConfigureContext
 from geofrac.elements.kinematics import KINDS
 from geofrac.fracture import CRITERION_NAMES, SOLVERS
 from geofrac.fracture.config import CrackingConfig, JointProperties
+from geofrac.fracture.consistent import GRADIENTS
 from geofrac.fracture.control import FORCE_LOADS, RELEASE
 from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import finite, short
@@ -142,6 +148,7 @@ KEYS = (
     "neighbours",
     "margin",
     "max_radius_factor",
+    "mls_gradient",
     "precracked",
     "mls_region",
     "control",
@@ -540,6 +547,20 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "cracking.switch",
             f"applies to elements cracked at grain interfaces ({', '.join(grains)}) only",
         )
+    gradient = table.get("mls_gradient", GRADIENTS[0])
+    if not isinstance(gradient, str) or gradient not in GRADIENTS:
+        raise SceneError(
+            file,
+            "cracking.mls_gradient",
+            f"must be one of {', '.join(repr(g) for g in GRADIENTS)}, got {short(gradient)}",
+        )
+    if gradient != GRADIENTS[0] and (spec.cracking != "edges" or spec.kinematics is not None):
+        raise SceneError(
+            file,
+            "cracking.mls_gradient",
+            f"'{gradient}' takes the traces of linear element cells (p1, CST), not "
+            f"'{ctx.element}': use mls_gradient = 'fit' or element = 'p1'",
+        )
     solver = table.get("solver", "update")
     if not isinstance(solver, str) or solver not in SOLVERS:
         raise SceneError(
@@ -614,6 +635,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         neighbours=_number(table, file, "neighbours", 10, int, 3),
         margin=_number(table, file, "margin", 1.1, float, 1.0, closed=False),
         max_radius_factor=_number(table, file, "max_radius_factor", 8.0, float, 1.0),
+        mls_gradient=gradient,
         precracked=tuple(precracked),
         mls_region=region,
         control=control,

@@ -50,6 +50,8 @@ class CrackingConfig:
     precracked_fraction: float = 0.0
     precrack_seed: int = 0
     switch: str = "patch"
+    #: the MLS cells' strain (:data:`~geofrac.fracture.consistent.GRADIENTS`).
+    mls_gradient: str = "fit"
     #: crack faces in contact (docs/cracking.md, "Crack faces in contact").
     contact: bool = False
     #: the faces of new cracks (and of pre-existing ones without a ``joints`` entry).

@@ -185,22 +185,26 @@ def pair_operator(
     tangent: np.ndarray,
     normal: np.ndarray,
     D: np.ndarray,
+    faces: tuple[LinearFit, LinearFit] | None = None,
 ) -> PairOperator:
     """[u] = u₊(point) − u₋(point) of two linear fits, and (p, τ) of their mean stress.
 
     Args:
-        plus: the fit of the cell on the +n side.
-        minus: the fit of the cell on the −n side.
+        plus: the field of the cell on the +n side.
+        minus: the field of the cell on the −n side.
         point: the edge midpoint, shape=(2,).
         tangent: the edge's unit t, shape=(2,).
         normal: the edge's unit n, shape=(2,).
         D: plane stress-strain matrix (Voigt, engineering shear), shape=(3, 3).
+        faces: the (+, −) cells' own fits when their fields are not those fits
+            (:mod:`geofrac.fracture.consistent`): the jump is taken from them, the
+            stress from ``plus`` and ``minus``. Default: ``(plus, minus)``.
     """
-    nodes = np.concatenate([plus.nodes, minus.nodes]).astype(np.int64)
-    w = np.concatenate(
-        [plus.shape_functions(point[None])[0], -minus.shape_functions(point[None])[0]]
-    )
-    unique, inverse = np.unique(nodes, return_inverse=True)
+    fp, fm = (plus, minus) if faces is None else faces
+    nodes = np.concatenate([fp.nodes, fm.nodes, plus.nodes, minus.nodes]).astype(np.int64)
+    w = np.concatenate([fp.shape_functions(point[None])[0], -fm.shape_functions(point[None])[0]])
+    unique, index = np.unique(nodes, return_inverse=True)
+    jump_at, inverse = index[: len(w)], index[len(w) :]
     q = len(unique)
     # mean strain ½ (B₊ u₊ + B₋ u₋) on the union's interleaved DOFs, shape=(3, 2q)
     B = np.zeros((3, 2 * q))
@@ -218,7 +222,7 @@ def pair_operator(
             [t[0] * n[0], t[1] * n[1], t[0] * n[1] + t[1] * n[0]],
         ]
     )
-    return PairOperator(unique, np.bincount(inverse, weights=w, minlength=q), resolve @ D @ B)
+    return PairOperator(unique, np.bincount(jump_at, weights=w, minlength=q), resolve @ D @ B)
 
 
 def _jump_row(op: PairOperator, direction: np.ndarray) -> np.ndarray:
@@ -358,26 +362,35 @@ class FacePairs:
         e = np.unique(m.cell_edges[np.asarray(cells, dtype=np.int64)].ravel())
         return e[self.state[e] != NO_PAIR]
 
-    def refresh(self, edges: np.ndarray, fits: dict[int, LinearFit | None]) -> np.ndarray:
+    def refresh(
+        self,
+        edges: np.ndarray,
+        fits: dict[int, LinearFit | None],
+        *,
+        own: dict[int, LinearFit | None] | None = None,
+    ) -> np.ndarray:
         """Recompute the operators of pairs ``edges`` from the cells' ``fits``.
 
-        A pair with a void cell (no fit) is inactive. Returns the pairs whose operator
-        changed (new, dropped or different), shape=(k,).
+        ``own``: the cells' own fits, the faces' jump (:func:`pair_operator`). A pair
+        with a void cell is inactive. Returns the pairs whose operator changed, shape=(k,).
         """
         changed = []
         for e in np.asarray(edges, dtype=np.int64).tolist():
-            fp, fm = fits.get(int(self.plus[e])), fits.get(int(self.minus[e]))
+            p, m = int(self.plus[e]), int(self.minus[e])
+            fp, fm = fits.get(p), fits.get(m)
             old = self.ops.get(e)
             if fp is None or fm is None:
                 if old is not None:
                     del self.ops[e]
                     changed.append(e)
                 continue
-            op = pair_operator(
-                fp, fm, self.midpoint[e], tangent=self.tangent[e], normal=self.normal[e], D=self.D
-            )
+            faces = None if own is None or own is fits else (own[p], own[m])
+            t, n = self.tangent[e], self.normal[e]
+            op = pair_operator(fp, fm, self.midpoint[e], tangent=t, normal=n, D=self.D, faces=faces)  # type: ignore[arg-type]
             if old is None or not (
-                np.array_equal(old.nodes, op.nodes) and np.array_equal(old.weights, op.weights)
+                np.array_equal(old.nodes, op.nodes)
+                and np.array_equal(old.weights, op.weights)
+                and np.array_equal(old.traction, op.traction)
             ):
                 self.ops[e] = op
                 changed.append(e)

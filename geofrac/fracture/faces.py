@@ -242,7 +242,7 @@ class Faces:
         if not self.contact_on:
             return
         new = self.pairs.add(cracked)
-        self.pairs.refresh(new, self.units.state.fits)
+        self.pairs.refresh(new, self.units.state.fits, own=self.units.state.own_fits)
         self._diff(new)
 
     def cracked(
@@ -267,7 +267,7 @@ class Faces:
                 self.dissipated += energy * float(self.pairs.length[e]) * self.ctx.t
         touched = np.union1d(new, self.pairs.pairs_of_cells(changed_cells))
         self.release(touched)
-        self.pairs.refresh(touched, self.units.state.fits)
+        self.pairs.refresh(touched, self.units.state.fits, own=self.units.state.own_fits)
         return self._diff(touched)
 
     # -- the active set --------------------------------------------------------------
@@ -397,7 +397,7 @@ class Faces:
             p.tooth[cohesive] = tooth[tooth >= 0]
             self.dissipated = float(counters["dissipated"])  # type: ignore[arg-type]
         p.ops.clear()
-        p.refresh(edges, self.units.state.fits)
+        p.refresh(edges, self.units.state.fits, own=self.units.state.own_fits)
         self.applied = {}
         for e in applied.tolist():
             block = self._block(e)

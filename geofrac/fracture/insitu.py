@@ -54,6 +54,7 @@ from geofrac.fem.solution import Solution
 from geofrac.fem.stages import TOLERANCE, refusal
 from geofrac.fracture.cells import MIDPOINTS, strain_operator
 from geofrac.fracture.config import CrackingConfig, LoopSettings
+from geofrac.fracture.consistent import void_sides
 from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_load
 from geofrac.fracture.constant_loop import ConstantEventLoop
 from geofrac.fracture.contact import ROUNDOFF
@@ -218,13 +219,18 @@ class InitialStressLoad:
         t ∫ Bᵀ σ0 dA (no longer there) minus its MLS fit's t A Bᵀ σ̄0 (none when void).
         """
         ctx, units = self.ctx, self.units
+        state = units.state
+        keeps = state.fits is not state.own_fits  # consistent cells: void ones keep σ0
+        dead = getattr(state, "removed", None)
         change = np.zeros(ctx.n_global)
-        for c, fit in units.state.fits.items():
+        for c, fit in state.fits.items():
             i = self.position.get(int(c))
             if i is None:
                 continue
             np.add.at(change, units.fe_dofs[i], self.fe_force[i])
             if fit is None:
+                if keeps and (dead is None or not dead[c]):
+                    self._void_force(change, int(c), dead)
                 continue
             assert isinstance(fit, LinearFit)
             weight = ctx.t * units.state.areas[c]
@@ -232,6 +238,22 @@ class InitialStressLoad:
             np.add.at(change, ctx.mls_dofs(fit.nodes), -f)
         ctx.comm.Allreduce(MPI.IN_PLACE, change, op=MPI.SUM)
         return self.base + change
+
+    def _void_force(self, change: np.ndarray, c: int, dead: np.ndarray | None) -> None:
+        """Subtract void cell c's t Σ_sides (σ̄0 L n) w from ``change`` (it keeps σ0)."""
+        ctx, state = self.ctx, self.units.state
+        s = self.cell_mean[c]
+        sigma = np.array([[s[0], s[2]], [s[2], s[1]]])
+        for nodes, weights, ln in void_sides(
+            c,
+            mesh=state.mesh,
+            own=state.own_fits,
+            cracked=state.cracked,
+            node_cracks=state.node_cracks,
+            dead=dead,
+        ):
+            f = ctx.t * np.outer(weights, sigma @ ln)  # shape=(q, 2)
+            np.add.at(change, ctx.mls_dofs(nodes), -f.ravel())
 
 
 class InsituEventLoop(ConstantEventLoop):
@@ -289,13 +311,20 @@ class InsituEventLoop(ConstantEventLoop):
                 f"residual {self.residual:.2e} of the applied force is not released"
             )
             if self.residual > RESIDUAL_WARNING:
+                state = self.parts.units.state
+                remedy = (
+                    "Where joints end on a loaded or supported side, the boundary's loads "
+                    "and the cells' own fits there differ; keep joints off those sides"
+                    if state.fits is not state.own_fits
+                    else "Use cracking.mls_gradient = 'consistent' (docs/cracking.md, "
+                    "'Integration-consistent MLS cells')"
+                )
                 self.ctx.say(
                     f"warning: the closed joints' residual is {self.residual:.3g} times the "
                     "largest applied force: the MLS cells beside the joints carry σ0 with "
                     "an error larger than the loads, and every cell whose fit a crack or a "
                     "removal changes releases its share of it as a spurious force (cracks "
-                    "at λ = 0 that are not physics). Refine cracking's joints (a smaller "
-                    "fracture_mesh_size), or loosen the network (docs/insitu.md)"
+                    f"at λ = 0 that are not physics). {remedy} (docs/insitu.md)"
                 )
         return run
 

@@ -68,15 +68,17 @@ class StagedCrackState(CrackState):
             self.boundary_bins.add(e, np.minimum(a, b), np.maximum(a, b))
         self._on_boundary[m.edges[wall].ravel()] = True
         for c in cells.tolist():
-            self.fits[c] = None
+            self.own_fits[c] = None
         self._h[cells] = 0.0
         inside = np.zeros(len(m.coords), dtype=bool)
         inside[m.cells[cells].ravel()] = True
         near = [
-            c for c, fit in self.fits.items() if fit is not None and bool(inside[fit.nodes].any())
+            c
+            for c, fit in self.own_fits.items()
+            if fit is not None and bool(inside[fit.nodes].any())
         ]
         refitted = self.refit(np.array(sorted(near), dtype=np.int64))
-        return np.union1d(cells, refitted)
+        return self.conform(np.union1d(cells, refitted), wall)
 
 
 def group_cells(ctx: CrackContext, groups: tuple[str, ...]) -> np.ndarray:

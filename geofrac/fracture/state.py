@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from geofrac.fracture.consistent import consistent_fit, touched_cells
 from geofrac.fracture.topology import EdgeMesh, components
 from geofrac.fracture.visibility import Bins, PointIndex, blocked, visible_nodes
 from geofrac.mls.shape import LinearFit, linear_fit
@@ -45,11 +46,14 @@ class MlsSettings:
         neighbours: visible satellite nodes wanted (Edo (2016): about 10).
         margin: h / distance of the ``neighbours``-th node.
         max_radius_factor: largest search radius in units of the cell's longest edge.
+        gradient: ``"fit"``, the fit's own gradient (Edo (2016), eq. 2.19), or
+            ``"consistent"`` (:mod:`geofrac.fracture.consistent`).
     """
 
     neighbours: int = 10
     margin: float = 1.1
     max_radius_factor: float = 8.0
+    gradient: str = "fit"
 
 
 def segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -92,7 +96,15 @@ class CrackState:
         self._star = order // 3  # cells around each node, grouped by node
         self._star_ptr = np.searchsorted(m.cells.ravel()[order], np.arange(n_nodes + 1))
         self.cracked = np.zeros(len(m.edges), dtype=bool)
-        self.fits: dict[int, LinearFit | None] = {}
+        #: each MLS cell's own fit through its satellites (eq. 2.17), None when void; the
+        #: faces of a crack take their jump from these.
+        self.own_fits: dict[int, LinearFit | None] = {}
+        #: the field each MLS cell's stiffness and stress use: its own fit, or with
+        #: ``settings.gradient == "consistent"`` the consistent field
+        #: (:func:`~geofrac.fracture.consistent.consistent_fit`); the same keys.
+        self.fits: dict[int, LinearFit | None] = (
+            self.own_fits if self.settings.gradient == "fit" else {}
+        )
         self.centroids = m.centroids()
         self.areas = m.areas()
         seg = m.coords[m.edges]  # shape=(ne, 2, 2)
@@ -117,17 +129,17 @@ class CrackState:
     @property
     def mls_cells(self) -> np.ndarray:
         """Ids of the cells that use MLS, sorted, shape=(k,)."""
-        return np.array(sorted(self.fits), dtype=np.int64)
+        return np.array(sorted(self.own_fits), dtype=np.int64)
 
     def is_mls(self) -> np.ndarray:
         """Whether each cell uses MLS, shape=(num_cells,)."""
         out = np.zeros(self.mesh.num_cells, dtype=bool)
-        out[list(self.fits)] = True
+        out[list(self.own_fits)] = True
         return out
 
     def void_cells(self) -> np.ndarray:
         """Cracked cells without a fit (no stiffness), sorted, shape=(k,)."""
-        return np.array(sorted(c for c, f in self.fits.items() if f is None), dtype=np.int64)
+        return np.array(sorted(c for c, f in self.own_fits.items() if f is None), dtype=np.int64)
 
     # -- updates ---------------------------------------------------------------------
     def start(self, precracked: np.ndarray) -> np.ndarray:
@@ -138,7 +150,8 @@ class CrackState:
         for e in np.flatnonzero(self.cracked):
             cells.update(c for c in self.mesh.edge_cells[e] if c >= 0)
         cells.update(self._cut_cells(np.flatnonzero(self.node_cracks)))
-        return self._refit_hinged(self.refit(np.array(sorted(cells), dtype=np.int64)))
+        changed = self._refit_hinged(self.refit(np.array(sorted(cells), dtype=np.int64)))
+        return self.conform(changed, np.flatnonzero(self.cracked))
 
     def hinged_cells(self) -> np.ndarray:
         """Element cells that hang on at most one node: they would turn about it freely.
@@ -164,7 +177,7 @@ class CrackState:
         key = np.unique(m.cells[cells].ravel() * m.num_cells + np.repeat(labels[cells], 3))
         node, piece = np.divmod(key, m.num_cells)
         used = np.zeros(len(m.coords), dtype=bool)
-        for fit in self.fits.values():
+        for fit in self.own_fits.values():
             if fit is not None:
                 used[fit.nodes] = True
         holds = used[node] | (np.bincount(node, minlength=len(m.coords))[node] > 1)
@@ -222,18 +235,19 @@ class CrackState:
                 d = segment_distance(self.centroids[mls], a, b)
                 near.update(mls[d < self._h[mls]].tolist())
         ends = self.mesh.edges[np.asarray(edges, dtype=np.int64)].ravel()
-        own.update(c for c in self._cut_cells(ends) if c not in self.fits)
+        own.update(c for c in self._cut_cells(ends) if c not in self.own_fits)
         seg = self.segments[np.asarray(edges, dtype=np.int64)]
         coords, target = self.mesh.coords, self.settings.neighbours
         for c in sorted(near - own):
-            fit = self.fits[c]
+            fit = self.own_fits[c]
             if (
                 fit is None
                 or len(fit.nodes) < target
                 or blocked(self.centroids[c], coords[fit.nodes], a=seg[:, 0], b=seg[:, 1]).any()
             ):
                 own.add(c)
-        return self._refit_hinged(self.refit(np.array(sorted(own), dtype=np.int64)))
+        changed = self._refit_hinged(self.refit(np.array(sorted(own), dtype=np.int64)))
+        return self.conform(changed, np.asarray(edges, dtype=np.int64))
 
     def _mark(self, e: int) -> None:
         self.cracked[e] = True
@@ -252,16 +266,54 @@ class CrackState:
         items = [int(c) for c in np.asarray(cells, dtype=np.int64)]
         for c, (ids, h) in zip(items, self.mapper(self._search, items), strict=True):
             self._h[c] = h
-            known = c in self.fits
-            old = self.fits.get(c)
+            known = c in self.own_fits
+            old = self.own_fits.get(c)
             if known and old is not None and old.h == h and np.array_equal(old.nodes, ids):
                 continue
             fit = linear_fit(self.centroids[c], h, ids, coords=coords[ids]) if len(ids) else None
             if known and old is None and fit is None:
                 continue
-            self.fits[c] = fit
+            self.own_fits[c] = fit
             changed.append(c)
         return np.array(changed, dtype=np.int64)
+
+    def conform(self, changed: np.ndarray, edges: np.ndarray) -> np.ndarray:
+        """Bring :attr:`fits` up to :attr:`own_fits` after a change; all changed cells.
+
+        Args:
+            changed: cells whose own fit changed, shape=(m,).
+            edges: edges newly cracked or turned into boundary, shape=(j,).
+
+        Returns:
+            ``changed`` and, with consistent gradients, the cells whose consistent field
+            changed with them (:func:`~geofrac.fracture.consistent.touched_cells`), sorted.
+            A field equal to the old one keeps its object.
+        """
+        if self.fits is self.own_fits:
+            return changed
+        out = []
+        m = self.mesh
+        for c in touched_cells(changed, edges, mesh=m, own=self.own_fits).tolist():
+            new = consistent_fit(
+                c,
+                mesh=m,
+                own=self.own_fits,
+                cracked=self.cracked,
+                node_cracks=self.node_cracks,
+                centroid=self.centroids[c],
+                area=float(self.areas[c]),
+            )
+            old = self.fits.get(c, False)
+            same = (old is None and new is None) or (
+                isinstance(old, LinearFit)
+                and new is not None
+                and np.array_equal(old.nodes, new.nodes)
+                and np.array_equal(old.coefficients, new.coefficients)
+            )
+            if not same:
+                self.fits[c] = new
+                out.append(c)
+        return np.union1d(changed, np.array(out, dtype=np.int64)).astype(np.int64)
 
     def _search(self, c: int) -> tuple[np.ndarray, float]:
         """Visible satellites of cell c and its radius h (:func:`visible_nodes`)."""

@@ -197,8 +197,10 @@ class Units(Protocol):
 
 
 def mls_settings(config: CrackingConfig) -> MlsSettings:
-    """The MLS fits' settings of ``[cracking]`` (neighbours, margin, radius factor)."""
-    return MlsSettings(config.neighbours, config.margin, config.max_radius_factor)
+    """The MLS fits' settings of ``[cracking]`` (neighbours, margin, radius factor, gradient)."""
+    return MlsSettings(
+        config.neighbours, config.margin, config.max_radius_factor, config.mls_gradient
+    )
 
 
 class EdgeUnits:

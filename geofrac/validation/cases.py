@@ -755,8 +755,28 @@ CASES: tuple[Case, ...] = (
         "10 % high (normal ones up to 26 % at the specimen's sides) and the joint slips "
         "6-17 % early at β = 45° and 60° on every mesh tried (h = 2.5, 1.25; three gmsh "
         "algorithms), whatever the contact penalty; integration-consistent MLS cells "
-        "(a prototype, docs/jaeger_cause.py --consistent) slip within 1e-11 of the law for "
-        "β = 30-60° (docs/cracking.md, crack faces in contact)",
+        "(cracking.mls_gradient = 'consistent', the next row) slip within 1e-11 of the law "
+        "for β = 45-60° on those meshes (docs/cracking.md, integration-consistent MLS cells)",
+    ),
+    Case(
+        "jaeger_60_consistent",
+        "Cracking",
+        "the same joint with integration-consistent MLS cells (cracking.mls_gradient = "
+        "'consistent', h = 2.5): the stress at which it slips",
+        "σ1 at slip (stress unit of c)",
+        Reference(
+            jaeger_slip_stress(60.0, 1.0, 0.5),
+            "closed form: Jaeger, Cook and Zimmerman (2007), §4.7",
+            rtol=0.03,
+        ),
+        _first_slip_stress(40.0, 1.0),
+        scene="jobs/validation/jaeger_joint.toml",
+        overrides=(
+            "geometry.parameters.beta=60",
+            "geometry.parameters.h=2.5",
+            "cracking.mls_gradient=consistent",
+            "cracking.max_events=1",
+        ),
     ),
     Case(
         "mpm_bar",

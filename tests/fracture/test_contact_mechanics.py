@@ -101,9 +101,13 @@ def ends_without_an_absurd_event(rows: list, res: dict) -> bool:
     return res["end_reason"] == "separated" and "beyond the specimen's size" in res["end_detail"]
 
 
-def slip_stress(beta: float, comm: MPI.Comm = MPI.COMM_SELF) -> float:
+def slip_stress(
+    beta: float, comm: MPI.Comm = MPI.COMM_SELF, *, overrides: tuple[str, ...] = ()
+) -> float:
     """σ1 = reaction / (W t) at the first event, which must be the joint's slip."""
-    rows, res = run(f"geometry.parameters.beta={beta}", "cracking.max_events=1", comm=comm)
+    rows, res = run(
+        f"geometry.parameters.beta={beta}", "cracking.max_events=1", *overrides, comm=comm
+    )
     assert rows, f"no event at beta = {beta}: {res['end_reason']}"
     assert rows[0]["mode"] == "slip"
     return rows[0]["reaction"] / (W * THICKNESS)
@@ -126,6 +130,23 @@ TRACTIONS_UNRELIABLE = pytest.mark.xfail(
 @pytest.mark.parametrize("beta", [30.0, 45.0, 60.0, 75.0])
 def test_joint_slips_at_jaegers_load(beta):
     assert slip_stress(beta) == pytest.approx(jaeger_sigma1(beta), rel=JAEGER_RTOL)
+
+
+#: Known failure of the consistent cells: at β = 75° the joint ends on the platens and
+#: cuts wedges of 10-25° there; the first slip comes 9.3 % early at the pair next to the
+#: platen (docs/cracking.md, "Integration-consistent MLS cells").
+STEEP_WEDGES = pytest.mark.xfail(strict=True, reason="wedges at the platens: 9 % early")
+
+
+@pytest.mark.parametrize("beta", [30.0, 45.0, 60.0, pytest.param(75.0, marks=STEEP_WEDGES)])
+def test_joint_slips_at_jaegers_load_with_consistent_mls_cells(beta):
+    """``mls_gradient = "consistent"``: the faces read the uniform field, Jaeger's law holds.
+
+    Measured: exact to 1e-11 at β = 30° and 45°; +1.3 % at 60°, the reaction's own error
+    on this coarse mesh (a face pair's fit reaches the platen: docs/cracking.md).
+    """
+    sigma = slip_stress(beta, overrides=("cracking.mls_gradient=consistent",))
+    assert sigma == pytest.approx(jaeger_sigma1(beta), rel=JAEGER_RTOL)
 
 
 @pytest.mark.parametrize("beta", [20.0, 25.0])

@@ -105,8 +105,16 @@ def test_the_closed_form_of_the_discrete_joints():
     assert sorted(round(t) for t in where) == [-101, -19, 79, 161]
 
 
-def test_joints_first_slip_where_and_when_the_closed_form_says():
-    driver, results = run(SCENE)
+#: Known failure, not located: with integration-consistent MLS cells the first slip is at
+#: the right wall point but 4.4 % late (0.6848 against 0.6556 at the pair; docs/cracking.md,
+#: "Integration-consistent MLS cells").
+CONSISTENT_LATE = pytest.mark.xfail(strict=True, reason="consistent cells: slip 4.4 % late")
+
+
+@pytest.mark.parametrize("gradient", ["fit", pytest.param("consistent", marks=CONSISTENT_LATE)])
+def test_joints_first_slip_where_and_when_the_closed_form_says(gradient):
+    """The thesis's MLS cells and the integration-consistent ones (docs/cracking.md)."""
+    driver, results = run(SCENE, f"cracking.mls_gradient={gradient}")
     assert driver.rows, results["end_reason"]
     first = driver.rows[0]
     assert first["mode"] == "slip"

@@ -141,7 +141,7 @@ def _hinge_state(cut=True):
     state = CrackState(m, np.zeros(n, bool), np.zeros(n, bool), MlsSettings(), cut=cut)
     a, b, c = cells[0]
     others = np.setdiff1d(np.arange(len(coords)), [b, c])
-    state.fits = {k: SimpleNamespace(nodes=others) for k in range(1, n)}
+    state.own_fits = state.fits = {k: SimpleNamespace(nodes=others) for k in range(1, n)}
     return state, (a, b, c)
 
 
