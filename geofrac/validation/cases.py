@@ -263,6 +263,14 @@ def jaeger_slip_stress(beta_deg: float, c: float, mu: float) -> float:
     return 2.0 * c / ((1.0 - mu / math.tan(b)) * math.sin(2.0 * b))
 
 
+#: Jaeger's slip stress of the validation joint (β = 60°, c = 1, μ = 0.5).
+_JAEGER_60 = Reference(
+    jaeger_slip_stress(60.0, 1.0, 0.5),
+    "closed form: Jaeger, Cook and Zimmerman (2007), §4.7",
+    rtol=0.03,
+)
+
+
 #: The Kirsch scene refined as in tests/fem/test_insitu.py: a block of 40 radii (the
 #: finite block's error goes as (a/L)², 0.45 % at most here), h = 0.04a on the wall.
 KIRSCH_FINE = (
@@ -741,11 +749,7 @@ CASES: tuple[Case, ...] = (
         "Cracking",
         "joint at β = 60° in uniaxial compression: the stress at which it slips",
         "σ1 at slip (stress unit of c)",
-        Reference(
-            jaeger_slip_stress(60.0, 1.0, 0.5),
-            "closed form: Jaeger, Cook and Zimmerman (2007), §4.7",
-            rtol=0.03,
-        ),
+        _JAEGER_60,
         _first_slip_stress(40.0, 1.0),
         scene="jobs/validation/jaeger_joint.toml",
         overrides=("geometry.parameters.beta=60", "cracking.max_events=1"),
@@ -764,11 +768,7 @@ CASES: tuple[Case, ...] = (
         "the same joint with integration-consistent MLS cells (cracking.mls_gradient = "
         "'consistent', h = 2.5): the stress at which it slips",
         "σ1 at slip (stress unit of c)",
-        Reference(
-            jaeger_slip_stress(60.0, 1.0, 0.5),
-            "closed form: Jaeger, Cook and Zimmerman (2007), §4.7",
-            rtol=0.03,
-        ),
+        _JAEGER_60,
         _first_slip_stress(40.0, 1.0),
         scene="jobs/validation/jaeger_joint.toml",
         overrides=(
