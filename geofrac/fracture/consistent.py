@@ -56,6 +56,14 @@ __all__ = ["GRADIENTS", "consistent_fit", "touched_cells", "void_sides"]
 GRADIENTS = ("fit", "consistent")
 
 
+def _side(mesh: EdgeMesh, e: int, centroid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(midpoint, outward normal times length) of edge e of the cell at ``centroid``."""
+    p, q = mesh.coords[mesh.edges[e]]
+    mid, d = 0.5 * (p + q), q - p
+    n = np.array([d[1], -d[0]])
+    return mid, (n if n @ (mid - centroid) >= 0.0 else -n)
+
+
 def _trace(fit: LinearFit, point: np.ndarray) -> dict[int, float]:
     """{node: φ_I(point)} of one fit."""
     values = fit.shape_functions(point[None])[0]
@@ -122,15 +130,10 @@ def consistent_fit(
     fit = own[c]
     if fit is None:
         return None
-    x = mesh.coords
     value: dict[int, float] = {}
     grad: dict[int, np.ndarray] = {}
     for e in mesh.cell_edges[c].tolist():
-        p, q = x[mesh.edges[e]]
-        mid, d = 0.5 * (p + q), q - p
-        n = np.array([d[1], -d[0]])  # length L, outward below
-        if n @ (mid - centroid) < 0.0:
-            n = -n
+        mid, n = _side(mesh, e, centroid)
         for k, w in _edge_trace(
             c, e, mid, mesh=mesh, own=own, cracked=cracked, node_cracks=node_cracks
         ).items():
@@ -194,19 +197,14 @@ def void_sides(
         times its length, shape=(2,)), the weights those of the trace the live cell
         uses for the side (:func:`consistent_fit`). Its force is t (σ0 L n) wᵢ on node i.
     """
-    x = mesh.coords
-    centroid = x[mesh.cells[c]].mean(axis=0)
+    centroid = mesh.coords[mesh.cells[c]].mean(axis=0)
     out = []
     for e in mesh.cell_edges[c].tolist():
         a, b = mesh.edge_cells[e]
         o = int(a if b == c else b)
         if o < 0 or (dead is not None and dead[o]):
             continue
-        p, q = x[mesh.edges[e]]
-        mid, d = 0.5 * (p + q), q - p
-        n = np.array([d[1], -d[0]])
-        if n @ (mid - centroid) < 0.0:
-            n = -n
+        mid, n = _side(mesh, e, centroid)
         if o in own:
             if own[o] is None:
                 continue

@@ -405,26 +405,85 @@ class EventOutput:
         cracks are grey; with contact, joints (pre-existing cracks) are drawn by the
         state of their faces at the end: stuck grey, open purple, slipping orange (thicker),
         and new cracks whose faces slip are drawn orange over their mode's colour. Cells a
-        stage removed are filled grey, other void cells (fragments) sand. The axes keep a margin
-        around the specimen so that its outline is drawn whole; the legend sits below.
+        stage removed are filled grey, other void cells (fragments) sand; cracks inside
+        the excavation (both cells removed) are not drawn. When the excavation spans less
+        than a quarter of the specimen, a second panel shows it enlarged (its frame is
+        drawn on the first). The axes keep a margin around the specimen so that its
+        outline is drawn whole; the legend sits below.
         """
         import matplotlib.pyplot as plt
+
+        state = self.state
+        m = state.mesh
+        x0, y0 = m.coords.min(axis=0)
+        x1, y1 = m.coords.max(axis=0)
+        span = max(x1 - x0, y1 - y0)
+        pad = 0.02 * span
+        removed = getattr(state, "removed", np.zeros(m.num_cells, dtype=bool))
+        zoom = None
+        if removed.any():
+            pts = m.coords[m.cells[removed]].reshape(-1, 2)
+            lo, hi = pts.min(axis=0), pts.max(axis=0)
+            if (hi - lo).max() < 0.25 * span:
+                centre, half = 0.5 * (lo + hi), (hi - lo).max()
+                zoom = (centre - half, centre + half)
+        aspect = (y1 - y0 + 2 * pad) / (x1 - x0 + 2 * pad)
+        size = 7.0  # inches of the longer side of the specimen's box
+        box = (size, size * aspect) if aspect <= 1.0 else (size / aspect, size)
+        width, height = max(box[0], 3.5) + 0.8, max(box[1], 2.0) + 1.2
+        if zoom is None:
+            fig, ax = plt.subplots(figsize=(width, height))
+            axes = [ax]
+        else:
+            fig, axes = plt.subplots(1, 2, figsize=(width + height - 1.2, height))
+        length = self.ctx.scene.units.length
+        for i, ax in enumerate(axes):
+            self._draw_cracks(ax, modes, faces, legend=i == 0)
+            if i == 0:
+                ax.set_xlim(x0 - pad, x1 + pad)
+                ax.set_ylim(y0 - pad, y1 + pad)
+            else:
+                assert zoom is not None
+                ax.set_xlim(zoom[0][0], zoom[1][0])
+                ax.set_ylim(zoom[0][1], zoom[1][1])
+                ax.set_title("around the excavation", fontsize=10)
+                (a, b), (c, d) = zoom
+                axes[0].plot([a, c, c, a, a], [b, b, d, d, b], color="k", lw=0.8, ls="--")
+            ax.set_aspect("equal")
+            ax.set_xlabel(f"x ({length})")
+            ax.set_ylabel(f"y ({length})")
+        new = int((state.cracked & ~self._precracked()).sum())
+        axes[0].set_title(
+            f"{self.ctx.scene.name}: {new} new cracked edges after {events} events", fontsize=10
+        )
+        handles, labels = axes[0].get_legend_handles_labels()
+        if handles:  # below the axes: it hides nothing
+            fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
+        rows = (len(handles) + 1) // 2  # legend rows below the axes
+        fig.tight_layout(rect=(0.0, 0.03 + 0.03 * rows if handles else 0.0, 1.0, 1.0))
+        fig.savefig(self.out_dir / "cracks.png", dpi=110)
+        plt.close(fig)
+
+    def _precracked(self) -> np.ndarray:
+        """Whether each edge was cracked before loading, shape=(num_edges,)."""
+        pre = np.zeros(len(self.state.mesh.edges), dtype=bool)
+        pre[self.sites.precracked] = True
+        return pre
+
+    def _draw_cracks(
+        self, ax: Axes, modes: np.ndarray, faces: np.ndarray | None, *, legend: bool
+    ) -> None:
+        """Draw void cells, the outline and the crack layers of ``cracks.png`` on ``ax``."""
         from matplotlib.collections import LineCollection, PolyCollection
 
         state = self.state
         m = state.mesh
-        pre = np.zeros(len(m.edges), dtype=bool)
-        pre[self.sites.precracked] = True
+        pre = self._precracked()
         new = state.cracked & ~pre
-        x0, y0 = m.coords.min(axis=0)
-        x1, y1 = m.coords.max(axis=0)
-        pad = 0.02 * max(x1 - x0, y1 - y0)
-        aspect = (y1 - y0 + 2 * pad) / (x1 - x0 + 2 * pad)
-        size = 7.0  # inches of the longer side of the specimen's box
-        box = (size, size * aspect) if aspect <= 1.0 else (size / aspect, size)
-        fig, ax = plt.subplots(figsize=(max(box[0], 3.5) + 0.8, max(box[1], 2.0) + 1.2))
         void = state.void_cells()
         removed = getattr(state, "removed", np.zeros(m.num_cells, dtype=bool))
+        ec = m.edge_cells
+        inside = (ec >= 0).all(axis=1) & removed[np.maximum(ec, 0)].all(axis=1)
         for cells, colour, label in (
             (void[removed[void]], "0.75", "excavated"),
             (void[~removed[void]], "#f3d9a4", "fragment (void)"),
@@ -432,7 +491,10 @@ class EventOutput:
             if len(cells):
                 ax.add_collection(
                     PolyCollection(
-                        m.coords[m.cells[cells]], facecolors=colour, edgecolors="none", label=label
+                        m.coords[m.cells[cells]],
+                        facecolors=colour,
+                        edgecolors="none",
+                        label=label if legend else None,
                     )
                 )
         outline = m.coords[m.edges[m.boundary_edges]]
@@ -456,28 +518,15 @@ class EventOutput:
         if faces is not None:
             layers.append((pre & (faces == SLIP), SLIP_COLOUR, 1.8, "joint, slipping"))
             layers.append((new & (faces == SLIP), SLIP_COLOUR, 1.8, "new crack, slipping"))
-        for mask, colour, width_, label in layers:
+        for layer, colour, width_, label in layers:
+            mask = layer & ~inside
             if mask.any():
                 segments = self.drawing.segments(mask)
                 ax.add_collection(
-                    LineCollection(segments, colors=colour, linewidths=width_, label=label)
+                    LineCollection(
+                        segments, colors=colour, linewidths=width_, label=label if legend else None
+                    )
                 )
-        ax.set_xlim(x0 - pad, x1 + pad)
-        ax.set_ylim(y0 - pad, y1 + pad)
-        ax.set_aspect("equal")
-        ax.set_xlabel(f"x ({self.ctx.scene.units.length})")
-        ax.set_ylabel(f"y ({self.ctx.scene.units.length})")
-        ax.set_title(
-            f"{self.ctx.scene.name}: {int(new.sum())} new cracked edges after {events} events",
-            fontsize=10,
-        )
-        handles, labels = ax.get_legend_handles_labels()
-        if handles:  # below the axes: it hides nothing
-            fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
-        rows = (len(handles) + 1) // 2  # legend rows below the axes
-        fig.tight_layout(rect=(0.0, 0.03 + 0.03 * rows if handles else 0.0, 1.0, 1.0))
-        fig.savefig(self.out_dir / "cracks.png", dpi=110)
-        plt.close(fig)
 
 
 def _changes_until(path: Path, event: float) -> list[list[str]]:
