@@ -460,7 +460,7 @@ class EventOutput:
         if handles:  # below the axes: it hides nothing
             fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
         rows = (len(handles) + 1) // 2  # legend rows below the axes
-        fig.tight_layout(rect=(0.0, 0.03 + 0.03 * rows if handles else 0.0, 1.0, 1.0))
+        fig.tight_layout(rect=(0.0, 0.03 + 0.03 * rows if handles else 0.0, 1.0, 0.98))
         fig.savefig(self.out_dir / "cracks.png", dpi=110)
         plt.close(fig)
 
