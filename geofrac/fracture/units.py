@@ -264,6 +264,39 @@ class EdgeUnits:
         #: (σ_xx, σ_yy, σ_xy) of each cell at its edge midpoints from the last
         #: :meth:`measures` when ``keep_stress``, shape=(num_cells, 3, 3).
         self.midpoint_stress = np.zeros((0, 3, 3))
+        #: each cell's elasticity matrix once :meth:`set_material` gave some cells their
+        #: own (installed support), shape=(num_cells, 3, 3); None: ``ctx.D`` everywhere.
+        self.cell_D: np.ndarray | None = None
+
+    def set_material(self, cells: np.ndarray, D: np.ndarray) -> None:
+        """Give ``cells`` (gathered ids, shape=(k,)) the elasticity matrix D, shape=(3, 3).
+
+        Their element matrices and stress operators are recomputed; their MLS fits take
+        D from then on (installed support, docs/insitu.md).
+        """
+        ctx, gm = self.ctx, self.ctx.gm
+        if self.cell_D is None:
+            self.cell_D = np.broadcast_to(ctx.D, (len(gm.cells), 3, 3)).copy()
+        cells = np.asarray(cells, dtype=np.int64)
+        self.cell_D[cells] = D
+        for c in cells.tolist():
+            self._mls_k.pop(c, None)
+        mine = np.flatnonzero(np.isin(self.own, cells))
+        if not len(mine):
+            return
+        x = gm.coords[gm.cells[self.own[mine]]]
+        self.K_fe[mine] = fe_matrices(ctx.spec, x, D, thickness=ctx.t, penalty=self._penalty(D))
+        op = np.einsum("ij,cqjp->cqip", D, strain_operator(ctx.spec, x, MIDPOINTS))
+        self._stress_op_t[:, :, mine] = op.reshape(len(mine), 9, -1).transpose(1, 2, 0)
+        self._K_fe_t[:, :, mine] = self.K_fe[mine].transpose(1, 2, 0)
+
+    def _penalty(self, D: np.ndarray) -> float:
+        """The zero-mode penalty α μ of a material D (μ = D[2, 2]; ctx's for ctx.D)."""
+        return float(self.ctx.penalty * D[2, 2] / self.ctx.D[2, 2])
+
+    def _D(self, c: int) -> np.ndarray:
+        """Cell c's elasticity matrix, shape=(3, 3)."""
+        return self.ctx.D if self.cell_D is None else self.cell_D[c]
 
     # -- sites ------------------------------------------------------------------------
     def group_sites(self, pairs: np.ndarray) -> np.ndarray:
@@ -304,6 +337,13 @@ class EdgeUnits:
         gm, ctx = self.ctx.gm, self.ctx
         x = gm.coords[gm.cells[units]]
         ks = fe_matrices(ctx.spec, x, ctx.D, thickness=ctx.t, penalty=ctx.penalty)
+        if self.cell_D is not None:  # installed support: its own D
+            for i, c in enumerate(units):
+                if not np.array_equal(self.cell_D[c], ctx.D):
+                    D = self.cell_D[c]
+                    ks[i] = fe_matrices(
+                        ctx.spec, x[i : i + 1], D, thickness=ctx.t, penalty=self._penalty(D)
+                    )[0]
         return {c: (ctx.node_dofs(gm.cells[c]), k) for c, k in zip(units, ks, strict=True)}
 
     def fit_block(self, unit: int, fit: Fit) -> Block | None:
@@ -318,7 +358,7 @@ class EdgeUnits:
         cached = self._mls_k.get(c)
         if cached is not None and cached[0] is fit:
             return cached[1]
-        k = mls_matrix(fit, self.ctx.D, self.ctx.t, area=self.state.areas[c])
+        k = mls_matrix(fit, self._D(c), self.ctx.t, area=self.state.areas[c])
         if c in self.state.fits and self.state.fits[c] is fit:
             self._mls_k[c] = (fit, k)
         return k
@@ -403,7 +443,10 @@ class EdgeUnits:
         table = self._table
         assert table is not None
         eps = table.strains(u_ext)  # shape=(rows, 3)
-        sig = eps @ ctx.D.T
+        if self.cell_D is None:
+            sig = eps @ ctx.D.T
+        else:  # installed support: each row its cell's D
+            sig = np.einsum("rij,rj->ri", self.cell_D[np.maximum(table.cells, 0)], eps)
         live = table.cells >= 0
         s1[table.cells[live]] = principal_max(sig[live])[:, None]
         if full is not None:
