@@ -150,7 +150,7 @@ def test_two_ranks_crack_the_lining_as_one(tmp_path_factory):
     path = tensile(Path(tmp), 9.0) if comm.rank == 0 else None
     comm.barrier()
     path = Path(comm.bcast(str(path) if path else None))
-    rows, res, stt = crack_run(path, "cracking.max_events=2", comm=comm)
+    rows, res, _ = crack_run(path, "cracking.max_events=2", comm=comm)
     mine = ([r["edge"] for r in rows], [r["load_factor"] for r in rows], res["stages"])
     ref = None
     if comm.rank == 0:
