@@ -136,7 +136,7 @@ class StagedEventLoop(InsituEventLoop):
         self._share_history: Visited = {}
         assert isinstance(parts.units, EdgeUnits)
         #: the support installed by stages' ``add`` (:mod:`~geofrac.fracture.support`).
-        self.supports = Supports(ctx, parts.units, insitu, chooser)
+        self.supports = Supports(ctx, parts.units, insitu, chooser=chooser)
 
     def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
         """Run the stages (a resume is refused: the stages' state is not in checkpoints)."""
@@ -196,21 +196,15 @@ class StagedEventLoop(InsituEventLoop):
 
     def _install(self, stage: Stage) -> None:
         """Install the stage's groups, stress-free in the state u_e (collective)."""
-        ctx, units = self.ctx, self.parts.units
-        assert stage.material is not None and self._unknown is not None
-        cells = group_cells(ctx, stage.add)
-        changed = self.supports.install(cells, stage.material, self.u_end)
+        changed = self.supports.install(stage, self.u_end, index=self.k + 1)
         if self.faces is not None:
             self.faces.faces.cracked(np.zeros(0, dtype=np.int64), changed)
-        units.reset()
+        self.parts.units.reset()
         self.parts.strategy.reset()
         self.parts.strategy.drop()
+        assert self._unknown is not None and stage.material is not None
         self._finish_field(self._unknown, self.u_end)  # u_ref of the output's fields
-        install_fields(ctx.problem, stage.add, stage.material)
-        ctx.say(
-            f"stage {self.k + 1}/{len(self.stages)} '{stage.name}': installed "
-            f"{', '.join(stage.add)} ({len(cells)} cells, E = {stage.material.E:g})"
-        )
+        install_fields(self.ctx.problem, stage.add, stage.material)
 
     def _kill(self, groups: tuple[str, ...]) -> None:
         """``alive`` = 0 on the removed groups (their weight and the stress output)."""

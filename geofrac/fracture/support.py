@@ -5,8 +5,9 @@ lining, backfill, with the stage's ``material`` (E, ν and optionally a tensile 
 Until their stage the cells are void (:class:`~geofrac.fracture.staged_state.StagedCrackState`);
 at it they are installed, stress-free in the state u_I where the last stage ended:
 
-- their stiffness is that of their own material (:meth:`EdgeUnits.set_material`), element
-  cells again, MLS once a crack reaches them;
+- their stiffness is that of their own material
+  (:func:`~geofrac.fracture.units.set_material`), element cells again, MLS once a crack
+  reaches them;
 - their stress is D ε(u − u_I) and they carry no σ0: their internal force is
   K_s (u − u_I), so the constant right-hand side gains F_I = K_s u_I (each event, on the
   current crack state), and at the sites their constant stress gains −D ε(u_I)
@@ -36,10 +37,10 @@ from geofrac.fracture.constant import ConstantChooser
 from geofrac.fracture.context import CrackContext
 from geofrac.fracture.insitu import InitialStressLoad
 from geofrac.fracture.modes import Choice
-from geofrac.fracture.staged_state import StagedCrackState, internal_force
-from geofrac.fracture.units import EdgeUnits
+from geofrac.fracture.staged_state import StagedCrackState, group_cells, internal_force
+from geofrac.fracture.units import EdgeUnits, set_material
 from geofrac.materials import d_matrix
-from geofrac.model.scene import Material
+from geofrac.model.scene import Stage
 
 __all__ = ["SupportChooser", "Supports", "drop_initial_stress"]
 
@@ -99,6 +100,7 @@ class Supports:
         ctx: CrackContext,
         units: EdgeUnits,
         insitu: InitialStressLoad,
+        *,
         chooser: ConstantChooser,
     ) -> None:
         self.ctx, self.units, self.insitu, self.chooser = ctx, units, insitu, chooser
@@ -109,12 +111,18 @@ class Supports:
         #: (the installation's cells, shape=(nc,) bool; u_I, shape=(n_global,)).
         self.installed: list[tuple[np.ndarray, np.ndarray]] = []
 
-    def install(self, cells: np.ndarray, material: Material, u_ref: np.ndarray) -> np.ndarray:
-        """Install ``cells`` (shape=(k,)) with ``material`` at u_I = ``u_ref``; changed cells.
+    def install(self, stage: Stage, u_ref: np.ndarray, *, index: int) -> np.ndarray:
+        """Install ``stage.add`` with its material at u_I = ``u_ref``; the changed cells.
+
+        ``u_ref``: shape=(n_global,); ``index``: the stage's (1-based, for the message).
+        Collective.
 
         Raises:
             RunError: when an edge of the cells cracked before they were removed.
         """
+        material = stage.material
+        assert material is not None
+        cells = group_cells(self.ctx, stage.add)
         state = self.units.state
         assert isinstance(state, StagedCrackState)
         m = state.mesh
@@ -125,7 +133,7 @@ class Supports:
                 "installing support on cracked cells is not supported"
             )
         D = d_matrix(material.E, material.nu, 2, plane=material.plane)
-        self.units.set_material(cells, D)
+        set_material(self.units, cells, D)
         f_t = material.tensile_strength
         self.strength[cells] = np.inf if f_t is None else f_t
         self.material[cells] = len(self.installed) + 1
@@ -138,6 +146,11 @@ class Supports:
         mask[cells] = True
         self.installed.append((mask, u_ref.copy()))
         self._scale()
+        self.ctx.say(
+            f"stage {index}/{len(self.ctx.scene.stages)} '{stage.name}': installed "
+            f"{', '.join(stage.add)} ({len(cells)} cells, E = {material.E:g}, f_t = "
+            f"{'none' if f_t is None else f'{f_t:g}'})"
+        )
         return changed
 
     def _scale(self) -> None:

@@ -43,6 +43,8 @@ __all__ = [
     "SiteState",
     "Units",
     "mls_settings",
+    "penalty_of",
+    "set_material",
     "unit_masks",
 ]
 
@@ -264,35 +266,9 @@ class EdgeUnits:
         #: (σ_xx, σ_yy, σ_xy) of each cell at its edge midpoints from the last
         #: :meth:`measures` when ``keep_stress``, shape=(num_cells, 3, 3).
         self.midpoint_stress = np.zeros((0, 3, 3))
-        #: each cell's elasticity matrix once :meth:`set_material` gave some cells their
+        #: each cell's elasticity matrix once :func:`set_material` gave some cells their
         #: own (installed support), shape=(num_cells, 3, 3); None: ``ctx.D`` everywhere.
         self.cell_D: np.ndarray | None = None
-
-    def set_material(self, cells: np.ndarray, D: np.ndarray) -> None:
-        """Give ``cells`` (gathered ids, shape=(k,)) the elasticity matrix D, shape=(3, 3).
-
-        Their element matrices and stress operators are recomputed; their MLS fits take
-        D from then on (installed support, docs/insitu.md).
-        """
-        ctx, gm = self.ctx, self.ctx.gm
-        if self.cell_D is None:
-            self.cell_D = np.broadcast_to(ctx.D, (len(gm.cells), 3, 3)).copy()
-        cells = np.asarray(cells, dtype=np.int64)
-        self.cell_D[cells] = D
-        for c in cells.tolist():
-            self._mls_k.pop(c, None)
-        mine = np.flatnonzero(np.isin(self.own, cells))
-        if not len(mine):
-            return
-        x = gm.coords[gm.cells[self.own[mine]]]
-        self.K_fe[mine] = fe_matrices(ctx.spec, x, D, thickness=ctx.t, penalty=self._penalty(D))
-        op = np.einsum("ij,cqjp->cqip", D, strain_operator(ctx.spec, x, MIDPOINTS))
-        self._stress_op_t[:, :, mine] = op.reshape(len(mine), 9, -1).transpose(1, 2, 0)
-        self._K_fe_t[:, :, mine] = self.K_fe[mine].transpose(1, 2, 0)
-
-    def _penalty(self, D: np.ndarray) -> float:
-        """The zero-mode penalty α μ of a material D (μ = D[2, 2]; ctx's for ctx.D)."""
-        return float(self.ctx.penalty * D[2, 2] / self.ctx.D[2, 2])
 
     def _D(self, c: int) -> np.ndarray:
         """Cell c's elasticity matrix, shape=(3, 3)."""
@@ -342,7 +318,7 @@ class EdgeUnits:
                 if not np.array_equal(self.cell_D[c], ctx.D):
                     D = self.cell_D[c]
                     ks[i] = fe_matrices(
-                        ctx.spec, x[i : i + 1], D, thickness=ctx.t, penalty=self._penalty(D)
+                        ctx.spec, x[i : i + 1], D, thickness=ctx.t, penalty=penalty_of(ctx, D)
                     )[0]
         return {c: (ctx.node_dofs(gm.cells[c]), k) for c, k in zip(units, ks, strict=True)}
 
@@ -510,3 +486,31 @@ class EdgeUnits:
 
     def results(self, out: dict[str, JsonValue], precracked: int, random_precracked: int) -> None:
         """Nothing to add: the loop's results count edges and MLS cells."""
+
+
+def penalty_of(ctx: CrackContext, D: np.ndarray) -> float:
+    """The zero-mode penalty α μ of a material D, shape=(3, 3) (μ = D[2, 2]; ctx's for ctx.D)."""
+    return float(ctx.penalty * D[2, 2] / ctx.D[2, 2])
+
+
+def set_material(units: EdgeUnits, cells: np.ndarray, D: np.ndarray) -> None:
+    """Give ``cells`` (gathered ids, shape=(k,)) of ``units`` the elasticity matrix D.
+
+    D: shape=(3, 3). Their element matrices and stress operators are recomputed; their
+    MLS fits take D from then on (installed support, docs/insitu.md).
+    """
+    ctx, gm = units.ctx, units.ctx.gm
+    if units.cell_D is None:
+        units.cell_D = np.broadcast_to(ctx.D, (len(gm.cells), 3, 3)).copy()
+    cells = np.asarray(cells, dtype=np.int64)
+    units.cell_D[cells] = D
+    for c in cells.tolist():
+        units._mls_k.pop(c, None)
+    mine = np.flatnonzero(np.isin(units.own, cells))
+    if not len(mine):
+        return
+    x = gm.coords[gm.cells[units.own[mine]]]
+    units.K_fe[mine] = fe_matrices(ctx.spec, x, D, thickness=ctx.t, penalty=penalty_of(ctx, D))
+    op = np.einsum("ij,cqjp->cqip", D, strain_operator(ctx.spec, x, MIDPOINTS))
+    units._stress_op_t[:, :, mine] = op.reshape(len(mine), 9, -1).transpose(1, 2, 0)
+    units._K_fe_t[:, :, mine] = units.K_fe[mine].transpose(1, 2, 0)
