@@ -19,7 +19,9 @@ whose variable load is the release of the running stage:
 - each event the least λ of the sites (:class:`~geofrac.fracture.constant.ConstantChooser`):
   λ ≤ s cracks the sites; λ > s ends the stage at λ = s without an event (a += s, and
   u_c + s u_v is the state the next stage starts from). After the last stage the run
-  ends (``stages_done``).
+  ends (``stages_done``);
+- a stage's ``add`` installs removed groups again after its removal, stress-free in the
+  state u_e, with their own material (:mod:`~geofrac.fracture.support`).
 
 Each stage's end is a step of ``results.xdmf`` (step 0 the initial state), and
 ``summary.json`` has a ``stages`` entry per stage (its events, share, the first event's

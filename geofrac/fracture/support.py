@@ -142,6 +142,8 @@ class Supports:
         kind = self.material[np.maximum(ec, 0)]
         state.crackable[edges] &= (ec >= 0).all(axis=1) & (kind[:, 0] == kind[:, 1])
         drop_initial_stress(self.insitu, cells)
+        for earlier, _ in self.installed:  # removed since, now installed again
+            earlier[cells] = False
         mask = np.zeros(len(m.cells), dtype=bool)
         mask[cells] = True
         self.installed.append((mask, u_ref.copy()))

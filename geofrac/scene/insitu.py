@@ -327,11 +327,12 @@ def _loaded(t: Table, geometry: Geometry) -> tuple[str, ...]:
 def _staged_cracking(
     file: Path, raw: list[Any], *, initial: bool, bcs: Sequence[Any], loads: Sequence[Any]
 ) -> None:
-    """A cracking scene takes stages that remove cells, from an initial stress.
+    """A cracking scene takes stages that remove cells, and add them back, from an initial stress.
 
     The stages' release is the only load that varies (docs/insitu.md, "Stages in a
     cracking scene"); the element and the crack settings were checked with
-    ``[initial_stress]``.
+    ``[initial_stress]``. Added groups must have been removed first, and their material
+    is weightless.
     """
     if not initial:
         raise SceneError(

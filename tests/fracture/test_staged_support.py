@@ -141,6 +141,10 @@ def test_added_groups_are_refused_where_a_cracking_scene_cannot_install_them(tmp
     bad.write_text(text.replace("nu = 0.2, tensile", "nu = 0.2, density = 2000.0, tensile"))
     with pytest.raises(SceneError, match=r"stages\[1\]\.material\.density"):
         load_scene_collective(MPI.COMM_SELF, bad, [])
+    elastic = ELASTIC.read_text().replace('"lined.geo"', f'"{ELASTIC.parent / "lined.geo"}"')
+    bad.write_text(elastic.replace("nu = 0.2 }", "nu = 0.2, tensile_strength = 1.0 }"))
+    with pytest.raises(SceneError, match=r"stages\[1\]\.material\.tensile_strength"):
+        load_scene_collective(MPI.COMM_SELF, bad, [])  # an elastic scene has no sites
 
 
 @pytest.mark.mpi(min_size=2)
