@@ -66,6 +66,7 @@ __all__ = [
     "StagedResults",
     "StagedRun",
     "initial_balance",
+    "install_fields",
     "refusal",
     "run_stages",
     "state_frame",
@@ -252,22 +253,7 @@ class StagedRun:
         Their stiffness, weight and internal force come back with their own E, ν and
         density; their stress is C ε(u − u at installation).
         """
-        problem = self.problem
-        fields = self.insitu
-        gdim = problem.mesh.geometry.dim
-        lam, mu = lame(material.E, material.nu, gdim, plane=material.plane)
-        for group in groups:
-            cells = np.asarray(group_cells(problem.tagged, group), dtype=np.int32)
-            dofs = cell_dofs(fields.alive, cells)
-            fields.alive.x.array[dofs] = 1.0
-            fields.lam.x.array[dofs] = lam
-            fields.mu.x.array[dofs] = mu
-            fields.rho.x.array[dofs] = material.density or 0.0
-            blocks = fields.sigma0.function_space.dofmap.list[cells].ravel()
-            fields.sigma0.x.array.reshape(-1, 9)[blocks] = 0.0
-            fields.u_ref.interpolate(problem.uh, cells0=cells, cells1=cells)
-        for f in (fields.alive, fields.lam, fields.mu, fields.rho, fields.sigma0, fields.u_ref):
-            f.x.scatter_forward()
+        install_fields(self.problem, groups, material)
         self._hold_orphans()
         self._factor()
 
@@ -469,6 +455,29 @@ class StagedRun:
             if vec is not None:
                 vec.destroy()
         self.release = self.r0 = None
+
+
+def install_fields(problem: ElasticProblem, groups: Sequence[str], material: Material) -> None:
+    """Set the staged fields of installed groups: live, ``material``, σ0 = 0, u_ref = uh.
+
+    The elastic and the cracking stages alike (collective).
+    """
+    fields = problem.insitu
+    assert fields is not None
+    gdim = problem.mesh.geometry.dim
+    lam, mu = lame(material.E, material.nu, gdim, plane=material.plane)
+    for group in groups:
+        cells = np.asarray(group_cells(problem.tagged, group), dtype=np.int32)
+        dofs = cell_dofs(fields.alive, cells)
+        fields.alive.x.array[dofs] = 1.0
+        fields.lam.x.array[dofs] = lam
+        fields.mu.x.array[dofs] = mu
+        fields.rho.x.array[dofs] = material.density or 0.0
+        blocks = fields.sigma0.function_space.dofmap.list[cells].ravel()
+        fields.sigma0.x.array.reshape(-1, 9)[blocks] = 0.0
+        fields.u_ref.interpolate(problem.uh, cells0=cells, cells1=cells)
+    for f in (fields.alive, fields.lam, fields.mu, fields.rho, fields.sigma0, fields.u_ref):
+        f.x.scatter_forward()
 
 
 def refusal(value: float) -> str:

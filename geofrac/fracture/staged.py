@@ -19,7 +19,9 @@ whose variable load is the release of the running stage:
 - each event the least λ of the sites (:class:`~geofrac.fracture.constant.ConstantChooser`):
   λ ≤ s cracks the sites; λ > s ends the stage at λ = s without an event (a += s, and
   u_c + s u_v is the state the next stage starts from). After the last stage the run
-  ends (``stages_done``).
+  ends (``stages_done``);
+- a stage's ``add`` installs removed groups again after its removal, stress-free in the
+  state u_e, with their own material (:mod:`~geofrac.fracture.support`).
 
 Each stage's end is a step of ``results.xdmf`` (step 0 the initial state), and
 ``summary.json`` has a ``stages`` entry per stage (its events, share, the first event's
@@ -41,7 +43,7 @@ from geofrac.fem.insitu import cell_dofs
 from geofrac.fem.insitu import group_cells as local_group_cells
 from geofrac.fem.solution import Solution
 from geofrac.fem.stage_checkpoint import Frame
-from geofrac.fem.stages import state_frame
+from geofrac.fem.stages import install_fields, state_frame
 from geofrac.fracture.config import LoopSettings
 from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_load
 from geofrac.fracture.constant_loop import ConstantEventLoop
@@ -52,6 +54,7 @@ from geofrac.fracture.insitu import InitialStressLoad, InsituEventLoop, checked_
 from geofrac.fracture.loop import LoopParts, _Run
 from geofrac.fracture.modes import Choice
 from geofrac.fracture.staged_state import StagedCrackState, group_cells, internal_force
+from geofrac.fracture.support import SupportChooser, Supports
 from geofrac.fracture.units import EdgeUnits
 from geofrac.io.checkpoint import RunControl
 from geofrac.model.scene import Stage
@@ -133,6 +136,9 @@ class StagedEventLoop(InsituEventLoop):
         #: active-set steps judged at the running stage's end, and the states they left.
         self._share_settles = 0
         self._share_history: Visited = {}
+        assert isinstance(parts.units, EdgeUnits)
+        #: the support installed by stages' ``add`` (:mod:`~geofrac.fracture.support`).
+        self.supports = Supports(ctx, parts.units, insitu, chooser=chooser)
 
     def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
         """Run the stages (a resume is refused: the stages' state is not in checkpoints)."""
@@ -172,8 +178,10 @@ class StagedEventLoop(InsituEventLoop):
             self._kill(stage.remove)
             self.staged_insitu.refresh()
             pairs = None if self.faces is None else self.faces.faces.owned_blocks()
-            self.release = self._initial_force() - internal_force(
-                ctx, units, self.u_end, pairs=pairs
+            self.release = (
+                self._initial_force()
+                + self.supports.force()
+                - internal_force(ctx, units, self.u_end, pairs=pairs)
             )
             self.release[ctx.bc_rows] = 0.0
             self.applied = 0.0
@@ -182,9 +190,23 @@ class StagedEventLoop(InsituEventLoop):
                 f"stage {self.k + 1}/{len(self.stages)} '{stage.name}': removed "
                 f"{', '.join(stage.remove)} ({len(cells)} cells, {len(changed)} changed)"
             )
+        if stage.add:
+            self._install(stage)
         self.share = self._share()
         self.begun, self._events, self._first = True, [], None
         self._share_settles, self._share_history = 0, {}
+
+    def _install(self, stage: Stage) -> None:
+        """Install the stage's groups, stress-free in the state u_e (collective)."""
+        changed = self.supports.install(stage, self.u_end, index=self.k + 1)
+        if self.faces is not None:
+            self.faces.faces.cracked(np.zeros(0, dtype=np.int64), changed)
+        self.parts.units.reset()
+        self.parts.strategy.reset()
+        self.parts.strategy.drop()
+        assert self._unknown is not None and stage.material is not None
+        self._finish_field(self._unknown, self.u_end)  # u_ref of the output's fields
+        install_fields(self.ctx.problem, stage.add, stage.material)
 
     def _kill(self, groups: tuple[str, ...]) -> None:
         """``alive`` = 0 on the removed groups (their weight and the stress output)."""
@@ -207,6 +229,7 @@ class StagedEventLoop(InsituEventLoop):
             "index": self.k + 1,
             "name": stage.name,
             "removed": list(stage.remove),
+            "added": list(stage.add),
             "share": share,
             "released": self.applied + share if complete else None,
             "complete": complete,
@@ -311,6 +334,10 @@ class StagedEventLoop(InsituEventLoop):
     def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
         """The constant load F0 − (1 − a) P on the current crack state, then both solves."""
         force = self._initial_force() - (1.0 - self.applied) * self.release
+        if self.supports.installed:  # K_s u_I, and −D ε(u_I) at the support's sites
+            force += self.supports.force()
+            assert self.load.extra_stress is not None
+            self.supports.offset(self.load.extra_stress)
         self.load.constant.load.setArray(force[self._rows])
         return ConstantEventLoop._solve(self, run, event, replay=replay)
 
@@ -350,6 +377,8 @@ class StagedEventLoop(InsituEventLoop):
             self._end_stage(run, complete=False)
         self._final = self.u_end
         results = super()._finish(run, unknown)
+        if not run.rows:  # no event: the field is where the last stage ended, not u_v
+            self._finish_field(unknown, self.u_end)
         results["stages"] = self.entries  # type: ignore[assignment]
         self.solution.frames = self.frames
         return results
@@ -400,6 +429,8 @@ def staged_loop(
     load.variable.load.set(0.0)
     load.extra_stress = insitu.site_stress.copy()
     parts.assembler.case = load.variable
+    adds = any(stage.add for stage in ctx.scene.stages)
+    chooser = (SupportChooser if adds else ConstantChooser)(criterion, insitu.units, ctx.config)
     return StagedEventLoop(
         ctx,
         parts,
@@ -407,7 +438,7 @@ def staged_loop(
         settings=settings,
         control=control,
         load=load,
-        chooser=ConstantChooser(criterion, insitu.units, ctx.config),
+        chooser=chooser,
         insitu=insitu,
         solution=solution,
     )

@@ -10,6 +10,12 @@ takes no satellite inside the opening, and a node on it counts as a boundary nod
 the cut cells. :class:`StagedCrackState` keeps removed cells void through every refit;
 :data:`~geofrac.fracture.staged_variant.STAGED_EDGES` is the edge variant whose units
 carry it.
+
+A later stage may install removed cells again (support, backfill: ``add``):
+:meth:`StagedCrackState.install` makes them element cells again; their edges are crack
+sites again where the caller says (the support's strength), the wall between them and
+the rock becomes an ordinary interior edge (no longer blocking visibility, its nodes no
+longer boundary nodes), and fits made from then on see across it.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ from mpi4py import MPI
 from geofrac.fracture.context import CrackContext
 from geofrac.fracture.state import CrackState
 from geofrac.fracture.units import Block, EdgeUnits
+from geofrac.fracture.visibility import Bins
 from geofrac.mls.shape import LinearFit
 
 __all__ = ["StagedCrackState", "group_cells", "internal_force"]
@@ -80,6 +87,50 @@ class StagedCrackState(CrackState):
         refitted = self.refit(np.array(sorted(near), dtype=np.int64))
         return self.conform(np.union1d(cells, refitted), wall)
 
+    def install(self, cells: np.ndarray, *, sites: bool) -> np.ndarray:
+        """Install removed ``cells`` (shape=(k,)) again; return the changed cells, sorted.
+
+        They become element cells (no fit); the edges with two live cells, neither
+        frozen, become crack sites when ``sites`` (the installed material has a
+        strength), else not; the wall edges that now have two live cells stop blocking
+        visibility and their nodes stop being boundary nodes (unless on another wall or
+        the mesh boundary). Fits already made are kept: a refit would change a cell's
+        field without a load (the state left the last stage in balance); those made
+        later see across the new interior edges.
+        """
+        m = self.mesh
+        cells = np.unique(np.asarray(cells, dtype=np.int64))
+        cells = cells[self.removed[cells]]
+        self.removed[cells] = False
+        for c in cells.tolist():
+            self.own_fits.pop(c, None)
+            if self.fits is not self.own_fits:
+                self.fits.pop(c, None)
+        edges = np.unique(m.cell_edges[cells])
+        ec = m.edge_cells[edges]
+        live = (ec >= 0).all(axis=1) & ~self.removed[np.maximum(ec, 0)].any(axis=1)
+        live &= ~self.frozen[np.maximum(ec, 0)].any(axis=1)
+        self.crackable[edges] = live & sites
+        self._rebuild_walls()
+        mine = set(cells.tolist())  # installed cells at a cut node use MLS at once
+        cut = [c for c in self._cut_cells(m.cells[cells].ravel()) if c in mine]
+        changed = np.union1d(cells, self.refit(np.array(sorted(set(cut)), dtype=np.int64)))
+        return self.conform(changed.astype(np.int64), edges)
+
+    def _rebuild_walls(self) -> None:
+        """The visibility boundary and boundary nodes: the mesh's and the live cells' walls."""
+        m = self.mesh
+        ec = m.edge_cells
+        gone = (ec >= 0) & self.removed[np.maximum(ec, 0)]
+        wall = np.flatnonzero(gone.any(axis=1) & ((ec >= 0) & ~gone).any(axis=1))
+        bins = Bins(self.boundary_bins.size)
+        for e in np.union1d(np.flatnonzero(m.boundary_edges), wall).tolist():
+            a, b = self.segments[e]
+            bins.add(e, np.minimum(a, b), np.maximum(a, b))
+        self.boundary_bins = bins
+        self._on_boundary = m.boundary_nodes()
+        self._on_boundary[m.edges[wall].ravel()] = True
+
 
 def group_cells(ctx: CrackContext, groups: tuple[str, ...]) -> np.ndarray:
     """The gathered-mesh cells of cell groups, from every rank, sorted, shape=(k,)."""
@@ -92,22 +143,30 @@ def group_cells(ctx: CrackContext, groups: tuple[str, ...]) -> np.ndarray:
 
 
 def internal_force(
-    ctx: CrackContext, units: EdgeUnits, u: np.ndarray, *, pairs: list[Block] | None = None
+    ctx: CrackContext,
+    units: EdgeUnits,
+    u: np.ndarray,
+    *,
+    pairs: list[Block] | None = None,
+    only: np.ndarray | None = None,
 ) -> np.ndarray:
     """K u of the current crack state, gathered on every rank, shape=(n_global,).
 
     The owned cells' element matrices (intact cells) and MLS stiffness (2.19) (fitted
     cells), the matrices the assembly uses; void cells give nothing; ``pairs``: the
-    owned crack-face pairs' blocks in their current states (with contact). ``u``:
-    shape=(n_global,). Collective.
+    owned crack-face pairs' blocks in their current states (with contact); ``only``:
+    whether each cell counts (the cells of one installation), shape=(num_cells,),
+    None: all. ``u``: shape=(n_global,). Collective.
     """
     state = units.state
     f = np.zeros(ctx.n_global)
     fe = ~state.is_mls()[units.own]
+    if only is not None:
+        fe &= only[units.own]
     dofs = units.fe_dofs[fe]
     np.add.at(f, dofs, np.einsum("cij,cj->ci", units.K_fe[fe], u[dofs]))
     for c, fit in state.fits.items():
-        if fit is None or not units.owned[c]:
+        if fit is None or not units.owned[c] or (only is not None and not only[c]):
             continue
         assert isinstance(fit, LinearFit)
         block = units.fit_block(c, fit)

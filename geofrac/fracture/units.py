@@ -43,6 +43,8 @@ __all__ = [
     "SiteState",
     "Units",
     "mls_settings",
+    "penalty_of",
+    "set_material",
     "unit_masks",
 ]
 
@@ -264,6 +266,13 @@ class EdgeUnits:
         #: (σ_xx, σ_yy, σ_xy) of each cell at its edge midpoints from the last
         #: :meth:`measures` when ``keep_stress``, shape=(num_cells, 3, 3).
         self.midpoint_stress = np.zeros((0, 3, 3))
+        #: each cell's elasticity matrix once :func:`set_material` gave some cells their
+        #: own (installed support), shape=(num_cells, 3, 3); None: ``ctx.D`` everywhere.
+        self.cell_D: np.ndarray | None = None
+
+    def _D(self, c: int) -> np.ndarray:
+        """Cell c's elasticity matrix, shape=(3, 3)."""
+        return self.ctx.D if self.cell_D is None else self.cell_D[c]
 
     # -- sites ------------------------------------------------------------------------
     def group_sites(self, pairs: np.ndarray) -> np.ndarray:
@@ -304,6 +313,13 @@ class EdgeUnits:
         gm, ctx = self.ctx.gm, self.ctx
         x = gm.coords[gm.cells[units]]
         ks = fe_matrices(ctx.spec, x, ctx.D, thickness=ctx.t, penalty=ctx.penalty)
+        if self.cell_D is not None:  # installed support: its own D
+            for i, c in enumerate(units):
+                if not np.array_equal(self.cell_D[c], ctx.D):
+                    D = self.cell_D[c]
+                    ks[i] = fe_matrices(
+                        ctx.spec, x[i : i + 1], D, thickness=ctx.t, penalty=penalty_of(ctx, D)
+                    )[0]
         return {c: (ctx.node_dofs(gm.cells[c]), k) for c, k in zip(units, ks, strict=True)}
 
     def fit_block(self, unit: int, fit: Fit) -> Block | None:
@@ -318,7 +334,7 @@ class EdgeUnits:
         cached = self._mls_k.get(c)
         if cached is not None and cached[0] is fit:
             return cached[1]
-        k = mls_matrix(fit, self.ctx.D, self.ctx.t, area=self.state.areas[c])
+        k = mls_matrix(fit, self._D(c), self.ctx.t, area=self.state.areas[c])
         if c in self.state.fits and self.state.fits[c] is fit:
             self._mls_k[c] = (fit, k)
         return k
@@ -403,7 +419,10 @@ class EdgeUnits:
         table = self._table
         assert table is not None
         eps = table.strains(u_ext)  # shape=(rows, 3)
-        sig = eps @ ctx.D.T
+        if self.cell_D is None:
+            sig = eps @ ctx.D.T
+        else:  # installed support: each row its cell's D
+            sig = np.einsum("rij,rj->ri", self.cell_D[np.maximum(table.cells, 0)], eps)
         live = table.cells >= 0
         s1[table.cells[live]] = principal_max(sig[live])[:, None]
         if full is not None:
@@ -467,3 +486,31 @@ class EdgeUnits:
 
     def results(self, out: dict[str, JsonValue], precracked: int, random_precracked: int) -> None:
         """Nothing to add: the loop's results count edges and MLS cells."""
+
+
+def penalty_of(ctx: CrackContext, D: np.ndarray) -> float:
+    """The zero-mode penalty α μ of a material D, shape=(3, 3) (μ = D[2, 2]; ctx's for ctx.D)."""
+    return float(ctx.penalty * D[2, 2] / ctx.D[2, 2])
+
+
+def set_material(units: EdgeUnits, cells: np.ndarray, D: np.ndarray) -> None:
+    """Give ``cells`` (gathered ids, shape=(k,)) of ``units`` the elasticity matrix D.
+
+    D: shape=(3, 3). Their element matrices and stress operators are recomputed; their
+    MLS fits take D from then on (installed support, docs/insitu.md).
+    """
+    ctx, gm = units.ctx, units.ctx.gm
+    if units.cell_D is None:
+        units.cell_D = np.broadcast_to(ctx.D, (len(gm.cells), 3, 3)).copy()
+    cells = np.asarray(cells, dtype=np.int64)
+    units.cell_D[cells] = D
+    for c in cells.tolist():
+        units._mls_k.pop(c, None)
+    mine = np.flatnonzero(np.isin(units.own, cells))
+    if not len(mine):
+        return
+    x = gm.coords[gm.cells[units.own[mine]]]
+    units.K_fe[mine] = fe_matrices(ctx.spec, x, D, thickness=ctx.t, penalty=penalty_of(ctx, D))
+    op = np.einsum("ij,cqjp->cqip", D, strain_operator(ctx.spec, x, MIDPOINTS))
+    units._stress_op_t[:, :, mine] = op.reshape(len(mine), 9, -1).transpose(1, 2, 0)
+    units._K_fe_t[:, :, mine] = units.K_fe[mine].transpose(1, 2, 0)

@@ -31,7 +31,7 @@ INITIAL_STRESS_KEYS = ("kind", "stress", "surface", "density", "K0", "tectonic",
 #: Keys of one ``[[stages]]`` entry.
 STAGE_KEYS = ("name", "remove", "relaxation", "add", "material")
 #: Keys of a stage's ``material`` (the added groups').
-STAGE_MATERIAL_KEYS = ("E", "nu", "density")
+STAGE_MATERIAL_KEYS = ("E", "nu", "density", "tensile_strength")
 #: Kinds of initial stress.
 KINDS = ("constant", "geostatic")
 #: Largest K0 accepted (the horizontal stress at most this many times the vertical).
@@ -327,11 +327,12 @@ def _loaded(t: Table, geometry: Geometry) -> tuple[str, ...]:
 def _staged_cracking(
     file: Path, raw: list[Any], *, initial: bool, bcs: Sequence[Any], loads: Sequence[Any]
 ) -> None:
-    """A cracking scene takes stages that remove cells, from an initial stress.
+    """A cracking scene takes stages that remove cells, and add them back, from an initial stress.
 
     The stages' release is the only load that varies (docs/insitu.md, "Stages in a
     cracking scene"); the element and the crack settings were checked with
-    ``[initial_stress]``.
+    ``[initial_stress]``. Added groups must have been removed first, and their material
+    is weightless.
     """
     if not initial:
         raise SceneError(
@@ -350,13 +351,26 @@ def _staged_cracking(
             "which staged cracking does not take yet (hold the far sides or load them by "
             "σ0·n with initial_stress.loaded)",
         )
+    absent = _absent_at_start(raw)
     for i, entry in enumerate(raw):
-        if isinstance(entry, dict) and "add" in entry:
+        if not isinstance(entry, dict):
+            continue
+        for group in entry.get("add", []) if isinstance(entry.get("add"), list) else []:
+            if group in absent:
+                raise SceneError(
+                    file,
+                    f"stages[{i}].add",
+                    f"group '{group}' is added before any stage removed it; a cracking "
+                    "scene installs support only where a stage excavated (the initial "
+                    "stress is that of the whole mesh): remove it in an earlier stage",
+                )
+        material = entry.get("material")
+        if isinstance(material, dict) and "density" in material:
             raise SceneError(
                 file,
-                f"stages[{i}].add",
-                "installing support (cells added by a stage) is for elastic scenes only so "
-                "far; a cracking scene's stages remove cells",
+                f"stages[{i}].material.density",
+                "a cracking scene's installed support is weightless (its weight would "
+                "be a load the staged loop does not take yet): leave density out",
             )
 
 
@@ -381,7 +395,9 @@ def stages(
     only adds groups, or only switches loads or supports (its name is in ``switched``,
     :mod:`geofrac.scene.switches`), may apply nothing. A cracking scene (``declared``
     has ``cracking``) needs ``initial`` (an ``[initial_stress]``), no ``bcs`` that move
-    and no ``loads``, and its stages may not add cells.
+    and no ``loads``; the groups its stages add must have been removed by an earlier
+    stage, and their ``material`` has no density (the support is weightless) and may
+    have a ``tensile_strength`` (only a cracking scene's may).
 
     Raises:
         SceneError: naming the stage and key.
@@ -413,7 +429,7 @@ def stages(
         removed.difference_update(add)
         if all(g in removed for g in cells):
             raise t.error("remove", "removes every cell group: no body would be left")
-        support = _stage_material(t, material) if add else None
+        support = _stage_material(t, material, cracking="cracking" in declared) if add else None
         if t.has("material") and not add:
             raise t.error("material", "is the material of the groups in 'add'; add some")
         if remove:
@@ -477,8 +493,11 @@ def _added(t: Table, geometry: Geometry, removed: set[str]) -> tuple[str, ...]:
     return tuple(value)
 
 
-def _stage_material(t: Table, scene_material: Material | None) -> Material:
-    """A stage's ``material``: E and ν required, density optional (0: weightless)."""
+def _stage_material(t: Table, scene_material: Material | None, *, cracking: bool) -> Material:
+    """A stage's ``material``: E and ν required, density optional (0: weightless).
+
+    ``tensile_strength`` (a cracking scene only): the support's edges are crack sites.
+    """
     if not t.has("material"):
         raise t.error("material", "missing (required with 'add': the added groups' E and nu)")
     m = Table(t.file, t.path("material"), t.data["material"], allowed=STAGE_MATERIAL_KEYS)
@@ -490,7 +509,21 @@ def _stage_material(t: Table, scene_material: Material | None) -> Material:
     plane = scene_material.plane if scene_material is not None else "stress"
     thickness = scene_material.thickness if scene_material is not None else 1.0
     density = m.number("density", positive=True, maximum=1e6)
-    return Material(E=float(E), nu=float(nu), plane=plane, thickness=thickness, density=density)
+    strength = m.number("tensile_strength", positive=True, maximum=1e15)
+    if strength is not None and not cracking:
+        raise m.error(
+            "tensile_strength",
+            "applies to a cracking scene (the support's edges crack at it); an elastic "
+            "scene has no crack sites",
+        )
+    return Material(
+        E=float(E),
+        nu=float(nu),
+        plane=plane,
+        thickness=thickness,
+        density=density,
+        tensile_strength=strength,
+    )
 
 
 def _removed(t: Table, geometry: Geometry, removed: set[str]) -> tuple[str, ...]:

@@ -1,14 +1,16 @@
 // A lined circular opening, a quarter model (tests/fem/test_insitu.py): the core r < b,
 // the lining ring b < r < a and the rock of a square block of side L, each a cell
 // group ("core", "ring", "rock"); symmetry lines "left" (x = 0) and "bottom" (y = 0)
-// through all three; far sides "right" and "top". Curved (second-order) cells; the mesh
+// through all three; far sides "right" and "top". Curved (second-order) cells (order = 1:
+// straight, for the cracking elements); the mesh
 // size is h near the opening and grows to h_far at 10a.
 DefineConstant[
   a = {1.0, Name "Parameters/a"},
   b = {0.9, Name "Parameters/b"},
   L = {40.0, Name "Parameters/L"},
   h = {0.05, Name "Parameters/h"},
-  h_far = {2.0, Name "Parameters/h_far"}
+  h_far = {2.0, Name "Parameters/h_far"},
+  order = {2, Name "Parameters/order"}
 ];
 Point(1) = {0, 0, 0, h};
 Point(2) = {b, 0, 0, h};
@@ -47,7 +49,7 @@ Background Field = 2;
 Mesh.MeshSizeExtendFromBoundary = 0;
 Mesh.MeshSizeFromPoints = 0;
 Mesh.MeshSizeFromCurvature = 0;
-Mesh.ElementOrder = 2;
+Mesh.ElementOrder = order;
 Physical Surface("core") = {1};
 Physical Surface("ring") = {2};
 Physical Surface("rock") = {3};

@@ -209,10 +209,11 @@ def test_heading_then_bench_ends_where_one_excavation_does(tmp_path):
 ONE = '[[stages]]\nname = "a"\nremove = ["hole"]\n'
 BAD = [
     (
-        ONE + '[[stages]]\nname = "b"\nadd = ["hole"]\nmaterial = { E = 1.0, nu = 0.2 }\n',
+        ONE + '[[stages]]\nname = "b"\nadd = ["hole"]\nmaterial = { E = 1.0, nu = 0.2, '
+        "density = 1.0 }\n",
         (),
-        "stages[1].add",
-        "elastic scenes only",
+        "stages[1].material.density",
+        "weightless",
     ),
     (
         ONE + '[[load]]\ntype = "traction"\ngroup = "top"\nvalue = [0.0, -1.0]\n',
