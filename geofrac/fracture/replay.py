@@ -10,7 +10,8 @@ so it repeats the interrupted run's arithmetic.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -43,6 +44,9 @@ class EventStart:
     criterion: dict[str, JsonValue]
     #: crack-face contact (:meth:`~geofrac.fracture.faces.Faces.snapshot`), or None.
     contact: tuple[dict[str, JsonValue], dict[str, np.ndarray]] | None = None
+    #: the loop's own state, (JSON data, arrays of shape=(n_global,)), or None: a
+    #: staged run's stage and release (:mod:`~geofrac.fracture.staged_resume`).
+    loop: tuple[dict[str, JsonValue], dict[str, np.ndarray]] | None = None
 
 
 @dataclass
@@ -56,6 +60,8 @@ class Restored:
         replay_from: j, the first event to compute again.
         first_energy: the first event's unit strain energy.
         face_hit: (event, x) where the crack first reached the ``face`` group, or None.
+        loop: the loop's own state (:attr:`EventStart.loop`), or None.
+        loop_arrays: its arrays (none without it).
     """
 
     rows: list[Row]
@@ -64,6 +70,12 @@ class Restored:
     replay_from: int
     first_energy: float
     face_hit: tuple[int, float] | None
+    loop: dict[str, JsonValue] | None = None
+    loop_arrays: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+#: The prefix of the loop's own arrays in ``shared.npz``.
+_LOOP = "loop_"
 
 
 def read_checkpoint(
@@ -159,24 +171,34 @@ class Replay:
         if ref.contact is not None:
             data["contact"] = ref.contact[0]
             arrays |= ref.contact[1]
+        if ref.loop is not None:
+            data["loop"] = ref.loop[0]
+            arrays |= {_LOOP + name: a for name, a in ref.loop[1].items()}
         control.save(event, data, shared=arrays)
 
-    def restore(self, ck: Checkpoint, n_global: int) -> Restored:
+    def restore(
+        self, ck: Checkpoint, n_global: int, *, between: Callable[[int], None] | None = None
+    ) -> Restored:
         """Bring the parts to the start of checkpoint ``ck``'s replay event.
 
         The crack state is rebuilt by cracking the sites of each event before it again,
         in event order (the fits are a function of the cracked sites); the held and
         pinned DOFs and the unit solution before that event (whose values held DOFs
-        keep) are read back.
+        keep) are read back. ``between(i)`` is called with i events' sites cracked, for
+        i = 0 … j − 1 (a staged run removes its stages' cells there, in their order).
         """
         data, arrays = read_checkpoint(ck, n_global)
         replay_from = int(data["replay_from"])  # type: ignore[arg-type]
         batches: list[list[int]] = data["batches"]  # type: ignore[assignment]
         logged: list[Row] = data["rows"]  # type: ignore[assignment]
-        for batch, row in zip(batches[: replay_from - 1], logged, strict=False):
+        for i, (batch, row) in enumerate(zip(batches[: replay_from - 1], logged, strict=False)):
+            if between is not None:
+                between(i)
             if row.get("mode") == "soften":  # a tooth of an edge cracked before
                 continue
             self.units.state.crack_many([int(e) for e in batch])
+        if between is not None:
+            between(replay_from - 1)
         held = self.assembler
         held.fragment_nodes = arrays["fragment_nodes"].astype(np.int64)
         held.pinned_dofs = arrays["pinned_dofs"].astype(np.int64)
@@ -202,6 +224,8 @@ class Replay:
             replay_from=replay_from,
             first_energy=float(data["first_energy"]),  # type: ignore[arg-type]
             face_hit=None if hit is None else (int(hit[0]), float(hit[1])),  # type: ignore[index, arg-type]
+            loop=data.get("loop"),  # type: ignore[arg-type]
+            loop_arrays={k[len(_LOOP) :]: v for k, v in arrays.items() if k.startswith(_LOOP)},
         )
 
     def _restore_timing(self, t: dict[str, JsonValue]) -> None:

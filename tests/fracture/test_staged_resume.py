@@ -1,0 +1,165 @@
+"""Checkpoints of a staged cracking run: stop at event k, resume, compare with a whole run.
+
+The plate of scenes/plate_hole_staged.toml with its opening excavated as a heading (share
+0.45: one crack, at λ = 0.403) and a bench (the rest: five more), as
+tests/fracture/test_staged_cracking.py. A run stopped (SIGTERM through the run control, as
+tests/fracture/test_resume.py) after event 1, the heading's last (the stage boundary comes
+in event 2), or after event 3 (the bench running: the restored crack state has the
+heading's crack, then the bench's removal, then its cracks), and resumed, must give the
+whole run's events (the same edges, modes and numbers to 1e-10), the same ``stages``
+entries of ``summary.json``, the same ``results.xdmf`` steps and the same final state.
+A checkpoint of other stages is refused naming them.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from geofrac.effects.cracking import make_driver
+from geofrac.io import checkpoint
+from geofrac.io.checkpoint import CheckpointPolicy, RunControl
+from geofrac.meshing.geo import meshed_model
+from geofrac.scene import load_scene_collective
+from tests.fracture.test_resume import StopAt, check_resumed, run
+from tests.fracture.test_staged_cracking import HEADING_BENCH, _staged
+
+#: the heading's share: it cracks once, then the bench five times.
+SHARE = 0.45
+OVERRIDES = ("cracking.max_events=6", "cracking.output_every=2")
+RTOL = 1e-10
+
+
+def scene(tmp: Path, comm: MPI.Comm, share: float = SHARE, *, mesh: Path | None = None) -> Path:
+    """The heading-and-bench plate in rank 0's ``tmp``, on its mesh meshed once (``.msh``).
+
+    ``mesh``: a ``.msh`` already written (another share of the same plate).
+    """
+    path = None
+    if comm.rank == 0:
+        tmp.mkdir(parents=True, exist_ok=True)
+        text = _staged(tmp, HEADING_BENCH.format(share=share), split=True).read_text()
+        found = re.search(r'file = "(.*)"\nparameters = \{(.*)\}', text)
+        assert found is not None
+        if mesh is None:
+            mesh = tmp / "plate.msh"
+            pairs = (kv.split("=") for kv in found.group(2).split(","))
+            with meshed_model(
+                Path(found.group(1)), {k.strip(): float(v) for k, v in pairs}, None, dim=2
+            ) as gmsh:
+                gmsh.write(str(mesh))
+        path = tmp / "plate.toml"
+        path.write_text(text.replace(found.group(0), f'file = "{mesh}"'))
+    return Path(comm.bcast(str(path) if path else None, root=0))
+
+
+def driver(
+    path: Path, overrides: tuple[str, ...], out: Path, comm: MPI.Comm, control: Any = None
+) -> Any:
+    """The crack driver of ``path`` writing into ``out`` (not run)."""
+    from geofrac.elements import make_element
+    from geofrac.fem.elastic import make_problem
+    from geofrac.fem.solution import Solution
+    from geofrac.meshing.distribute import build_mesh
+
+    sc = load_scene_collective(comm, path, list(overrides), out=out)
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    config = next(s.config for s in sc.effects if s.name == "cracking")
+    tagged = build_mesh(sc.geometry, comm)
+    problem = make_problem(tagged, make_element(sc.discretization.element, tagged.mesh), sc)
+    problem.compile()
+    solution = Solution(sc, tagged, problem, control=control)
+    return make_driver(config, solution, lambda msg: None, write=True)
+
+
+def stop_at(directory: Path, comm: MPI.Comm, at: int, resume: Any = None) -> RunControl:
+    return StopAt(
+        comm, directory, "sha", "cracking", CheckpointPolicy(0, 0.0), at=at, resume=resume
+    )
+
+
+def frames(d: Any) -> list[tuple[int, str, list[np.ndarray]]]:
+    """The ``results.xdmf`` steps: (index, name, this rank's arrays of each field)."""
+    return [(f.index, f.name, [g.x.array.copy() for g in f.functions]) for f in d.loop.frames]
+
+
+def same_stages(a: list[dict[str, Any]], b: list[dict[str, Any]]) -> None:
+    """The ``stages`` entries agree: the same events, numbers to RTOL."""
+    assert len(a) == len(b)
+    for x, y in zip(a, b, strict=True):
+        assert x.keys() == y.keys()
+        for key in x:
+            if isinstance(x[key], float) or isinstance(y[key], float):
+                assert x[key] == pytest.approx(y[key], rel=RTOL, abs=0), key
+            elif key in ("first_event", "probes"):
+                assert str(x[key]) == str(y[key]) or x[key] == pytest.approx(y[key], rel=RTOL), key
+            else:
+                assert x[key] == y[key], key
+
+
+def whole(base: Path, path: Path, overrides: tuple[str, ...], comm: MPI.Comm) -> Any:
+    d = driver(path, overrides, base / "whole", comm)
+    res, u = run(d)
+    assert res is not None
+    return d, res, u, frames(d)
+
+
+def stopped(base: Path, path: Path, overrides: tuple[str, ...], k: int, comm: MPI.Comm) -> Path:
+    """Run ``path`` into ``base / "stopped"``, checkpoints after every event, stop after k."""
+    ck = base / "stopped" / "checkpoint"
+    control = StopAt(comm, ck, "sha", "cracking", CheckpointPolicy(1, 0.0), at=k)
+    res, _ = run(driver(path, overrides, base / "stopped", comm, control))
+    assert res is None
+    return ck
+
+
+def resumed(
+    base: Path, path: Path, overrides: tuple[str, ...], saved: Any, ref: Any, comm: MPI.Comm
+) -> None:
+    """Resume from ``saved`` in ``base / "stopped"``; it agrees with ``ref`` (the whole run)."""
+    out = base / "stopped"
+    d = driver(path, overrides, out, comm, stop_at(saved.path.parent, comm, -1, resume=saved))
+    res, u = run(d)
+    assert res is not None and res["resumed_after_event"] == saved.k
+    d_a, res_a, _, frames_a = ref
+    check_resumed(base, out, ref[:3], d, res, u, comm)
+    assert [r["mode"] for r in d.rows] == [r["mode"] for r in d_a.rows]
+    same_stages(res["stages"], res_a["stages"])
+    got = frames(d)
+    assert [f[:2] for f in got] == [f[:2] for f in frames_a]
+    for (_, name, fields), (_, _, fields_a) in zip(got, frames_a, strict=True):
+        for f, f_a in zip(fields, fields_a, strict=True):
+            scale = comm.allreduce(float(np.max(np.abs(f_a), initial=0.0)), op=MPI.MAX)
+            np.testing.assert_allclose(f, f_a, rtol=0, atol=RTOL * scale, err_msg=name)
+
+
+def saved(ck: Path, k: int) -> checkpoint.Checkpoint:
+    """Checkpoint k of the directory ``ck``."""
+    path = ck / f"ckpt-{k:09d}"
+    return checkpoint.Checkpoint(path, json.loads((path / "meta.json").read_text()))
+
+
+def test_staged_cracking_resumes_at_a_stage_boundary_and_within_a_stage(tmp_path, monkeypatch):
+    """Stopped after event 3, resumed from its checkpoints after events 1 and 3.
+
+    After event 1 the heading is running (its end and the bench's removal come in event
+    2); after event 3 the bench is, and its first solve (event 2) is the replay's start.
+    """
+    monkeypatch.setattr(checkpoint, "KEEP", 3)  # keep the checkpoints of events 1-3
+    comm = MPI.COMM_SELF
+    path = scene(tmp_path / "scene", comm)
+    ref = whole(tmp_path, path, OVERRIDES, comm)
+    assert [s["events"] for s in ref[1]["stages"]] == [1, 5]
+    ck = stopped(tmp_path, path, OVERRIDES, 3, comm)
+    for k, stage, replay_from in ((1, 0, 1), (3, 1, 2)):
+        ckpt = saved(ck, k)
+        assert ckpt.data["loop"]["stage"] == stage and ckpt.data["replay_from"] == replay_from
+        resumed(tmp_path, path, OVERRIDES, ckpt, ref, comm)
