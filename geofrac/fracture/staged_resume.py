@@ -65,7 +65,7 @@ def snapshot(loop: StagedEventLoop) -> tuple[dict[str, JsonValue], dict[str, np.
     The arrays are kept by reference (the loop replaces, never changes, them).
     """
     history = [
-        [e, [[state, v, d] for state, (v, d) in seen.items()]]
+        [int(e), [[int(state), float(v), float(d)] for state, (v, d) in seen.items()]]
         for e, seen in loop._share_history.items()
     ]
     data: dict[str, JsonValue] = {

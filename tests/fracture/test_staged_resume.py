@@ -23,11 +23,12 @@ import pytest
 from mpi4py import MPI
 
 from geofrac.effects.cracking import make_driver
+from geofrac.errors import RunError
 from geofrac.io import checkpoint
 from geofrac.io.checkpoint import CheckpointPolicy, RunControl
 from geofrac.meshing.geo import meshed_model
 from geofrac.scene import load_scene_collective
-from tests.fracture.test_resume import StopAt, check_resumed, run
+from tests.fracture.test_resume import StopAt, check_resumed, read_log, run, shared_dir
 from tests.fracture.test_staged_cracking import HEADING_BENCH, _staged
 
 #: the heading's share: it cracks once, then the bench five times.
@@ -91,18 +92,20 @@ def frames(d: Any) -> list[tuple[int, str, list[np.ndarray]]]:
     return [(f.index, f.name, [g.x.array.copy() for g in f.functions]) for f in d.loop.frames]
 
 
-def same_stages(a: list[dict[str, Any]], b: list[dict[str, Any]]) -> None:
-    """The ``stages`` entries agree: the same events, numbers to RTOL."""
-    assert len(a) == len(b)
-    for x, y in zip(a, b, strict=True):
-        assert x.keys() == y.keys()
+def same(x: Any, y: Any, where: str = "stages") -> None:
+    """JSON values alike: the same structure and strings, numbers to RTOL."""
+    if isinstance(x, dict):
+        assert isinstance(y, dict) and x.keys() == y.keys(), where
         for key in x:
-            if isinstance(x[key], float) or isinstance(y[key], float):
-                assert x[key] == pytest.approx(y[key], rel=RTOL, abs=0), key
-            elif key in ("first_event", "probes"):
-                assert str(x[key]) == str(y[key]) or x[key] == pytest.approx(y[key], rel=RTOL), key
-            else:
-                assert x[key] == y[key], key
+            same(x[key], y[key], f"{where}.{key}")
+    elif isinstance(x, list):
+        assert isinstance(y, list) and len(x) == len(y), where
+        for i, (a, b) in enumerate(zip(x, y, strict=True)):
+            same(a, b, f"{where}[{i}]")
+    elif isinstance(x, float) and not isinstance(y, bool):
+        assert y == pytest.approx(x, rel=RTOL, abs=0), where
+    else:
+        assert x == y, where
 
 
 def whole(base: Path, path: Path, overrides: tuple[str, ...], comm: MPI.Comm) -> Any:
@@ -123,22 +126,26 @@ def stopped(base: Path, path: Path, overrides: tuple[str, ...], k: int, comm: MP
 
 def resumed(
     base: Path, path: Path, overrides: tuple[str, ...], saved: Any, ref: Any, comm: MPI.Comm
-) -> None:
+) -> dict[str, float]:
     """Resume from ``saved`` in ``base / "stopped"``; it agrees with ``ref`` (the whole run)."""
     out = base / "stopped"
     d = driver(path, overrides, out, comm, stop_at(saved.path.parent, comm, -1, resume=saved))
     res, u = run(d)
     assert res is not None and res["resumed_after_event"] == saved.k
     d_a, res_a, _, frames_a = ref
-    check_resumed(base, out, ref[:3], d, res, u, comm)
+    got = check_resumed(base, out, ref[:3], d, res, u, comm)
     assert [r["mode"] for r in d.rows] == [r["mode"] for r in d_a.rows]
-    same_stages(res["stages"], res_a["stages"])
-    got = frames(d)
-    assert [f[:2] for f in got] == [f[:2] for f in frames_a]
-    for (_, name, fields), (_, _, fields_a) in zip(got, frames_a, strict=True):
+    same(res["stages"], res_a["stages"])
+    steps = frames(d)
+    assert [f[:2] for f in steps] == [f[:2] for f in frames_a]
+    got["steps"] = 0.0
+    for (_, name, fields), (_, _, fields_a) in zip(steps, frames_a, strict=True):
         for f, f_a in zip(fields, fields_a, strict=True):
             scale = comm.allreduce(float(np.max(np.abs(f_a), initial=0.0)), op=MPI.MAX)
             np.testing.assert_allclose(f, f_a, rtol=0, atol=RTOL * scale, err_msg=name)
+            diff = comm.allreduce(float(np.max(np.abs(f - f_a), initial=0.0)), op=MPI.MAX)
+            got["steps"] = max(got["steps"], diff / scale if scale else diff)
+    return got
 
 
 def saved(ck: Path, k: int) -> checkpoint.Checkpoint:
@@ -159,7 +166,61 @@ def test_staged_cracking_resumes_at_a_stage_boundary_and_within_a_stage(tmp_path
     ref = whole(tmp_path, path, OVERRIDES, comm)
     assert [s["events"] for s in ref[1]["stages"]] == [1, 5]
     ck = stopped(tmp_path, path, OVERRIDES, 3, comm)
-    for k, stage, replay_from in ((1, 0, 1), (3, 1, 2)):
+    for k, stage, replay_from in ((1, 0, 1), (2, 1, 2), (3, 1, 2)):
         ckpt = saved(ck, k)
         assert ckpt.data["loop"]["stage"] == stage and ckpt.data["replay_from"] == replay_from
-        resumed(tmp_path, path, OVERRIDES, ckpt, ref, comm)
+        print(f"resumed after event {k}: {resumed(tmp_path, path, OVERRIDES, ckpt, ref, comm)}")
+
+    # a checkpoint of other stages, or of a run without stages, is refused
+    other = scene(tmp_path / "other", comm, 0.5, mesh=tmp_path / "scene" / "plate.msh")
+    ckpt = saved(ck, 3)
+    d = driver(other, OVERRIDES, tmp_path / "other", comm, stop_at(ck, comm, -1, resume=ckpt))
+    with pytest.raises(
+        RunError, match=r"other \[\[stages\]\] \('heading' \(removes heading, 0.45\)"
+    ):
+        d.run()
+    d.problem.destroy()
+    ckpt.meta["data"].pop("loop")
+    d = driver(path, OVERRIDES, tmp_path / "other", comm, stop_at(ck, comm, -1, resume=ckpt))
+    with pytest.raises(RunError, match="without \\[\\[stages\\]\\]; this scene has 2 stages"):
+        d.run()
+    d.problem.destroy()
+
+
+def test_staged_cracking_with_contact_resumes(tmp_path):
+    """Contact on the new cracks (share 0.3: the bench cracks, its pairs stick and slip).
+
+    Stopped after event 4 of 6: the pairs' states, held pairs and counters come back with
+    the crack state, both removals replayed before it.
+    """
+    comm = MPI.COMM_SELF
+    overrides = ("cracking.max_events=6", "cracking.contact=true")
+    path = scene(tmp_path / "scene", comm, 0.3)
+    ref = whole(tmp_path, path, overrides, comm)
+    assert [s["events"] for s in ref[1]["stages"]] == [0, 6]
+    assert ref[1]["contact"]["slip"] > 0 and ref[1]["contact"]["frozen_pairs"] > 0
+    ck = stopped(tmp_path, path, overrides, 4, comm)
+    ckpt = saved(ck, 4)
+    assert ckpt.data["loop"]["stage"] == 1 and ckpt.data["loop"]["starts"] == [0, 0]
+    print(f"with contact: {resumed(tmp_path, path, overrides, ckpt, ref, comm)}")
+    whole_log, log = (
+        read_log(d / "events.csv") for d in (tmp_path / "whole", tmp_path / "stopped")
+    )
+    for key in ("open", "stick", "slip", "contact_changes"):
+        assert [r[key] for r in log] == [r[key] for r in whole_log], key
+    changes = [read_log(d / "contact.csv") for d in (tmp_path / "whole", tmp_path / "stopped")]
+    assert changes[1] == changes[0] and changes[0]
+
+
+@pytest.mark.mpi(min_size=2)
+def test_staged_cracking_resumes_on_2_ranks(tmp_path):
+    """Stopped after event 3 (the bench running), resumed: as the whole run on 2 ranks."""
+    comm = MPI.COMM_WORLD
+    base = shared_dir(tmp_path, comm)
+    path = scene(base / "scene", comm)
+    ref = whole(base, path, OVERRIDES, comm)
+    assert [s["events"] for s in ref[1]["stages"]] == [1, 5]
+    ck = stopped(base, path, OVERRIDES, 3, comm)
+    ckpt = saved(ck, 3)
+    assert ckpt.data["loop"]["stage"] == 1
+    print(f"on {comm.size} ranks: {resumed(base, path, OVERRIDES, ckpt, ref, comm)}")
