@@ -326,10 +326,9 @@ class EventLoop:
     # -- start and end ---------------------------------------------------------------
     def _begin(self, space: dolfinx.fem.FunctionSpace) -> _Run:
         """The state before loading, or a checkpoint's when resuming (collective)."""
-        run = self._fresh(space)
-        if run.resume is not None:
-            assert self.control is not None
-            self.control.check_resume()  # the same scene and number of ranks
+        run, control = self._fresh(space), self.control
+        if run.resume is not None and control is not None:
+            control.check_resume()  # the same scene and number of ranks
             back = self._restore(run.resume)
             run.rows, run.batches, run.u_unit = back.rows, back.batches, back.u_unit
             run.first, run.first_energy = back.replay_from, back.first_energy
@@ -339,24 +338,13 @@ class EventLoop:
 
     def _fresh(self, space: dolfinx.fem.FunctionSpace) -> _Run:
         """The state before loading (a resume starts from it too; collective)."""
-        parts, control = self.parts, self.control
-        parts.crack.start(self.sites.precracked)
-        parts.equilibrium.open(space)
-        run = _Run(u_unit=np.zeros(self.ctx.n_global))
-        run.resume = control.resume if control is not None else None
-        return run
+        self.parts.crack.start(self.sites.precracked)
+        self.parts.equilibrium.open(space)
+        resume = self.control.resume if self.control is not None else None
+        return _Run(u_unit=np.zeros(self.ctx.n_global), resume=resume)
 
     def _restore(self, ck: Checkpoint) -> Restored:
-        """The parts at the start of ``ck``'s replay event.
-
-        A loop with a state of its own overrides it
-        (:class:`~geofrac.fracture.staged.StagedEventLoop`).
-        """
-        if ck.data.get("loop") is not None:
-            raise RunError(
-                f"--resume: the checkpoint {ck.path} was written by a cracking run with "
-                "[[stages]]; this scene has none (run without --resume to start afresh)"
-            )
+        """The parts at the start of ``ck``'s replay event (a staged loop's own state too)."""
         return self.parts.replay.restore(ck, self.ctx.n_global)
 
     def _announce(self, run: _Run, t0: float) -> None:

@@ -185,9 +185,15 @@ class Replay:
         in event order (the fits are a function of the cracked sites); the held and
         pinned DOFs and the unit solution before that event (whose values held DOFs
         keep) are read back. ``between(i)`` is called with i events' sites cracked, for
-        i = 0 … j − 1 (a staged run removes its stages' cells there, in their order).
+        i = 0 … j − 1: a staged run removes its stages' cells there, in their order (a
+        checkpoint of a staged run is refused without it).
         """
         data, arrays = read_checkpoint(ck, n_global)
+        if data.get("loop") is not None and between is None:  # (a staged run's removals)
+            raise RunError(
+                f"--resume: the checkpoint {ck.path} was written by a cracking run with "
+                "[[stages]]; this scene has none (run without --resume to start afresh)"
+            )
         replay_from = int(data["replay_from"])  # type: ignore[arg-type]
         batches: list[list[int]] = data["batches"]  # type: ignore[assignment]
         logged: list[Row] = data["rows"]  # type: ignore[assignment]

@@ -309,11 +309,7 @@ class StagedEventLoop(InsituEventLoop):
     def _crack(
         self, run: _Run, event: int, choice: Choice, solved: Solved, *, replay: bool
     ) -> bool:
-        """Log the state u_c + λ u_v, crack the sites, publish (ConstantEventLoop's event).
-
-        ``replay``: an event of the log that a resumed run computes again (checked, not
-        logged or published).
-        """
+        """Log the state u_c + λ u_v, crack, publish (``replay``: check it, as the log's)."""
         assert run.unit is not None
         r, (energy_c, _, _, cross) = choice.r, self._const
         energy = energy_c + r * cross + r * r * run.unit[0]

@@ -24,23 +24,62 @@ resumed run then computes events j … k again, as the unstaged loops do.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
 from geofrac.errors import RunError
-from geofrac.fracture.context import JsonValue
+from geofrac.fem.solution import Solution
+from geofrac.fem.stage_checkpoint import Frame
+from geofrac.fracture.constant import ConstantLoad
+from geofrac.fracture.context import CrackContext, JsonValue
+from geofrac.fracture.equilibrium import Visited
+from geofrac.fracture.loop import LoopParts
 from geofrac.fracture.replay import Restored, read_checkpoint
 from geofrac.io.checkpoint import Checkpoint
 from geofrac.model.scene import Stage
 
-if TYPE_CHECKING:
-    from geofrac.fracture.staged import StagedEventLoop
-
-__all__ = ["KIND", "layout", "restore", "snapshot"]
+__all__ = ["KIND", "StagedLoop", "layout", "restore", "snapshot"]
 
 #: The ``kind`` of a staged run's own checkpoint data.
 KIND = "stages"
+
+
+class StagedLoop(Protocol):
+    """What a checkpoint reads and sets of :class:`~geofrac.fracture.staged.StagedEventLoop`."""
+
+    ctx: CrackContext
+    parts: LoopParts
+    load: ConstantLoad
+    solution: Solution
+    stages: tuple[Stage, ...]
+    k: int
+    begun: bool
+    share: float
+    beyond: float
+    applied: float
+    release: np.ndarray
+    u_const: np.ndarray
+    u_end: np.ndarray
+    entries: list[dict[str, JsonValue]]
+    frames: list[Frame]
+    over_cracked: int
+    over_at_start: int | None
+    _starts: list[int]
+    _ends: list[np.ndarray]
+    _events: list[int]
+    _first: dict[str, JsonValue] | None
+    _share_settles: int
+    _share_history: Visited
+    _rows: slice
+
+    def _frame(self, index: int, name: str, u: np.ndarray) -> Frame:
+        """The fields of the state u for ``results.xdmf``."""
+        ...
+
+    def _remove(self, stage: Stage) -> tuple[np.ndarray, np.ndarray]:
+        """Make the stage's cells void (collective)."""
+        ...
 
 
 def layout(stages: tuple[Stage, ...]) -> list[JsonValue]:
@@ -59,7 +98,7 @@ def _words(stages: list[JsonValue]) -> str:
     return "; ".join(out) or "none"
 
 
-def snapshot(loop: StagedEventLoop) -> tuple[dict[str, JsonValue], dict[str, np.ndarray]]:
+def snapshot(loop: StagedLoop) -> tuple[dict[str, JsonValue], dict[str, np.ndarray]]:
     """The stages' state at an event's start: (JSON data, arrays of shape=(n_global,)).
 
     The arrays are kept by reference (the loop replaces, never changes, them).
@@ -89,7 +128,7 @@ def snapshot(loop: StagedEventLoop) -> tuple[dict[str, JsonValue], dict[str, np.
     return data, arrays
 
 
-def _checked(loop: StagedEventLoop, ck: Checkpoint) -> tuple[dict[str, JsonValue], int]:
+def _checked(loop: StagedLoop, ck: Checkpoint) -> tuple[dict[str, JsonValue], int]:
     """The checkpoint's stage data and its number of finished stages, or a refusal."""
     data = ck.data.get("loop")
     ours = layout(loop.stages)
@@ -112,7 +151,7 @@ def _checked(loop: StagedEventLoop, ck: Checkpoint) -> tuple[dict[str, JsonValue
     return data, stage
 
 
-def restore(loop: StagedEventLoop, ck: Checkpoint) -> Restored:
+def restore(loop: StagedLoop, ck: Checkpoint) -> Restored:
     """Bring the parts and the stages to the start of ``ck``'s replay event (collective).
 
     Raises:
@@ -147,7 +186,7 @@ def restore(loop: StagedEventLoop, ck: Checkpoint) -> Restored:
     return back
 
 
-def _put(loop: StagedEventLoop, data: dict[str, JsonValue], ends: list[np.ndarray]) -> None:
+def _put(loop: StagedLoop, data: dict[str, JsonValue], ends: list[np.ndarray]) -> None:
     """The stages' bookkeeping of ``data`` into ``loop`` (the running stage begun)."""
     loop.k, loop.begun = int(data["stage"]), True  # type: ignore[arg-type]
     loop.share, loop.applied = float(data["share"]), float(data["applied"])  # type: ignore[arg-type]
