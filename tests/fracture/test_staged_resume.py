@@ -2,13 +2,16 @@
 
 The plate of scenes/plate_hole_staged.toml with its opening excavated as a heading (share
 0.45: one crack, at λ = 0.403) and a bench (the rest: five more), as
-tests/fracture/test_staged_cracking.py. A run stopped (SIGTERM through the run control, as
+tests/fracture/test_staged_cracking.py, meshed once per test (a ``.msh``: the runs then
+take about 0.5 s each). A run stopped (SIGTERM through the run control, as
 tests/fracture/test_resume.py) after event 1, the heading's last (the stage boundary comes
-in event 2), or after event 3 (the bench running: the restored crack state has the
-heading's crack, then the bench's removal, then its cracks), and resumed, must give the
-whole run's events (the same edges, modes and numbers to 1e-10), the same ``stages``
-entries of ``summary.json``, the same ``results.xdmf`` steps and the same final state.
-A checkpoint of other stages is refused naming them.
+in event 2), after event 2 or after event 3 (the bench running: the restored crack state
+has the heading's crack, then the bench's removal, then its cracks), and resumed, must
+give the whole run's events (the same edges, modes and numbers to 1e-10), the same
+``stages`` entries of ``summary.json``, the same ``results.xdmf`` steps and the same final
+state; also with contact on the new cracks (the pairs' states and contact.csv), for a
+stage without a removal (the share of the release applied before it) and on 2 ranks.
+A checkpoint of other stages, or of a run without stages, is refused naming the problem.
 """
 
 from __future__ import annotations
@@ -37,15 +40,19 @@ OVERRIDES = ("cracking.max_events=6", "cracking.output_every=2")
 RTOL = 1e-10
 
 
-def scene(tmp: Path, comm: MPI.Comm, share: float = SHARE, *, mesh: Path | None = None) -> Path:
+def scene(
+    tmp: Path, comm: MPI.Comm, share: float = SHARE, *, mesh: Path | None = None, stages: str = ""
+) -> Path:
     """The heading-and-bench plate in rank 0's ``tmp``, on its mesh meshed once (``.msh``).
 
-    ``mesh``: a ``.msh`` already written (another share of the same plate).
+    ``mesh``: a ``.msh`` already written (another share of the same plate); ``stages``:
+    other ``[[stages]]`` than the heading's (``share``) and the bench's.
     """
     path = None
     if comm.rank == 0:
         tmp.mkdir(parents=True, exist_ok=True)
-        text = _staged(tmp, HEADING_BENCH.format(share=share), split=True).read_text()
+        stages = stages or HEADING_BENCH.format(share=share)
+        text = _staged(tmp, stages, split=True).read_text()
         found = re.search(r'file = "(.*)"\nparameters = \{(.*)\}', text)
         assert found is not None
         if mesh is None:
@@ -210,6 +217,35 @@ def test_staged_cracking_with_contact_resumes(tmp_path):
         assert [r[key] for r in log] == [r[key] for r in whole_log], key
     changes = [read_log(d / "contact.csv") for d in (tmp_path / "whole", tmp_path / "stopped")]
     assert changes[1] == changes[0] and changes[0]
+
+
+#: the whole opening at once, 0.4 of its release, then the rest without a removal.
+RELAX = """[[stages]]
+name = "excavate"
+remove = ["heading", "bench"]
+relaxation = 0.4
+
+[[stages]]
+name = "rest"
+"""
+
+
+def test_a_stage_without_removal_resumes_with_the_share_applied_before_it(tmp_path):
+    """The second stage releases the rest of the first stage's release P (a = 0.4).
+
+    The refactor solver factorises every event, so checkpoint 3 restarts at event 3 in the
+    second stage: its constant load F0 − (1 − a) P needs the stored P and a.
+    """
+    comm = MPI.COMM_SELF
+    overrides = ("cracking.max_events=5", "cracking.solver=refactor")
+    path = scene(tmp_path / "scene", comm, stages=RELAX)
+    ref = whole(tmp_path, path, overrides, comm)
+    assert [s["events"] for s in ref[1]["stages"]] == [0, 5]
+    ck = stopped(tmp_path, path, overrides, 3, comm)
+    ckpt = saved(ck, 3)
+    loop = ckpt.data["loop"]
+    assert loop["stage"] == 1 and loop["applied"] == 0.4 and ckpt.data["replay_from"] == 3
+    print(f"without removal: {resumed(tmp_path, path, overrides, ckpt, ref, comm)}")
 
 
 @pytest.mark.mpi(min_size=2)
