@@ -11,7 +11,7 @@ so it repeats the interrupted run's arithmetic.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,7 +25,7 @@ from geofrac.fracture.output import Row
 from geofrac.fracture.units import Units
 from geofrac.io.checkpoint import Checkpoint, RunControl
 
-__all__ = ["EventStart", "Replay", "Restored", "read_checkpoint"]
+__all__ = ["LOOP_ARRAYS", "EventStart", "Replay", "Restored", "read_checkpoint"]
 
 
 @dataclass
@@ -60,8 +60,6 @@ class Restored:
         replay_from: j, the first event to compute again.
         first_energy: the first event's unit strain energy.
         face_hit: (event, x) where the crack first reached the ``face`` group, or None.
-        loop: the loop's own state (:attr:`EventStart.loop`), or None.
-        loop_arrays: its arrays (none without it).
     """
 
     rows: list[Row]
@@ -70,12 +68,10 @@ class Restored:
     replay_from: int
     first_energy: float
     face_hit: tuple[int, float] | None
-    loop: dict[str, JsonValue] | None = None
-    loop_arrays: dict[str, np.ndarray] = field(default_factory=dict)
 
 
-#: The prefix of the loop's own arrays in ``shared.npz``.
-_LOOP = "loop_"
+#: The prefix of the loop's own arrays (:attr:`EventStart.loop`) in ``shared.npz``.
+LOOP_ARRAYS = "loop_"
 
 
 def read_checkpoint(
@@ -173,7 +169,7 @@ class Replay:
             arrays |= ref.contact[1]
         if ref.loop is not None:
             data["loop"] = ref.loop[0]
-            arrays |= {_LOOP + name: a for name, a in ref.loop[1].items()}
+            arrays |= {LOOP_ARRAYS + name: a for name, a in ref.loop[1].items()}
         control.save(event, data, shared=arrays)
 
     def restore(
@@ -230,8 +226,6 @@ class Replay:
             replay_from=replay_from,
             first_energy=float(data["first_energy"]),  # type: ignore[arg-type]
             face_hit=None if hit is None else (int(hit[0]), float(hit[1])),  # type: ignore[index, arg-type]
-            loop=data.get("loop"),  # type: ignore[arg-type]
-            loop_arrays={k[len(_LOOP) :]: v for k, v in arrays.items() if k.startswith(_LOOP)},
         )
 
     def _restore_timing(self, t: dict[str, JsonValue]) -> None:

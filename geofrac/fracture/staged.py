@@ -23,7 +23,8 @@ whose variable load is the release of the running stage:
 
 Each stage's end is a step of ``results.xdmf`` (step 0 the initial state), and
 ``summary.json`` has a ``stages`` entry per stage (its events, share, the first event's
-release and the probes' displacement at the nearest node).
+release and the probes' displacement at the nearest node). A run stopped by a signal
+resumes at the stage and event where it stopped (:mod:`~geofrac.fracture.staged_resume`).
 """
 
 from __future__ import annotations

@@ -35,7 +35,7 @@ from geofrac.fracture.constant import ConstantLoad
 from geofrac.fracture.context import CrackContext, JsonValue
 from geofrac.fracture.equilibrium import Visited
 from geofrac.fracture.loop import LoopParts
-from geofrac.fracture.replay import Restored, read_checkpoint
+from geofrac.fracture.replay import LOOP_ARRAYS, Restored, read_checkpoint
 from geofrac.io.checkpoint import Checkpoint
 from geofrac.model.scene import Stage
 
@@ -160,11 +160,12 @@ def restore(loop: StagedLoop, ck: Checkpoint) -> Restored:
     """
     data, stage = _checked(loop, ck)
     n_global = loop.ctx.n_global
-    _, arrays = read_checkpoint(ck, n_global)
-    ends = [arrays.get(f"loop_end{i}") for i in range(stage)]
-    need = [arrays.get("loop_release"), arrays.get("loop_u_const"), *ends]
-    if any(a is None or a.shape != (n_global,) for a in need):
+    _, saved = read_checkpoint(ck, n_global)
+    arrays = {k[len(LOOP_ARRAYS) :]: v for k, v in saved.items() if k.startswith(LOOP_ARRAYS)}
+    names = ["release", "u_const", *(f"end{i}" for i in range(stage))]
+    if any(name not in arrays or arrays[name].shape != (n_global,) for name in names):
         raise RunError(f"--resume: the checkpoint {ck.path} does not match this mesh")
+    ends = [np.array(arrays[f"end{i}"], dtype=float) for i in range(stage)]
     starts = [int(i) for i in data["starts"]]  # type: ignore[union-attr]
     xdmf = loop.solution.scene.output.xdmf
 
@@ -179,9 +180,9 @@ def restore(loop: StagedLoop, ck: Checkpoint) -> Restored:
                 loop._remove(loop.stages[s])
 
     back = loop.parts.replay.restore(ck, n_global, between=removals)
-    _put(loop, data, [np.array(a, dtype=float) for a in ends])
-    loop.release = np.array(arrays["loop_release"], dtype=float)
-    loop.u_const = np.array(arrays["loop_u_const"], dtype=float)
+    _put(loop, data, ends)
+    loop.release = np.array(arrays["release"], dtype=float)
+    loop.u_const = np.array(arrays["u_const"], dtype=float)
     loop.load.variable.load.setArray(loop.release[loop._rows])
     return back
 
