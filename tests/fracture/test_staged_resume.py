@@ -109,7 +109,7 @@ def same(x: Any, y: Any, where: str = "stages") -> None:
         assert isinstance(y, list) and len(x) == len(y), where
         for i, (a, b) in enumerate(zip(x, y, strict=True)):
             same(a, b, f"{where}[{i}]")
-    elif isinstance(x, float) and not isinstance(y, bool):
+    elif isinstance(x, float):
         assert y == pytest.approx(x, rel=RTOL, abs=0), where
     else:
         assert x == y, where
@@ -162,7 +162,7 @@ def saved(ck: Path, k: int) -> checkpoint.Checkpoint:
 
 
 def test_staged_cracking_resumes_at_a_stage_boundary_and_within_a_stage(tmp_path, monkeypatch):
-    """Stopped after event 3, resumed from its checkpoints after events 1 and 3.
+    """Stopped after event 3, resumed from its checkpoints after events 1, 2 and 3.
 
     After event 1 the heading is running (its end and the bench's removal come in event
     2); after event 3 the bench is, and its first solve (event 2) is the replay's start.
@@ -183,7 +183,9 @@ def test_staged_cracking_resumes_at_a_stage_boundary_and_within_a_stage(tmp_path
     ckpt = saved(ck, 3)
     d = driver(other, OVERRIDES, tmp_path / "other", comm, stop_at(ck, comm, -1, resume=ckpt))
     with pytest.raises(
-        RunError, match=r"other \[\[stages\]\] \('heading' \(removes heading, 0.45\)"
+        RunError,
+        match=r"other \[\[stages\]\] \('heading' \(removes heading, 0.45\); 'bench' \(removes "
+        r"bench, all that remains\)\); this scene's are 'heading' \(removes heading, 0.5\)",
     ):
         d.run()
     d.problem.destroy()
