@@ -184,6 +184,11 @@ def restore(loop: StagedLoop, ck: Checkpoint) -> Restored:
     loop.release = np.array(arrays["release"], dtype=float)
     loop.u_const = np.array(arrays["u_const"], dtype=float)
     loop.load.variable.load.setArray(loop.release[loop._rows])
+    loop.ctx.say(
+        f"stage {loop.k + 1}/{len(loop.stages)} '{loop.stages[loop.k].name}': resumed at "
+        f"event {back.replay_from} ({loop.k} of {len(loop.stages)} stages finished; "
+        f"{loop.applied:.4g} of the pending release applied before it)"
+    )
     return back
 
 
