@@ -86,9 +86,13 @@ class ConstantEventLoop(EventLoop):
             self.faces = ConstantFaces(parts.contact, ctx)
             parts.record.proportional = False  # the pairs' values are the event's own
 
+    #: whether checkpoints keep what the loop needs to continue (the constant load's
+    #: solution; :class:`~geofrac.fracture.staged.StagedEventLoop`'s do).
+    resumable = False
+
     def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
         """Run (a resume is refused: checkpoints keep the variable solution only)."""
-        if self.control is not None and self.control.resume is not None:
+        if not self.resumable and self.control is not None and self.control.resume is not None:
             raise RunError(
                 "--resume: a run with cracking.constant cannot be resumed yet (its "
                 "checkpoints keep the variable load's solution only); run it again"

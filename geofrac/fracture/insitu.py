@@ -291,9 +291,12 @@ class InsituEventLoop(ConstantEventLoop):
         self._reference: np.ndarray | None = None
         self.residual = 0.0
 
-    def _begin(self, space: dolfinx.fem.FunctionSpace) -> _Run:
-        """The pre-cracked state; with contact, σ0 on the pairs and their initial states."""
-        run = super()._begin(space)
+    def _fresh(self, space: dolfinx.fem.FunctionSpace) -> _Run:
+        """The pre-cracked state; with contact, σ0 on the pairs and their initial states.
+
+        A resumed run starts from it too (R is the pre-cracked state's), then restores.
+        """
+        run = super()._fresh(space)
         if self.faces is not None:
             insitu, faces = self.insitu, self.faces
             edge_stress = edge_means(self.parts.units.state.mesh, insitu.site_stress)

@@ -41,7 +41,7 @@ from geofrac.fracture.linear import SolverStrategy, Timing
 from geofrac.fracture.modes import MODES, Choice, ModeChooser
 from geofrac.fracture.output import OutputWriter, Row
 from geofrac.fracture.record import Recorder
-from geofrac.fracture.replay import EventStart, Replay
+from geofrac.fracture.replay import EventStart, Replay, Restored
 from geofrac.fracture.scales import TENSION_FLOOR
 from geofrac.fracture.summary import Summary
 from geofrac.fracture.units import Units
@@ -326,20 +326,26 @@ class EventLoop:
     # -- start and end ---------------------------------------------------------------
     def _begin(self, space: dolfinx.fem.FunctionSpace) -> _Run:
         """The state before loading, or a checkpoint's when resuming (collective)."""
-        parts, control = self.parts, self.control
-        parts.crack.start(self.sites.precracked)
-        parts.equilibrium.open(space)
-        run = _Run(u_unit=np.zeros(self.ctx.n_global))
-        run.resume = control.resume if control is not None else None
-        if run.resume is not None:
-            assert control is not None
+        run, control = self._fresh(space), self.control
+        if run.resume is not None and control is not None:
             control.check_resume()  # the same scene and number of ranks
-            back = parts.replay.restore(run.resume, self.ctx.n_global)
+            back = self._restore(run.resume)
             run.rows, run.batches, run.u_unit = back.rows, back.batches, back.u_unit
             run.first, run.first_energy = back.replay_from, back.first_energy
             run.face_hit, run.done = back.face_hit, len(back.rows)
             run.peak = max((r["strain_energy"] for r in run.rows[: run.first - 1]), default=0.0)
         return run
+
+    def _fresh(self, space: dolfinx.fem.FunctionSpace) -> _Run:
+        """The state before loading (a resume starts from it too; collective)."""
+        self.parts.crack.start(self.sites.precracked)
+        self.parts.equilibrium.open(space)
+        resume = self.control.resume if self.control is not None else None
+        return _Run(u_unit=np.zeros(self.ctx.n_global), resume=resume)
+
+    def _restore(self, ck: Checkpoint) -> Restored:
+        """The parts at the start of ``ck``'s replay event (a staged loop's own state too)."""
+        return self.parts.replay.restore(ck, self.ctx.n_global)
 
     def _announce(self, run: _Run, t0: float) -> None:
         """The start-up message: the crack state, the set-up time, what a resume repeats."""

@@ -10,6 +10,7 @@ so it repeats the interrupted run's arithmetic.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,7 @@ from geofrac.fracture.output import Row
 from geofrac.fracture.units import Units
 from geofrac.io.checkpoint import Checkpoint, RunControl
 
-__all__ = ["EventStart", "Replay", "Restored", "read_checkpoint"]
+__all__ = ["LOOP_ARRAYS", "EventStart", "Replay", "Restored", "read_checkpoint"]
 
 
 @dataclass
@@ -43,6 +44,9 @@ class EventStart:
     criterion: dict[str, JsonValue]
     #: crack-face contact (:meth:`~geofrac.fracture.faces.Faces.snapshot`), or None.
     contact: tuple[dict[str, JsonValue], dict[str, np.ndarray]] | None = None
+    #: the loop's own state, (JSON data, arrays of shape=(n_global,)), or None: a
+    #: staged run's stage and release (:mod:`~geofrac.fracture.staged_resume`).
+    loop: tuple[dict[str, JsonValue], dict[str, np.ndarray]] | None = None
 
 
 @dataclass
@@ -64,6 +68,10 @@ class Restored:
     replay_from: int
     first_energy: float
     face_hit: tuple[int, float] | None
+
+
+#: The prefix of the loop's own arrays (:attr:`EventStart.loop`) in ``shared.npz``.
+LOOP_ARRAYS = "loop_"
 
 
 def read_checkpoint(
@@ -159,24 +167,40 @@ class Replay:
         if ref.contact is not None:
             data["contact"] = ref.contact[0]
             arrays |= ref.contact[1]
+        if ref.loop is not None:
+            data["loop"] = ref.loop[0]
+            arrays |= {LOOP_ARRAYS + name: a for name, a in ref.loop[1].items()}
         control.save(event, data, shared=arrays)
 
-    def restore(self, ck: Checkpoint, n_global: int) -> Restored:
+    def restore(
+        self, ck: Checkpoint, n_global: int, *, between: Callable[[int], None] | None = None
+    ) -> Restored:
         """Bring the parts to the start of checkpoint ``ck``'s replay event.
 
         The crack state is rebuilt by cracking the sites of each event before it again,
         in event order (the fits are a function of the cracked sites); the held and
         pinned DOFs and the unit solution before that event (whose values held DOFs
-        keep) are read back.
+        keep) are read back. ``between(i)`` is called with i events' sites cracked, for
+        i = 0 … j − 1: a staged run removes its stages' cells there, in their order (a
+        checkpoint of a staged run is refused without it).
         """
         data, arrays = read_checkpoint(ck, n_global)
+        if data.get("loop") is not None and between is None:  # (a staged run's removals)
+            raise RunError(
+                f"--resume: the checkpoint {ck.path} was written by a cracking run with "
+                "[[stages]]; this scene has none (run without --resume to start afresh)"
+            )
         replay_from = int(data["replay_from"])  # type: ignore[arg-type]
         batches: list[list[int]] = data["batches"]  # type: ignore[assignment]
         logged: list[Row] = data["rows"]  # type: ignore[assignment]
-        for batch, row in zip(batches[: replay_from - 1], logged, strict=False):
+        for i, (batch, row) in enumerate(zip(batches[: replay_from - 1], logged, strict=False)):
+            if between is not None:
+                between(i)
             if row.get("mode") == "soften":  # a tooth of an edge cracked before
                 continue
             self.units.state.crack_many([int(e) for e in batch])
+        if between is not None:
+            between(replay_from - 1)
         held = self.assembler
         held.fragment_nodes = arrays["fragment_nodes"].astype(np.int64)
         held.pinned_dofs = arrays["pinned_dofs"].astype(np.int64)

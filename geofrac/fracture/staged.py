@@ -25,7 +25,8 @@ whose variable load is the release of the running stage:
 
 Each stage's end is a step of ``results.xdmf`` (step 0 the initial state), and
 ``summary.json`` has a ``stages`` entry per stage (its events, share, the first event's
-release and the probes' displacement at the nearest node).
+release and the probes' displacement at the nearest node). A run stopped by a signal
+resumes at the stage and event where it stopped (:mod:`~geofrac.fracture.staged_resume`).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ from geofrac.fem.insitu import group_cells as local_group_cells
 from geofrac.fem.solution import Solution
 from geofrac.fem.stage_checkpoint import Frame
 from geofrac.fem.stages import install_fields, state_frame
+from geofrac.fracture import staged_resume
 from geofrac.fracture.config import LoopSettings
 from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_load
 from geofrac.fracture.constant_loop import ConstantEventLoop
@@ -53,10 +55,11 @@ from geofrac.fracture.equilibrium import ContactEquilibrium, Solved, Visited
 from geofrac.fracture.insitu import InitialStressLoad, InsituEventLoop, checked_initial_stress
 from geofrac.fracture.loop import LoopParts, _Run
 from geofrac.fracture.modes import Choice
+from geofrac.fracture.replay import Restored
 from geofrac.fracture.staged_state import StagedCrackState, group_cells, internal_force
 from geofrac.fracture.support import SupportChooser, Supports
 from geofrac.fracture.units import EdgeUnits
-from geofrac.io.checkpoint import RunControl
+from geofrac.io.checkpoint import Checkpoint, RunControl
 from geofrac.model.scene import Stage
 
 __all__ = ["StagedEventLoop", "StagedInitialStress", "staged_loop"]
@@ -139,14 +142,28 @@ class StagedEventLoop(InsituEventLoop):
         assert isinstance(parts.units, EdgeUnits)
         #: the support installed by stages' ``add`` (:mod:`~geofrac.fracture.support`).
         self.supports = Supports(ctx, parts.units, insitu, chooser=chooser)
+        #: the events cracked before each stage began, and the state where each finished
+        #: stage ended, shape=(n_global,) (what a checkpoint derives the rest from).
+        self._starts: list[int] = []
+        self._ends: list[np.ndarray] = []
+
+    #: checkpoints keep the stages' state (:mod:`~geofrac.fracture.staged_resume`).
+    resumable = True
 
     def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
-        """Run the stages (a resume is refused: the stages' state is not in checkpoints)."""
+        """Run the stages (or resume them from ``control.resume``).
+
+        Raises:
+            RunError: a resume of stages that install support (``add``): checkpoints do
+                not keep the installations yet.
+        """
         if self.control is not None and self.control.resume is not None:
-            raise RunError(
-                "--resume: a cracking run with [[stages]] cannot be resumed yet (its "
-                "checkpoints keep neither the release nor the stage's state); run it again"
-            )
+            added = [st.name for st in self.stages if st.add]
+            if added:
+                raise RunError(
+                    f"--resume: stage(s) {', '.join(added)} install support (add), which "
+                    "checkpoints do not keep yet; run the scene again without --resume"
+                )
         self._unknown = unknown
         if self.solution.scene.output.xdmf:
             self.frames.append(self._frame(0, "initial", self.u_end))
@@ -158,25 +175,19 @@ class StagedEventLoop(InsituEventLoop):
         relaxation = self.stages[self.k].relaxation
         return max(1.0 - self.applied, 0.0) if relaxation is None else relaxation
 
-    def _begin_stage(self) -> None:
+    def _begin_stage(self, event: int) -> None:
         """Remove the stage's cells and form its release P = F0 − K u_e (collective)."""
         ctx, stage = self.ctx, self.stages[self.k]
         units = self.parts.units
         assert isinstance(units, EdgeUnits)
+        self._starts.append(event - 1)  # (one site batch per event before it)
         if stage.remove:
-            state = units.state
-            assert isinstance(state, StagedCrackState)
-            cells = group_cells(ctx, stage.remove)
-            changed = state.remove(cells)
+            cells, changed = self._remove(stage)
             if self.faces is not None:  # pairs beside a void cell are no pairs any more
                 self.faces.faces.cracked(np.zeros(0, dtype=np.int64), changed)
             units.reset()  # the MLS table of the measures: rebuilt
             self.parts.strategy.reset()
             self.parts.strategy.drop()  # a new factorisation with the new release
-            assert self.load.extra_stress is not None
-            self.load.extra_stress[cells] = 0.0  # no σ0 in the opening
-            self._kill(stage.remove)
-            self.staged_insitu.refresh()
             pairs = None if self.faces is None else self.faces.faces.owned_blocks()
             self.release = (
                 self._initial_force()
@@ -207,6 +218,21 @@ class StagedEventLoop(InsituEventLoop):
         assert self._unknown is not None and stage.material is not None
         self._finish_field(self._unknown, self.u_end)  # u_ref of the output's fields
         install_fields(self.ctx.problem, stage.add, stage.material)
+
+    def _remove(self, stage: Stage) -> tuple[np.ndarray, np.ndarray]:
+        """Make the stage's cells void, σ0 and their weight gone (collective).
+
+        Returns the removed cells and the cells whose field changed, shape=(k,).
+        """
+        state = self.parts.units.state
+        assert isinstance(state, StagedCrackState)
+        cells = group_cells(self.ctx, stage.remove)
+        changed = state.remove(cells)
+        assert self.load.extra_stress is not None
+        self.load.extra_stress[cells] = 0.0  # no σ0 in the opening
+        self._kill(stage.remove)
+        self.staged_insitu.refresh()
+        return cells, changed
 
     def _kill(self, groups: tuple[str, ...]) -> None:
         """``alive`` = 0 on the removed groups (their weight and the stress output)."""
@@ -250,17 +276,19 @@ class StagedEventLoop(InsituEventLoop):
         )
         if complete:
             self.applied += share
+            self._ends.append(self.u_end)
         self.k, self.begun = self.k + 1, False
 
     # -- an event ------------------------------------------------------------------------
     def _event(self, run: _Run, event: int) -> bool:
         """Solve, choose; crack when λ ≤ s, else end the stage and go on with the next."""
-        parts = self.parts
+        parts, replay = self.parts, event <= run.done
         while self.k < len(self.stages):
             if not self.begun:
-                self._begin_stage()
+                self._begin_stage(event)
             start = parts.replay.start(event, run.u_unit, run.face_hit)
-            solved = self._solve(run, event, replay=False)
+            start.loop = staged_resume.snapshot(self)
+            solved = self._solve(run, event, replay=replay)
             if solved is None:
                 return False
             self._keep_reference(run, start)
@@ -273,7 +301,7 @@ class StagedEventLoop(InsituEventLoop):
                     return False  # unsettled, singular or separated
                 choice, solved = settled if settled is not None else (None, solved)
             if choice is not None:
-                return self._crack(run, event, choice, solved)
+                return self._crack(run, event, choice, solved, replay=replay)
             if run.end != "no_tensile_edge":  # separated
                 return False
             if self.faces is not None:
@@ -315,13 +343,19 @@ class StagedEventLoop(InsituEventLoop):
         equilibrium.absorb(changes, blocks, history=self._share_history, made=[], last=False)
         return True
 
-    def _crack(self, run: _Run, event: int, choice: Choice, solved: Solved) -> bool:
-        """Log the state u_c + λ u_v, crack the sites, publish (ConstantEventLoop's event)."""
+    def _crack(
+        self, run: _Run, event: int, choice: Choice, solved: Solved, *, replay: bool
+    ) -> bool:
+        """Log the state u_c + λ u_v, crack, publish (``replay``: check it, as the log's)."""
         assert run.unit is not None
         r, (energy_c, _, _, cross) = choice.r, self._const
         energy = energy_c + r * cross + r * r * run.unit[0]
-        row = self._log(run, event, choice, solved=solved, energy=energy)
-        row["control_displacement"] = 0.0
+        row = None
+        if replay:
+            self._check_replay(run, event, choice)
+        else:
+            row = self._log(run, event, choice, solved=solved, energy=energy)
+            row["control_displacement"] = 0.0
         if choice.r == 0.0:
             self.over_cracked += len(choice.sites)
         if not self._events:
@@ -329,6 +363,8 @@ class StagedEventLoop(InsituEventLoop):
         self._events.append(event)
         self.parts.crack.apply(choice)
         self._after_crack(run, event, choice, row=row, energy=energy)
+        if row is None:  # a replayed event: in the log and the series already
+            return True
         return self._publish(run, event, row=row, energy=energy)
 
     def _solve(self, run: _Run, event: int, *, replay: bool) -> Solved | None:
@@ -340,6 +376,10 @@ class StagedEventLoop(InsituEventLoop):
             self.supports.offset(self.load.extra_stress)
         self.load.constant.load.setArray(force[self._rows])
         return ConstantEventLoop._solve(self, run, event, replay=replay)
+
+    def _restore(self, ck: Checkpoint) -> Restored:
+        """The parts and the stages at the start of ``ck``'s replay event."""
+        return staged_resume.restore(self, ck)
 
     # -- results -------------------------------------------------------------------------
     def _probes(self, u: np.ndarray) -> dict[str, JsonValue]:
