@@ -39,9 +39,6 @@ import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 import dolfinx
 import numpy as np
 
-from geofrac.errors import RunError
-from geofrac.fem.insitu import cell_dofs
-from geofrac.fem.insitu import group_cells as local_group_cells
 from geofrac.fem.solution import Solution
 from geofrac.fem.stage_checkpoint import Frame
 from geofrac.fem.stages import install_fields, state_frame
@@ -56,7 +53,15 @@ from geofrac.fracture.insitu import InitialStressLoad, InsituEventLoop, checked_
 from geofrac.fracture.loop import LoopParts, _Run
 from geofrac.fracture.modes import Choice
 from geofrac.fracture.replay import Restored
-from geofrac.fracture.staged_state import StagedCrackState, group_cells, internal_force
+from geofrac.fracture.staged_state import (
+    StagedCrackState,
+    group_cells,
+    internal_force,
+    kill_groups,
+    live_max_displacement,
+    probe_displacements,
+    state_of,
+)
 from geofrac.fracture.support import SupportChooser, Supports
 from geofrac.fracture.units import EdgeUnits
 from geofrac.io.checkpoint import Checkpoint, RunControl
@@ -151,19 +156,9 @@ class StagedEventLoop(InsituEventLoop):
     resumable = True
 
     def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
-        """Run the stages (or resume them from ``control.resume``).
-
-        Raises:
-            RunError: a resume of stages that install support (``add``): checkpoints do
-                not keep the installations yet.
-        """
+        """Run the stages (or resume them from ``control.resume``; not with ``add``)."""
         if self.control is not None and self.control.resume is not None:
-            added = [st.name for st in self.stages if st.add]
-            if added:
-                raise RunError(
-                    f"--resume: stage(s) {', '.join(added)} install support (add), which "
-                    "checkpoints do not keep yet; run the scene again without --resume"
-                )
+            staged_resume.refuse_support(self.stages)
         self._unknown = unknown
         if self.solution.scene.output.xdmf:
             self.frames.append(self._frame(0, "initial", self.u_end))
@@ -230,18 +225,9 @@ class StagedEventLoop(InsituEventLoop):
         changed = state.remove(cells)
         assert self.load.extra_stress is not None
         self.load.extra_stress[cells] = 0.0  # no σ0 in the opening
-        self._kill(stage.remove)
+        kill_groups(self.ctx, stage.remove)
         self.staged_insitu.refresh()
         return cells, changed
-
-    def _kill(self, groups: tuple[str, ...]) -> None:
-        """``alive`` = 0 on the removed groups (their weight and the stress output)."""
-        insitu = self.ctx.problem.insitu
-        assert insitu is not None
-        for group in groups:
-            cells = np.asarray(local_group_cells(self.ctx.tagged, group), dtype=np.int32)
-            insitu.alive.x.array[cell_dofs(insitu.alive, cells)] = 0.0
-        insitu.alive.x.scatter_forward()
 
     def _end_stage(self, run: _Run, *, complete: bool) -> None:
         """Close the running stage at its share (or, not complete, at its last event)."""
@@ -263,8 +249,8 @@ class StagedEventLoop(InsituEventLoop):
             "event_ids": list(self._events),
             "first_event": self._first,
             "next_load_factor": beyond if complete and np.isfinite(beyond) else None,
-            "probes": self._probes(self.u_end),
-            "max_displacement": self._max_displacement(self.u_end),
+            "probes": probe_displacements(self.ctx, self.u_end),
+            "max_displacement": live_max_displacement(self.ctx, state_of(self), self.u_end),
         }
         self.entries.append(entry)
         if self.solution.scene.output.xdmf:
@@ -380,24 +366,6 @@ class StagedEventLoop(InsituEventLoop):
     def _restore(self, ck: Checkpoint) -> Restored:
         """The parts and the stages at the start of ``ck``'s replay event."""
         return staged_resume.restore(self, ck)
-
-    # -- results -------------------------------------------------------------------------
-    def _probes(self, u: np.ndarray) -> dict[str, JsonValue]:
-        """Each probe's displacement at the mesh node nearest to it."""
-        gm, out = self.ctx.gm, {}
-        for name, point in self.solution.scene.output.probes.items():
-            node = int(np.argmin(np.hypot(*(gm.coords - np.asarray(point)[:2]).T)))
-            out[name] = [float(v) for v in u[self.ctx.node_dofs(np.array([node]), 2)]]
-        return out  # type: ignore[return-value]
-
-    def _max_displacement(self, u: np.ndarray) -> float:
-        """Largest |u| over the nodes of live cells."""
-        gm, state = self.ctx.gm, self.parts.units.state
-        live = np.zeros(len(gm.coords), dtype=bool)
-        assert isinstance(state, StagedCrackState)
-        live[gm.cells[~state.removed].ravel()] = True
-        uv = u[self.ctx.node_dofs(np.flatnonzero(live), 2)].reshape(-1, 2)
-        return float(np.max(np.hypot(uv[:, 0], uv[:, 1]), initial=0.0))
 
     def _frame(self, index: int, name: str, u: np.ndarray) -> Frame:
         """The fields of the state u for ``results.xdmf`` (displacement, stresses, alive)."""

@@ -39,7 +39,7 @@ from geofrac.fracture.replay import LOOP_ARRAYS, Restored, read_checkpoint
 from geofrac.io.checkpoint import Checkpoint
 from geofrac.model.scene import Stage
 
-__all__ = ["KIND", "StagedLoop", "layout", "restore", "snapshot"]
+__all__ = ["KIND", "StagedLoop", "layout", "refuse_support", "restore", "snapshot"]
 
 #: The ``kind`` of a staged run's own checkpoint data.
 KIND = "stages"
@@ -80,6 +80,20 @@ class StagedLoop(Protocol):
     def _remove(self, stage: Stage) -> tuple[np.ndarray, np.ndarray]:
         """Make the stage's cells void (collective)."""
         ...
+
+
+def refuse_support(stages: tuple[Stage, ...]) -> None:
+    """Refuse a resume of stages that install support (``add``).
+
+    Raises:
+        RunError: naming the stages: checkpoints do not keep the installations yet.
+    """
+    added = [st.name for st in stages if st.add]
+    if added:
+        raise RunError(
+            f"--resume: stage(s) {', '.join(added)} install support (add), which "
+            "checkpoints do not keep yet; run the scene again without --resume"
+        )
 
 
 def layout(stages: tuple[Stage, ...]) -> list[JsonValue]:

@@ -21,19 +21,30 @@ longer boundary nodes), and fits made from then on see across it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import numpy as np
 from mpi4py import MPI
 
-from geofrac.fracture.context import CrackContext
+from geofrac.fem.insitu import cell_dofs
+from geofrac.fem.insitu import group_cells as local_group_cells
+from geofrac.fracture.context import CrackContext, JsonValue
 from geofrac.fracture.state import CrackState
 from geofrac.fracture.units import Block, EdgeUnits
 from geofrac.fracture.visibility import Bins
 from geofrac.mls.shape import LinearFit
 
-__all__ = ["StagedCrackState", "group_cells", "internal_force"]
+__all__ = [
+    "StagedCrackState",
+    "group_cells",
+    "internal_force",
+    "kill_groups",
+    "live_max_displacement",
+    "probe_displacements",
+    "state_of",
+]
 
 
 @dataclass
@@ -177,3 +188,41 @@ def internal_force(
         np.add.at(f, d, k @ u[d])
     ctx.comm.Allreduce(MPI.IN_PLACE, f, op=MPI.SUM)
     return f
+
+
+def state_of(loop: Any) -> StagedCrackState:
+    """The staged crack state of a loop's units."""
+    state = loop.parts.units.state
+    assert isinstance(state, StagedCrackState)
+    return state
+
+
+def kill_groups(ctx: CrackContext, groups: tuple[str, ...]) -> None:
+    """``alive`` = 0 on the removed groups (their weight and the stress output)."""
+    insitu = ctx.problem.insitu
+    assert insitu is not None
+    for group in groups:
+        cells = np.asarray(local_group_cells(ctx.tagged, group), dtype=np.int32)
+        insitu.alive.x.array[cell_dofs(insitu.alive, cells)] = 0.0
+    insitu.alive.x.scatter_forward()
+
+
+def probe_displacements(ctx: CrackContext, u: np.ndarray) -> dict[str, JsonValue]:
+    """Each ``output.probes`` point's displacement at the mesh node nearest to it.
+
+    ``u``: shape=(n_global,) (gathered).
+    """
+    gm, out = ctx.gm, {}
+    for name, point in ctx.scene.output.probes.items():
+        node = int(np.argmin(np.hypot(*(gm.coords - np.asarray(point)[:2]).T)))
+        out[name] = [float(v) for v in u[ctx.node_dofs(np.array([node]), 2)]]
+    return out  # type: ignore[return-value]
+
+
+def live_max_displacement(ctx: CrackContext, state: StagedCrackState, u: np.ndarray) -> float:
+    """Largest |u| over the nodes of live cells (``u``: shape=(n_global,))."""
+    gm = ctx.gm
+    live = np.zeros(len(gm.coords), dtype=bool)
+    live[gm.cells[~state.removed].ravel()] = True
+    uv = u[ctx.node_dofs(np.flatnonzero(live), 2)].reshape(-1, 2)
+    return float(np.max(np.hypot(uv[:, 0], uv[:, 1]), initial=0.0))
