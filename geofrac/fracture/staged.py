@@ -207,10 +207,9 @@ class StagedEventLoop(InsituEventLoop):
                 f"stage {self.k + 1}/{len(self.stages)} '{stage.name}': removed "
                 f"{', '.join(stage.remove)} ({len(cells)} cells, {len(changed)} changed)"
             )
-        self.staged_insitu.step = self.k + 1  # its loads: a jump of the constant load
         if stage.add:
             self._install(stage)
-        self.share = self._share()
+        self.share, self.staged_insitu.step = self._share(), self.k + 1  # its loads: a jump
         self.begun, self._events, self._first = True, [], None
         self._share_settles, self._share_history = 0, {}
 
@@ -377,9 +376,7 @@ class StagedEventLoop(InsituEventLoop):
 
     def _restore(self, ck: Checkpoint) -> Restored:
         """The parts and the stages at the start of ``ck``'s replay event."""
-        back = staged_resume.restore(self, ck)
-        self.staged_insitu.step = self.k + 1
-        return back
+        return staged_resume.restore(self, ck)
 
     def _frame(self, index: int, name: str, u: np.ndarray) -> Frame:
         """The fields of the state u for ``results.xdmf`` (displacement, stresses, alive)."""
