@@ -12,7 +12,8 @@ nothing cracks and the run is elastic. References independent of the crack loop:
   releases half: the surcharge is applied whole at the stage's start, the release by its
   share) or a stage later (linearity: the final state does not depend on the order).
 - **Linearity**: the surcharge's share of the crown displacement is q times that of a
-  unit surcharge (to 1e-9).
+  unit surcharge, and switched off at the next stage (``until``) it leaves the bare
+  excavation's state (to 1e-9).
 - **Closed form**, a wall displacement check of the excavation itself: for the
   hydrostatic opening u_r(a) = p a (1 + ν)/E (Kirsch; Jaeger, Cook and Zimmerman
   (2007)); the finite plate (12a, rollers on two sides, which shift the crown by the
@@ -83,6 +84,10 @@ def test_surcharge_from_the_excavation_matches_the_elastic_path(tmp_path):
     (c0,), (c1,) = _crown(bare), _crown(unit)
     np.testing.assert_allclose(crown - c0, Q * (c1 - c0), rtol=0, atol=1e-9 * U)
     assert crown[1] < c0[1] < 0.0  # the surcharge pushes the crown further down
+    # switched off at the next stage (until): back to the bare excavation's state
+    off = LATER + SURCHARGE.format(q=Q, stage="excavate") + 'until = "surcharge"\n'
+    _, res_off = run(_scene(tmp_path, off, name="f"))
+    np.testing.assert_allclose(_crown(res_off)[1], c0, rtol=0, atol=1e-9 * U)
     # the excavation alone: Kirsch's wall displacement plus the rollers' shift, 5 %
     assert c0[1] == pytest.approx(-U * (1 + A / 6.0), rel=0.05)
 
