@@ -53,6 +53,7 @@ from geofrac.fracture.insitu import InitialStressLoad, InsituEventLoop, checked_
 from geofrac.fracture.loop import LoopParts, _Run
 from geofrac.fracture.modes import Choice
 from geofrac.fracture.replay import Restored
+from geofrac.fracture.staged_loads import StageLoads
 from geofrac.fracture.staged_state import (
     StagedCrackState,
     group_cells,
@@ -74,12 +75,22 @@ class StagedInitialStress(InitialStressLoad):
     """σ0 and its out-of-balance force, with the removed cells' weight gone.
 
     F_ext,0 includes the effects' terms (gravity: ρ of the live cells, ``alive``);
-    :meth:`refresh` reassembles it after a removal.
+    :meth:`refresh` reassembles it after a removal. :meth:`force` adds the scene's loads
+    acting in ``step`` (:mod:`~geofrac.fracture.staged_loads`; the loop sets ``step`` to
+    the running stage's at its start, after forming a removal's release).
     """
 
     def __init__(self, ctx: CrackContext, units: EdgeUnits) -> None:
         super().__init__(ctx, units)
         self.external = self._external()[0] if ctx.problem.terms else None
+        self.loads = StageLoads(ctx) if ctx.scene.loads else None
+        #: the step whose loads act (0: the initial state; k + 1: stage k, 0-based).
+        self.step = 0
+
+    def force(self) -> np.ndarray:
+        """F0 on the current crack state plus the loads acting in ``step`` (collective)."""
+        force = super().force()
+        return force if self.loads is None else force + self.loads.at(self.step)
 
     def refresh(self) -> None:
         """F0 of the intact mesh with the current ``alive`` cells' weight (collective)."""
@@ -198,7 +209,7 @@ class StagedEventLoop(InsituEventLoop):
             )
         if stage.add:
             self._install(stage)
-        self.share = self._share()
+        self.share, self.staged_insitu.step = self._share(), self.k + 1  # its loads: a jump
         self.begun, self._events, self._first = True, [], None
         self._share_settles, self._share_history = 0, {}
 

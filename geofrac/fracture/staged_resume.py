@@ -39,10 +39,16 @@ from geofrac.fracture.replay import LOOP_ARRAYS, Restored, read_checkpoint
 from geofrac.io.checkpoint import Checkpoint
 from geofrac.model.scene import Stage
 
-__all__ = ["KIND", "StagedLoop", "layout", "refuse_support", "restore", "snapshot"]
+__all__ = ["KIND", "StagedLoop", "Stepped", "layout", "refuse_support", "restore", "snapshot"]
 
 #: The ``kind`` of a staged run's own checkpoint data.
 KIND = "stages"
+
+
+class Stepped(Protocol):
+    """The step whose switched loads act (:class:`~geofrac.fracture.staged.StagedInitialStress`)."""
+
+    step: int
 
 
 class StagedLoop(Protocol):
@@ -51,6 +57,7 @@ class StagedLoop(Protocol):
     ctx: CrackContext
     parts: LoopParts
     load: ConstantLoad
+    staged_insitu: Stepped
     solution: Solution
     stages: tuple[Stage, ...]
     k: int
@@ -209,6 +216,7 @@ def restore(loop: StagedLoop, ck: Checkpoint) -> Restored:
 def _put(loop: StagedLoop, data: dict[str, JsonValue], ends: list[np.ndarray]) -> None:
     """The stages' bookkeeping of ``data`` into ``loop`` (the running stage begun)."""
     loop.k, loop.begun = int(data["stage"]), True  # type: ignore[arg-type]
+    loop.staged_insitu.step = loop.k + 1  # the running stage's loads
     loop.share, loop.applied = float(data["share"]), float(data["applied"])  # type: ignore[arg-type]
     beyond = data["beyond"]
     loop.beyond = float("inf") if beyond is None else float(beyond)  # type: ignore[arg-type]

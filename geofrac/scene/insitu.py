@@ -342,8 +342,13 @@ def _staged_cracking(
             "driven by the release of the stress that the removed cells carried",
         )
     moving = [bc.group for bc in bcs if bc.value == "exact" or any(v != 0 for v in bc.value)]
-    if moving or loads:
-        what = f"[[bc]] '{moving[0]}' prescribes a displacement" if moving else "[[load]]"
+    fixed = [ld for ld in loads if ld.switch_on is None]
+    if moving or fixed:
+        what = (
+            f"[[bc]] '{moving[0]}' prescribes a displacement"
+            if moving
+            else "[[load]] acting from the initial state (switch it on at a stage: 'from')"
+        )
         raise SceneError(
             file,
             "stages",
@@ -351,6 +356,15 @@ def _staged_cracking(
             "which staged cracking does not take yet (hold the far sides or load them by "
             "σ0·n with initial_stress.loaded)",
         )
+    for i, ld in enumerate(loads):
+        if ld.type not in ("traction", "pressure") or ld.value == "exact":
+            raise SceneError(
+                file,
+                f"load[{i}].type",
+                f"a cracking scene's stages switch traction or pressure loads with a number "
+                f"value only, got type '{ld.type}'"
+                + (" with value 'exact'" if ld.value == "exact" else ""),
+            )
     absent = _absent_at_start(raw)
     for i, entry in enumerate(raw):
         if not isinstance(entry, dict):
@@ -395,9 +409,10 @@ def stages(
     only adds groups, or only switches loads or supports (its name is in ``switched``,
     :mod:`geofrac.scene.switches`), may apply nothing. A cracking scene (``declared``
     has ``cracking``) needs ``initial`` (an ``[initial_stress]``), no ``bcs`` that move
-    and no ``loads``; the groups its stages add must have been removed by an earlier
-    stage, and their ``material`` has no density (the support is weightless) and may
-    have a ``tensile_strength`` (only a cracking scene's may).
+    and only traction or pressure ``loads`` switched on at a stage (``from``); the
+    groups its stages add must have been removed by an earlier stage, and their
+    ``material`` has no density (the support is weightless) and may have a
+    ``tensile_strength`` (only a cracking scene's may).
 
     Raises:
         SceneError: naming the stage and key.

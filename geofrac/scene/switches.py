@@ -71,7 +71,8 @@ def switches(
     Each must name a stage of the scene, ``until`` a stage after ``from``; a support
     installed in a stage has a number ``value`` (its displacement increment); every step
     must hold some ``[[bc]]`` (else the problem is singular); the run must be the elastic
-    staged run (no effect that drives the run).
+    staged run (no effect that drives the run), or, for loads only, a cracking run with
+    stages (:func:`geofrac.scene.insitu.stages` checks their kind).
 
     Raises:
         SceneError: naming the entry's key.
@@ -83,7 +84,14 @@ def switches(
         if e.switch_on is None and e.switch_off is None:
             continue
         owners = [n for n in declared if effects.drives(n)]
-        if owners:
+        if owners == ["cracking"] and isinstance(e, BoundaryCondition):
+            raise SceneError(
+                file,
+                f"{where}.{'from' if e.switch_on is not None else 'until'}",
+                "a cracking scene switches loads per stage, not supports: install support "
+                "with a stage's 'add' (docs/insitu.md, 'Stages in a cracking scene')",
+            )
+        if owners and owners != ["cracking"]:
             raise SceneError(
                 file,
                 f"{where}.{'from' if e.switch_on is not None else 'until'}",
