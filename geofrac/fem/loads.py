@@ -128,9 +128,38 @@ def load_form(
     if load.type == "body_force":
         return forms.body_force_form(v, value, thickness, dx)
     _, tag = tagged.groups[load.group]
+    assert load.group is not None  # a facet load names its group
+    _refuse_interior(tagged, load.group)
     if load.type == "pressure":
         value = -value * ufl.FacetNormal(tagged.mesh)
     return forms.traction_form(v, value, thickness, ds(tag))
+
+
+def _refuse_interior(tagged: TaggedMesh, group: str) -> None:
+    """Refuse a facet load whose group has facets inside the mesh (collective).
+
+    ``ds`` integrates over the mesh's boundary only: a traction on facets between two
+    cells (an excavation's wall before its cells are removed, a joint) would be lost
+    without a word.
+
+    Raises:
+        RunError: on every rank, naming the group and how many facets are interior.
+    """
+    dim, facets = tagged.entities(group)
+    top = tagged.mesh.topology
+    top.create_connectivity(dim, dim + 1)
+    owned = tagged.owned(dim, facets)
+    exterior = dolfinx.mesh.exterior_facet_indices(top)
+    inside = tagged.mesh.comm.allreduce(
+        int(np.count_nonzero(~np.isin(owned, exterior))), op=MPI.SUM
+    )
+    if inside:
+        raise RunError(
+            f"load on group '{group}': {inside} of its facets lie inside the mesh (between "
+            "two cells), where a traction or pressure is not applied (loads act on the "
+            "mesh's boundary only; an opening's wall is inside the mesh until a stage "
+            "removes its cells). Put the load on a boundary group"
+        )
 
 
 @dataclass(frozen=True)

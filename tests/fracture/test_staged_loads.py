@@ -164,3 +164,17 @@ def test_switched_load_on_1_and_2_ranks(tmp_path):
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-9 * U)
     ends = comm.allgather(_crown(res)[-1].tolist())
     assert all(e == ends[0] for e in ends)
+
+
+def test_a_pressure_on_the_wall_inside_the_mesh_is_refused(tmp_path):
+    """The opening's wall lies between two cells until its stage: ``ds`` would drop the load.
+
+    Before the refusal such a pressure changed nothing, without a word (measured: a wall
+    pressure of 4, 0 or −4 gave the same crown displacement).
+    """
+    from geofrac.errors import RunError
+
+    wall = SURCHARGE.format(q=4.0, stage="excavate").replace('group = "top"', 'group = "wall"')
+    path = _scene(tmp_path, EXCAVATE + wall, cracking=False)
+    with pytest.raises(RunError, match=r"load on group 'wall': \d+ of its facets lie inside"):
+        _elastic(path)
