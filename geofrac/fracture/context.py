@@ -48,6 +48,7 @@ __all__ = [
     "crack_context",
     "facet_nodes",
     "gather_mesh",
+    "gather_vector",
 ]
 
 #: A JSON-ready value (event rows, results, checkpoint data).
@@ -258,7 +259,7 @@ class CrackContext:
         return out
 
 
-def _gather_vector(v: Vector, comm: MPI.Comm) -> np.ndarray:
+def gather_vector(v: Vector, comm: MPI.Comm) -> np.ndarray:
     """The owned entries of every rank in global order, shape=(size_global,) (collective)."""
     return np.concatenate(comm.allgather(np.array(v.getArray(readonly=True), dtype=float)))
 
@@ -278,7 +279,7 @@ def _force(
             continue
         v = problem.load_part(i)
         try:
-            part = _gather_vector(v, comm)
+            part = gather_vector(v, comm)
         finally:
             v.destroy()
         forces = part if forces is None else forces + part

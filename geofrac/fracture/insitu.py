@@ -58,7 +58,7 @@ from geofrac.fracture.consistent import void_sides
 from geofrac.fracture.constant import ConstantChooser, ConstantLoad, constant_load
 from geofrac.fracture.constant_loop import ConstantEventLoop
 from geofrac.fracture.contact import ROUNDOFF
-from geofrac.fracture.context import CrackContext, JsonValue, Sites, crack_context
+from geofrac.fracture.context import CrackContext, JsonValue, Sites, crack_context, gather_vector
 from geofrac.fracture.criterion import edge_means
 from geofrac.fracture.equilibrium import Solved
 from geofrac.fracture.event_criterion import EdgeCriterion
@@ -68,7 +68,7 @@ from geofrac.fracture.units import GAUSS_6, EdgeUnits, mls_settings
 from geofrac.geometry.insitu import column_weight, evaluate, surface_height
 from geofrac.io.checkpoint import RunControl
 from geofrac.mls.shape import LinearFit, strain_matrix
-from geofrac.solvers import Vector, assemble_vector
+from geofrac.solvers import assemble_vector
 from geofrac_forms import elasticity as forms
 
 __all__ = [
@@ -137,11 +137,6 @@ def initial_stress_at(ctx: CrackContext, bary: np.ndarray) -> np.ndarray:
     return voigt.reshape(len(gm.cells), len(bary), 3)
 
 
-def _gather(v: Vector, comm: MPI.Comm) -> np.ndarray:
-    """The owned entries of every rank in global order, shape=(size_global,) (collective)."""
-    return np.concatenate(comm.allgather(np.array(v.getArray(readonly=True), dtype=float)))
-
-
 class InitialStressLoad:
     """σ0 at the sites and its out-of-balance force F0 on the current crack state.
 
@@ -207,7 +202,7 @@ class InitialStressLoad:
             form: Any = sum(part, zero)
             b = problem._on_unknowns(assemble_vector(dolfinx.fem.form(form)))
             try:
-                out.append(_gather(b, comm))
+                out.append(gather_vector(b, comm))
             finally:
                 b.destroy()
         return out[0] + 0.0, out[1]

@@ -12,8 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from geofrac.fracture.context import CrackContext
-from geofrac.fracture.insitu import _gather
+from geofrac.fracture.context import CrackContext, gather_vector
 from geofrac.model.scene import Load, acts
 
 __all__ = ["StageLoads"]
@@ -37,7 +36,7 @@ class StageLoads:
         for i in range(len(self.loads)):
             b = ctx.problem.load_part(i)
             try:
-                self.forces.append(_gather(b, ctx.comm))
+                self.forces.append(gather_vector(b, ctx.comm))
             finally:
                 b.destroy()
 

@@ -83,13 +83,24 @@ def driver(
     control: RunControl | None = None,
 ) -> Any:
     """The driver of ``case`` writing into ``out``, with ``control`` (not run)."""
+    job, small = case
+    return path_driver(JOBS / f"{job}.toml", small + overrides, out, comm, control)
+
+
+def path_driver(
+    path: Path,
+    overrides: tuple[str, ...],
+    out: Path,
+    comm: MPI.Comm,
+    control: RunControl | None = None,
+) -> Any:
+    """The crack driver of the scene ``path`` writing into ``out``, with ``control`` (not run)."""
     from geofrac.elements import make_element
     from geofrac.fem.elastic import make_problem
     from geofrac.fem.solution import Solution
     from geofrac.meshing.distribute import build_mesh
 
-    job, small = case
-    scene = load_scene_collective(comm, JOBS / f"{job}.toml", small + overrides, out=out)
+    scene = load_scene_collective(comm, path, list(overrides), out=out)
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     comm.barrier()

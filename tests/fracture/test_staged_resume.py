@@ -25,13 +25,12 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from geofrac.effects.cracking import make_driver
 from geofrac.errors import RunError
 from geofrac.io import checkpoint
 from geofrac.io.checkpoint import CheckpointPolicy, RunControl
 from geofrac.meshing.geo import meshed_model
-from geofrac.scene import load_scene_collective
 from tests.fracture.test_resume import StopAt, check_resumed, read_log, run, shared_dir
+from tests.fracture.test_resume import path_driver as driver
 from tests.fracture.test_staged_cracking import HEADING_BENCH, _staged
 
 #: the heading's share: it cracks once, then the bench five times.
@@ -65,27 +64,6 @@ def scene(
         path = tmp / "plate.toml"
         path.write_text(text.replace(found.group(0), f'file = "{mesh}"'))
     return Path(comm.bcast(str(path) if path else None, root=0))
-
-
-def driver(
-    path: Path, overrides: tuple[str, ...], out: Path, comm: MPI.Comm, control: Any = None
-) -> Any:
-    """The crack driver of ``path`` writing into ``out`` (not run)."""
-    from geofrac.elements import make_element
-    from geofrac.fem.elastic import make_problem
-    from geofrac.fem.solution import Solution
-    from geofrac.meshing.distribute import build_mesh
-
-    sc = load_scene_collective(comm, path, list(overrides), out=out)
-    if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
-    config = next(s.config for s in sc.effects if s.name == "cracking")
-    tagged = build_mesh(sc.geometry, comm)
-    problem = make_problem(tagged, make_element(sc.discretization.element, tagged.mesh), sc)
-    problem.compile()
-    solution = Solution(sc, tagged, problem, control=control)
-    return make_driver(config, solution, lambda msg: None, write=True)
 
 
 def stop_at(directory: Path, comm: MPI.Comm, at: int, resume: Any = None) -> RunControl:
