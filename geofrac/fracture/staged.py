@@ -167,9 +167,7 @@ class StagedEventLoop(InsituEventLoop):
     resumable = True
 
     def run(self, unknown: dolfinx.fem.Function) -> dict[str, JsonValue]:
-        """Run the stages (or resume them from ``control.resume``; not with ``add``)."""
-        if self.control is not None and self.control.resume is not None:
-            staged_resume.refuse_support(self.stages)
+        """Run the stages (or resume them from ``control.resume``)."""
         self._unknown = unknown
         if self.solution.scene.output.xdmf:
             self.frames.append(self._frame(0, "initial", self.u_end))
@@ -215,15 +213,26 @@ class StagedEventLoop(InsituEventLoop):
 
     def _install(self, stage: Stage) -> None:
         """Install the stage's groups, stress-free in the state u_e (collective)."""
-        changed = self.supports.install(stage, self.u_end, index=self.k + 1)
+        changed = self._installed(stage, self.k + 1)
         if self.faces is not None:
             self.faces.faces.cracked(np.zeros(0, dtype=np.int64), changed)
         self.parts.units.reset()
         self.parts.strategy.reset()
         self.parts.strategy.drop()
+
+    def _installed(self, stage: Stage, index: int) -> np.ndarray:
+        """The installation's state at u_I = ``u_end``; the changed cells (collective).
+
+        The crack state, stiffness, σ0, strengths and references of
+        :meth:`~geofrac.fracture.support.Supports.install` and the output's fields;
+        what a resume replays (:mod:`~geofrac.fracture.staged_resume`). ``index``: the
+        stage's, 1-based.
+        """
+        changed = self.supports.install(stage, self.u_end, index=index)
         assert self._unknown is not None and stage.material is not None
         self._finish_field(self._unknown, self.u_end)  # u_ref of the output's fields
         install_fields(self.ctx.problem, stage.add, stage.material)
+        return changed
 
     def _remove(self, stage: Stage) -> tuple[np.ndarray, np.ndarray]:
         """Make the stage's cells void, σ0 and their weight gone (collective).

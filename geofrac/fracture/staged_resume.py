@@ -4,7 +4,8 @@ A staged run's checkpoint is the event loop's (:mod:`~geofrac.fracture.replay`: 
 each event's sites and the state at the start of the replay event j) with the stages'
 state at that start (:attr:`~geofrac.fracture.replay.EventStart.loop`, :func:`snapshot`):
 
-- JSON: the scene's stage layout (each stage's name, removed groups and relaxation); the
+- JSON: the scene's stage layout (each stage's name, removed groups and relaxation) and
+  its installations (each stage's added groups and their material, :func:`supports`); the
   running stage, its share s and the least λ of the last choice; the share a of the
   pending release applied before it; how many events had cracked when each stage began
   (``starts``); the finished stages' ``summary.json`` entries; the running stage's events
@@ -15,16 +16,25 @@ state at that start (:attr:`~geofrac.fracture.replay.EventStart.loop`, :func:`sn
   before event j (its solve's guess) and the state u_e where each finished stage ended.
 
 The rest is derived (:func:`restore`): the crack state by cracking each event's sites
-again with each stage's removal between them where it happened (the void cells, their σ0
-and weight gone, ``alive`` and the MLS fits beside the new wall follow from both and from
-their order); each finished stage's ``results.xdmf`` step from its u_e, with ``alive`` as
-it was then; the constant right-hand side F0 − (1 − a) P from the restored state. The
-resumed run then computes events j … k again, as the unstaged loops do.
+again with each stage's removal and installation between them where they happened (the
+void cells, their σ0 and weight gone, ``alive`` and the MLS fits beside the new wall
+follow from both and from their order); an installation is made again at u_I = the
+stored u_e of the stage before it (:mod:`~geofrac.fracture.support`: the installed cells
+live, their material's element matrices and D, their σ0 dropped from I(σ0), their sites'
+strengths and the chooser's scale, the support's reference u_I, the refits at cut nodes,
+the output's material fields and reference); each finished stage's ``results.xdmf`` step
+from its u_e, with ``alive`` and the installations as they were then; the constant
+right-hand side F0 + F_I − (1 − a) P and the support's site stresses −D ε(u_I) from the
+restored state. The resumed run then computes events j … k again, as the unstaged loops
+do. A checkpoint whose installations differ from the scene's (``add``, ``material``) is
+refused naming the key.
 """
 
 from __future__ import annotations
 
-from typing import Protocol
+import dataclasses
+import json
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -39,7 +49,7 @@ from geofrac.fracture.replay import LOOP_ARRAYS, Restored, read_checkpoint
 from geofrac.io.checkpoint import Checkpoint
 from geofrac.model.scene import Stage
 
-__all__ = ["KIND", "StagedLoop", "Stepped", "layout", "refuse_support", "restore", "snapshot"]
+__all__ = ["KIND", "StagedLoop", "Stepped", "layout", "restore", "snapshot", "supports"]
 
 #: The ``kind`` of a staged run's own checkpoint data.
 KIND = "stages"
@@ -88,24 +98,56 @@ class StagedLoop(Protocol):
         """Make the stage's cells void (collective)."""
         ...
 
-
-def refuse_support(stages: tuple[Stage, ...]) -> None:
-    """Refuse a resume of stages that install support (``add``).
-
-    Raises:
-        RunError: naming the stages: checkpoints do not keep the installations yet.
-    """
-    added = [st.name for st in stages if st.add]
-    if added:
-        raise RunError(
-            f"--resume: stage(s) {', '.join(added)} install support (add), which "
-            "checkpoints do not keep yet; run the scene again without --resume"
-        )
+    def _installed(self, stage: Stage, index: int) -> np.ndarray:
+        """Install the stage's groups at u_I = ``u_end`` (collective)."""
+        ...
 
 
 def layout(stages: tuple[Stage, ...]) -> list[JsonValue]:
     """Each stage's [name, removed groups, relaxation (None: what remains)]."""
     return [[s.name, list(s.remove), s.relaxation] for s in stages]
+
+
+def supports(stages: tuple[Stage, ...]) -> list[Any]:
+    """Each stage's [added groups, their material's fields (None: the stage adds none)].
+
+    As JSON reads it back (lists, not tuples).
+    """
+    out = [
+        [list(s.add), dataclasses.asdict(s.material) if s.add and s.material else None]
+        for s in stages
+    ]
+    back: list[Any] = json.loads(json.dumps(out))
+    return back
+
+
+def _check_supports(ck: Checkpoint, saved: Any, stages: tuple[Stage, ...]) -> None:
+    """Refuse a checkpoint whose installations are not the scene's, naming the key.
+
+    ``saved``: the checkpoint's :func:`supports` (None: written before they were kept;
+    such a checkpoint resumes only stages that add nothing).
+    """
+    ours = supports(stages)
+    theirs = [[[], None] for _ in stages] if saved is None else saved
+    if not isinstance(theirs, list) or len(theirs) != len(ours):
+        raise RunError(f"--resume: the checkpoint {ck.path} has no valid stage state")
+    for i, ((added, then), (adds, now)) in enumerate(zip(theirs, ours, strict=True)):
+        if added != adds:
+            raise RunError(
+                f"--resume: the checkpoint {ck.path} was written with stages[{i}].add = "
+                f"{added}; this scene's stages[{i}].add is {adds} (run without --resume "
+                "to start afresh)"
+            )
+        old, new = then or {}, now or {}
+        keys = sorted(k for k in {*old, *new} if old.get(k) != new.get(k))
+        if keys:
+            words = ", ".join(
+                f"stages[{i}].material.{k} = {old.get(k)} there, {new.get(k)} here" for k in keys
+            )
+            raise RunError(
+                f"--resume: the checkpoint {ck.path} was written with another support "
+                f"material ({words}); run without --resume to start afresh"
+            )
 
 
 def _words(stages: list[JsonValue]) -> str:
@@ -131,6 +173,7 @@ def snapshot(loop: StagedLoop) -> tuple[dict[str, JsonValue], dict[str, np.ndarr
     data: dict[str, JsonValue] = {
         "kind": KIND,
         "layout": layout(loop.stages),
+        "supports": supports(loop.stages),
         "stage": loop.k,
         "share": loop.share,
         "beyond": loop.beyond if np.isfinite(loop.beyond) else None,
@@ -165,6 +208,7 @@ def _checked(loop: StagedLoop, ck: Checkpoint) -> tuple[dict[str, JsonValue], in
             f"({_words(data['layout'])}); this scene's are {_words(ours)} (run without "
             "--resume to start afresh)"
         )
+    _check_supports(ck, data.get("supports"), loop.stages)
     stage = int(data["stage"])
     starts = [int(i) for i in data["starts"]]
     if not 0 <= stage < len(ours) or len(starts) != stage + 1:
@@ -177,7 +221,8 @@ def restore(loop: StagedLoop, ck: Checkpoint) -> Restored:
 
     Raises:
         RunError: on every rank, for a checkpoint of a run without stages, of another
-            stage layout or of another mesh.
+            stage layout, other installations (``add``, their ``material``) or of
+            another mesh.
     """
     data, stage = _checked(loop, ck)
     n_global = loop.ctx.n_global
@@ -191,7 +236,7 @@ def restore(loop: StagedLoop, ck: Checkpoint) -> Restored:
     xdmf = loop.solution.scene.output.xdmf
 
     def removals(done: int) -> None:
-        """The stages that began with ``done`` events cracked: their frames, removals."""
+        """The stages that began with ``done`` events cracked: frames, removals, adds."""
         for s in range(stage + 1):
             if starts[s] != done:
                 continue
@@ -199,6 +244,9 @@ def restore(loop: StagedLoop, ck: Checkpoint) -> Restored:
                 loop.frames.append(loop._frame(s, loop.stages[s - 1].name, ends[s - 1]))
             if loop.stages[s].remove:
                 loop._remove(loop.stages[s])
+            if loop.stages[s].add:  # at u_I: where the stage before ended
+                loop.u_end = ends[s - 1] if s > 0 else np.zeros(n_global)
+                loop._installed(loop.stages[s], s + 1)
 
     back = loop.parts.replay.restore(ck, n_global, between=removals)
     _put(loop, data, ends)

@@ -166,20 +166,3 @@ def test_two_ranks_crack_the_lining_as_one(tmp_path_factory):
     for a, b in zip(mine[2], ref[2], strict=True):
         for name in a["probes"]:
             assert np.allclose(a["probes"][name], b["probes"][name], rtol=1e-9, atol=1e-16)
-
-
-def test_a_resume_of_stages_that_install_support_is_refused(tmp_path):
-    """Checkpoints do not keep the installations yet: --resume says so, naming the stage."""
-    from types import SimpleNamespace
-
-    from geofrac.errors import RunError
-    from tests.fracture.test_staged_resume import driver, stop_at
-
-    comm = MPI.COMM_SELF
-    control = stop_at(tmp_path / "ck", comm, -1, resume=SimpleNamespace(k=1))
-    d = driver(LINED, (), tmp_path / "out", comm, control)
-    try:
-        with pytest.raises(RunError, match=r"--resume: stage\(s\) \w+ install support \(add\)"):
-            d.run()
-    finally:
-        d.problem.destroy()
