@@ -14,8 +14,11 @@ run's events (the same edges in the same order, λ to 1e-12 relative, every logg
 to 1e-10), ``stages`` entries, ``results.xdmf`` steps (the output's support material and
 reference included) and final displacement (1e-10 of its largest), on 1 and 2 ranks.
 With the refactor solver checkpoint 4 restarts at event 4: the replay cracks ring edges
-after the installation, whose MLS fits take the ring's D. A checkpoint whose ``add`` or
-support ``material`` differs from the scene's is refused naming the key.
+after the installation, whose MLS fits take the ring's D. With contact on the cracks
+(the rock's pairs exist when the ring is installed) a checkpoint in the lined stage
+resumes alike, the pairs' states included. A checkpoint whose ``add`` or support
+``material`` differs from the scene's, or that kept no installations, is refused naming
+the key.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ from geofrac.errors import RunError
 from geofrac.io import checkpoint
 from geofrac.meshing.geo import meshed_model
 from tests.fracture.test_resume import path_driver as driver
-from tests.fracture.test_resume import shared_dir
+from tests.fracture.test_resume import read_log, shared_dir
 from tests.fracture.test_staged_resume import resumed, saved, stop_at, stopped, whole
 from tests.fracture.test_staged_support import ELASTIC, LINED
 
@@ -87,8 +90,6 @@ def check_whole(ref: Any) -> None:
 
 def lambdas_match(base: Path) -> None:
     """λ of every event of the resumed run's log against the whole run's, to 1e-12."""
-    from tests.fracture.test_resume import read_log
-
     a, b = (read_log(base / d / "events.csv") for d in ("whole", "stopped"))
     assert [r["edge"] for r in b] == [r["edge"] for r in a]
     x = np.array([float(r["load_factor"]) for r in b])
@@ -112,6 +113,31 @@ def test_a_staged_run_with_support_resumes_before_and_after_the_installation(tmp
         got = resumed(tmp_path, path, OVERRIDES, ckpt, ref, comm)
         lambdas_match(tmp_path)
         print(f"resumed after event {k} (replay from {replay_from}): {got}")
+
+
+def test_a_staged_run_with_support_and_contact_resumes(tmp_path):
+    """With contact on the cracks: the rock's pairs exist when the ring is installed.
+
+    The excavation cracks three rock edges (a pair sticks and slips), the lined stage
+    three of the ring; stopped after event 5, checkpoint 5 restarts at event 4, the
+    lined stage's first (its installation refreshed the pairs beside the ring).
+    """
+    comm = MPI.COMM_SELF
+    overrides = ("cracking.max_events=6", "cracking.contact=true", "output.xdmf=true")
+    path = scene(tmp_path / "scene", comm)
+    ref = whole(tmp_path, path, overrides, comm)
+    assert [s["events"] for s in ref[1]["stages"]] == [3, 3]
+    assert ring_sites(ref[0].rows) == [4, 5, 6] and ref[1]["contact"]["pairs"] > 0
+    ck = stopped(tmp_path, path, overrides, 5, comm)
+    ckpt = saved(ck, 5)
+    assert ckpt.data["loop"]["stage"] == 1 and ckpt.data["replay_from"] == 4
+    print(f"with contact: {resumed(tmp_path, path, overrides, ckpt, ref, comm)}")
+    lambdas_match(tmp_path)
+    whole_log, log = (
+        read_log(d / "events.csv") for d in (tmp_path / "whole", tmp_path / "stopped")
+    )
+    for key in ("open", "stick", "slip", "contact_changes"):
+        assert [r[key] for r in log] == [r[key] for r in whole_log], key
 
 
 def test_a_checkpoint_with_other_installations_is_refused(tmp_path):
