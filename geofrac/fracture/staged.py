@@ -206,33 +206,22 @@ class StagedEventLoop(InsituEventLoop):
                 f"{', '.join(stage.remove)} ({len(cells)} cells, {len(changed)} changed)"
             )
         if stage.add:
-            self._install(stage)
+            self._install(stage, self.k + 1)
         self.share, self.staged_insitu.step = self._share(), self.k + 1  # its loads: a jump
         self.begun, self._events, self._first = True, [], None
         self._share_settles, self._share_history = 0, {}
 
-    def _install(self, stage: Stage) -> None:
-        """Install the stage's groups, stress-free in the state u_e (collective)."""
-        changed = self._installed(stage, self.k + 1)
+    def _install(self, stage: Stage, index: int) -> None:
+        """Install stage ``index`` (1-based)'s groups, stress-free at u_e (also on resume)."""
+        changed = self.supports.install(stage, self.u_end, index=index)
         if self.faces is not None:
             self.faces.faces.cracked(np.zeros(0, dtype=np.int64), changed)
         self.parts.units.reset()
         self.parts.strategy.reset()
         self.parts.strategy.drop()
-
-    def _installed(self, stage: Stage, index: int) -> np.ndarray:
-        """The installation's state at u_I = ``u_end``; the changed cells (collective).
-
-        The crack state, stiffness, σ0, strengths and references of
-        :meth:`~geofrac.fracture.support.Supports.install` and the output's fields;
-        what a resume replays (:mod:`~geofrac.fracture.staged_resume`). ``index``: the
-        stage's, 1-based.
-        """
-        changed = self.supports.install(stage, self.u_end, index=index)
         assert self._unknown is not None and stage.material is not None
         self._finish_field(self._unknown, self.u_end)  # u_ref of the output's fields
         install_fields(self.ctx.problem, stage.add, stage.material)
-        return changed
 
     def _remove(self, stage: Stage) -> tuple[np.ndarray, np.ndarray]:
         """Make the stage's cells void, σ0 and their weight gone (collective).

@@ -98,7 +98,7 @@ class StagedLoop(Protocol):
         """Make the stage's cells void (collective)."""
         ...
 
-    def _installed(self, stage: Stage, index: int) -> np.ndarray:
+    def _install(self, stage: Stage, index: int) -> None:
         """Install the stage's groups at u_I = ``u_end`` (collective)."""
         ...
 
@@ -244,9 +244,10 @@ def restore(loop: StagedLoop, ck: Checkpoint) -> Restored:
                 loop.frames.append(loop._frame(s, loop.stages[s - 1].name, ends[s - 1]))
             if loop.stages[s].remove:
                 loop._remove(loop.stages[s])
-            if loop.stages[s].add:  # at u_I: where the stage before ended
+            if loop.stages[s].add:  # at u_I, where the stage before ended (the solver
+                # parts it resets and the pairs it refreshes are restored after the replay)
                 loop.u_end = ends[s - 1] if s > 0 else np.zeros(n_global)
-                loop._installed(loop.stages[s], s + 1)
+                loop._install(loop.stages[s], s + 1)
 
     back = loop.parts.replay.restore(ck, n_global, between=removals)
     _put(loop, data, ends)
