@@ -8,6 +8,8 @@ breaks a joint's bond; a soften event drops a cohesive pair to its next tooth.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+
 import numpy as np
 
 from geofrac.fracture.event_criterion import EventCriterion
@@ -52,6 +54,19 @@ class CrackUpdate:
         if self.contact is not None:
             self.contact.start(np.flatnonzero(state.cracked))
         self.modes = np.zeros(len(state.cracked), dtype=np.int8)
+
+    def replayed(
+        self, rows: Sequence[Mapping[str, object]], batches: Sequence[Sequence[int]]
+    ) -> None:
+        """Set the modes of the sites that a resume's replay cracked again.
+
+        ``rows[i]`` is event i + 1's log row (its ``mode``), ``batches[i]`` its sites;
+        slip and soften events leave the modes as they are (as :meth:`apply` does).
+        """
+        for row, batch in zip(rows, batches, strict=False):
+            mode = row.get("mode")
+            if mode in ("tension", "shear"):
+                self.modes[np.asarray(batch, dtype=np.int64)] = 1 + MODES.index(str(mode))
 
     def apply(self, choice: Choice) -> None:
         """Apply the event ``choice`` (a slip or soften event has one site)."""

@@ -330,6 +330,7 @@ class EventLoop:
         if run.resume is not None and control is not None:
             control.check_resume()  # the same scene and number of ranks
             back = self._restore(run.resume)
+            self.parts.crack.replayed(back.rows[: back.replay_from - 1], back.batches)
             run.rows, run.batches, run.u_unit = back.rows, back.batches, back.u_unit
             run.first, run.first_energy = back.replay_from, back.first_energy
             run.face_hit, run.done = back.face_hit, len(back.rows)

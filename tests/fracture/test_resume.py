@@ -214,6 +214,8 @@ def check_resumed(
         assert res[key] == res_a[key], key  # the same solver path, counted once
     du = rel(u, u_a, comm)
     assert du <= max(RTOL, noise), (du, noise)
+    # how each site cracked (cracks.h5's mode), the sites cracked before the replay too
+    assert np.array_equal(resumed.loop.modes, d_a.loop.modes)
 
     def files() -> None:
         log_a, log_b = read_log(base / "whole" / "events.csv"), read_log(out / "events.csv")
