@@ -7,7 +7,7 @@ in-situ stress σ0 = −p0 I (p0 = 10), far sides on rollers (left, bottom) or l
 σ0·n (right, top). One stage excavates the opening; a pressure p_i on the wall
 (``group = "wall"``, inside the mesh until the excavation) acts from that stage. Later
 stages switch the pressure off and on again, so one run gives the states for p_i = 4,
-0, 1 and p0. References:
+0, 1 and p0 (``WALL`` of tests/fracture/test_staged_loads.py). References:
 
 - **Kirsch/Lamé** (Jaeger, Cook and Zimmerman (2007), §8.4): the opening in an infinite
   plate under −p0 with p_i on its wall moves radially by u_r(a) = −(p0 − p_i) a (1 + ν)/E
@@ -15,9 +15,10 @@ stages switch the pressure off and on again, so one run gives the states for p_i
   invert converge by 2 u_r, as do the sidewalls (the rollers' rigid shift cancels),
   within 1 %, the tolerance of the P2 Kirsch wall-displacement tests
   (tests/fem/test_insitu.py, L = 40a: the finite plate is softer by O((a/L)²) ≈ 0.1 %).
-  Measured: +0.05 % at p_i = 0 and 4.
+  Measured: −0.03 % (crown) and +0.04 % (sidewalls) at p_i = 0, 1 and 4.
 - **p_i = p0** restores what the removed cells carried: the release is cancelled on
-  every wall facet and the body does not move (|u| < 1e-9 of p0 a (1 + ν)/E).
+  every wall facet and the body does not move (|u| < 1e-9 of p0 a (1 + ν)/E;
+  measured 7e-15).
 - **Linearity**: u(p_i) = u(0) + p_i (u(1) − u(0)) (1e-9), and switched off (``until``)
   the pressure leaves the bare excavation's state, that of a run without it (1e-9).
 """
@@ -31,73 +32,29 @@ from mpi4py import MPI
 from geofrac.errors import RunError
 from geofrac.runner import solve_scene
 from geofrac.scene import load_scene_collective
-from tests.conftest import JOBS
+from tests.fracture.test_staged_loads import EXCAVATE, WALL, _scene
 
 P0, E, NU, A = 10.0, 1000.0, 0.25, 1.0
 U = P0 * A * (1 + NU) / E  # the wall displacement's scale
 POINTS = {"crown": (0, 1), "invert": (0, -1), "right": (1, 0), "left": (-1, 0)}
 
-SCENE = f"""
-name = "wall_pressure"
-[geometry]
-file = "{JOBS.parent / "meshes" / "opening.geo"}"
-parameters = {{ a = {A}, L = 40.0, h_wall = 0.1, h_far = 3.0 }}
-[material]
-E = {E}
-nu = {NU}
-plane = "strain"
-[discretization]
-element = "p2"
-[[bc]]
-group = "left"
-components = ["x"]
-value = [0.0]
-[[bc]]
-group = "bottom"
-components = ["y"]
-value = [0.0]
-[initial_stress]
-kind = "constant"
-stress = [{-P0}, {-P0}, 0.0]
-loaded = ["right", "top"]
-[output]
-xdmf = false
-probes = {{ {", ".join(f"{k} = [{x}.0, {y}.0]" for k, (x, y) in POINTS.items())} }}
-[[stages]]
-name = "excavate"
-remove = ["hole"]
-"""
-#: p_i = 4 from the excavation, off at 'free', 1 from 'unit', 1 + 9 = p0 from 'full'.
-SWITCHED = (
-    SCENE
-    + """[[stages]]
-name = "free"
-[[stages]]
-name = "unit"
-[[stages]]
-name = "full"
-"""
-    + "".join(
-        f'[[load]]\ntype = "pressure"\ngroup = "wall"\nvalue = {q}\nfrom = "{on}"\n{off}'
-        for q, on, off in (
-            (4.0, "excavate", 'until = "free"\n'),
-            (1.0, "unit", ""),
-            (9.0, "full", ""),
-        )
-    )
-)
+#: P2 on the plate's mesh with its outer square at 40a, probes on the wall.
+OVERRIDES = [
+    "discretization.element=p2",
+    "geometry.parameters.L=40.0",
+    "geometry.parameters.h_far=3.0",
+    "output.probes={" + ", ".join(f"{k} = [{x}.0, {y}.0]" for k, (x, y) in POINTS.items()) + "}",
+]
 
 
-def _states(text: str, tmp, comm=MPI.COMM_WORLD) -> list[dict[str, np.ndarray]]:
-    """Each stage's probe displacements, shape=(2,) per point."""
-    path = tmp / "scene.toml"
-    if comm.rank == 0:
-        path.write_text(text)
-    comm.barrier()
-    solution = solve_scene(load_scene_collective(comm, path, []), comm, verbose=False)
+def _states(stages: str, tmp, comm=MPI.COMM_WORLD) -> list[dict[str, np.ndarray]]:
+    """Each stage's probe displacements, shape=(2,) per point, of the plate with ``stages``."""
+    path = comm.bcast(_scene(tmp, stages, cracking=False) if comm.rank == 0 else None)
+    scene = load_scene_collective(comm, path, OVERRIDES)
+    solution = solve_scene(scene, comm, verbose=False)
     try:
-        stages = solution.results["stages"][1:]
-        return [{k: np.array(v) for k, v in s["probes"].items()} for s in stages]
+        stages_ = solution.results["stages"][1:]
+        return [{k: np.array(v) for k, v in s["probes"].items()} for s in stages_]
     finally:
         solution.problem.destroy()
 
@@ -113,7 +70,7 @@ def _wall(state: dict[str, np.ndarray]) -> np.ndarray:
 
 
 def test_wall_pressure_gives_lame_and_superposes(tmp_path):
-    four, free, unit, full = _states(SWITCHED, tmp_path)
+    four, free, unit, full = _states(WALL, tmp_path)
     for p_i, state in ((4.0, four), (0.0, free), (1.0, unit)):
         closed = -(P0 - p_i) * A * (1 + NU) / E
         np.testing.assert_allclose(_wall(state), closed, rtol=0.01, err_msg=f"p_i = {p_i}")
@@ -122,13 +79,13 @@ def test_wall_pressure_gives_lame_and_superposes(tmp_path):
         np.testing.assert_allclose(
             four[name], free[name] + 4.0 * (unit[name] - free[name]), atol=1e-9 * U
         )
-    (bare,) = _states(SCENE, tmp_path)
+    (bare,) = _states(EXCAVATE, tmp_path)
     for name in POINTS:  # switched off: the bare excavation's state
         np.testing.assert_allclose(free[name], bare[name], rtol=0, atol=1e-9 * U)
 
 
 def test_a_wall_pressure_without_from_is_refused_naming_the_key(tmp_path):
-    text = SCENE + '[[load]]\ntype = "pressure"\ngroup = "wall"\nvalue = 4.0\n'
+    text = EXCAVATE + '[[load]]\ntype = "pressure"\ngroup = "wall"\nvalue = 4.0\n'
     with pytest.raises(RunError, match=r"load\[0\]\.group: \d+ facets of group 'wall' lie inside"):
         _states(text, tmp_path, comm=MPI.COMM_SELF)
 
@@ -136,9 +93,8 @@ def test_a_wall_pressure_without_from_is_refused_naming_the_key(tmp_path):
 @pytest.mark.mpi(min_size=2)
 def test_wall_pressure_on_2_ranks_equals_1(tmp_path):
     comm = MPI.COMM_WORLD
-    tmp = comm.bcast(tmp_path if comm.rank == 0 else None)
-    many = _states(SWITCHED, tmp, comm=comm)
-    ref = comm.bcast(_states(SWITCHED, tmp, comm=MPI.COMM_SELF) if comm.rank == 0 else None)
+    many = _states(WALL, tmp_path, comm=comm)
+    ref = comm.bcast(_states(WALL, tmp_path, comm=MPI.COMM_SELF) if comm.rank == 0 else None)
     for a, b in zip(many, ref, strict=True):
         for name in POINTS:
             np.testing.assert_allclose(a[name], b[name], rtol=0, atol=1e-9 * U)
