@@ -20,6 +20,7 @@ from geofrac.elements.base import Element
 from geofrac.elements.kinematics import constrained_bases, dofs_from_gradient
 from geofrac.errors import RunError
 from geofrac.fem import loads
+from geofrac.fem.walls import facet_measure
 from geofrac.materials import lame
 from geofrac.meshing.distribute import TaggedMesh
 from geofrac.model.scene import Load, Scene
@@ -150,8 +151,9 @@ class ElasticProblem:
         self.dx = ufl.Measure(
             "dx", domain=mesh, metadata={} if q is None else {"quadrature_degree": q}
         )
-        fdim = mesh.topology.dim - 1
-        self.ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged.tags.get(fdim))
+        #: the facet measure and, per load on an opening's wall, its subdomain id
+        #: (:mod:`geofrac.fem.walls`).
+        self.ds, self.walls = facet_measure(tagged, scene)
         self.exact = (
             make_exact(
                 scene.exact.name, scene.exact.parameters, E=mat.E, nu=mat.nu, plane=mat.plane
@@ -210,8 +212,16 @@ class ElasticProblem:
                 value = sig * ufl.FacetNormal(self.mesh)
             else:  # the body force that makes u_exact an equilibrium state
                 value = -ufl.div(forms.sigma(u_ex, self.lam, self.mu))
+        wall = self.walls.get(self.scene.loads.index(load))  # equal loads: equal forms
         return loads.load_form(
-            load, v, self.tagged, ds=self.ds, dx=self.dx, thickness=self.thickness, value=value
+            load,
+            v,
+            self.tagged,
+            ds=self.ds,
+            dx=self.dx,
+            thickness=self.thickness,
+            value=value,
+            subdomain=wall,
         )
 
     @property

@@ -24,6 +24,7 @@ import ufl
 from mpi4py import MPI
 
 from geofrac.errors import RunError
+from geofrac.fem.walls import live_cells
 from geofrac.geometry.insitu import (
     StressField,
     column_weight,
@@ -207,14 +208,8 @@ def insitu_fields(
     mesh = tagged.mesh
     dg0 = dolfinx.fem.functionspace(mesh, ("DG", 0))
     alive = dolfinx.fem.Function(dg0, name="alive")
-    alive.x.array[:] = 1.0
-    seen: set[str] = set()
-    for stage in scene.stages:
-        seen.update(stage.remove)
-        for group in stage.add:
-            if group not in seen:
-                alive.x.array[cell_dofs(alive, group_cells(tagged, group))] = 0.0
-            seen.add(group)
+    live = live_cells(tagged, scene.stages, 0)
+    alive.x.array[cell_dofs(alive, np.arange(len(live)))] = live
     alive.x.scatter_forward()
     rho = _density(tagged, scene, alive)
     lam_f = dolfinx.fem.Function(dg0, name="lambda")

@@ -6,6 +6,8 @@ by the thickness t in 2D (1 in 3D):
 - ``traction`` t̄ (force per area) on a facet group: t ∫ t̄·v ds;
 - ``pressure`` p on a facet group: the traction -p n with n the outward unit normal
   (``ufl.FacetNormal``), so p > 0 pushes into the body;
+- a traction or pressure on facets inside the mesh (an opening's wall) acts from the
+  stage that removes the cells on one side, on the live side (:mod:`geofrac.fem.walls`);
 - ``body_force`` b (force per volume): t ∫ b·v dx.
 
 A component given as an expression text (:mod:`geofrac.model.expr`) is translated node by
@@ -111,6 +113,7 @@ def load_form(
     dx: ufl.Measure,
     thickness: Any,
     value: Any = None,
+    subdomain: int | None = None,
 ) -> ufl.Form:
     """The linear form of a traction, pressure or body-force load.
 
@@ -118,48 +121,23 @@ def load_form(
         load: the scene's load (not ``point``).
         v: test function of the displacement space.
         tagged: the mesh with its physical groups (the facet group of the load).
-        ds: exterior facet measure with the facet tags.
+        ds: the problem's exterior facet measure (:func:`geofrac.fem.walls.facet_measure`).
         dx: cell measure.
         thickness: t in 2D, 1 in 3D.
         value: the load's value as UFL when it is not ``load.value`` (``"exact"``).
+        subdomain: the id of ``ds`` for a load on facets inside the mesh (an opening's
+            wall, integrated on its live side, :mod:`geofrac.fem.walls`); None: the
+            group's tag.
     """
     if value is None:
         value = value_ufl(load.value, tagged.mesh)
     if load.type == "body_force":
         return forms.body_force_form(v, value, thickness, dx)
-    _, tag = tagged.groups[load.group]
     assert load.group is not None  # a facet load names its group
-    _refuse_interior(tagged, load.group)
+    tag = tagged.groups[load.group][1] if subdomain is None else subdomain
     if load.type == "pressure":
         value = -value * ufl.FacetNormal(tagged.mesh)
     return forms.traction_form(v, value, thickness, ds(tag))
-
-
-def _refuse_interior(tagged: TaggedMesh, group: str) -> None:
-    """Refuse a facet load whose group has facets inside the mesh (collective).
-
-    ``ds`` integrates over the mesh's boundary only: a traction on facets between two
-    cells (an excavation's wall before its cells are removed, a joint) would be lost
-    without a word.
-
-    Raises:
-        RunError: on every rank, naming the group and how many facets are interior.
-    """
-    dim, facets = tagged.entities(group)
-    top = tagged.mesh.topology
-    top.create_connectivity(dim, dim + 1)
-    owned = tagged.owned(dim, facets)
-    exterior = dolfinx.mesh.exterior_facet_indices(top)
-    inside = tagged.mesh.comm.allreduce(
-        int(np.count_nonzero(~np.isin(owned, exterior))), op=MPI.SUM
-    )
-    if inside:
-        raise RunError(
-            f"load on group '{group}': {inside} of its facets lie inside the mesh (between "
-            "two cells), where a traction or pressure is not applied (loads act on the "
-            "mesh's boundary only; an opening's wall is inside the mesh until a stage "
-            "removes its cells). Put the load on a boundary group"
-        )
 
 
 @dataclass(frozen=True)
