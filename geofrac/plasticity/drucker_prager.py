@@ -132,7 +132,8 @@ class DruckerPrager:
 
     def trial(self, stress: np.ndarray, deps: np.ndarray) -> np.ndarray:
         """The elastic trial σ + C:Δε, shapes=(n, 3, 3) → shape=(n, 3, 3)."""
-        return elastic_trial(stress, deps, *self.moduli())
+        K, G = self.moduli()
+        return elastic_trial(stress, deps, K=K, G=G)
 
     def update(self, stress: np.ndarray, deps: np.ndarray, *, tangent: bool = False) -> Return:
         """Elastic trial and return for strain increments, shapes=(n, 3, 3)."""

@@ -23,7 +23,7 @@ __all__ = [
 VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
 
 
-def elastic_trial(stress: np.ndarray, deps: np.ndarray, K: float, G: float) -> np.ndarray:
+def elastic_trial(stress: np.ndarray, deps: np.ndarray, *, K: float, G: float) -> np.ndarray:
     """σ* = σ + K tr(Δε) I + 2G dev(Δε).
 
     Args:

@@ -173,7 +173,8 @@ class MohrCoulomb:
 
     def trial(self, stress: np.ndarray, deps: np.ndarray) -> np.ndarray:
         """The elastic trial σ + C:Δε, shapes=(n, 3, 3) → shape=(n, 3, 3)."""
-        return elastic_trial(stress, deps, *self.moduli())
+        K, G = self.moduli()
+        return elastic_trial(stress, deps, K=K, G=G)
 
     def update(self, stress: np.ndarray, deps: np.ndarray, *, tangent: bool = False) -> Return:
         """Elastic trial and return for strain increments, shapes=(n, 3, 3)."""
@@ -199,7 +200,8 @@ class MohrCoulomb:
         if np.any(plastic):
             s, g, k, j = self._return_principal(star[plastic])
             sigma[plastic], gamma[plastic], kind[plastic], jac[plastic] = s, g, k, j
-        new = np.einsum("nik,nk,njk->nij", V, sigma, V)
+        new = trial.copy()  # elastic points keep the trial exactly
+        new[plastic] = np.einsum("nik,nk,njk->nij", V[plastic], sigma[plastic], V[plastic])
         return Return(
             stress=new,
             multipliers=gamma,
@@ -219,7 +221,7 @@ class MohrCoulomb:
     def _fixed_points(self) -> list[tuple[int, np.ndarray, tuple[tuple[int, ...], ...]]]:
         """(kind, principal stress, flow subsets) of the corners, vertex and apex."""
         sf, cf = np.sin(np.radians(self.friction_angle)), np.cos(np.radians(self.friction_angle))
-        out = []
+        out: list[tuple[int, np.ndarray, tuple[tuple[int, ...], ...]]] = []
         if self.tension is not None:
             T = self.tension
             low = (T * (1 + sf) - 2 * self.cohesion * cf) / (1 - sf)
