@@ -142,6 +142,18 @@ def test_every_return_lands_on_the_surface(name):
     # Δεᵖ = C⁻¹:(σ* − σ): Hooke of the plastic strain gives back the stress drop
     np.testing.assert_allclose(hooke(ret.plastic_strain, E, NU), trial - ret.stress, atol=1e-12)
     assert np.all(ret.multipliers >= -1e-15)
+    # away from the fixed points the plastic strain is the flow rule: Σⱼ Δγⱼ nⱼ in the
+    # trial's principal frame (the flow vectors written here, sorted order)
+    sp = np.sin(np.radians(law.dilatancy_angle))
+    flows = np.array(
+        [[1 + sp, 0, -(1 - sp)], [1 + sp, -(1 - sp), 0], [0, 1 + sp, -(1 - sp)], *np.eye(3)]
+    )
+    _, V = np.linalg.eigh(trial)
+    V = V[:, :, ::-1]
+    flowing = plastic & ~np.isin(ret.kind, [APEX, TENSION_CORNER, TENSION_APEX])
+    principal = ret.multipliers[flowing] @ flows
+    want = np.einsum("nik,nk,njk->nij", V[flowing], principal, V[flowing])
+    np.testing.assert_allclose(ret.plastic_strain[flowing], want, atol=1e-14 * C)
 
 
 @pytest.mark.parametrize("name", list(LAWS))
