@@ -41,6 +41,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "geofrac.analytic",
             "geofrac.analytic_joints",
             "geofrac.kernels",
+            # the plasticity laws MPM and the finite-element solver share (pure numpy)
+            "geofrac.plasticity",
         ),
     ),
     # the UFL forms (geofrac_forms, folder forms/): pure symbolic definitions that

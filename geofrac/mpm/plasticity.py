@@ -22,7 +22,9 @@ elastic trial minus that after the return.
 
 Edo (2016) gives the yield function only; the flow rule and the apex treatment are the
 standard ones (e.g. de Souza Neto, Perić and Owen, ch. 8) and are documented here
-because the thesis is silent on them.
+because the thesis is silent on them. The return itself is the shared one,
+:class:`geofrac.plasticity.drucker_prager.DruckerPrager` (plane-strain match), which the
+finite-element solver uses too (docs/plasticity.md).
 """
 
 from __future__ import annotations
@@ -36,6 +38,8 @@ from geofrac.materials import bulk_shear, p_wave_modulus
 from geofrac.mpm.elastic import Elastic
 from geofrac.mpm.energy import stored
 from geofrac.mpm.rotation import rotate_stress, spin_increment
+from geofrac.plasticity.drucker_prager import DruckerPrager as SharedDruckerPrager
+from geofrac.plasticity.drucker_prager import yield_function
 
 if TYPE_CHECKING:
     from geofrac.mpm.energy import StepBudget
@@ -87,34 +91,30 @@ class DruckerPrager:
     dilatancy_angle: float = 0.0
 
     def __post_init__(self) -> None:
-        """Check the parameters."""
-        if not self.E > 0 or not -1 < self.nu < 0.5:
-            raise ValueError(f"need E > 0 and -1 < nu < 0.5, got E={self.E}, nu={self.nu}")
-        if (
-            not 0 <= self.friction_angle < 90
-            or not 0 <= self.dilatancy_angle <= self.friction_angle
-        ):
-            raise ValueError("need 0 <= dilatancy_angle <= friction_angle < 90 (degrees)")
-        if self.cohesion < 0:
-            raise ValueError(f"cohesion must be >= 0, got {self.cohesion}")
+        """Check the parameters (the shared law's checks)."""
+        _ = self.law
+
+    @property
+    def law(self) -> SharedDruckerPrager:
+        """The shared law (:mod:`geofrac.plasticity.drucker_prager`, plane-strain match)."""
+        return SharedDruckerPrager(
+            self.E, self.nu, self.friction_angle, self.cohesion, self.dilatancy_angle
+        )
 
     @property
     def beta(self) -> float:
         """β of eq. 4.42."""
-        t = np.tan(np.radians(self.friction_angle))
-        return float(t / np.sqrt(9 + 12 * t * t))
+        return self.law.beta
 
     @property
     def k(self) -> float:
         """The material constant k of eq. 4.43."""
-        t = np.tan(np.radians(self.friction_angle))
-        return float(3 * self.cohesion / np.sqrt(9 + 12 * t * t))
+        return self.law.k
 
     @property
     def beta_psi(self) -> float:
         """β of the plastic potential (eq. 4.42 with ψ)."""
-        t = np.tan(np.radians(self.dilatancy_angle))
-        return float(t / np.sqrt(9 + 12 * t * t))
+        return self.law.beta_psi
 
     def moduli(self) -> tuple[float, float]:
         """(bulk modulus K, shear modulus G) (:func:`geofrac.materials.bulk_shear`)."""
@@ -191,7 +191,7 @@ class DruckerPrager:
             budget.plastic += trial - float(np.sum(after))
 
     def update(self, stress: np.ndarray, deps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Elastic trial and return mapping for strain increments.
+        """Elastic trial and return mapping for strain increments (the shared return).
 
         Args:
             stress: stresses at the start, shape=(n, 3, 3).
@@ -199,50 +199,10 @@ class DruckerPrager:
 
         Returns:
             The new stresses, shape=(n, 3, 3), and the plastic multipliers Δλ, shape=(n,)
-            (0 where the step stayed elastic).
+            (0 where the step stayed elastic; the cone's Δλ at the apex).
         """
-        K, G = self.moduli()
-        eye = np.eye(3)
-        tr = np.trace(deps, axis1=1, axis2=2)
-        dev = deps - tr[:, None, None] / 3 * eye
-        trial = stress + K * tr[:, None, None] * eye + 2 * G * dev
-        f = yield_function(trial, self.beta, self.k)
-        dlam = np.zeros(len(stress))
-        plastic = f > 0
-        if not np.any(plastic):
-            return trial, dlam
-        t = trial[plastic]
-        i1 = np.trace(t, axis1=1, axis2=2)
-        s = t - i1[:, None, None] / 3 * eye
-        sqrt_j2 = np.sqrt(0.5 * np.sum(s * s, axis=(1, 2)))
-        b, bp = self.beta, self.beta_psi
-        lam = f[plastic] / (9 * K * b * bp + G)
-        q = sqrt_j2 - G * lam  # √J₂ after the return
-        cone = q > 0
-        out = np.empty_like(t)
-        unit = np.where(
-            sqrt_j2[:, None, None] > 0, s / np.maximum(sqrt_j2, 1e-300)[:, None, None], 0
-        )
-        i1_new = i1 - 9 * K * bp * lam
-        out[cone] = (i1_new[cone] / 3)[:, None, None] * eye + q[cone, None, None] * unit[cone]
-        # beyond the apex: the apex (√J₂ = 0, β I₁ = k)
-        apex = ~cone
-        if np.any(apex):
-            if b > 0:
-                out[apex] = (self.k / (3 * b)) * eye
-            else:  # von Mises limit (φ = 0): the deviator on the cylinder k
-                out[apex] = (i1[apex] / 3)[:, None, None] * eye + self.k * unit[apex]
-        new = trial.copy()
-        new[plastic] = out
-        dlam[plastic] = lam
-        return new, dlam
-
-
-def yield_function(stress: np.ndarray, beta: float, k: float) -> np.ndarray:
-    """The yield function f = β I₁ + √J₂ − k (eq. 4.39), shape=(n, 3, 3) → shape=(n,)."""
-    i1 = np.trace(stress, axis1=1, axis2=2)
-    s = stress - i1[:, None, None] / 3 * np.eye(3)
-    return beta * i1 + np.sqrt(0.5 * np.sum(s * s, axis=(1, 2))) - k
+        ret = self.law.update(stress, deps)
+        return ret.stress, ret.multipliers[:, 0]
 
 
 def from_scene(E: float, nu: float, config: PlasticityParameters) -> DruckerPrager:

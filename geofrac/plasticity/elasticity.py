@@ -1,0 +1,72 @@
+"""Isotropic linear elasticity on arrays of 3×3 tensors (pure numpy), for the returns.
+
+The elastic trial σ* = σₙ + K tr(Δε) I + 2G dev(Δε), the compliance C⁻¹ that turns
+σ* − σ into the plastic strain increment, the stored energy density ½ σ:C⁻¹:σ, the
+elasticity tensor C and the Voigt form of fourth-order tangents (order xx, yy, zz, yz,
+xz, xy with engineering shear strains, as :func:`geofrac.materials.d_matrix`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "VOIGT",
+    "compliance",
+    "elastic_tangent",
+    "elastic_trial",
+    "energy_density",
+    "to_voigt",
+]
+
+#: The (i, j) index pairs of the Voigt order xx, yy, zz, yz, xz, xy.
+VOIGT = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+
+
+def elastic_trial(stress: np.ndarray, deps: np.ndarray, *, K: float, G: float) -> np.ndarray:
+    """σ* = σ + K tr(Δε) I + 2G dev(Δε).
+
+    Args:
+        stress: stresses at the start of the step, shape=(n, 3, 3).
+        deps: strain increments, shape=(n, 3, 3) (plane strain: zero zz, xz, yz entries).
+        K: bulk modulus.
+        G: shear modulus.
+
+    Returns:
+        The elastic trial stresses, shape=(n, 3, 3).
+    """
+    eye = np.eye(3)
+    tr = np.trace(deps, axis1=1, axis2=2)
+    dev = deps - tr[:, None, None] / 3 * eye
+    return stress + K * tr[:, None, None] * eye + 2 * G * dev
+
+
+def compliance(stress: np.ndarray, K: float, G: float) -> np.ndarray:
+    """C⁻¹:σ = tr σ/(9K) I + dev σ/(2G), shape=(n, 3, 3) → shape=(n, 3, 3)."""
+    tr = np.trace(stress, axis1=1, axis2=2)[:, None, None]
+    return tr / (9 * K) * np.eye(3) + (stress - tr / 3 * np.eye(3)) / (2 * G)
+
+
+def energy_density(stress: np.ndarray, K: float, G: float) -> np.ndarray:
+    """½ σ:C⁻¹:σ, shape=(n, 3, 3) → shape=(n,)."""
+    return 0.5 * np.sum(stress * compliance(stress, K, G), axis=(1, 2))
+
+
+def elastic_tangent(K: float, G: float) -> np.ndarray:
+    """C = K I⊗I + 2G (𝕀ˢʸᵐ − I⊗I/3), shape=(3, 3, 3, 3)."""
+    eye = np.eye(3)
+    ii = np.einsum("ij,kl->ijkl", eye, eye)
+    sym = 0.5 * (np.einsum("ik,jl->ijkl", eye, eye) + np.einsum("il,jk->ijkl", eye, eye))
+    return K * ii + 2 * G * (sym - ii / 3)
+
+
+def to_voigt(tangent: np.ndarray) -> np.ndarray:
+    """A minor-symmetric tangent in Voigt form, shape=(n, 3, 3, 3, 3) → shape=(n, 6, 6).
+
+    Rows and columns in :data:`VOIGT` order; with engineering shear strains
+    (γ_xy = 2ε_xy) the entries are the tensor components, D[I, J] = C[i, j, k, l].
+    Plane strain takes rows and columns (0, 1, 5).
+    """
+    rows = [i for i, _ in VOIGT]
+    cols = [j for _, j in VOIGT]
+    return tangent[:, rows, cols][:, :, rows, cols]
