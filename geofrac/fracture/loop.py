@@ -128,6 +128,13 @@ class _Run:
     started: float = 0.0
     clock: float = 0.0
 
+    def resumed(self, back: Restored) -> None:
+        """Continue from a checkpoint's restored state (:meth:`EventLoop._restore`)."""
+        self.rows, self.batches, self.u_unit = back.rows, back.batches, back.u_unit
+        self.first, self.first_energy = back.replay_from, back.first_energy
+        self.face_hit, self.done = back.face_hit, len(back.rows)
+        self.peak = max((r["strain_energy"] for r in self.rows[: self.first - 1]), default=0.0)
+
 
 class EventLoop:
     """Runs events on the parts until an end condition.
@@ -331,10 +338,7 @@ class EventLoop:
             control.check_resume()  # the same scene and number of ranks
             back = self._restore(run.resume)
             self.parts.crack.replayed(back.rows[: back.replay_from - 1], back.batches)
-            run.rows, run.batches, run.u_unit = back.rows, back.batches, back.u_unit
-            run.first, run.first_energy = back.replay_from, back.first_energy
-            run.face_hit, run.done = back.face_hit, len(back.rows)
-            run.peak = max((r["strain_energy"] for r in run.rows[: run.first - 1]), default=0.0)
+            run.resumed(back)
         return run
 
     def _fresh(self, space: dolfinx.fem.FunctionSpace) -> _Run:
