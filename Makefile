@@ -27,14 +27,16 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(VENV)/bin/mypy
 
+# the 1-rank tests on NP worker processes (pytest-xdist; one test module per worker at a
+# time, so that a module's fixtures are built once)
 test-serial: $(STAMP)
-	$(PY) -m pytest --with-mpi -m "not robust"
+	$(PY) -m pytest --with-mpi -m "not robust" -n $(NP) --dist loadscope
 
 test-mpi: $(STAMP)
 	$(VENV)/bin/mpiexec -n $(NP) $(PY) -m mpi4py -m pytest --only-mpi -p no:cacheprovider -m "not robust"
 
 test-robust: $(STAMP)
-	$(PY) -m pytest --with-mpi -m robust
+	$(PY) -m pytest --with-mpi -m robust -n $(NP) --dist loadscope
 	$(VENV)/bin/mpiexec -n $(NP) $(PY) -m mpi4py -m pytest --only-mpi -p no:cacheprovider -m robust
 
 test-latest:
