@@ -1,4 +1,4 @@
-"""Effect ``dfn``: scene validation, the seed's models, and a mesh that follows the network."""
+"""Effect ``dfn``: scene validation, the models of Edo (2016), a mesh that follows the network."""
 
 import json
 import math
@@ -19,8 +19,9 @@ from tests.conftest import JOBS
 from tests.conftest import run_and_list_modules as _run_and_list_modules
 
 MODEL1, MODEL2 = JOBS / "dfn_model1.toml", JOBS / "dfn_model2.toml"
-#: A coarse mesh of the seed models for tests (the seed size is geofrac bench dfn), with
-#: the cleaning tolerance of the seed-size mesh (0.84 / 4) so the network is the same.
+#: A coarse mesh of the models of Edo (2016) for tests (their full size is geofrac bench
+#: dfn), with the cleaning tolerance of the full-size mesh (0.84 / 4) so the network is the
+#: same.
 COARSE = ["dfn.mesh_size=3.0", "dfn.tolerance=0.21"]
 
 
