@@ -65,7 +65,7 @@ def _rows(data, element):
     return [r for r in data["records"] if r["element"] == element]
 
 
-def test_convergence_rates_match_the_seed_and_theory(report):
+def test_convergence_rates_match_the_thesis_and_theory(report):
     _, data = report
     assert 1.9 <= data["rates"]["cst"]["u"] <= 2.1  # Edo (2016), Fig. 2.8: R = 2.0
     assert data["rates"]["p2"]["u"] >= 2.8
@@ -74,7 +74,7 @@ def test_convergence_rates_match_the_seed_and_theory(report):
         assert p2["error_u"] < cst["error_u"]
 
 
-def test_rgnt_and_gnt_acceptance_on_the_seed_meshes(report):
+def test_rgnt_and_gnt_acceptance_on_the_thesis_meshes(report):
     """Issue 3: RGNT R >= 1.9 (Edo (2016): 2.1) and below CST on every mesh; GNT beside it."""
     _, data = report
     assert data["rates"]["rgnt"]["u"] >= 1.9

@@ -13,7 +13,7 @@ def _run(*args):
     return main(["bench", *args])
 
 
-def test_efmm_selects_the_seed_3_4_1_beam_and_reports_equal_time(tmp_path):
+def test_efmm_selects_the_thesis_3_4_1_beam_and_reports_equal_time(tmp_path):
     out = tmp_path / "b"
     code = _run("cantilever", "--elements", "cst,efmm", "--meshes", "2,4,6", "--repeat", "1",
                 "--out", str(out))  # fmt: skip

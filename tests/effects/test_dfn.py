@@ -29,7 +29,7 @@ def _config(scene):
     return next(e.config for e in scene.effects if e.name == "dfn")
 
 
-def test_seed_models_declare_table_2_1():
+def test_thesis_models_declare_table_2_1():
     one, two = _config(load_scene(MODEL1)), _config(load_scene(MODEL2))
     table = [(s.mean_deg, s.spread**2) for s in two.sets]
     np.testing.assert_allclose(table, [(47.473, 60.74), (102.753, 57.16), (162.830, 57.48)])
