@@ -1,7 +1,7 @@
 """Small-strain linear elasticity in 2D (plane stress/strain) and 3D.
 
 σ = 2μ ε + λ tr(ε) I, with λ the effective plane-stress value in 2D plane stress
-(see :func:`geofrac.materials.lame`); the weak form is the stiffness of seed eq. (2.4),
+(see :func:`geofrac.materials.lame`); the weak form is the stiffness of Edo (2016), eq. (2.4),
 k = t ∫ Bᵀ D B dΩ, written as t ∫ σ(u) : ε(v) dΩ.
 """
 
@@ -37,7 +37,7 @@ def sigma(u: Any, lam: Any, mu: Any) -> Any:
 
 
 def stiffness_form(u: Any, v: Any, lam: Any, mu: Any, thickness: Any, dx: Any) -> Any:
-    """Bilinear form t ∫ σ(u) : ε(v) dx (seed eq. 2.4)."""
+    """Bilinear form t ∫ σ(u) : ε(v) dx (Edo (2016), eq. 2.4)."""
     return thickness * ufl.inner(sigma(u, lam, mu), epsilon(v)) * dx
 
 
@@ -57,16 +57,16 @@ def strain_energy_form(u: Any, lam: Any, mu: Any, thickness: Any, dx: Any) -> An
 
 
 def l2_error_form(u: Any, u_exact: Any, dx: Any) -> Any:
-    """Functional ∫ (u - u_exact)·(u - u_exact) dx; its square root is seed eq. (2.22)."""
+    """Functional ∫ (u - u_exact)·(u - u_exact) dx; its square root is Edo (2016), eq. (2.22)."""
     e = u - u_exact
     return ufl.inner(e, e) * dx
 
 
 def energy_error_form(u: Any, u_exact: Any, lam: Any, mu: Any, dx: Any) -> Any:
-    """Functional ∫ ½ (ε - ε_exact) : (σ - σ_exact) dx; its square root is seed eq. (3.30b).
+    """Functional ∫ ½ (ε - ε_exact) : (σ - σ_exact) dx; its square root is Edo (2016), eq. (3.30b).
 
     ε_exact is the symmetric gradient of the exact displacement, equal to D⁻¹ σ_exact
-    (seed eq. 3.32) for an exact elasticity solution.
+    (Edo (2016), eq. 3.32) for an exact elasticity solution.
     """
     e = u - u_exact
     return 0.5 * ufl.inner(sigma(e, lam, mu), epsilon(e)) * dx

@@ -1,6 +1,6 @@
-// Timoshenko cantilever (seed section 2.4.1, Fig. 2.7; section 3.3.1, Fig. 3.9).
+// Timoshenko cantilever (Edo (2016), §2.4.1, Fig. 2.7; §3.3.1, Fig. 3.9).
 // Beam 0 <= x <= L, -D/2 <= y <= D/2 meshed with nx x ny squares, each split into two
-// right-isosceles triangles when L/nx == D/ny (seed meshes 4x40 ... 11x110: ny x nx).
+// right-isosceles triangles when L/nx == D/ny (the meshes of Edo (2016): 4x40 ... 11x110, ny x nx).
 // Parameters are overridden from a scene's [geometry.parameters] (gmsh -setnumber).
 DefineConstant[
   L = {10, Name "Parameters/L"},

@@ -1,5 +1,5 @@
 // Cylinder of radius r and height l on the z axis, tetrahedral mesh of size h: the block
-// model of seed Fig. 5.10 (a cylinder turned into 3D blocks). Parameters come from a
+// model of Edo (2016), Fig. 5.10 (a cylinder turned into 3D blocks). Parameters come from a
 // scene's [geometry.parameters].
 SetFactory("OpenCASCADE");
 DefineConstant[

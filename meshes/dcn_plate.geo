@@ -1,9 +1,9 @@
-// Double centre notch plate after Zhu and Tang (seed thesis, section 2.4.5): a square
+// Double centre notch plate after Zhu and Tang (Edo (2016), §2.4.5): a square
 // plate 150 x 150 mm (0 <= x, y <= 150) with two zero-width notches of length c, inclined
 // at alpha degrees to the x axis (counter-clockwise), centred at (75 - s/2, 75) and
 // (75 + s/2, 75). The notches are embedded lines (element edges follow them; nodes on them
 // are shared). Uniform mesh size h; the default gives 17,712 nodes and 34,938 triangles
-// (seed: 17,551 nodes, 34,560 elements).
+// (Edo (2016): 17,551 nodes, 34,560 elements).
 // Units: mm. Parameters come from a scene's [geometry.parameters].
 DefineConstant[
   c = {30, Name "Parameters/c"},

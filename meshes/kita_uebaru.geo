@@ -1,5 +1,5 @@
-// Moving layer of the Kita-Uebaru landslide model (seed 4.3.2, Fig. 4.4-4.5), our profile.
-// The seed gives the slope length (237 m along the ground surface) and the greatest
+// Moving layer of the Kita-Uebaru landslide model (Edo (2016), §4.3.2, Fig. 4.4-4.5), our profile.
+// Edo (2016) gives the slope length (237 m along the ground surface) and the greatest
 // vertical depth of the moving layer (15.8 m) but not the profile; we build it as:
 //   ground surface  a straight slope of `slope` degrees from the crown (0, H) to the toe
 //                   (Lx, 0), Lx = length cos(slope), H = Lx tan(slope);

@@ -1,10 +1,10 @@
-// Plate with 1, 3 or 5 circular holes under uniaxial compression (seed thesis 3.5.2,
+// Plate with 1, 3 or 5 circular holes under uniaxial compression (Edo (2016), §3.5.2,
 // Fig. 3.17-3.18, after Tang et al.): 100 mm wide (0 <= x <= 100) and 200 mm long
-// (0 <= y <= 200), loaded along y. The seed's hole centres and diameters are in its
+// (0 <= y <= 200), loaded along y. The hole centres and diameters of Edo (2016) are in its
 // Fig. 3.17, which the text does not reproduce; ours: a large hole (diameter 20 mm) at
 // the centre, for n = 3 two holes of 12 mm at (30, 60) and (70, 140), for n = 5 also two
 // of 8 mm at (72, 68) and (28, 132) - the holes lie on a diagonal band so that cracks from
-// one can run to the next. Uniform mesh size h (the seed: uniform; 7,197 / 6,112 / 5,521
+// one can run to the next. Uniform mesh size h (Edo (2016): uniform; 7,197 / 6,112 / 5,521
 // nodes). Units: mm. Parameters come from a scene's [geometry.parameters].
 SetFactory("OpenCASCADE");
 DefineConstant[

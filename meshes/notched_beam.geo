@@ -1,14 +1,14 @@
-// Notched three-point beam after Galvez et al. (seed thesis, section 2.4.3): a beam of length
+// Notched three-point beam after Galvez et al. (Edo (2016), §2.4.3): a beam of length
 // 675 mm (-337.5 <= x <= 337.5) and depth 150 mm (0 <= y <= 150), centre x = 0, with a
 // sawn notch of depth a and width w centred on x = 0: a slot in the geometry with free
-// faces (the seed and Galvez et al. do not give the width; 2 mm is assumed); w = 0 gives
+// faces (Edo (2016) and Galvez et al. do not give the width; 2 mm is assumed); w = 0 gives
 // an embedded line instead (see below). A zero-width
 // notch of cracked edges would leave the notch closed: nodes on it are shared, and intact
 // cells touching it only at a vertex tie its two faces together. Point supports on the
 // bottom edge at x = -75 (roller) and x = +300 (pin), point load on the top edge at
 // x = +150. The mesh is refined to h_fine in the box -40 <= x <= 120 (right of the notch,
 // where the crack runs) with a smooth transition to h elsewhere. Defaults give about
-// 7,800 nodes (seed: 7,863).
+// 7,800 nodes (Edo (2016): 7,863).
 // Units: mm. Parameters come from a scene's [geometry.parameters].
 DefineConstant[
   a = {75, Name "Parameters/a"},

@@ -1,10 +1,10 @@
-// Patch test square with an MLS core (seed thesis, section 2.4.2, Fig. 2.9): a square
+// Patch test square with an MLS core (Edo (2016), §2.4.2, Fig. 2.9): a square
 // a x a (a = 5 mm, 0 <= x, y <= a) containing a square core of side b centred at
 // (a/2, a/2) whose four edges are embedded lines, so element edges follow the core
 // boundary and every triangle lies either inside or outside the core. One plane surface
-// ("domain") holds both. Uniform mesh size h. Values of h giving about the seed's node
+// ("domain") holds both. Uniform mesh size h. Values of h giving about Edo (2016)'s node
 // counts (gmsh 4.15, default Frontal-Delaunay algorithm):
-//   seed nodes |   h    | nodes | triangles
+//   Edo (2016) |   h    | nodes | triangles
 //          218 | 0.475  |   214 |       382
 //          526 | 0.26   |   523 |       964
 //        1,028 | 0.182  | 1,029 |     1,944

@@ -1,9 +1,9 @@
-// Plate with a circular hole in uniaxial compression after Tang et al. (seed thesis, section 2.4.4):
+// Plate with a circular hole in uniaxial compression after Tang et al. (Edo (2016), §2.4.4):
 // a plate of width W = 50 mm (0 <= x <= 50) and height H = 170 mm (0 <= y <= 170) with a
 // hole of diameter d = 20 mm centred at (25, 85), loaded on the top edge and supported on
 // the bottom edge. The hole is four quarter arcs whose end points include its top (25, 95)
 // and bottom (25, 75), where cracks initiate. Uniform mesh size h; the default gives
-// 12,887 nodes and 25,196 triangles (seed: 12,933 nodes, 25,448 elements); gmsh also keeps
+// 12,887 nodes and 25,196 triangles (Edo (2016): 12,933 nodes, 25,448 elements); gmsh also keeps
 // a node at the hole centre (the arcs' centre point), which no element uses.
 // Units: mm. Parameters come from a scene's [geometry.parameters].
 DefineConstant[

@@ -1,5 +1,5 @@
 // Square a x a with an unstructured (Delaunay) triangle mesh of size h.
-// Seed patch test (section 2.4.2, Fig. 2.9): a = 5 mm, u = 0.002 x, v = -0.0006 y on the boundary.
+// Patch test of Edo (2016), §2.4.2, Fig. 2.9: a = 5 mm, u = 0.002 x, v = -0.0006 y on the boundary.
 DefineConstant[
   a = {5, Name "Parameters/a"},
   h = {0.5, Name "Parameters/h"}

@@ -28,7 +28,7 @@ from geofrac.bench.args import number_list
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-__all__ = ["SEED_MESHES", "SETUPS", "add_arguments", "int_list", "run"]
+__all__ = ["SETUPS", "THESIS_MESHES", "add_arguments", "int_list", "run"]
 
 _JOBS = Path(__file__).resolve().parents[2] / "jobs"
 
@@ -51,7 +51,7 @@ SETUPS: dict[str, tuple[Path, tuple[int, ...], int, str]] = {
 }
 
 #: Meshes of Edo (2016), §2.4.1: ny (depth) values; nx = 10 ny.
-SEED_MESHES = SETUPS["2.4.1"][1]
+THESIS_MESHES = SETUPS["2.4.1"][1]
 
 
 #: Positive integers from a comma-separated list (an argparse type).

@@ -1,4 +1,4 @@
-"""The cantilever accuracy-cost study on the seed's meshes (seed Fig. 2.8)."""
+"""The cantilever accuracy-cost study on the meshes of Edo (2016) (Fig. 2.8)."""
 
 import json
 
@@ -65,24 +65,24 @@ def _rows(data, element):
     return [r for r in data["records"] if r["element"] == element]
 
 
-def test_convergence_rates_match_the_seed_and_theory(report):
+def test_convergence_rates_match_the_thesis_and_theory(report):
     _, data = report
-    assert 1.9 <= data["rates"]["cst"]["u"] <= 2.1  # seed Fig. 2.8: R = 2.0
+    assert 1.9 <= data["rates"]["cst"]["u"] <= 2.1  # Edo (2016), Fig. 2.8: R = 2.0
     assert data["rates"]["p2"]["u"] >= 2.8
-    assert 0.9 <= data["rates"]["cst"]["energy"] <= 1.1  # seed Fig. 3.11: FEM R = 0.9
+    assert 0.9 <= data["rates"]["cst"]["energy"] <= 1.1  # Edo (2016), Fig. 3.11: FEM R = 0.9
     for cst, p2 in zip(_rows(data, "cst"), _rows(data, "p2"), strict=True):
         assert p2["error_u"] < cst["error_u"]
 
 
-def test_rgnt_and_gnt_acceptance_on_the_seed_meshes(report):
-    """Issue 3: RGNT R >= 1.9 (seed 2.1) and below CST at every seed mesh; GNT beside it."""
+def test_rgnt_and_gnt_acceptance_on_the_thesis_meshes(report):
+    """Issue 3: RGNT R >= 1.9 (Edo (2016): 2.1) and below CST on every mesh; GNT beside it."""
     _, data = report
     assert data["rates"]["rgnt"]["u"] >= 1.9
     cst, rgnt, gnt = (_rows(data, e) for e in ("cst", "rgnt", "gnt"))
     assert [r["mesh"] for r in rgnt] == [r["mesh"] for r in cst]
     for c, r, g in zip(cst, rgnt, gnt, strict=True):
         assert r["error_u"] < 0.2 * c["error_u"]  # measured: 9.5x (4x40) ... 11x (11x110)
-        assert g["error_u"] < r["error_u"]  # the seed's claim (Tian et al. 2006)
+        assert g["error_u"] < r["error_u"]  # the claim of Edo (2016) (Tian et al. 2006)
     # RGNT: 3 DOFs per vertex, GNT: 6; the unknowns are vertex DOFs only
     assert [r["dofs"] for r in rgnt] == [3 * r["nodes"] for r in rgnt]
     assert [r["dofs"] for r in gnt] == [6 * r["nodes"] for r in gnt]

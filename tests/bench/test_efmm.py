@@ -1,4 +1,4 @@
-"""EFMM benches: the seed 3.4.1 cantilever set-up and the q_rand study (Table 3.1)."""
+"""EFMM benches: the cantilever set-up of Edo (2016), §3.4.1, and the q_rand study (Table 3.1)."""
 
 import json
 
@@ -13,7 +13,7 @@ def _run(*args):
     return main(["bench", *args])
 
 
-def test_efmm_selects_the_seed_3_4_1_beam_and_reports_equal_time(tmp_path):
+def test_efmm_selects_the_thesis_3_4_1_beam_and_reports_equal_time(tmp_path):
     out = tmp_path / "b"
     code = _run("cantilever", "--elements", "cst,efmm", "--meshes", "2,4,6", "--repeat", "1",
                 "--out", str(out))  # fmt: skip
@@ -25,7 +25,7 @@ def test_efmm_selects_the_seed_3_4_1_beam_and_reports_equal_time(tmp_path):
     assert [r["nodes"] for r in data["records"][:3]] == [27, 85, 175]
     efmm = [r for r in data["records"] if r["element"] == "efmm"]
     cst = [r for r in data["records"] if r["element"] == "cst"]
-    # seed Fig. 3.10: CST 2.29e-1 at 8x2 (our CST reproduces it); EFMM below CST everywhere
+    # Edo (2016), Fig. 3.10: CST 2.29e-1 at 8x2 (our CST reproduces it); EFMM below CST everywhere
     assert cst[0]["error_u"] == pytest.approx(0.229, rel=5e-3)
     assert all(e["error_u"] < c["error_u"] for e, c in zip(efmm, cst, strict=True))
     same = data["equal_time"]

@@ -14,7 +14,7 @@ from geofrac.pipeline import run_scene
 from geofrac.scene import load_scene
 from tests.conftest import JOBS
 
-# the seed-scale terrain at h = 25 m: a few hundred blocks
+# the terrain at the scale of Edo (2016), h = 25 m: a few hundred blocks
 SMALL_TERRAIN = ["blocks.terrain.h=25", "blocks.terrain.h_immobile=150"]
 
 

@@ -1,4 +1,4 @@
-"""Polygonal blocks from triangles (seed 5.2.2(a), Fig. 5.6-5.8)."""
+"""Polygonal blocks from triangles (Edo (2016), §5.2.2(a), Fig. 5.6-5.8)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Polyhedral blocks from tetrahedra (seed 5.2.2(b)): geometry checked from first principles."""
+"""Polyhedral blocks from tetrahedra (Edo (2016), §5.2.2(b)): geometry from first principles."""
 
 import numpy as np
 import pytest
@@ -41,7 +41,7 @@ def test_one_tetrahedron_gives_four_blocks_of_six_faces_and_a_quarter_volume():
     points = np.array([[0.0, 0, 0], [2, 0, 0], [0, 1, 0], [0.3, 0.2, 1.5]])
     blocks = blocks_3d(points, np.array([[0, 1, 2, 3]]))
     assert blocks.num_blocks == 4
-    np.testing.assert_array_equal(np.diff(blocks.face_offsets), 6)  # seed: 6 faces each
+    np.testing.assert_array_equal(np.diff(blocks.face_offsets), 6)  # Edo (2016): 6 faces each
     volume = _tet_volumes(points, np.array([[0, 1, 2, 3]]))[0]
     np.testing.assert_allclose(_volumes(blocks), volume / 4, rtol=1e-13)
 

@@ -1,4 +1,4 @@
-"""The immobile part as one block (seed 5.3.2), and joining/welding block sets."""
+"""The immobile part as one block (Edo (2016), §5.3.2), and joining/welding block sets."""
 
 import numpy as np
 
@@ -21,7 +21,7 @@ def test_a_box_surface_gives_one_closed_block_of_three_quads_per_triangle():
     points, tris = _box_surface([0, 0, 0], [2, 1, 3])
     block = surface_block(points, tris)
     assert block.num_blocks == 1 and block.kind[0] == 1 and block.ids[0] == -1
-    assert len(block.faces) == 3 * len(tris)  # seed 5.5: three faces per triangle
+    assert len(block.faces) == 3 * len(tris)  # Edo (2016), §5.5: three faces per triangle
     assert abs(q.block_volumes(block)[0] - 6.0) < 1e-12
     assert q.check_closed(block)[0] and q.euler_characteristic(block)[0] == 2
     np.testing.assert_allclose(block.seeds[0], [1, 0.5, 1.5], atol=1e-12)

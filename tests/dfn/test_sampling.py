@@ -1,8 +1,8 @@
 """Fracture sets, samplers and network generation (geofrac.dfn.sampling).
 
 The statistical tests are the acceptance criterion of the DFN generator: with the sets of
-the seed's Table 2.1 (3000 fractures each, power law n = 3.1 on 10-50 mm, 200 × 100 mm),
-the lengths pass a KS test against the truncated power law of seed eq. (2.28) and the
+Table 2.1 of Edo (2016) (3000 fractures each, power law n = 3.1 on 10-50 mm, 200 × 100 mm),
+the lengths pass a KS test against the truncated power law of Edo (2016), eq. (2.28) and the
 orientations' mean and variance are within their 99 % confidence intervals, while
 deliberately wrong laws are rejected. Seeds are fixed, so the outcome is deterministic.
 """
@@ -36,7 +36,7 @@ from geofrac.dfn.stats import (
 )
 
 DOMAIN = rectangle((0.0, 0.0), (200.0, 100.0))
-# seed Table 2.1: (name, mean angle in degrees, variance in deg²)
+# Edo (2016), Table 2.1: (name, mean angle in degrees, variance in deg²)
 TABLE_2_1 = [("set1", 47.473, 60.74), ("set2", 102.753, 57.16), ("set3", 162.830, 57.48)]
 LMIN, LMAX, N_EXP = 10.0, 50.0, 3.1
 COUNT = 3000
@@ -156,7 +156,7 @@ def test_power_law_rejects_bad_parameters():
         power_law_ccdf(1.0, 5.0, 2.0, exponent=3.1)
 
 
-# -------------------------------------------------- acceptance: seed Table 2.1 statistics
+# -------------------------------------------- acceptance: Edo (2016), Table 2.1 statistics
 
 
 @pytest.mark.parametrize("i", range(3))

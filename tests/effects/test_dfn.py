@@ -1,4 +1,4 @@
-"""Effect ``dfn``: scene validation, the seed's models, and a mesh that follows the network."""
+"""Effect ``dfn``: scene validation, the models of Edo (2016), a mesh that follows the network."""
 
 import json
 import math
@@ -19,8 +19,9 @@ from tests.conftest import JOBS
 from tests.conftest import run_and_list_modules as _run_and_list_modules
 
 MODEL1, MODEL2 = JOBS / "dfn_model1.toml", JOBS / "dfn_model2.toml"
-#: A coarse mesh of the seed models for tests (the seed size is geofrac bench dfn), with
-#: the cleaning tolerance of the seed-size mesh (0.84 / 4) so the network is the same.
+#: A coarse mesh of the models of Edo (2016) for tests (their full size is geofrac bench
+#: dfn), with the cleaning tolerance of the full-size mesh (0.84 / 4) so the network is the
+#: same.
 COARSE = ["dfn.mesh_size=3.0", "dfn.tolerance=0.21"]
 
 
@@ -28,7 +29,7 @@ def _config(scene):
     return next(e.config for e in scene.effects if e.name == "dfn")
 
 
-def test_seed_models_declare_table_2_1():
+def test_thesis_models_declare_table_2_1():
     one, two = _config(load_scene(MODEL1)), _config(load_scene(MODEL2))
     table = [(s.mean_deg, s.spread**2) for s in two.sets]
     np.testing.assert_allclose(table, [(47.473, 60.74), (102.753, 57.16), (162.830, 57.48)])

@@ -1,4 +1,4 @@
-"""EFMM numpy reference (seed 3.2): domains tile the mesh, patch test, rigid modes."""
+"""EFMM numpy reference (Edo (2016), §3.2): domains tile the mesh, patch test, rigid modes."""
 
 import numpy as np
 import pytest

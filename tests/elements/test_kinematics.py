@@ -30,7 +30,7 @@ def _p2_nodes(coords, edges):
 
 
 @pytest.mark.parametrize("name", ["rgnt", "gnt", "rgnq"])
-def test_local_map_equals_the_seed_field_at_the_p2_nodes(name):
+def test_local_map_equals_the_thesis_field_at_the_p2_nodes(name):
     """T_loc w gives eq. (2.1)/(2.29)/(2.5) evaluated directly, at every P2 node."""
     kind = KINDS[name]
     gdim, edges = kind.gdim, EDGES[kind.gdim]

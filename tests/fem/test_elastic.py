@@ -36,7 +36,7 @@ def test_p2_tip_deflection_within_one_percent_of_timoshenko():
     assert tip == pytest.approx(exact, rel=1e-2)
 
 
-def test_cst_converges_at_rate_two_on_seed_meshes():
+def test_cst_converges_at_rate_two_on_the_thesis_meshes():
     errs, nodes = [], []
     for ny in (4, 8):
         sol = solve_job(

@@ -3,7 +3,7 @@
 Lamé's thick cylinder (Timoshenko & Goodier, §28) in 2D and 3D; resultants and first
 moments of hydrostatic pressures, expression tractions and body forces; a point load's
 resultant on every 2D element and a cantilever under a point tip load against the
-Timoshenko beam solution (seed eq. 2.24-2.25).
+Timoshenko beam solution (Edo (2016), eq. 2.24-2.25).
 """
 
 from pathlib import Path

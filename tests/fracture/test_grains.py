@@ -1,4 +1,4 @@
-"""Grain interfaces, their crack state and the event loop on EFMM grains (seed 3.3)."""
+"""Grain interfaces, their crack state and the event loop on EFMM grains (Edo (2016), §3.3)."""
 
 import numpy as np
 import pytest

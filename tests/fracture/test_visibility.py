@@ -1,4 +1,4 @@
-"""Visibility of nodes across cracks (the fan of seed Fig. 2.3)."""
+"""Visibility of nodes across cracks (the fan of Edo (2016), Fig. 2.3)."""
 
 import numpy as np
 

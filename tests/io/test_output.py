@@ -40,7 +40,8 @@ def test_xdmf_loads_in_meshio_with_all_fields(quickstart_run):
     assert point_data["displacement"][tip, 1] == pytest.approx(
         summary["results"]["probes"]["tip"][1], rel=1e-10
     )
-    # the shear stress follows the parabola τxy = P/(2I) (D²/4 - y²) (seed eq. 3.31e) near mid-span
+    # the shear stress follows the parabola τxy = P/(2I) (D²/4 - y²) (Edo (2016), eq. 3.31e)
+    # near mid-span
     centres = points[cells[0].data].mean(axis=1)
     near = np.linalg.norm(centres - [5.0, 0.0], axis=1) < 0.2
     exact = 1.0 / (2.0 / 12.0) * (0.25 - centres[near, 1] ** 2)

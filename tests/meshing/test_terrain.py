@@ -1,4 +1,4 @@
-"""Landslide terrain (seed 5.4, eq. 5.1, Fig. 5.23): moving layer of tets + immobile patch."""
+"""Landslide terrain (Edo (2016), §5.4, eq. 5.1, Fig. 5.23): moving tets + immobile patch."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""C-MultiMLSM node field (seed App. C, eqs. 3.12-3.28): numpy reference and C kernel."""
+"""C-MultiMLSM node field (Edo (2016), App. C, eqs. 3.12-3.28): numpy reference and C kernel."""
 
 import warnings
 

@@ -1,4 +1,4 @@
-"""MLS field of a cracked cell (seed eqs. 2.10-2.19)."""
+"""MLS field of a cracked cell (Edo (2016), eqs. 2.10-2.19)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""The seed's bar benchmarks: quasi-static bar (4.5.1), translating bar (4.5.3)."""
+"""The bar benchmarks of Edo (2016): quasi-static bar (4.5.1), translating bar (4.5.3)."""
 
 import numpy as np
 import pytest
@@ -8,7 +8,7 @@ from geofrac.mpm.bar import impact_bar, quasi_static_bar, self_weight_stress
 from geofrac.mpm.schemes import SCHEMES
 from geofrac.mpm.shapes import REGISTRY
 
-# The quadratic B-spline (not a seed shape) misses the 2 % at the fixed base: RMS 0.030
+# The quadratic B-spline (not a shape of Edo (2016)) misses the 2 % at the fixed base: RMS 0.030
 # (MUSL), the error sits in the particles within 1.5 cells of the base (−27 % of ρ₀|b|L₀
 # at the second one; 0.013 RMS without the three particles at each end), where the
 # spline's support crosses the held nodes with no boundary-modified spline. Measured on
@@ -21,7 +21,7 @@ _BASE = pytest.mark.xfail(strict=True, reason="bspline2 has no boundary-modified
     "shape", [pytest.param(s, marks=_BASE) if s == "bspline2" else s for s in REGISTRY]
 )
 def test_quasi_static_bar_matches_eq_4_73_at_W_1000(shape, scheme):
-    """Seed 4.5.1 (Fig. 4.13): RMS stress error over ρ₀|b|L₀ below 2% for every variant."""
+    """Edo (2016), §4.5.1 (Fig. 4.13): RMS stress error over ρ₀|b|L₀ below 2% for every variant."""
     res = quasi_static_bar(shape, scheme, W=1000.0)
     assert res.steps == 500
     assert res.error < 0.02
@@ -39,7 +39,7 @@ def test_self_weight_stress_is_in_equilibrium():
 
 
 def test_translating_bar_stays_finite_over_1e5_steps():
-    """Seed 4.5.3, 1e5 steps (about 224 time units, 9 wall hits): no NaN.
+    """Edo (2016), §4.5.3, 1e5 steps (about 224 time units, 9 wall hits): no NaN.
 
     Point-particle MPM with MLS smoothing: the variant whose energy drifts most.
     """
@@ -53,7 +53,7 @@ def test_translating_bar_stays_finite_over_1e5_steps():
 @pytest.mark.parametrize("scheme", SCHEMES)
 @pytest.mark.parametrize("shape", REGISTRY)
 def test_impact_bar_carries_the_stress_of_eq_4_75_behind_the_wave(shape, scheme):
-    """Seed 4.5.2: behind the front the mean stress is −E v₀/c (within 3 %), ahead ~0."""
+    """Edo (2016), §4.5.2: behind the front the mean stress is −E v₀/c (within 3 %), ahead ~0."""
     res = impact_bar(shape, scheme)
     behind, ahead = res.x0 < 35.0, res.x0 > 45.0
     assert np.mean(res.stress[behind]) == pytest.approx(1.0, abs=0.03)

@@ -132,10 +132,10 @@ def test_the_stored_work_is_the_hypoelastic_bars_energy_at_the_impact():
 
 
 def test_consistent_smoothing_makes_the_grid_work_the_stress_work():
-    """The adjoint forces' work is the smoothed increments' stress work; the seed's is not.
+    """The adjoint forces' work is the smoothed increments' stress work; Edo (2016)'s is not.
 
     Forces from the V-weighted adjoint of the MLS operator Φ: −Δt Σ f_int·v =
-    Σ V σ : (Φ Δε(v)) for any σ and v; the seed's forces (from σ) do not satisfy it.
+    Σ V σ : (Φ Δε(v)) for any σ and v; the forces of Edo (2016) (from σ) do not satisfy it.
     """
     from geofrac.mpm.consistent import mls_operator
     from geofrac.mpm.shapes import UGIMP, weights

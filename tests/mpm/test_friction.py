@@ -1,4 +1,4 @@
-"""Contact and Coulomb friction on boundary nodes (seed eqs. 4.44-4.47), against closed forms.
+"""Contact and Coulomb friction on boundary nodes (Edo (2016), eqs. 4.44-4.47) vs closed forms.
 
 A rigid block on a plane inclined at θ with Coulomb coefficient μ sticks when μ > tan θ
 and otherwise accelerates at g (sin θ − μ cos θ); launched at v₀ on a level floor it

@@ -1,4 +1,4 @@
-"""Drucker-Prager return mapping and the Jaumann rate (seed 4.39-4.43, D.30-D.31)."""
+"""Drucker-Prager return mapping and the Jaumann rate (Edo (2016), eqs. 4.39-4.43, D.30-D.31)."""
 
 import numpy as np
 import pytest
@@ -67,7 +67,7 @@ def _spin_to_quarter_turn(steps: int) -> np.ndarray:
     """σ₀ carried through a rigid rotation by 90° about z in ``steps`` Jaumann updates."""
     s = np.array([[[3.0, 1.0, 0.0], [1.0, -2.0, 0.0], [0.0, 0.0, 0.5]]])
     w = (np.pi / 2) / steps
-    # v = ω × x: ∂v_x/∂y = −w Δt, ∂v_y/∂x = w Δt per step; the seed's Δω (D.31)
+    # v = ω × x: ∂v_x/∂y = −w Δt, ∂v_y/∂x = w Δt per step; the Δω of Edo (2016) (D.31)
     dw = np.array([[[0.0, w, 0.0], [-w, 0.0, 0.0], [0.0, 0.0, 0.0]]])
     for _ in range(steps):
         s = rotate_stress(s, dw)

@@ -1,4 +1,4 @@
-"""MLS smoothing of strain increments (seed eqs. 4.50-4.58)."""
+"""MLS smoothing of strain increments (Edo (2016), eqs. 4.50-4.58)."""
 
 from pathlib import Path
 
