@@ -140,6 +140,9 @@ class PlasticProblem:
         self.V, self.law, self.mesh = V, law, V.mesh
         self.comm: MPI.Comm = V.mesh.comm
         qdeg = 2 * (degree - 1)
+        self._qdeg = qdeg
+        self._yielded: dolfinx.fem.Function | None = None
+        self._area: dolfinx.fem.Form | None = None
         cell = self.mesh.basix_cell()
         self.dx = ufl.Measure(
             "dx",
@@ -229,6 +232,23 @@ class PlasticProblem:
         dev = ep - np.trace(ep, axis1=1, axis2=2)[:, None, None] / 3 * np.eye(3)
         return np.sqrt(2.0 / 3.0 * np.sum(dev * dev, axis=(1, 2)))
 
+    def plastic_points(self) -> int:
+        """Owned quadrature points (all ranks) with accumulated plastic strain."""
+        owned = self.eps.function_space.dofmap.index_map.size_local
+        local = int(np.count_nonzero(self.plastic_shear_strain()[:owned] > 0.0))
+        return int(self.comm.allreduce(local, op=MPI.SUM))
+
+    def yielded_area(self) -> float:
+        """∫ 1[the point has yielded] dx over the mesh (all ranks), with the solver's rule."""
+        if self._yielded is None:
+            cell = self.mesh.basix_cell()
+            element = basix.ufl.quadrature_element(cell, value_shape=(), degree=self._qdeg)
+            self._yielded = dolfinx.fem.Function(dolfinx.fem.functionspace(self.mesh, element))
+            self._area = dolfinx.fem.form(self._yielded * self.dx)
+        self._yielded.x.array[:] = self.plastic_shear_strain() > 0.0
+        local = dolfinx.fem.assemble_scalar(self._area)
+        return float(self.comm.allreduce(local, op=MPI.SUM))
+
     def solve_steps(
         self,
         steps: int,
@@ -269,13 +289,11 @@ class PlasticProblem:
             self.u.x.array[:] = u_saved
             self.factor.value = done
             self._update()
+            stop = cuts >= max_cuts
             if progress and self.comm.rank == 0:
-                print(
-                    f"plastic: factor {target:.4f} diverged ({report.reason_name}), "
-                    f"cut {cuts + 1}/{max_cuts}",
-                    flush=True,
-                )
-            if cuts >= max_cuts:
+                what = "giving up" if stop else f"cut {cuts + 1}/{max_cuts}"
+                print(f"plastic: factor {target:.4f} diverged ({report.reason_name}), {what}")
+            if stop:
                 return PlasticResult(False, done, "step_too_small", records, self._monitor(monitor))
             inc, cuts = inc / 2, cuts + 1
         return PlasticResult(True, 1.0, "converged", records, self._monitor(monitor))

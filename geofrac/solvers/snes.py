@@ -5,7 +5,8 @@ the unknown u (a :class:`dolfinx.fem.Function`) and an ``update`` callback run e
 u changes, before F or J is assembled (the return mapping at quadrature points of an
 elasto-plastic solve). Dirichlet conditions are imposed on the increment (residual
 entries u − g, rows of J replaced by the identity). Defaults: ``newtonls`` with the
-backtracking line search (``bt``), ``preonly`` + LU from MUMPS (the tangent of a
+secant line search on ||F||² (``l2``; ``bt`` stops at the first iteration of a plastic
+step started from a converged state on the yield surface, measured DIVERGED_LINE_SEARCH), ``preonly`` + LU from MUMPS (the tangent of a
 non-associated law is not symmetric), under the solver's own options prefix; user
 options are applied after and then removed from the global database. Every residual norm
 is recorded (the SNES monitor) and the converged reason is returned with its name; the
@@ -95,7 +96,7 @@ class NewtonSolver:
         self.prefix = prefix
         self.options = {
             "snes_type": "newtonls",
-            "snes_linesearch_type": "bt",
+            "snes_linesearch_type": "l2",
             "ksp_type": "preonly",
             "pc_type": "lu",
             "pc_factor_mat_solver_type": "mumps",
@@ -165,6 +166,15 @@ class NewtonSolver:
             raise RunError(f"Newton solver '{self.prefix}' failed ({exc})") from None
         self._set_u(self.x)
         reason = int(self.snes.getConvergedReason())
+        ksp = self.snes.getKSP()
+        self.linear_failure = ""
+        if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
+            pc = ksp.getPC()
+            self.linear_failure = f"KSP reason {ksp.getConvergedReason()}, PC {pc.getFailedReason()}"
+            if pc.getType() == "lu" and pc.getFactorSolverType() == "mumps":
+                factor = pc.getFactorMatrix()
+                self.linear_failure += f", MUMPS INFOG(1) {factor.getMumpsInfog(1)}"
+            pc.reset()  # a failed factorisation is not reused by the next solve
         if reason > 0 and not np.isfinite(self.x.norm()):
             reason = int(PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN)
         return NewtonReport(

@@ -80,3 +80,8 @@ def plastic_radius(problem: PlasticProblem) -> float:
     yielded = problem.plastic_shear_strain()[:owned] > 0.0
     local = float(r[:owned][yielded].max()) if yielded.any() else 0.0
     return float(problem.comm.allreduce(local, op=MPI.MAX))
+
+
+def plastic_radius_from_area(problem: PlasticProblem, a: float) -> float:
+    """ρ from the yielded area of the quarter ring, π/4 (ρ² − a²) (all ranks)."""
+    return float(np.sqrt(a * a + 4.0 * problem.yielded_area() / np.pi))
