@@ -116,8 +116,9 @@ class PlasticProblem:
         external: (load factor constant, test function) → the external work form at that
             factor (e.g. tractions that move from their initial to final values).
         bcs: Dirichlet conditions (held through the steps).
-        initial_stress: σ₀, shape=(3, 3), the stress at u = 0 (in equilibrium with the
-            external loads at factor 0), or None for zero.
+        initial_stress: σ₀ at u = 0 (in equilibrium with the external loads at factor
+            0): a constant array, shape=(3, 3), a 3×3 UFL tensor (interpolated at the
+            quadrature points; :mod:`geofrac.fem.insitu`'s field), or None for zero.
         prefix: PETSc options prefix of the Newton solver.
         options: user PETSc options (without prefix).
     """
@@ -129,7 +130,7 @@ class PlasticProblem:
         external: Callable[[dolfinx.fem.Constant, Any], ufl.Form],
         *,
         bcs: Sequence[dolfinx.fem.DirichletBC] = (),
-        initial_stress: np.ndarray | None = None,
+        initial_stress: Any = None,
         prefix: str = "geofrac_plastic_",
         options: dict[str, str] | None = None,
         atol: float = 1e-10,
@@ -168,9 +169,8 @@ class PlasticProblem:
             Qe.element.interpolation_points,
         )
         n = self.eps.x.array.size // 3
-        sigma0 = np.zeros((3, 3)) if initial_stress is None else np.asarray(initial_stress)
         #: converged stress σₙ and strain εₙ at every local quadrature point, shape=(n, 3, 3).
-        self.stress_n = np.broadcast_to(sigma0, (n, 3, 3)).copy()
+        self.stress_n = self._initial(initial_stress, n, cell, qdeg)
         self.strain_n = np.zeros((n, 3, 3))
         #: accumulated plastic strain, shape=(n, 3, 3).
         self.plastic_strain = np.zeros((n, 3, 3))
@@ -200,6 +200,20 @@ class PlasticProblem:
             rtol=rtol,
             max_it=max_it,
         )
+
+    def _initial(self, initial_stress: Any, n: int, cell: Any, qdeg: int) -> np.ndarray:
+        """σ₀ at every local quadrature point, shape=(n, 3, 3), from a constant (3, 3)
+        array, a 3×3 UFL tensor (e.g. the in-situ field) or None (zero)."""
+        if initial_stress is None:
+            return np.zeros((n, 3, 3))
+        if isinstance(initial_stress, np.ndarray):
+            return np.broadcast_to(initial_stress, (n, 3, 3)).copy()
+        element = basix.ufl.quadrature_element(cell, value_shape=(9,), degree=qdeg)
+        Q9 = dolfinx.fem.functionspace(self.mesh, element)
+        field = dolfinx.fem.Function(Q9)
+        flat = ufl.as_vector([initial_stress[i, j] for i in range(3) for j in range(3)])
+        field.interpolate(dolfinx.fem.Expression(flat, Q9.element.interpolation_points))
+        return field.x.array.reshape(n, 3, 3).copy()
 
     def _update(self) -> None:
         """Return-map every quadrature point at the current u; fill stress and tangent."""
@@ -254,10 +268,12 @@ class PlasticProblem:
         steps: int,
         *,
         max_cuts: int = 4,
-        progress: bool = False,
+        say: Callable[[str], None] | None = None,
         monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None = None,
     ) -> PlasticResult:
         """Load factor 0 → 1 in ``steps`` increments, halving a diverged increment.
+
+        ``say`` receives one line per attempted step (the caller prints on rank 0).
 
         Returns:
             the result; ``converged = False`` with the last converged factor when an
@@ -276,13 +292,12 @@ class PlasticProblem:
                 plastic = self._commit()
                 records.append(StepRecord(target, report, True, plastic))
                 done, cuts = target, 0
-                if progress and self.comm.rank == 0:
+                if say is not None:
                     eta = (time.perf_counter() - t0) * (1.0 - done) / done
-                    print(
+                    say(
                         f"plastic: factor {done:.4f} converged ({report.reason_name}, "
                         f"{report.iterations} its, |F| {report.residuals[-1]:.2e}), "
-                        f"{plastic} plastic points, ETA {eta:.1f} s",
-                        flush=True,
+                        f"{plastic} plastic points, ETA {eta:.1f} s"
                     )
                 continue
             records.append(StepRecord(target, report, False, 0))
@@ -290,9 +305,9 @@ class PlasticProblem:
             self.factor.value = done
             self._update()
             stop = cuts >= max_cuts
-            if progress and self.comm.rank == 0:
+            if say is not None:
                 what = "giving up" if stop else f"cut {cuts + 1}/{max_cuts}"
-                print(f"plastic: factor {target:.4f} diverged ({report.reason_name}), {what}")
+                say(f"plastic: factor {target:.4f} diverged ({report.reason_name}), {what}")
             if stop:
                 return PlasticResult(False, done, "step_too_small", records, self._monitor(monitor))
             inc, cuts = inc / 2, cuts + 1
