@@ -70,7 +70,9 @@ class MohrCoulombOpening:
         if not 0.0 < self.a < self.b:
             raise ValueError(f"needs 0 < a < b, got a = {self.a!r}, b = {self.b!r}")
         if not 0.0 < self.friction_angle < 90.0:
-            raise ValueError(f"friction_angle must be in (0, 90) degrees, got {self.friction_angle}")
+            raise ValueError(
+                f"friction_angle must be in (0, 90) degrees, got {self.friction_angle}"
+            )
         if not 0.0 <= self.dilatancy_angle <= self.friction_angle:
             raise ValueError("dilatancy_angle must be in [0, friction_angle]")
         if not 0.0 <= self.pi <= self.p0:

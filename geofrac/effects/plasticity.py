@@ -134,7 +134,7 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
             ctx.file, "plasticity", "the FEM elasto-plastic solver is plane strain (2D) only"
         )
     if ctx.material.plane != "strain":
-        raise SceneError(ctx.file, "material.plane", "plasticity needs plane = \"strain\"")
+        raise SceneError(ctx.file, "material.plane", 'plasticity needs plane = "strain"')
     if ctx.element not in FEM_ELEMENTS:
         raise SceneError(
             ctx.file,
@@ -149,20 +149,20 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
     law = t.string("law", choices=LAWS, default="mohr_coulomb")
     match = t.string("match", choices=MATCHES, default="plane_strain")
     if law == "mohr_coulomb" and t.has("match"):
-        raise t.error("match", "is Drucker-Prager's (law = \"drucker_prager\")")
+        raise t.error("match", 'is Drucker-Prager\'s (law = "drucker_prager")')
     if law == "mohr_coulomb" and phi == 0 and c == 0:
         raise t.error("cohesion", "must be > 0 when friction_angle = 0")
     cutoff = None
     if t.has("tension_cutoff"):
         if law != "mohr_coulomb":
-            raise t.error("tension_cutoff", "is Mohr-Coulomb's (law = \"mohr_coulomb\")")
+            raise t.error("tension_cutoff", 'is Mohr-Coulomb\'s (law = "mohr_coulomb")')
         cutoff = float(t.number("tension_cutoff", minimum=0.0))  # type: ignore[arg-type]
         limit = math.inf if phi == 0 else c / math.tan(math.radians(phi))
         if cutoff > limit:
             raise t.error("tension_cutoff", f"must be <= c cot(phi) = {limit:.6g}, got {cutoff}")
-    steps = int(t.number("load_steps", default=10, integer=True, minimum=1, maximum=100_000))  # type: ignore[arg-type]
-    cuts = int(t.number("max_cuts", default=4, integer=True, minimum=0, maximum=30))  # type: ignore[arg-type]
-    its = int(t.number("max_iterations", default=25, integer=True, minimum=1, maximum=1000))  # type: ignore[arg-type]
+    steps = int(t.number("load_steps", default=10, integer=True, minimum=1, maximum=100_000))
+    cuts = int(t.number("max_cuts", default=4, integer=True, minimum=0, maximum=30))
+    its = int(t.number("max_iterations", default=25, integer=True, minimum=1, maximum=1000))
     return PlasticityConfig(phi, c, psi, law, match, cutoff, steps, cuts, its)
 
 

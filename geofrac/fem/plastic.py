@@ -202,8 +202,10 @@ class PlasticProblem:
         )
 
     def _initial(self, initial_stress: Any, n: int, cell: Any, qdeg: int) -> np.ndarray:
-        """σ₀ at every local quadrature point, shape=(n, 3, 3), from a constant (3, 3)
-        array, a 3×3 UFL tensor (e.g. the in-situ field) or None (zero)."""
+        """σ₀ at every local quadrature point, shape=(n, 3, 3).
+
+        From a constant (3, 3) array, a 3×3 UFL tensor (e.g. the in-situ field) or None (zero).
+        """
         if initial_stress is None:
             return np.zeros((n, 3, 3))
         if isinstance(initial_stress, np.ndarray):
@@ -227,6 +229,7 @@ class PlasticProblem:
         st = self.sig.x.array.reshape(-1, 4)
         for k, (i, j) in enumerate(STRESS_2D):
             st[:, k] = ret.stress[:, i, j]
+        assert ret.tangent is not None  # asked for
         D = to_voigt(ret.tangent)[:, VOIGT_2D][:, :, VOIGT_2D]
         self.tan.x.array[:] = D.reshape(-1)
 

@@ -56,8 +56,10 @@ def make_law(config: PlasticityConfig, *, E: float, nu: float) -> Law:
 
 
 def _external(problem: Any) -> Callable[[Any, Any], Any]:
-    """(λ, v) → the external work: the effects' terms and σ0·n of the loaded sides held,
-    the scene's loads times λ."""
+    """(λ, v) → the external work.
+
+    The effects' terms and σ0·n of the loaded sides held, the scene's loads times λ.
+    """
     scene = problem.scene
 
     def external(factor: Any, v: Any) -> Any:

@@ -6,8 +6,9 @@ u changes, before F or J is assembled (the return mapping at quadrature points o
 elasto-plastic solve). Dirichlet conditions are imposed on the increment (residual
 entries u − g, rows of J replaced by the identity). Defaults: ``newtonls`` with the
 secant line search on ||F||² (``l2``; ``bt`` stops at the first iteration of a plastic
-step started from a converged state on the yield surface, measured DIVERGED_LINE_SEARCH), ``preonly`` + LU from MUMPS (the tangent of a
-non-associated law is not symmetric), under the solver's own options prefix; user
+step started from a converged state on the yield surface, measured
+DIVERGED_LINE_SEARCH), ``preonly`` + LU from MUMPS (the tangent of a non-associated law
+is not symmetric), under the solver's own options prefix; user
 options are applied after and then removed from the global database. Every residual norm
 is recorded (the SNES monitor) and the converged reason is returned with its name; the
 caller decides what a negative reason means (never a silent result).
@@ -170,7 +171,9 @@ class NewtonSolver:
         self.linear_failure = ""
         if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
             pc = ksp.getPC()
-            self.linear_failure = f"KSP reason {ksp.getConvergedReason()}, PC {pc.getFailedReason()}"
+            self.linear_failure = (
+                f"KSP reason {ksp.getConvergedReason()}, PC {pc.getFailedReason()}"
+            )
             if pc.getType() == "lu" and pc.getFactorSolverType() == "mumps":
                 factor = pc.getFactorMatrix()
                 self.linear_failure += f", MUMPS INFOG(1) {factor.getMumpsInfog(1)}"

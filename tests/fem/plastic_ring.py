@@ -71,8 +71,10 @@ def wall_displacement(u: dolfinx.fem.Function, a: float) -> float:
 
 
 def plastic_radius(problem: PlasticProblem) -> float:
-    """The largest radius of a quadrature point that yielded in the last committed step
-    (all ranks), from the accumulated plastic strain."""
+    """The largest radius of a yielded quadrature point (all ranks).
+
+    From the accumulated plastic strain.
+    """
     Q = problem.eps.function_space
     x = Q.tabulate_dof_coordinates()
     r = np.hypot(x[:, 0], x[:, 1])

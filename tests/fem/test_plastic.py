@@ -66,9 +66,13 @@ def test_opening_against_salencon(psi: float, h: float) -> None:
 
 
 def _plastic_step_residuals(**kw: object) -> list[float]:
-    """SNES residual norms of the first load step past the elastic ones (psi = 0, h = 0.2),
-    converged or not."""
-    problem = ring_problem(ring_mesh(MPI.COMM_WORLD, a=A, b=B, h=0.2), _law(0.0), p0=P0, pi=PI, **kw)
+    """SNES residual norms of the first load step past the elastic ones.
+
+    psi = 0, h = 0.2, converged or not.
+    """
+    problem = ring_problem(
+        ring_mesh(MPI.COMM_WORLD, a=A, b=B, h=0.2), _law(0.0), p0=P0, pi=PI, **kw
+    )
     try:
         result = problem.solve_steps(5, max_cuts=0)
     finally:
@@ -79,9 +83,12 @@ def _plastic_step_residuals(**kw: object) -> list[float]:
 
 
 def test_newton_converges_quadratically() -> None:
-    """The consistent tangent: e_{k+1} <= 10 e_k² on the last two iterations above the
-    round-off floor (e = r/r0 > 1e-12; measured e = 1, 0.56, 0.21, 2.2e-2, 1.1e-4, 1.7e-9,
-    7.7e-14: ratios 0.23, 0.15), and converged in at most 10 iterations."""
+    """The consistent tangent: e_{k+1} <= 10 e_k² (e = r/r0).
+
+    On the last two iterations above the round-off floor (e > 1e-12; measured e = 1,
+    0.56, 0.21, 2.2e-2, 1.1e-4, 1.7e-9, 7.7e-14: ratios 0.23, 0.15), and converged in
+    at most 10 iterations.
+    """
     r = np.array(_plastic_step_residuals())
     e = r / r[0]
     assert e[-1] < 1e-10
@@ -92,8 +99,11 @@ def test_newton_converges_quadratically() -> None:
 
 
 def test_non_convergent_step_is_reported() -> None:
-    """An inner tension above the apex c cot(phi) has no equilibrium: the run ends with
-    converged = False at the last converged factor, each failed step with its reason."""
+    """An inner tension above the apex c cot(phi) has no equilibrium.
+
+    The run ends with converged = False at the last converged factor, each failed step
+    with its reason.
+    """
     tagged = ring_mesh(MPI.COMM_WORLD, a=A, b=B, h=0.3)
     problem = ring_problem(tagged, _law(0.0), p0=P0, pi=-5.0, max_it=15)
     try:
@@ -110,9 +120,11 @@ def test_non_convergent_step_is_reported() -> None:
 
 
 def _linear_elastic(tagged, V, bcs, *, p0: float, pi: float) -> np.ndarray:  # type: ignore[no-untyped-def]
-    """The linear elastic solve of the same ring (geofrac_forms' stiffness, geofrac's
-    direct LinearSolver, the same quadrature degree 2): K u = f(pi) − f(p0), the load
-    change from the uniform state."""
+    """The linear elastic solve of the same ring.
+
+    geofrac_forms' stiffness, geofrac's direct LinearSolver, the same quadrature degree
+    2: K u = f(pi) − f(p0), the load change from the uniform state.
+    """
     from geofrac.materials import lame
     from geofrac_forms import elasticity as forms
 
@@ -129,7 +141,13 @@ def _linear_elastic(tagged, V, bcs, *, p0: float, pi: float) -> np.ndarray:  # t
     b = assemble_vector(L, (a, bcs))
     set_bc(b, bcs)
     uh = dolfinx.fem.Function(V)
-    solver = LinearSolver(Amat, "test_plastic_elastic_", "direct", options={}, num_dofs=V.dofmap.index_map.size_global * 2)
+    solver = LinearSolver(
+        Amat,
+        "test_plastic_elastic_",
+        "direct",
+        options={},
+        num_dofs=V.dofmap.index_map.size_global * 2,
+    )
     try:
         solver.solve(b, uh.x.petsc_vec)
     finally:
@@ -142,7 +160,7 @@ def _linear_elastic(tagged, V, bcs, *, p0: float, pi: float) -> np.ndarray:  # t
 
 @pytest.mark.parametrize("law", ["mohr_coulomb", "drucker_prager"])
 def test_huge_cohesion_equals_linear_elastic(law: str) -> None:
-    """c = 1e8: no point yields and u equals the linear elastic solver's to 1e-10."""
+    """C = 1e8: no point yields and u equals the linear elastic solver's to 1e-10."""
     tagged = ring_mesh(MPI.COMM_WORLD, a=A, b=B, h=0.3)
     strong = (
         _law(0.0, cohesion=1e8)

@@ -15,8 +15,11 @@ JOB = JOBS / "opening_mohr_coulomb.toml"
 
 
 def test_scene_opening_against_salencon() -> None:
-    """The scene (initial stress -p0 I, loaded sides, wall suction p0 - pi ramped) gives the
-    closed-form wall displacement within 2 % (measured -0.28 % at h = 0.2)."""
+    """The scene gives the closed-form wall displacement.
+
+    Initial stress -p0 I, loaded sides, wall suction p0 - pi ramped; within 2 %
+    (measured -0.28 % at h = 0.2).
+    """
     exact = MohrCoulombOpening(
         a=1.0, b=10.0, p0=10.0, pi=1.0, E=1e4, nu=0.3, cohesion=1.0, friction_angle=30.0
     )

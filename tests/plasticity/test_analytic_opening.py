@@ -26,7 +26,7 @@ def test_elastic_limit_is_lame() -> None:
 
 
 def test_critical_pressure_and_salencon_radius() -> None:
-    """b → ∞: yield starts at p_cr = (2p₀ − σ_c)/(1 + K_p); ρ is Salençon's formula."""
+    """B → ∞: yield starts at p_cr = (2p₀ − σ_c)/(1 + K_p); ρ is Salençon's formula."""
     kp = 3.0  # φ = 30°
     sc = 2 * math.cos(math.pi / 6) / (1 - 0.5)
     pcr = (2 * 10.0 - sc) / (1 + kp)
@@ -55,7 +55,9 @@ def test_fields_solve_equilibrium_yield_and_flow(psi: float) -> None:
     assert op.stresses(np.array([20.0]))[0][0] == pytest.approx(10.0, rel=1e-12)
     # continuity of u at ρ and the flow rule εᵖ_r + K_ψ εᵖ_θ = 0 in the plastic zone
     h = 1e-6
-    assert op.radial_displacement(rho - h) == pytest.approx(op.radial_displacement(rho + h), rel=1e-5)
+    assert op.radial_displacement(rho - h) == pytest.approx(
+        op.radial_displacement(rho + h), rel=1e-5
+    )
     E, nu = 1e4, 0.3
     for s in (1.2, 0.5 * (1 + rho)):
         du = (op.radial_displacement(s + h) - op.radial_displacement(s - h)) / (2 * h)
