@@ -51,6 +51,7 @@ __all__ = [
     "PlasticityConfig",
     "configure",
     "driver",
+    "make_law",
 ]
 
 #: Methods this effect serves.
@@ -172,4 +173,36 @@ def driver(
     """FEM scenes: the elasto-plastic load-stepped solve replaces the elastic one."""
     from geofrac.fem.plastic_driver import run
 
-    return run(config, solution, say)
+    mat = solution.scene.material
+    law = make_law(config, E=mat.E, nu=mat.nu)
+    return run(
+        law,
+        solution,
+        say,
+        steps=config.load_steps,
+        max_cuts=config.max_cuts,
+        max_iterations=config.max_iterations,
+    )
+
+
+def make_law(config: PlasticityConfig, *, E: float, nu: float) -> Any:
+    """The :mod:`geofrac.plasticity` law of a validated FEM ``[plasticity]`` table."""
+    from geofrac.plasticity import DruckerPrager, MohrCoulomb
+
+    if config.law == "mohr_coulomb":
+        return MohrCoulomb(
+            E=E,
+            nu=nu,
+            cohesion=config.cohesion,
+            friction_angle=config.friction_angle,
+            dilatancy_angle=config.dilatancy_angle,
+            tension=config.tension_cutoff,
+        )
+    return DruckerPrager(
+        E=E,
+        nu=nu,
+        cohesion=config.cohesion,
+        friction_angle=config.friction_angle,
+        dilatancy_angle=config.dilatancy_angle,
+        match=config.match,
+    )

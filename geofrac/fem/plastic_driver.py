@@ -1,8 +1,8 @@
 """The ``plasticity`` effect's loop for FEM scenes: the elasto-plastic load-stepped solve.
 
 Builds :class:`geofrac.fem.plastic.PlasticProblem` on the scene's set-up elastic problem
-(its P2 space, Dirichlet conditions and load forms), with the law of the validated
-``[plasticity]`` table. The load factor λ goes 0 → 1: the scene's ``[[load]]`` entries
+(its P2 space, Dirichlet conditions and load forms), with the law the effect built from
+its validated ``[plasticity]`` table. The load factor λ goes 0 → 1: the scene's ``[[load]]`` entries
 are scaled by λ; the effects' terms (gravity) and, with ``[initial_stress]``, the
 ``loaded`` sides' σ0·n act in full from the start, the initial stress σ0 being the
 starting stress at the quadrature points (it must balance them: the initial state of
@@ -16,7 +16,7 @@ of the last converged factor (never of the failed one).
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -25,34 +25,9 @@ import ufl
 from geofrac.fem.insitu import in_plane
 from geofrac.fem.plastic import Law, PlasticProblem
 from geofrac.fem.solution import Solution
-from geofrac.plasticity import DruckerPrager, MohrCoulomb
 from geofrac_forms import elasticity as forms
 
-if TYPE_CHECKING:
-    from geofrac.effects.plasticity import PlasticityConfig
-
-__all__ = ["make_law", "run"]
-
-
-def make_law(config: PlasticityConfig, *, E: float, nu: float) -> Law:
-    """The law of a validated ``[plasticity]`` table."""
-    if config.law == "mohr_coulomb":
-        return MohrCoulomb(
-            E=E,
-            nu=nu,
-            cohesion=config.cohesion,
-            friction_angle=config.friction_angle,
-            dilatancy_angle=config.dilatancy_angle,
-            tension=config.tension_cutoff,
-        )
-    return DruckerPrager(
-        E=E,
-        nu=nu,
-        cohesion=config.cohesion,
-        friction_angle=config.friction_angle,
-        dilatancy_angle=config.dilatancy_angle,
-        match=config.match,
-    )
+__all__ = ["run"]
 
 
 def _external(problem: Any) -> Callable[[Any, Any], Any]:
@@ -81,12 +56,17 @@ def _external(problem: Any) -> Callable[[Any, Any], Any]:
     return external
 
 
-def run(config: PlasticityConfig, solution: Solution, say: Callable[[str], None]) -> dict[str, Any]:
-    """Solve; copy the displacement into the elastic problem's ``uh``; the results."""
+def run(
+    law: Law,
+    solution: Solution,
+    say: Callable[[str], None],
+    *,
+    steps: int,
+    max_cuts: int,
+    max_iterations: int,
+) -> dict[str, Any]:
+    """Solve ``steps`` load increments; copy u into the elastic problem's ``uh``; the results."""
     problem = solution.problem
-    mat = solution.scene.material
-    assert mat is not None
-    law = make_law(config, E=mat.E, nu=mat.nu)
     sigma0 = None if problem.insitu is None else problem.insitu.sigma0
     plastic = PlasticProblem(
         problem.element.space,
@@ -96,23 +76,23 @@ def run(config: PlasticityConfig, solution: Solution, say: Callable[[str], None]
         initial_stress=sigma0,
         prefix="geofrac_plastic_",
         options=dict(solution.scene.solver.options),
-        max_it=config.max_iterations,
+        max_it=max_iterations,
     )
     talk = say if solution.tagged.mesh.comm.rank == 0 else None
     try:
-        result = plastic.solve_steps(config.load_steps, max_cuts=config.max_cuts, say=talk)
+        result = plastic.solve_steps(steps, max_cuts=max_cuts, say=talk)
         problem.uh.x.array[:] = plastic.u.x.array
         if not result.converged:
             say(
                 f"plastic: NOT CONVERGED: the increment beyond factor {result.factor:.4f} "
-                f"diverged after {config.max_cuts} halvings; the fields are those of the "
+                f"diverged after {max_cuts} halvings; the fields are those of the "
                 "last converged factor"
             )
         return {
             "converged": result.converged,
             "end_reason": result.end_reason,
             "factor": result.factor,
-            "law": config.law,
+            "law": type(law).__name__,
             "plastic_points": plastic.plastic_points(),
             "yielded_area": plastic.yielded_area(),
             "steps": [
