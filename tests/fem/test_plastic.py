@@ -18,6 +18,8 @@ phi = 30 degrees. Measured (docs/plasticity.md, h the wall mesh size, 5 load ste
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import dolfinx_solver  # noqa: F401
 
 import dolfinx
@@ -28,7 +30,7 @@ from mpi4py import MPI
 
 from geofrac.analytic_plastic import MohrCoulombOpening
 from geofrac.errors import RunError
-from geofrac.fem.plastic import PlasticProblem
+from geofrac.fem.plastic import PlasticProblem, solve_plastic
 from geofrac.plasticity import DruckerPrager, MohrCoulomb
 from geofrac.solvers import LinearSolver, assemble_matrix, assemble_vector, set_bc
 from tests.fem.plastic_ring import (
@@ -233,3 +235,31 @@ def test_two_ranks_equal_one() -> None:
     gap_area = world.allreduce(abs(area2 - area1) / area1, op=MPI.MAX)
     assert gap_u <= 1e-9 and gap_area <= 1e-9
     assert world.allreduce(int(n2 != n1), op=MPI.SUM) == 0
+
+
+def test_solve_plastic_for_strength_reduction() -> None:
+    """The entry point strength reduction will call.
+
+    The full strength converges with the monitor displacement; c and tan(phi) divided by
+    10 cannot hold p0 (the ring's limit outer pressure (pi + A)(b/a)^(K_p - 1) - A = 1.87
+    < p0 = 10) and is reported so.
+    """
+    tagged = ring_mesh(MPI.COMM_WORLD, a=A, b=B, h=0.3)
+
+    def factory(law: MohrCoulomb) -> PlasticProblem:
+        return ring_problem(tagged, law, p0=P0, pi=PI, max_it=15)
+
+    def monitor(u: dolfinx.fem.Function) -> np.ndarray:
+        return np.array([wall_displacement(u, A)])
+
+    strong = solve_plastic(factory, _law(0.0), steps=5, monitor=monitor)
+    assert strong.converged and strong.monitor is not None
+    exact = MohrCoulombOpening(
+        a=A, b=B, p0=P0, pi=PI, E=E, nu=NU, cohesion=C, friction_angle=PHI
+    ).wall_displacement
+    assert strong.monitor[0] == pytest.approx(exact, rel=0.05)  # h = 0.3: a coarse mesh
+    weak_phi = float(np.degrees(np.arctan(np.tan(np.radians(PHI)) / 10.0)))
+    weak = replace(_law(0.0), cohesion=C / 10.0, friction_angle=weak_phi)
+    result = solve_plastic(factory, weak, steps=2, monitor=monitor, max_cuts=1)
+    assert not result.converged and result.end_reason == "step_too_small"
+    assert result.factor < 1.0 and result.monitor is not None
