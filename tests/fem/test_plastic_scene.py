@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from geofrac.analytic_plastic import MohrCoulombOpening
@@ -76,3 +77,34 @@ def test_stages_refused_with_plasticity(tmp_path: Path) -> None:
     path.write_text(text + '\n[[stages]]\nname = "x"\nrelaxation = 0.5\n')
     with pytest.raises(SceneError, match="does not run construction stages"):
         load_scene(path)
+
+
+def test_huge_cohesion_scene_equals_the_elastic_scene(tmp_path: Path) -> None:
+    """With c = 1e8 the plastic scene equals the same scene without the effect.
+
+    The elastic initial-stress solve of docs/insitu.md, with the same quadrature degree 2,
+    to 1e-10 of max |u| (measured 7e-15).
+    """
+    from mpi4py import MPI
+
+    from geofrac.runner import solve_scene
+
+    geo = (JOB.parent / "../meshes/quarter_ring.geo").resolve()
+    text = JOB.read_text().replace('"../meshes/quarter_ring.geo"', f'"{geo}"')
+    elastic = text[: text.index("[plasticity]")] + text[text.index("[[load]]") :]
+    path = tmp_path / "elastic.toml"
+    path.write_text(elastic.replace('effects = ["plasticity"]', "effects = []"))
+    degree = ["discretization.quadrature_degree=2"]
+    strong = [*degree, "plasticity.cohesion=1e8", "plasticity.load_steps=1"]
+    comm = MPI.COMM_WORLD
+    el = solve_scene(load_scene(path, degree), comm, verbose=False)
+    pl = solve_scene(load_scene(JOB, strong), comm, verbose=False)
+    try:
+        assert pl.results["plasticity"]["plastic_points"] == 0
+        u_el, u_pl = el.problem.uh.x.array, pl.problem.uh.x.array
+        scale = comm.allreduce(float(np.abs(u_el).max()), op=MPI.MAX)
+        gap = comm.allreduce(float(np.abs(u_el - u_pl).max()), op=MPI.MAX)
+    finally:
+        el.problem.destroy()
+        pl.problem.destroy()
+    assert gap <= 1e-10 * scale
