@@ -1,4 +1,8 @@
-"""Effect ``plasticity``: Drucker-Prager perfect plasticity of MPM particles (Edo (2016), §4.3.2).
+"""Effect ``plasticity``: perfect plasticity of MPM particles and of the finite-element solve.
+
+MPM (Edo (2016), §4.3.2): Drucker-Prager of the particles. FEM: an elasto-plastic static
+solve (Mohr-Coulomb with tension cut-off or Drucker-Prager, plane strain, P2) that replaces
+the single elastic solve: :func:`driver` runs :mod:`geofrac.fem.plastic` (docs/plasticity.md).
 
 Yield function f = β I₁ + √J₂ − k (eqs. 4.39-4.43) with return mapping, the Jaumann rate
 (D.30-D.31) applied before each increment: the model :mod:`geofrac.mpm.plasticity` (registry
@@ -12,10 +16,23 @@ Scene table ``[plasticity]``:
   Edo (2016) sweeps 8 ... 25);
 - ``cohesion``: c >= 0 (default 0, the rain-softened landslide of Edo (2016));
 - ``dilatancy_angle``: ψ in degrees, 0 <= ψ <= φ (default 0: no plastic volume change).
+
+FEM scenes only (refused in MPM scenes, whose law is Drucker-Prager with the plane-strain
+match):
+
+- ``law``: ``"mohr_coulomb"`` (default) or ``"drucker_prager"``;
+- ``match``: Drucker-Prager's match to Mohr-Coulomb, ``plane_strain`` (default),
+  ``outer`` or ``inner``;
+- ``tension_cutoff``: Mohr-Coulomb's tension cut-off T, 0 <= T <= c cot φ (default: none);
+- ``load_steps``: equal increments of the load factor 0 → 1 (default 10);
+- ``max_cuts``: halvings of a diverged increment before the run ends (default 4);
+- ``max_iterations``: Newton iterations per increment (default 25).
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,12 +40,43 @@ from geofrac.effects import ConfigureContext
 from geofrac.model.errors import SceneError
 from geofrac.model.table import Table
 
-__all__ = ["KEYS", "MAX_COHESION", "METHODS", "PlasticityConfig", "configure"]
+__all__ = [
+    "FEM_ELEMENTS",
+    "FEM_KEYS",
+    "KEYS",
+    "LAWS",
+    "MATCHES",
+    "MAX_COHESION",
+    "METHODS",
+    "PlasticityConfig",
+    "configure",
+    "driver",
+    "make_law",
+]
 
 #: Methods this effect serves.
-METHODS = ("mpm",)
-#: Keys of ``[plasticity]``.
-KEYS = ("friction_angle", "cohesion", "dilatancy_angle")
+METHODS = ("mpm", "fem")
+#: Keys of ``[plasticity]`` (the last six for FEM scenes only).
+KEYS = (
+    "friction_angle",
+    "cohesion",
+    "dilatancy_angle",
+    "law",
+    "match",
+    "tension_cutoff",
+    "load_steps",
+    "max_cuts",
+    "max_iterations",
+)
+#: The FEM-only keys.
+FEM_KEYS = KEYS[3:]
+#: Laws a FEM scene may name.
+LAWS = ("mohr_coulomb", "drucker_prager")
+#: Drucker-Prager matches.
+MATCHES = ("plane_strain", "outer", "inner")
+#: Elements the FEM solver is valid for (P1 locks under plastic flow at psi = 0; the
+#: enriched and gradient elements have no quadrature-point stress update).
+FEM_ELEMENTS = ("p2",)
 #: Largest cohesion (stress units; the bound of ``material.E``).
 MAX_COHESION = 1e15
 
@@ -41,11 +89,23 @@ class PlasticityConfig:
         friction_angle: φ in degrees.
         cohesion: c.
         dilatancy_angle: ψ in degrees.
+        law: ``mohr_coulomb`` or ``drucker_prager`` (MPM: always the latter).
+        match: Drucker-Prager's match (FEM).
+        tension_cutoff: Mohr-Coulomb's T, or None (FEM).
+        load_steps: load increments (FEM).
+        max_cuts: halvings of a diverged increment (FEM).
+        max_iterations: Newton iterations per increment (FEM).
     """
 
     friction_angle: float
     cohesion: float
     dilatancy_angle: float
+    law: str = "drucker_prager"
+    match: str = "plane_strain"
+    tension_cutoff: float | None = None
+    load_steps: int = 10
+    max_cuts: int = 4
+    max_iterations: int = 25
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
@@ -60,4 +120,89 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
     psi = float(t.number("dilatancy_angle", default=0.0))
     if not 0 <= psi <= phi:
         raise t.error("dilatancy_angle", f"must lie in [0, friction_angle = {phi}], got {psi}")
-    return PlasticityConfig(phi, c, psi)
+    if ctx.method == "mpm":
+        for key in FEM_KEYS:
+            if t.has(key):
+                raise t.error(key, "applies to FEM scenes only (MPM's law is Drucker-Prager)")
+        return PlasticityConfig(phi, c, psi)
+    return _fem(t, ctx, phi, c, psi)
+
+
+def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> PlasticityConfig:
+    """The FEM keys, and what the elasto-plastic solver needs of the scene."""
+    if ctx.gdim != 2:
+        raise SceneError(
+            ctx.file, "plasticity", "the FEM elasto-plastic solver is plane strain (2D) only"
+        )
+    if ctx.material.plane != "strain":
+        raise SceneError(ctx.file, "material.plane", 'plasticity needs plane = "strain"')
+    if ctx.element not in FEM_ELEMENTS:
+        raise SceneError(
+            ctx.file,
+            "discretization.element",
+            f"plasticity needs one of {', '.join(FEM_ELEMENTS)}: '{ctx.element}' has no "
+            "quadrature-point stress update (P1/cst locks under plastic flow at psi = 0)",
+        )
+    if ctx.material.thickness != 1.0:
+        raise SceneError(ctx.file, "material.thickness", "plasticity solves per unit thickness (1)")
+    if any(load.type == "point" for load in ctx.loads):
+        raise SceneError(ctx.file, "load", "plasticity does not take point loads")
+    law = t.string("law", choices=LAWS, default="mohr_coulomb")
+    match = t.string("match", choices=MATCHES, default="plane_strain")
+    if law == "mohr_coulomb" and t.has("match"):
+        raise t.error("match", 'is Drucker-Prager\'s (law = "drucker_prager")')
+    if law == "mohr_coulomb" and phi == 0 and c == 0:
+        raise t.error("cohesion", "must be > 0 when friction_angle = 0")
+    cutoff = None
+    if t.has("tension_cutoff"):
+        if law != "mohr_coulomb":
+            raise t.error("tension_cutoff", 'is Mohr-Coulomb\'s (law = "mohr_coulomb")')
+        cutoff = float(t.number("tension_cutoff", minimum=0.0))  # type: ignore[arg-type]
+        limit = math.inf if phi == 0 else c / math.tan(math.radians(phi))
+        if cutoff > limit:
+            raise t.error("tension_cutoff", f"must be <= c cot(phi) = {limit:.6g}, got {cutoff}")
+    steps = int(t.number("load_steps", default=10, integer=True, minimum=1, maximum=100_000))
+    cuts = int(t.number("max_cuts", default=4, integer=True, minimum=0, maximum=30))
+    its = int(t.number("max_iterations", default=25, integer=True, minimum=1, maximum=1000))
+    return PlasticityConfig(phi, c, psi, law, match, cutoff, steps, cuts, its)
+
+
+def driver(
+    config: PlasticityConfig, solution: Any, say: Callable[[str], None], *, write: bool
+) -> dict[str, Any]:
+    """FEM scenes: the elasto-plastic load-stepped solve replaces the elastic one."""
+    from geofrac.fem.plastic_driver import run
+
+    mat = solution.scene.material
+    law = make_law(config, E=mat.E, nu=mat.nu)
+    return run(
+        law,
+        solution,
+        say,
+        steps=config.load_steps,
+        max_cuts=config.max_cuts,
+        max_iterations=config.max_iterations,
+    )
+
+
+def make_law(config: PlasticityConfig, *, E: float, nu: float) -> Any:
+    """The :mod:`geofrac.plasticity` law of a validated FEM ``[plasticity]`` table."""
+    from geofrac.plasticity import DruckerPrager, MohrCoulomb
+
+    if config.law == "mohr_coulomb":
+        return MohrCoulomb(
+            E=E,
+            nu=nu,
+            cohesion=config.cohesion,
+            friction_angle=config.friction_angle,
+            dilatancy_angle=config.dilatancy_angle,
+            tension=config.tension_cutoff,
+        )
+    return DruckerPrager(
+        E=E,
+        nu=nu,
+        cohesion=config.cohesion,
+        friction_angle=config.friction_angle,
+        dilatancy_angle=config.dilatancy_angle,
+        match=config.match,
+    )

@@ -1,0 +1,204 @@
+"""Newton's method through PETSc SNES for a residual and Jacobian given as DOLFINx forms.
+
+The caller supplies the compiled residual form F(u; v) and Jacobian form J(u; du, v),
+the unknown u (a :class:`dolfinx.fem.Function`) and an ``update`` callback run each time
+u changes, before F or J is assembled (the return mapping at quadrature points of an
+elasto-plastic solve). Dirichlet conditions are imposed on the increment (residual
+entries u − g, rows of J replaced by the identity). Defaults: ``newtonls`` with the
+secant line search on ||F||² (``l2``; ``bt`` stops at the first iteration of a plastic
+step started from a converged state on the yield surface, measured
+DIVERGED_LINE_SEARCH), ``preonly`` + LU from MUMPS (the tangent of a non-associated law
+is not symmetric), under the solver's own options prefix; user
+options are applied after and then removed from the global database. Every residual norm
+is recorded (the SNES monitor) and the converged reason is returned with its name; the
+caller decides what a negative reason means (never a silent result).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+import dolfinx.fem.petsc
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from geofrac.errors import RunError
+
+__all__ = ["NewtonReport", "NewtonSolver", "snes_reason_name"]
+
+
+def snes_reason_name(reason: int) -> str:
+    """PETSc's name of a ``SNESConvergedReason`` code (e.g. ``DIVERGED_MAX_IT``)."""
+    for name in dir(PETSc.SNES.ConvergedReason):
+        if not name.startswith("_") and getattr(PETSc.SNES.ConvergedReason, name) == reason:
+            return str(name)
+    return str(reason)
+
+
+@dataclass
+class NewtonReport:
+    """What one Newton solve did.
+
+    Attributes:
+        reason: the ``SNESConvergedReason`` (> 0 converged, < 0 diverged).
+        reason_name: its PETSc name.
+        iterations: Newton iterations taken.
+        residuals: ||F|| before each iteration and at the end (the SNES monitor),
+            shape=(iterations + 1,).
+    """
+
+    reason: int
+    reason_name: str
+    iterations: int
+    residuals: list[float] = field(default_factory=list)
+
+    @property
+    def converged(self) -> bool:
+        """Whether SNES reported convergence."""
+        return self.reason > 0
+
+
+class NewtonSolver:
+    """A SNES on the residual form ``F`` and Jacobian form ``J`` of the unknown ``u``.
+
+    Args:
+        F: compiled residual form (rank 1).
+        J: compiled Jacobian form (rank 2).
+        u: the unknown; its values are the initial guess and the result.
+        bcs: Dirichlet conditions (their values are the target of u).
+        update: called with u updated (ghosts included) before each F or J assembly.
+        prefix: PETSc options prefix, e.g. ``"geofrac_plastic_"``.
+        options: user options (without prefix), applied after the defaults.
+        atol: absolute tolerance on ||F||.
+        rtol: relative tolerance on ||F|| / ||F₀||.
+        max_it: the most Newton iterations.
+    """
+
+    def __init__(
+        self,
+        F: dolfinx.fem.Form,
+        J: dolfinx.fem.Form,
+        u: dolfinx.fem.Function,
+        *,
+        bcs: Sequence[dolfinx.fem.DirichletBC],
+        update: Callable[[], None],
+        prefix: str,
+        options: dict[str, str] | None = None,
+        atol: float = 1e-10,
+        rtol: float = 1e-9,
+        max_it: int = 25,
+    ) -> None:
+        self.F, self.J, self.u, self.bcs, self.update = F, J, u, list(bcs), update
+        self.prefix = prefix
+        self.options = {
+            "snes_type": "newtonls",
+            "snes_linesearch_type": "l2",
+            "ksp_type": "preonly",
+            "pc_type": "lu",
+            "pc_factor_mat_solver_type": "mumps",
+        }
+        self.options.update(options or {})
+        self.residuals: list[float] = []
+        self._last: np.ndarray | None = None
+        self.A = dolfinx.fem.petsc.create_matrix(J)
+        self.b = dolfinx.fem.petsc.create_vector(u.function_space)
+        self.x = dolfinx.fem.petsc.create_vector(u.function_space)
+        self.snes = PETSc.SNES().create(u.function_space.mesh.comm)
+        self.snes.setOptionsPrefix(prefix)
+        self.snes.setFunction(self._residual, self.b)
+        self.snes.setJacobian(self._jacobian, self.A)
+        self.snes.setTolerances(atol=atol, rtol=rtol, stol=0.0, max_it=max_it)
+        self.snes.setMonitor(lambda _snes, _it, norm: self.residuals.append(float(norm)))
+        db = PETSc.Options()
+        for k, v in self.options.items():
+            db[f"{prefix}{k}"] = v
+        try:
+            self.snes.setFromOptions()
+        except PETSc.Error as exc:
+            raise RunError(f"Newton solver '{prefix}' set-up failed ({exc})") from None
+        finally:
+            for k in self.options:
+                db.delValue(f"{prefix}{k}")
+
+    def _set_u(self, x: PETSc.Vec) -> None:
+        """Copy x into u and run ``update`` unless u already holds x."""
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        local = x.getArray(readonly=True)
+        same = self._last is not None and np.array_equal(local, self._last)
+        if self.u.function_space.mesh.comm.allreduce(same, op=MPI.LAND):
+            return
+        x.copy(self.u.x.petsc_vec)
+        self.u.x.scatter_forward()
+        self.update()
+        self._last = np.array(local, copy=True)
+
+    def _residual(self, _snes: PETSc.SNES, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        self._set_u(x)
+        with b.localForm() as local:
+            local.set(0.0)
+        dolfinx.fem.petsc.assemble_vector(b, self.F)
+        dolfinx.fem.petsc.apply_lifting(b, [self.J], [self.bcs], x0=[x], alpha=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
+
+    def _jacobian(self, _snes: PETSc.SNES, x: PETSc.Vec, A: PETSc.Mat, _P: PETSc.Mat) -> None:
+        self._set_u(x)
+        A.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(A, self.J, bcs=self.bcs)
+        A.assemble()
+
+    def solve(self) -> NewtonReport:
+        """Newton from the current u; u holds the last iterate whatever the reason.
+
+        Raises:
+            RunError: PETSc raised (e.g. a singular factorisation).
+        """
+        self.residuals = []
+        self._last = None
+        self.u.x.petsc_vec.copy(self.x)
+        try:
+            self.snes.solve(None, self.x)
+        except PETSc.Error as exc:
+            raise RunError(f"Newton solver '{self.prefix}' failed ({exc})") from None
+        self._set_u(self.x)
+        reason = int(self.snes.getConvergedReason())
+        ksp = self.snes.getKSP()
+        self.linear_failure = ""
+        if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
+            pc = ksp.getPC()
+            self.linear_failure = (
+                f"KSP reason {ksp.getConvergedReason()}, PC {pc.getFailedReason()}"
+            )
+            if pc.getType() == "lu" and pc.getFactorSolverType() == "mumps":
+                factor = pc.getFactorMatrix()
+                self.linear_failure += f", MUMPS INFOG(1) {factor.getMumpsInfog(1)}"
+            pc.reset()  # a failed factorisation is not reused by the next solve
+        if reason > 0 and not np.isfinite(self.x.norm()):
+            reason = int(PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN)
+        return NewtonReport(
+            reason, snes_reason_name(reason), int(self.snes.getIterationNumber()), self.residuals
+        )
+
+    def describe(self) -> dict[str, object]:
+        """Prefix, SNES, line search, KSP and PC types (for summary.json)."""
+        ksp = self.snes.getKSP()
+        return {
+            "prefix": self.prefix,
+            "snes_type": self.snes.getType(),
+            "linesearch": self.snes.getLineSearch().getType(),
+            "ksp_type": ksp.getType(),
+            "pc_type": ksp.getPC().getType(),
+            "options": dict(self.options),
+        }
+
+    def destroy(self) -> None:
+        """Free the SNES, matrix and vectors."""
+        self.snes.destroy()
+        self.A.destroy()
+        self.b.destroy()
+        self.x.destroy()
