@@ -35,8 +35,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from geofrac.materials import bulk_shear
-from geofrac.plasticity.elasticity import compliance, elastic_tangent, elastic_trial
+from geofrac.plasticity.elasticity import ElasticTrial, compliance, elastic_tangent
 from geofrac.plasticity.invariants import deviator, first_invariant, sqrt_j2
 from geofrac.plasticity.returns import APEX, SMOOTH, Return
 
@@ -71,7 +70,7 @@ def yield_function(stress: np.ndarray, beta: float, k: float) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class DruckerPrager:
+class DruckerPrager(ElasticTrial):
     """Drucker-Prager material (isotropic elasticity, perfect plasticity).
 
     Attributes:
@@ -122,22 +121,9 @@ class DruckerPrager:
         """β_ψ of the plastic potential (the match with ψ)."""
         return cone_constants(self.dilatancy_angle, 0.0, self.match)[0]
 
-    def moduli(self) -> tuple[float, float]:
-        """(bulk modulus K, shear modulus G) (:func:`geofrac.materials.bulk_shear`)."""
-        return bulk_shear(self.E, self.nu)
-
     def yield_function(self, stress: np.ndarray) -> np.ndarray:
         """f(σ), shape=(n, 3, 3) → shape=(n,)."""
         return yield_function(stress, self.beta, self.k)
-
-    def trial(self, stress: np.ndarray, deps: np.ndarray) -> np.ndarray:
-        """The elastic trial σ + C:Δε, shapes=(n, 3, 3) → shape=(n, 3, 3)."""
-        K, G = self.moduli()
-        return elastic_trial(stress, deps, K=K, G=G)
-
-    def update(self, stress: np.ndarray, deps: np.ndarray, *, tangent: bool = False) -> Return:
-        """Elastic trial and return for strain increments, shapes=(n, 3, 3)."""
-        return self.return_map(self.trial(stress, deps), tangent=tangent)
 
     def return_map(self, trial: np.ndarray, *, tangent: bool = False) -> Return:
         """Return mapping of elastic trial stresses (the module docstring).

@@ -10,8 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from geofrac.materials import bulk_shear
+from geofrac.plasticity.returns import Return
+
 __all__ = [
     "VOIGT",
+    "ElasticTrial",
     "compliance",
     "elastic_tangent",
     "elastic_trial",
@@ -70,3 +74,31 @@ def to_voigt(tangent: np.ndarray) -> np.ndarray:
     rows = [i for i, _ in VOIGT]
     cols = [j for _, j in VOIGT]
     return tangent[:, rows, cols][:, :, rows, cols]
+
+
+class ElasticTrial:
+    """The elastic part that every law shares: its moduli, the trial, the update.
+
+    A law (a frozen dataclass with ``E`` and ``nu``) inherits these and implements
+    :meth:`return_map`.
+    """
+
+    E: float
+    nu: float
+
+    def moduli(self) -> tuple[float, float]:
+        """(bulk modulus K, shear modulus G) (:func:`geofrac.materials.bulk_shear`)."""
+        return bulk_shear(self.E, self.nu)
+
+    def trial(self, stress: np.ndarray, deps: np.ndarray) -> np.ndarray:
+        """The elastic trial σ + C:Δε, shapes=(n, 3, 3) → shape=(n, 3, 3)."""
+        K, G = self.moduli()
+        return elastic_trial(stress, deps, K=K, G=G)
+
+    def update(self, stress: np.ndarray, deps: np.ndarray, *, tangent: bool = False) -> Return:
+        """Elastic trial and return for strain increments, shapes=(n, 3, 3)."""
+        return self.return_map(self.trial(stress, deps), tangent=tangent)
+
+    def return_map(self, trial: np.ndarray, *, tangent: bool = False) -> Return:
+        """Return mapping of elastic trial stresses, shape=(n, 3, 3) (the law's own)."""
+        raise NotImplementedError

@@ -45,8 +45,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from geofrac.materials import bulk_shear
-from geofrac.plasticity.elasticity import compliance, elastic_trial
+from geofrac.plasticity.elasticity import ElasticTrial, compliance
 from geofrac.plasticity.invariants import principal
 from geofrac.plasticity.returns import (
     APEX,
@@ -77,7 +76,7 @@ CANDIDATES = (
 
 
 @dataclass(frozen=True)
-class MohrCoulomb:
+class MohrCoulomb(ElasticTrial):
     """Mohr-Coulomb material with a tension cut-off (isotropic elasticity, perfect plasticity).
 
     Attributes:
@@ -123,10 +122,6 @@ class MohrCoulomb:
                 f"tension must lie in [0, c cot phi = {self.apex_stress()}], got {self.tension}"
             )
 
-    def moduli(self) -> tuple[float, float]:
-        """(bulk modulus K, shear modulus G) (:func:`geofrac.materials.bulk_shear`)."""
-        return bulk_shear(self.E, self.nu)
-
     def apex_stress(self) -> float:
         """The apex stress c cot φ, the hydrostatic stress of the apex (inf for φ = 0)."""
         if self.friction_angle == 0:
@@ -170,15 +165,6 @@ class MohrCoulomb:
         if self.tension is not None:
             f = np.maximum(f, p[:, 0] - self.tension)
         return f
-
-    def trial(self, stress: np.ndarray, deps: np.ndarray) -> np.ndarray:
-        """The elastic trial σ + C:Δε, shapes=(n, 3, 3) → shape=(n, 3, 3)."""
-        K, G = self.moduli()
-        return elastic_trial(stress, deps, K=K, G=G)
-
-    def update(self, stress: np.ndarray, deps: np.ndarray, *, tangent: bool = False) -> Return:
-        """Elastic trial and return for strain increments, shapes=(n, 3, 3)."""
-        return self.return_map(self.trial(stress, deps), tangent=tangent)
 
     def return_map(self, trial: np.ndarray, *, tangent: bool = False) -> Return:
         """Return mapping of elastic trial stresses (the module docstring).
