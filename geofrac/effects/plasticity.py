@@ -237,6 +237,7 @@ def driver(
             solution,
             say,
             config.strength_reduction,
+            write=write,
             steps=config.load_steps,
             max_cuts=config.max_cuts,
             max_iterations=config.max_iterations,

@@ -143,6 +143,7 @@ def run_reduction(
     say: Callable[[str], None],
     config: Any,
     *,
+    write: bool,
     steps: int,
     max_cuts: int,
     max_iterations: int,
@@ -150,7 +151,9 @@ def run_reduction(
     """The factor of safety (``config``: the effect's ``StrengthReductionConfig``).
 
     Bisection on F, then the last stable F re-solved: its displacement copied into the
-    elastic problem's ``uh`` (probes, XDMF), its plastic zone in the results.
+    elastic problem's ``uh`` (probes, XDMF), its plastic zone in the results. With
+    ``write``, rank 0 draws ``strength_reduction.png`` (monitor |u| against F) into
+    ``output.dir``.
     """
     problem = solution.problem
     ramp = problem.insitu is None
@@ -193,6 +196,32 @@ def run_reduction(
         )
     finally:
         plastic.destroy()
+    if write and problem.mesh.comm.rank == 0:
+        _plot(result, solution)
     if not out["last_stable"]["converged"]:  # type: ignore[index]
         say("strength reduction: WARNING: the last stable factor did not converge when re-solved")
     return out
+
+
+def _plot(result: Any, solution: Solution) -> None:
+    """``strength_reduction.png``: the monitor |u| of every trial against F."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    scene = solution.scene
+    rows = sorted((t.factor, t.monitor, t.stable) for t in result.trials if t.monitor is not None)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for ok, mark, label in ((True, "o", "stable"), (False, "x", "failed (last converged load)")):
+        pts = [(f, m) for f, m, s in rows if s == ok]
+        if pts:
+            ax.plot(*zip(*pts, strict=True), mark, label=label)
+    ax.axvline(result.factor_of_safety, color="k", lw=0.8, ls="--", label="factor of safety")
+    ax.set_xlabel("trial factor F")
+    ax.set_ylabel(f"monitor |u| ({scene.units.length})")
+    ax.set_title(f"{scene.name}: FoS {result.factor_of_safety:.3f}")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(scene.output.dir / "strength_reduction.png", dpi=90)
+    plt.close(fig)
