@@ -236,7 +236,7 @@ def driver(
             law,
             solution,
             say,
-            config.strength_reduction,
+            config=config.strength_reduction,
             write=write,
             steps=config.load_steps,
             max_cuts=config.max_cuts,
