@@ -91,6 +91,8 @@ class Trial:
         monitor: |u| at the monitor point at the end of the trial, or None.
         iterations: Newton iterations of all attempted increments.
         seconds: wall time of the trial.
+        diverged: PETSc reason name → count, over the rejected increments (e.g.
+            DIVERGED_MAX_IT, DIVERGED_LINEAR_SOLVE: which way Newton failed).
     """
 
     factor: float
@@ -100,6 +102,7 @@ class Trial:
     monitor: float | None
     iterations: int
     seconds: float
+    diverged: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass
@@ -128,7 +131,7 @@ class ReductionResult:
             "stable": self.bracket.stable,
             "failed": self.bracket.failed,
             "tolerance": self.tolerance,
-            "trials": [vars(t).copy() for t in self.trials],
+            "trials": [dict(vars(t)) for t in self.trials],
         }
 
 
@@ -162,6 +165,10 @@ def factor_of_safety(
             max_cuts=max_cuts,
         )
         its = sum(s.report.iterations for s in result.steps)
+        diverged: dict[str, int] = {}
+        for s in result.steps:
+            if not s.accepted:
+                diverged[s.report.reason_name] = diverged.get(s.report.reason_name, 0) + 1
         u = None if result.monitor is None else float(np.linalg.norm(result.monitor))
         trial = Trial(
             factor,
@@ -171,11 +178,14 @@ def factor_of_safety(
             u,
             its,
             time.perf_counter() - t0,
+            diverged,
         )
         trials.append(trial)
         if say is not None:
             state = "stable" if trial.stable else f"FAILED at load factor {result.factor:.4f}"
             shown = "" if u is None else f", monitor |u| {u:.4e}"
+            if diverged:
+                shown += ", rejected: " + ", ".join(f"{k} x{v}" for k, v in diverged.items())
             say(
                 f"strength reduction: F = {factor:.4f} {state} ({its} Newton its{shown}, "
                 f"{trial.seconds:.1f} s)"
