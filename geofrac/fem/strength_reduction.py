@@ -26,6 +26,7 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
+from geofrac.errors import RunError
 from geofrac.fem.plastic import Law, PlasticProblem, solve_plastic
 from geofrac.plasticity.strength_reduction import Bracket, bisect_factor, reduce_strength
 
@@ -44,7 +45,7 @@ Monitor = Callable[[dolfinx.fem.Function], np.ndarray]
 def point_monitor(point: Sequence[float]) -> Monitor:
     """The monitor u ↦ u(``point``) at (x, y), shape=(gdim,), the same on every rank.
 
-    Raises ValueError (on every rank) when the point is outside the mesh.
+    Raises RunError (on every rank) when the point is outside the mesh.
     """
 
     def monitor(u: dolfinx.fem.Function) -> np.ndarray:
@@ -62,9 +63,7 @@ def point_monitor(point: Sequence[float]) -> Monitor:
         total = mesh.comm.allreduce(value, op=MPI.SUM)
         found = mesh.comm.allreduce(count, op=MPI.SUM)
         if found == 0:
-            raise ValueError(
-                f"strength reduction: the monitor point {list(point)} is outside the mesh"
-            )
+            raise RunError(f"plasticity.reduction_monitor: {list(point)} is outside the mesh")
         return np.asarray(total / found)
 
     return monitor

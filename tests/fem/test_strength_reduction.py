@@ -199,3 +199,17 @@ def test_griffiths_lane_slope_fine(algorithm: int) -> None:
     )
     assert result.bracket.width <= 0.01
     assert result.factor_of_safety == pytest.approx(FOS_GL, rel=REL)
+
+
+def test_monitor_outside_the_mesh_is_refused() -> None:
+    """A monitor point off the slope stops the run with the key named (every rank)."""
+    from geofrac.errors import RunError
+    from geofrac.fem.strength_reduction import point_monitor
+
+    tagged = slope_mesh(MPI.COMM_WORLD, h=2.0)
+    problem = slope_problem(tagged, slope_law())
+    try:
+        with pytest.raises(RunError, match="reduction_monitor"):
+            point_monitor((-5.0, 8.0))(problem.u)  # above the toe: in the air
+    finally:
+        problem.destroy()
