@@ -26,7 +26,16 @@ match):
 - ``tension_cutoff``: Mohr-Coulomb's tension cut-off T, 0 <= T <= c cot φ (default: none);
 - ``load_steps``: equal increments of the load factor 0 → 1 (default 10);
 - ``max_cuts``: halvings of a diverged increment before the run ends (default 4);
-- ``max_iterations``: Newton iterations per increment (default 25).
+- ``max_iterations``: Newton iterations per increment (default 25);
+- ``strength_reduction``: true: the factor of safety by shear strength reduction
+  (:mod:`geofrac.fem.strength_reduction`) instead of one solve at full strength
+  (default false); then also
+- ``reduction_tolerance``: the bracket width [stable, failed] to stop at, 0 < tol <= 1
+  (default 0.01);
+- ``reduction_bracket``: [low, high], the first stable and failed trial factors,
+  0 < low < high (default [1.0, 2.0]; moved down/up when they are not);
+- ``reduction_monitor``: [x, y], the point whose |u| is the second failure indicator
+  (default: the largest nodal |u|).
 """
 
 from __future__ import annotations
@@ -48,7 +57,9 @@ __all__ = [
     "MATCHES",
     "MAX_COHESION",
     "METHODS",
+    "REDUCTION_KEYS",
     "PlasticityConfig",
+    "StrengthReductionConfig",
     "configure",
     "driver",
     "make_law",
@@ -67,9 +78,15 @@ KEYS = (
     "load_steps",
     "max_cuts",
     "max_iterations",
+    "strength_reduction",
+    "reduction_tolerance",
+    "reduction_bracket",
+    "reduction_monitor",
 )
 #: The FEM-only keys.
 FEM_KEYS = KEYS[3:]
+#: The keys that need ``strength_reduction = true``.
+REDUCTION_KEYS = KEYS[-3:]
 #: Laws a FEM scene may name.
 LAWS = ("mohr_coulomb", "drucker_prager")
 #: Drucker-Prager matches.
@@ -79,6 +96,23 @@ MATCHES = ("plane_strain", "outer", "inner")
 FEM_ELEMENTS = ("p2",)
 #: Largest cohesion (stress units; the bound of ``material.E``).
 MAX_COHESION = 1e15
+
+
+@dataclass(frozen=True)
+class StrengthReductionConfig:
+    """Validated strength-reduction settings.
+
+    Attributes:
+        tolerance: the bracket width to stop at.
+        low: the first trial factor expected stable.
+        high: the first trial factor expected failed.
+        monitor: the monitor point (x, y), or None for the largest nodal |u|.
+    """
+
+    tolerance: float = 0.01
+    low: float = 1.0
+    high: float = 2.0
+    monitor: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -95,6 +129,7 @@ class PlasticityConfig:
         load_steps: load increments (FEM).
         max_cuts: halvings of a diverged increment (FEM).
         max_iterations: Newton iterations per increment (FEM).
+        strength_reduction: the factor of safety's settings, or None (FEM).
     """
 
     friction_angle: float
@@ -106,6 +141,7 @@ class PlasticityConfig:
     load_steps: int = 10
     max_cuts: int = 4
     max_iterations: int = 25
+    strength_reduction: StrengthReductionConfig | None = None
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
@@ -164,7 +200,25 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
     steps = int(t.number("load_steps", default=10, integer=True, minimum=1, maximum=100_000))
     cuts = int(t.number("max_cuts", default=4, integer=True, minimum=0, maximum=30))
     its = int(t.number("max_iterations", default=25, integer=True, minimum=1, maximum=1000))
-    return PlasticityConfig(phi, c, psi, law, match, cutoff, steps, cuts, its)
+    reduction = _reduction(t, ctx)
+    return PlasticityConfig(phi, c, psi, law, match, cutoff, steps, cuts, its, reduction)
+
+
+def _reduction(t: Table, ctx: ConfigureContext) -> StrengthReductionConfig | None:
+    """The strength-reduction keys (only with ``strength_reduction = true``)."""
+    if not t.boolean("strength_reduction", default=False):
+        for key in REDUCTION_KEYS:
+            if t.has(key):
+                raise t.error(key, "needs strength_reduction = true")
+        return None
+    tol = float(t.number("reduction_tolerance", default=0.01, positive=True, maximum=1.0))
+    low, high = t.vector("reduction_bracket", 2, t.data.get("reduction_bracket", [1.0, 2.0]))
+    if not 0 < low < high:
+        raise t.error("reduction_bracket", f"needs 0 < low < high, got [{low}, {high}]")
+    monitor = None
+    if t.has("reduction_monitor"):
+        monitor = t.vector("reduction_monitor", ctx.gdim)
+    return StrengthReductionConfig(tol, low, high, monitor)
 
 
 def driver(
@@ -175,6 +229,19 @@ def driver(
 
     mat = solution.scene.material
     law = make_law(config, E=mat.E, nu=mat.nu)
+    if config.strength_reduction is not None:
+        from geofrac.fem.plastic_driver import run_reduction
+
+        return run_reduction(
+            law,
+            solution,
+            say,
+            config=config.strength_reduction,
+            write=write,
+            steps=config.load_steps,
+            max_cuts=config.max_cuts,
+            max_iterations=config.max_iterations,
+        )
     return run(
         law,
         solution,

@@ -11,6 +11,13 @@ every attempted step (factor, SNES converged reason, iterations, final residual,
 plastic points); a run whose increment could not converge after ``max_cuts`` halvings
 ends with ``converged = false``, ``end_reason = "step_too_small"`` and the displacement
 of the last converged factor (never of the failed one).
+
+With ``strength_reduction = true`` (:func:`run_reduction`) the solve is repeated for
+trial factors F (c, tan φ, tan ψ divided by F) in a bisection to the factor of safety
+(:mod:`geofrac.fem.strength_reduction`); without ``[initial_stress]`` the effects'
+terms (gravity) are then ramped with λ too (a stress-free start, the slope brought to
+its own weight in load steps), with it they are held (the K0 start balances them). The
+fields left in the scene's outputs are those of the last stable F, re-solved.
 """
 
 from __future__ import annotations
@@ -21,25 +28,30 @@ from typing import Any
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
 import ufl
+from mpi4py import MPI
 
 from geofrac.fem.insitu import in_plane
 from geofrac.fem.plastic import Law, PlasticProblem
 from geofrac.fem.solution import Solution
+from geofrac.fem.strength_reduction import factor_of_safety, largest_monitor, point_monitor
+from geofrac.plasticity.strength_reduction import reduce_strength
 from geofrac_forms import elasticity as forms
 
-__all__ = ["run"]
+__all__ = ["run", "run_reduction"]
 
 
-def _external(problem: Any) -> Callable[[Any, Any], Any]:
+def _external(problem: Any, *, ramp_terms: bool = False) -> Callable[[Any, Any], Any]:
     """(λ, v) → the external work.
 
-    The effects' terms and σ0·n of the loaded sides held, the scene's loads times λ.
+    The effects' terms (times λ when ``ramp_terms``) and σ0·n of the loaded sides held,
+    the scene's loads times λ.
     """
     scene = problem.scene
 
     def external(factor: Any, v: Any) -> Any:
         ctx = problem.form_context(v)
-        held = [term(ctx) for term in problem.terms]
+        scale = factor if ramp_terms else 1.0
+        held = [scale * term(ctx) for term in problem.terms]
         if scene.initial_stress is not None and problem.insitu is not None:
             gdim = problem.mesh.geometry.dim
             traction = in_plane(problem.insitu.sigma0, gdim) * ufl.FacetNormal(problem.mesh)
@@ -56,6 +68,29 @@ def _external(problem: Any) -> Callable[[Any, Any], Any]:
     return external
 
 
+def _factory(
+    solution: Solution, *, ramp_terms: bool, max_iterations: int
+) -> Callable[[Law], PlasticProblem]:
+    """The map law ↦ the scene's elasto-plastic problem with that law."""
+    problem = solution.problem
+    sigma0 = None if problem.insitu is None else problem.insitu.sigma0
+    external = _external(problem, ramp_terms=ramp_terms)
+
+    def make(law: Law) -> PlasticProblem:
+        return PlasticProblem(
+            problem.element.space,
+            law,
+            external,
+            bcs=problem.bcs,
+            initial_stress=sigma0,
+            prefix="geofrac_plastic_",
+            options=dict(solution.scene.solver.options),
+            max_it=max_iterations,
+        )
+
+    return make
+
+
 def run(
     law: Law,
     solution: Solution,
@@ -67,17 +102,7 @@ def run(
 ) -> dict[str, Any]:
     """Solve ``steps`` load increments; copy u into the elastic problem's ``uh``; the results."""
     problem = solution.problem
-    sigma0 = None if problem.insitu is None else problem.insitu.sigma0
-    plastic = PlasticProblem(
-        problem.element.space,
-        law,
-        _external(problem),
-        bcs=problem.bcs,
-        initial_stress=sigma0,
-        prefix="geofrac_plastic_",
-        options=dict(solution.scene.solver.options),
-        max_it=max_iterations,
-    )
+    plastic = _factory(solution, ramp_terms=False, max_iterations=max_iterations)(law)
     talk = say if solution.tagged.mesh.comm.rank == 0 else None
     try:
         result = plastic.solve_steps(steps, max_cuts=max_cuts, say=talk)
@@ -110,3 +135,93 @@ def run(
         }
     finally:
         plastic.destroy()
+
+
+def run_reduction(
+    law: Law,
+    solution: Solution,
+    say: Callable[[str], None],
+    *,
+    config: Any,
+    write: bool,
+    steps: int,
+    max_cuts: int,
+    max_iterations: int,
+) -> dict[str, Any]:
+    """The factor of safety (``config``: the effect's ``StrengthReductionConfig``).
+
+    Bisection on F, then the last stable F re-solved: its displacement copied into the
+    elastic problem's ``uh`` (probes, XDMF), its plastic zone in the results. With
+    ``write``, rank 0 draws ``strength_reduction.png`` (monitor |u| against F) into
+    ``output.dir``.
+    """
+    problem = solution.problem
+    ramp = problem.insitu is None
+    make = _factory(solution, ramp_terms=ramp, max_iterations=max_iterations)
+    monitor = largest_monitor if config.monitor is None else point_monitor(config.monitor)
+    talk = say if solution.tagged.mesh.comm.rank == 0 else None
+    result = factor_of_safety(
+        make,
+        law,
+        steps=steps,
+        low=config.low,
+        high=config.high,
+        tolerance=config.tolerance,
+        max_cuts=max_cuts,
+        monitor=monitor,
+        say=talk,
+    )
+    stable = result.bracket.stable
+    plastic = make(reduce_strength(law, stable))
+    try:
+        last = plastic.solve_steps(steps, max_cuts=max_cuts)
+        problem.uh.x.array[:] = plastic.u.x.array
+        shear = plastic.plastic_shear_strain()
+        owned = plastic.eps.function_space.dofmap.index_map.size_local
+        local = float(shear[:owned].max()) if owned else 0.0
+        out = result.as_dict()
+        out.update(
+            {
+                "gravity": "ramped" if ramp else "held (initial stress)",
+                "monitor": "largest nodal |u|" if config.monitor is None else list(config.monitor),
+                "last_stable": {
+                    "factor": stable,
+                    "converged": last.converged,
+                    "plastic_points": plastic.plastic_points(),
+                    "yielded_area": plastic.yielded_area(),
+                    "max_plastic_shear_strain": problem.mesh.comm.allreduce(local, op=MPI.MAX),
+                },
+                "solver": plastic.newton.describe(),
+            }
+        )
+    finally:
+        plastic.destroy()
+    if write and problem.mesh.comm.rank == 0:
+        _plot(result, solution)
+    if not out["last_stable"]["converged"]:  # type: ignore[index]
+        say("strength reduction: WARNING: the last stable factor did not converge when re-solved")
+    return out
+
+
+def _plot(result: Any, solution: Solution) -> None:
+    """``strength_reduction.png``: the monitor |u| of every trial against F."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    scene = solution.scene
+    rows = sorted((t.factor, t.monitor, t.stable) for t in result.trials if t.monitor is not None)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for ok, mark, label in ((True, "o", "stable"), (False, "x", "failed (last converged load)")):
+        pts = [(f, m) for f, m, s in rows if s == ok]
+        if pts:
+            ax.plot(*zip(*pts, strict=True), mark, label=label)
+    ax.axvline(result.factor_of_safety, color="k", lw=0.8, ls="--", label="factor of safety")
+    ax.set_xlabel("trial factor F")
+    ax.set_ylabel(f"monitor |u| ({scene.units.length})")
+    ax.set_title(f"{scene.name}: FoS {result.factor_of_safety:.3f}")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(scene.output.dir / "strength_reduction.png", dpi=90)
+    plt.close(fig)
