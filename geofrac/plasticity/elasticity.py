@@ -77,7 +77,7 @@ def to_voigt(tangent: np.ndarray) -> np.ndarray:
 
 
 class ElasticTrial:
-    """The elastic part that every law shares: its moduli, the trial, the update.
+    """What every law shares: the common parameter checks, moduli, the trial, the update.
 
     A law (a frozen dataclass with ``E`` and ``nu``) inherits these and implements
     :meth:`return_map`.
@@ -85,6 +85,25 @@ class ElasticTrial:
 
     E: float
     nu: float
+    friction_angle: float
+    dilatancy_angle: float
+    cohesion: float
+
+    def check_common(self) -> None:
+        """Check the parameters every law has (E, ν, φ, ψ, c).
+
+        Raises:
+            ValueError: naming the parameter out of its range.
+        """
+        if not self.E > 0 or not -1 < self.nu < 0.5:
+            raise ValueError(f"need E > 0 and -1 < nu < 0.5, got E={self.E}, nu={self.nu}")
+        if (
+            not 0 <= self.friction_angle < 90
+            or not 0 <= self.dilatancy_angle <= self.friction_angle
+        ):
+            raise ValueError("need 0 <= dilatancy_angle <= friction_angle < 90 (degrees)")
+        if self.cohesion < 0:
+            raise ValueError(f"cohesion must be >= 0, got {self.cohesion}")
 
     def moduli(self) -> tuple[float, float]:
         """(bulk modulus K, shear modulus G) (:func:`geofrac.materials.bulk_shear`)."""

@@ -108,15 +108,7 @@ class MohrCoulomb(ElasticTrial):
 
     def __post_init__(self) -> None:
         """Check the parameters."""
-        if not self.E > 0 or not -1 < self.nu < 0.5:
-            raise ValueError(f"need E > 0 and -1 < nu < 0.5, got E={self.E}, nu={self.nu}")
-        if (
-            not 0 <= self.friction_angle < 90
-            or not 0 <= self.dilatancy_angle <= self.friction_angle
-        ):
-            raise ValueError("need 0 <= dilatancy_angle <= friction_angle < 90 (degrees)")
-        if self.cohesion < 0:
-            raise ValueError(f"cohesion must be >= 0, got {self.cohesion}")
+        self.check_common()
         if self.tension is not None and not 0 <= self.tension <= self.apex_stress():
             raise ValueError(
                 f"tension must lie in [0, c cot phi = {self.apex_stress()}], got {self.tension}"
