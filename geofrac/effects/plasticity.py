@@ -27,6 +27,10 @@ match):
 - ``load_steps``: equal increments of the load factor 0 → 1 (default 10);
 - ``max_cuts``: halvings of a diverged increment before the run ends (default 4);
 - ``max_iterations``: Newton iterations per increment (default 25);
+- ``davis``: true: solve with Davis's (1968) associated equivalent of the non-associated
+  material (c* = β c, tan φ* = β tan φ, ψ* = φ*, β = cos φ cos ψ / (1 − sin φ sin ψ);
+  :mod:`geofrac.plasticity.davis`), in strength reduction with the factored angles
+  (default false: the given ψ);
 - ``strength_reduction``: true: the factor of safety by shear strength reduction
   (:mod:`geofrac.fem.strength_reduction`) instead of one solve at full strength
   (default false); then also
@@ -78,6 +82,7 @@ KEYS = (
     "load_steps",
     "max_cuts",
     "max_iterations",
+    "davis",
     "strength_reduction",
     "reduction_tolerance",
     "reduction_bracket",
@@ -129,6 +134,7 @@ class PlasticityConfig:
         load_steps: load increments (FEM).
         max_cuts: halvings of a diverged increment (FEM).
         max_iterations: Newton iterations per increment (FEM).
+        davis: Davis's associated equivalent instead of the given ψ (FEM).
         strength_reduction: the factor of safety's settings, or None (FEM).
     """
 
@@ -142,6 +148,7 @@ class PlasticityConfig:
     max_cuts: int = 4
     max_iterations: int = 25
     strength_reduction: StrengthReductionConfig | None = None
+    davis: bool = False
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
@@ -201,7 +208,8 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
     cuts = int(t.number("max_cuts", default=4, integer=True, minimum=0, maximum=30))
     its = int(t.number("max_iterations", default=25, integer=True, minimum=1, maximum=1000))
     reduction = _reduction(t, ctx)
-    return PlasticityConfig(phi, c, psi, law, match, cutoff, steps, cuts, its, reduction)
+    davis = t.boolean("davis", default=False)
+    return PlasticityConfig(phi, c, psi, law, match, cutoff, steps, cuts, its, reduction, davis)
 
 
 def _reduction(t: Table, ctx: ConfigureContext) -> StrengthReductionConfig | None:
@@ -255,7 +263,19 @@ def driver(
 def make_law(config: PlasticityConfig, *, E: float, nu: float) -> Any:
     """The :mod:`geofrac.plasticity` law of a validated FEM ``[plasticity]`` table."""
     from geofrac.plasticity import DruckerPrager, MohrCoulomb
+    from geofrac.plasticity.davis import Davis
 
+    if config.davis:
+        return Davis(
+            E=E,
+            nu=nu,
+            cohesion=config.cohesion,
+            friction_angle=config.friction_angle,
+            dilatancy_angle=config.dilatancy_angle,
+            law=config.law,
+            tension=config.tension_cutoff,
+            match=config.match,
+        )
     if config.law == "mohr_coulomb":
         return MohrCoulomb(
             E=E,

@@ -34,7 +34,9 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.plasticity import DruckerPrager, MohrCoulomb
+from geofrac.plasticity.davis import Davis
 from geofrac.plasticity.elasticity import to_voigt
+from geofrac.plasticity.ellipticity import lost_ellipticity
 from geofrac.solvers.snes import NewtonReport, NewtonSolver
 from geofrac.solvers.types import SCALAR
 
@@ -45,7 +47,7 @@ STRESS_2D = ((0, 0), (1, 1), (2, 2), (0, 1))
 #: Plane strain: the Voigt rows of the tangent (xx, yy, xy with engineering shear).
 VOIGT_2D = (0, 1, 5)
 
-Law = MohrCoulomb | DruckerPrager
+Law = MohrCoulomb | DruckerPrager | Davis
 
 
 @dataclass
@@ -77,6 +79,9 @@ class PlasticResult:
         steps: every attempted step, in order.
         monitor: the monitor displacement at the last converged factor (components,
             shape=(gdim,)), or None without a monitor point.
+        ellipticity: at the end of a run that did not converge, (plastic points whose
+            tangent has lost ellipticity, plastic points) at the last converged factor
+            (:meth:`PlasticProblem.ellipticity`); None for a converged run.
     """
 
     converged: bool
@@ -84,6 +89,7 @@ class PlasticResult:
     end_reason: str
     steps: list[StepRecord] = field(default_factory=list)
     monitor: np.ndarray | None = None
+    ellipticity: tuple[int, int] | None = None
 
 
 def _check_space(V: dolfinx.fem.FunctionSpace) -> int:
@@ -266,6 +272,22 @@ class PlasticProblem:
         local = dolfinx.fem.assemble_scalar(self._area)
         return float(self.comm.allreduce(local, op=MPI.SUM))
 
+    def ellipticity(self) -> tuple[int, int]:
+        """(owned plastic points whose tangent lost ellipticity, owned plastic points), all ranks.
+
+        At the current state's returns (:func:`geofrac.plasticity.ellipticity.lost_ellipticity`,
+        in-plane normals, scale G²): non-associated flow (ψ < φ) loses it at plastic
+        points, where the rate problem need not have a unique solution.
+        """
+        ret = self._ret
+        owned = self.eps.function_space.dofmap.index_map.size_local
+        plastic = np.flatnonzero(ret.kind[:owned] > 0)
+        _, G = self.law.moduli()
+        lost = lost_ellipticity(ret.tangent[plastic], shear_modulus=G, dim=2)
+        counts = np.array([np.count_nonzero(lost), len(plastic)], dtype=np.int64)
+        total = self.comm.allreduce(counts, op=MPI.SUM)
+        return int(total[0]), int(total[1])
+
     def solve_steps(
         self,
         steps: int,
@@ -308,11 +330,19 @@ class PlasticProblem:
             self.factor.value = done
             self._update()
             stop = cuts >= max_cuts
+            lost = self.ellipticity() if stop else None
             if say is not None:
                 what = "giving up" if stop else f"cut {cuts + 1}/{max_cuts}"
+                if lost is not None and lost[0]:
+                    what += (
+                        f"; the tangent has lost ellipticity at {lost[0]} of {lost[1]} "
+                        "plastic points (non-associated flow: docs/plasticity.md)"
+                    )
                 say(f"plastic: factor {target:.4f} diverged ({report.reason_name}), {what}")
             if stop:
-                return PlasticResult(False, done, "step_too_small", records, self._monitor(monitor))
+                return PlasticResult(
+                    False, done, "step_too_small", records, self._monitor(monitor), lost
+                )
             inc, cuts = inc / 2, cuts + 1
         return PlasticResult(True, 1.0, "converged", records, self._monitor(monitor))
 

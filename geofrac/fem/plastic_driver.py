@@ -120,6 +120,7 @@ def run(
             "law": type(law).__name__,
             "plastic_points": plastic.plastic_points(),
             "yielded_area": plastic.yielded_area(),
+            "ellipticity_lost": None if result.ellipticity is None else result.ellipticity[0],
             "steps": [
                 {
                     "factor": s.factor,

@@ -140,6 +140,8 @@ def test_non_convergent_step_is_reported() -> None:
     failed = result.steps[-3:]
     assert all(not s.accepted and s.report.reason < 0 for s in failed)
     assert all(s.report.reason_name.startswith("DIVERGED") for s in failed)
+    lost, plastic = result.ellipticity  # psi = 0 < phi: yielding points past the border
+    assert 0 < lost <= plastic  # (not those at the apex, where D = 0)
 
 
 def _linear_elastic(tagged, V, bcs, *, p0: float, pi: float) -> np.ndarray:  # type: ignore[no-untyped-def]

@@ -48,6 +48,36 @@ def test_scene_without_load_reaches_the_initial_state_only() -> None:
     assert max(abs(c) for c in results["probes"]["wall"]) < 1e-12
 
 
+def test_scene_with_davis_is_the_associated_equivalent() -> None:
+    """``davis = true`` solves Davis's associated equivalent material.
+
+    c* = β c, tan φ* = β tan φ, ψ* = φ*; β = cos 30° for ψ = 0: c* = √3/2, φ* = atan(1/2).
+    The wall displacement of that material's closed form within 2 % on h = 0.1 (h = 0.05:
+    -0.05 %), not the given material's (2.4 times smaller).
+    """
+    phi = float(np.degrees(np.arctan(0.5)))
+    exact = MohrCoulombOpening(
+        a=1.0,
+        b=10.0,
+        p0=10.0,
+        pi=1.0,
+        E=1e4,
+        nu=0.3,
+        cohesion=np.sqrt(3) / 2,
+        friction_angle=phi,
+        dilatancy_angle=phi,
+    )
+    solution = solve_job(
+        "opening_mohr_coulomb", "plasticity.davis=true", "geometry.parameters.h=0.1"
+    )
+    try:
+        results = solution.results
+    finally:
+        solution.problem.destroy()
+    assert results["plasticity"]["converged"]
+    assert results["probes"]["wall"][0] == pytest.approx(exact.wall_displacement, rel=0.02)
+
+
 @pytest.mark.parametrize(
     ("override", "key"),
     [
@@ -60,6 +90,7 @@ def test_scene_without_load_reaches_the_initial_state_only() -> None:
         ("discretization.element=cst", "discretization.element"),
         ("material.plane=stress", "material.plane"),
         ("plasticity.bogus=1", "plasticity"),
+        ("plasticity.davis=1", "plasticity.davis"),
     ],
 )
 def test_bad_keys_named_before_meshing(override: str, key: str) -> None:
