@@ -1,7 +1,7 @@
 """Effect ``plasticity``: perfect plasticity of MPM particles and of the finite-element solve.
 
 MPM (Edo (2016), §4.3.2): Drucker-Prager of the particles. FEM: an elasto-plastic static
-solve (Mohr-Coulomb with tension cut-off or Drucker-Prager, plane strain, P2) that replaces
+solve (Mohr-Coulomb with tension cut-off or Drucker-Prager, plane strain or 3D, P2) that replaces
 the single elastic solve: :func:`driver` runs :mod:`geofrac.fem.plastic` (docs/plasticity.md).
 
 Yield function f = β I₁ + √J₂ − k (eqs. 4.39-4.43) with return mapping, the Jaumann rate
@@ -173,12 +173,8 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
 
 def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> PlasticityConfig:
     """The FEM keys, and what the elasto-plastic solver needs of the scene."""
-    if ctx.gdim != 2:
-        raise SceneError(
-            ctx.file, "plasticity", "the FEM elasto-plastic solver is plane strain (2D) only"
-        )
-    if ctx.material.plane != "strain":
-        raise SceneError(ctx.file, "material.plane", 'plasticity needs plane = "strain"')
+    if ctx.gdim == 2 and ctx.material.plane != "strain":
+        raise SceneError(ctx.file, "material.plane", 'plasticity needs plane = "strain" in 2D')
     if ctx.element not in FEM_ELEMENTS:
         raise SceneError(
             ctx.file,
@@ -186,7 +182,7 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
             f"plasticity needs one of {', '.join(FEM_ELEMENTS)}: '{ctx.element}' has no "
             "quadrature-point stress update (P1/cst locks under plastic flow at psi = 0)",
         )
-    if ctx.material.thickness != 1.0:
+    if ctx.gdim == 2 and ctx.material.thickness != 1.0:
         raise SceneError(ctx.file, "material.thickness", "plasticity solves per unit thickness (1)")
     if any(load.type == "point" for load in ctx.loads):
         raise SceneError(ctx.file, "load", "plasticity does not take point loads")

@@ -1,7 +1,7 @@
 """Elasto-plastic static solve: return mapping at quadrature points, Newton through SNES.
 
-Plane strain (2D) with P2 displacements (or higher Lagrange degree); the stress and the
-consistent tangent live in DOLFINx quadrature spaces (``basix.ufl.quadrature_element``)
+Plane strain (2D) or 3D with P2 displacements (or higher Lagrange degree); the stress and
+the consistent tangent live in DOLFINx quadrature spaces (``basix.ufl.quadrature_element``)
 of degree 2(p − 1) (exact for the elastic stiffness), at whose points each residual
 evaluation calls the shared return mapping of :mod:`geofrac.plasticity` (Mohr-Coulomb
 with tension cut-off or Drucker-Prager): ``law.update(σₙ, ε − εₙ, tangent=True)``.
@@ -35,7 +35,7 @@ from mpi4py import MPI
 from geofrac.errors import RunError
 from geofrac.plasticity import DruckerPrager, MohrCoulomb
 from geofrac.plasticity.davis import Davis
-from geofrac.plasticity.elasticity import to_voigt
+from geofrac.plasticity.elasticity import VOIGT, to_voigt
 from geofrac.plasticity.ellipticity import lost_ellipticity
 from geofrac.solvers.snes import NewtonReport, NewtonSolver
 from geofrac.solvers.types import SCALAR
@@ -46,6 +46,29 @@ __all__ = ["PlasticProblem", "PlasticResult", "StepRecord", "solve_plastic"]
 STRESS_2D = ((0, 0), (1, 1), (2, 2), (0, 1))
 #: Plane strain: the Voigt rows of the tangent (xx, yy, xy with engineering shear).
 VOIGT_2D = (0, 1, 5)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """How a dimension stores stress, strain and tangent at the quadrature points.
+
+    Attributes:
+        stress: tensor index pairs of the stored stress components.
+        strain: tensor index pairs of the stored strain components (tensor shear).
+        voigt: the rows of :func:`~geofrac.plasticity.elasticity.to_voigt` the tangent
+            keeps (engineering shear strains, as the strain pairs' order).
+    """
+
+    stress: tuple[tuple[int, int], ...]
+    strain: tuple[tuple[int, int], ...]
+    voigt: tuple[int, ...]
+
+
+#: Plane strain (σ_zz kept) and 3D (the Voigt order xx, yy, zz, yz, xz, xy).
+LAYOUTS = {
+    2: Layout(STRESS_2D, ((0, 0), (1, 1), (0, 1)), VOIGT_2D),
+    3: Layout(VOIGT, VOIGT, tuple(range(6))),
+}
 
 Law = MohrCoulomb | DruckerPrager | Davis
 
@@ -96,10 +119,10 @@ def _check_space(V: dolfinx.fem.FunctionSpace) -> int:
     """The displacement degree; refuses what the solver is not valid for (RunError)."""
     mesh = V.mesh
     gdim = mesh.geometry.dim
-    if mesh.topology.dim != 2 or gdim != 2:
+    if mesh.topology.dim != gdim or gdim not in LAYOUTS:
         raise RunError(
-            "plasticity: the elasto-plastic solver is plane strain (2D) only; 3D is not built "
-            "(its stress storage and forms would need the 6-component Voigt form)"
+            "plasticity: the elasto-plastic solver takes plane strain (2D) or 3D solid "
+            f"meshes, got a {mesh.topology.dim}D mesh in {gdim}D"
         )
     element = V.ufl_element()
     family = element.basix_element.family
@@ -117,7 +140,7 @@ class PlasticProblem:
     """The elasto-plastic problem on a displacement space.
 
     Args:
-        V: vector Lagrange space of degree >= 2 on a 2D mesh (plane strain).
+        V: vector Lagrange space of degree >= 2 on a 2D (plane strain) or 3D mesh.
         law: the plastic law (its E, ν are the elasticity).
         external: (load factor constant, test function) → the external work form at that
             factor (e.g. tractions that move from their initial to final values).
@@ -156,25 +179,25 @@ class PlasticProblem:
             domain=self.mesh,
             metadata={"quadrature_degree": qdeg, "quadrature_scheme": "default"},
         )
-        Qs = dolfinx.fem.functionspace(
-            self.mesh, basix.ufl.quadrature_element(cell, value_shape=(4,), degree=qdeg)
-        )
-        Qt = dolfinx.fem.functionspace(
-            self.mesh, basix.ufl.quadrature_element(cell, value_shape=(9,), degree=qdeg)
-        )
-        Qe = dolfinx.fem.functionspace(
-            self.mesh, basix.ufl.quadrature_element(cell, value_shape=(3,), degree=qdeg)
-        )
+        gdim = self.mesh.geometry.dim
+        self.layout = layout = LAYOUTS[gdim]
+        ns, ne = len(layout.stress), len(layout.strain)
+
+        def space(size: int) -> dolfinx.fem.FunctionSpace:
+            element = basix.ufl.quadrature_element(cell, value_shape=(size,), degree=qdeg)
+            return dolfinx.fem.functionspace(self.mesh, element)
+
+        Qe = space(ne)
         self.u = dolfinx.fem.Function(V, name="displacement")
-        self.sig = dolfinx.fem.Function(Qs, name="stress")
-        self.tan = dolfinx.fem.Function(Qt, name="tangent")
+        self.sig = dolfinx.fem.Function(space(ns), name="stress")
+        self.tan = dolfinx.fem.Function(space(ne * ne), name="tangent")
         self.eps = dolfinx.fem.Function(Qe, name="strain")
         eps_u = ufl.sym(ufl.grad(self.u))
         self._eps_expr = dolfinx.fem.Expression(
-            ufl.as_vector([eps_u[0, 0], eps_u[1, 1], eps_u[0, 1]]),
+            ufl.as_vector([eps_u[i, j] for i, j in layout.strain]),
             Qe.element.interpolation_points,
         )
-        n = self.eps.x.array.size // 3
+        n = self.eps.x.array.size // ne
         #: converged stress σₙ and strain εₙ at every local quadrature point, shape=(n, 3, 3).
         self.stress_n = self._initial(initial_stress, n, cell, qdeg)
         self.strain_n = np.zeros((n, 3, 3))
@@ -183,14 +206,15 @@ class PlasticProblem:
         self._ret: Any = None
         self.factor = dolfinx.fem.Constant(self.mesh, SCALAR(0.0))
         v, du = ufl.TestFunction(V), ufl.TrialFunction(V)
-        s = self.sig
-        sigma = ufl.as_tensor([[s[0], s[3]], [s[3], s[1]]])
+        index = {pair: k for k, pair in enumerate(layout.stress)}
+        index.update({(j, i): k for (i, j), k in list(index.items())})
+        sigma = ufl.as_tensor([[self.sig[index[i, j]] for j in range(gdim)] for i in range(gdim)])
 
         def voigt(w: Any) -> Any:
             e = ufl.sym(ufl.grad(w))
-            return ufl.as_vector([e[0, 0], e[1, 1], 2 * e[0, 1]])
+            return ufl.as_vector([e[i, j] if i == j else 2 * e[i, j] for i, j in layout.strain])
 
-        D = ufl.as_matrix([[self.tan[3 * i + j] for j in range(3)] for i in range(3)])
+        D = ufl.as_matrix([[self.tan[ne * i + j] for j in range(ne)] for i in range(ne)])
         F = ufl.inner(sigma, ufl.sym(ufl.grad(v))) * self.dx - external(self.factor, v)
         J = ufl.inner(D * voigt(du), voigt(v)) * self.dx
         self._update()  # the initial state's stress and tangent
@@ -225,18 +249,20 @@ class PlasticProblem:
 
     def _update(self) -> None:
         """Return-map every quadrature point at the current u; fill stress and tangent."""
+        layout = self.layout
         self.eps.interpolate(self._eps_expr)
-        e = self.eps.x.array.reshape(-1, 3)
+        e = self.eps.x.array.reshape(-1, len(layout.strain))
         eps = np.zeros((e.shape[0], 3, 3))
-        eps[:, 0, 0], eps[:, 1, 1] = e[:, 0], e[:, 1]
-        eps[:, 0, 1] = eps[:, 1, 0] = e[:, 2]
+        for k, (i, j) in enumerate(layout.strain):
+            eps[:, i, j] = eps[:, j, i] = e[:, k]
         ret = self.law.update(self.stress_n, eps - self.strain_n, tangent=True)
         self._ret, self._eps_now = ret, eps
-        st = self.sig.x.array.reshape(-1, 4)
-        for k, (i, j) in enumerate(STRESS_2D):
+        st = self.sig.x.array.reshape(-1, len(layout.stress))
+        for k, (i, j) in enumerate(layout.stress):
             st[:, k] = ret.stress[:, i, j]
         assert ret.tangent is not None  # asked for
-        D = to_voigt(ret.tangent)[:, VOIGT_2D][:, :, VOIGT_2D]
+        rows = list(layout.voigt)
+        D = to_voigt(ret.tangent)[:, rows][:, :, rows]
         self.tan.x.array[:] = D.reshape(-1)
 
     def _commit(self) -> int:
@@ -275,15 +301,15 @@ class PlasticProblem:
     def ellipticity(self) -> tuple[int, int]:
         """(owned plastic points whose tangent lost ellipticity, owned plastic points), all ranks.
 
-        At the current state's returns (:func:`geofrac.plasticity.ellipticity.lost_ellipticity`,
-        in-plane normals, scale G²): non-associated flow (ψ < φ) loses it at plastic
-        points, where the rate problem need not have a unique solution.
+        At the current state's returns (:func:`geofrac.plasticity.ellipticity.lost_ellipticity`;
+        in-plane normals in plane strain, all in 3D): non-associated flow (ψ < φ) loses it
+        at plastic points, where the rate problem need not have a unique solution.
         """
         ret = self._ret
         owned = self.eps.function_space.dofmap.index_map.size_local
         plastic = np.flatnonzero(ret.kind[:owned] > 0)
         _, G = self.law.moduli()
-        lost = lost_ellipticity(ret.tangent[plastic], shear_modulus=G, dim=2)
+        lost = lost_ellipticity(ret.tangent[plastic], shear_modulus=G, dim=self.mesh.geometry.dim)
         counts = np.array([np.count_nonzero(lost), len(plastic)], dtype=np.int64)
         total = self.comm.allreduce(counts, op=MPI.SUM)
         return int(total[0]), int(total[1])

@@ -205,17 +205,13 @@ def test_huge_cohesion_equals_linear_elastic(law: str) -> None:
     assert diff <= 1e-10 * scale
 
 
-def test_refuses_p1_and_3d() -> None:
-    """P1 (locks under plastic flow) and 3D (not built) are refused with a reason."""
+def test_refuses_p1() -> None:
+    """P1 (locks under plastic flow) is refused with a reason (3D: tests/fem/test_plastic_3d.py)."""
     mesh = dolfinx.mesh.create_unit_square(MPI.COMM_WORLD, 2, 2)
     V1 = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (2,)))
     zero = lambda f, v: ufl.inner(f * ufl.as_vector([0.0, 0.0]), v) * ufl.ds  # noqa: E731
     with pytest.raises(RunError, match="degree >= 2"):
         PlasticProblem(V1, _law(0.0), zero)
-    cube = dolfinx.mesh.create_unit_cube(MPI.COMM_WORLD, 1, 1, 1)
-    V3 = dolfinx.fem.functionspace(cube, ("Lagrange", 2, (3,)))
-    with pytest.raises(RunError, match="plane strain"):
-        PlasticProblem(V3, _law(0.0), zero)
 
 
 @pytest.mark.mpi(min_size=2)
