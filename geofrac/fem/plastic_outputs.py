@@ -104,15 +104,18 @@ def plot_cell_field(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7, 5))
+    span = np.ptp(xy, axis=0)
+    aspect = float(span[1] / span[0]) if span[0] > 0 else 1.0
+    wide = aspect < 0.6  # a slope: the colour bar goes below
+    height = 1.8 + 6.0 * min(max(aspect, 0.25), 1.2) + (0.8 if wide else 0.0)
+    fig, ax = plt.subplots(figsize=(7.0, height), constrained_layout=True)
     triangles = np.arange(len(xy)).reshape(-1, 3)
     art = ax.tripcolor(xy[:, 0], xy[:, 1], triangles, facecolors=v, cmap="viridis")
-    fig.colorbar(art, ax=ax, label=label)
     ax.set_aspect("equal")
+    fig.colorbar(art, ax=ax, label=label, orientation="horizontal" if wide else "vertical")
     ax.set_xlabel(f"x ({length})")
     ax.set_ylabel(f"y ({length})")
-    ax.set_title(title)
-    fig.tight_layout()
+    ax.set_title(title, fontsize=10)
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
@@ -308,7 +311,7 @@ class ProbeHistory:
         import matplotlib.pyplot as plt
 
         fig, ax = plt.subplots(figsize=(6, 4))
-        pi = [r["p_i"] for r in curve]
+        pi = [float(r["p_i"] or 0.0) for r in curve]
         if curve[0]["u_r_closed_form"] is not None:
             fine = np.linspace(self.p0, min(pi), 101)
             exact = [-self._opening(float(p)).wall_displacement for p in fine]
