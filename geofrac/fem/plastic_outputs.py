@@ -277,9 +277,9 @@ class ProbeHistory:
             assert last["u_r_closed_form"] is not None and last["u_r"] is not None
             final["u_r_closed_form"] = last["u_r_closed_form"]
             final["plastic_radius_closed_form"] = last["plastic_radius_closed_form"]
-            final["relative_difference"] = (last["u_r"] - last["u_r_closed_form"]) / abs(
-                last["u_r_closed_form"]
-            )
+            exact = last["u_r_closed_form"]  # 0 where p_i = p0: no relative difference
+            gap = last["u_r"] - exact
+            final["relative_difference"] = gap / abs(exact) if exact != 0.0 else None
         entry: dict[str, Any] = {
             "probe": g.probe,
             "group": g.group,
