@@ -126,7 +126,8 @@ def run(
         plastic.u,
         scene.output.probes,
         ground=ground,
-        p0=0.0 if initial is None else -float(initial.stress[0]),
+        # the loader checked: with a ground reaction, σ0 is constant and isotropic in-plane
+        p0=0.0 if initial is None or ground is None else -float(initial.stress[0]),
         law=law,
     )
     probes_at: dict[float, dict[str, list[float]]] = {}

@@ -107,7 +107,7 @@ def plot_cell_field(
     span = np.ptp(xy, axis=0)
     aspect = float(span[1] / span[0]) if span[0] > 0 else 1.0
     wide = aspect < 0.6  # a slope: the colour bar goes below
-    height = 1.8 + 6.0 * min(max(aspect, 0.25), 1.2) + (0.8 if wide else 0.0)
+    height = 1.4 + 6.0 * min(max(aspect, 0.25), 1.2) + (0.4 if wide else 0.0)
     fig, ax = plt.subplots(figsize=(7.0, height), constrained_layout=True)
     triangles = np.arange(len(xy)).reshape(-1, 3)
     art = ax.tripcolor(xy[:, 0], xy[:, 1], triangles, facecolors=v, cmap="viridis")
