@@ -58,6 +58,13 @@ OUTPUT_FILES = (
     "grains.vtu",
     "grains.xdmf",
     "grains.h5",
+    "load_steps.csv",
+    "ground_reaction.csv",
+    "ground_reaction.png",
+    "plastic_shear_strain.png",
+    "strength_reduction.csv",
+    "strength_reduction.png",
+    "failure_mechanism.png",
 )
 
 
@@ -330,8 +337,10 @@ def _write_xdmf(solution: Solution) -> None:
         problem.write_extra(scene.output.dir)
         return
     wanted = [f for f in scene.output.fields if f in TENSOR_FIELDS]
-    fields = problem.tensor_fields(wanted)
-    functions += [fields[f] for f in wanted]
+    own = solution.fields  # an effect loop's own fields replace the ones computed from uh
+    fields = problem.tensor_fields([f for f in wanted if f not in own])
+    functions += [own[f] if f in own else fields[f] for f in wanted]
+    functions += [fn for name, fn in own.items() if name not in TENSOR_FIELDS]
     write_fields(scene.output.dir / "results.xdmf", mesh, functions)
     problem.write_extra(scene.output.dir)
 

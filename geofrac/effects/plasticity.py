@@ -39,7 +39,12 @@ match):
 - ``reduction_bracket``: [low, high], the first stable and failed trial factors,
   0 < low < high (default [1.0, 2.0]; moved down/up when they are not);
 - ``reduction_monitor``: [x, y], the point whose |u| is the second failure indicator
-  (default: the largest nodal |u|).
+  (default: the largest nodal |u|);
+- ``ground_reaction``: a table ``{ probe, group, centre, outer_radius }`` (not with
+  ``strength_reduction``): the ground reaction curve of a circular opening, the wall's
+  radial displacement at the ``output.probes`` point ``probe`` against the internal
+  pressure on ``group`` at every converged load step, beside Salençon's closed form
+  (:mod:`geofrac.fem.plastic_outputs`).
 """
 
 from __future__ import annotations
@@ -56,14 +61,17 @@ from geofrac.model.table import Table
 __all__ = [
     "FEM_ELEMENTS",
     "FEM_KEYS",
+    "GROUND_REACTION_KEYS",
     "KEYS",
     "LAWS",
     "MATCHES",
     "MAX_COHESION",
     "METHODS",
     "REDUCTION_KEYS",
+    "GroundReactionConfig",
     "PlasticityConfig",
     "StrengthReductionConfig",
+    "check_scene",
     "configure",
     "driver",
     "make_law",
@@ -87,11 +95,14 @@ KEYS = (
     "reduction_tolerance",
     "reduction_bracket",
     "reduction_monitor",
+    "ground_reaction",
 )
 #: The FEM-only keys.
 FEM_KEYS = KEYS[3:]
 #: The keys that need ``strength_reduction = true``.
-REDUCTION_KEYS = KEYS[-3:]
+REDUCTION_KEYS = ("reduction_tolerance", "reduction_bracket", "reduction_monitor")
+#: Keys of ``[plasticity].ground_reaction``.
+GROUND_REACTION_KEYS = ("probe", "group", "centre", "outer_radius")
 #: Laws a FEM scene may name.
 LAWS = ("mohr_coulomb", "drucker_prager")
 #: Drucker-Prager matches.
@@ -121,6 +132,27 @@ class StrengthReductionConfig:
 
 
 @dataclass(frozen=True)
+class GroundReactionConfig:
+    """Validated ground reaction curve settings (docs/scenes.md, ``[plasticity]``).
+
+    Attributes:
+        probe: the ``output.probes`` point on the opening's wall.
+        group: the wall's boundary group, loaded by ``pressure`` entries only.
+        pressure: the sum of the group's ``pressure`` values: the internal pressure
+            changes by ``pressure`` times the load factor.
+        centre: the opening's centre (x, y): u_r = u·(x − centre)/|x − centre|.
+        outer_radius: where the in-situ pressure is held (inf: an infinite medium), for
+            the closed form.
+    """
+
+    probe: str
+    group: str
+    pressure: float
+    centre: tuple[float, ...] = (0.0, 0.0)
+    outer_radius: float = math.inf
+
+
+@dataclass(frozen=True)
 class PlasticityConfig:
     """Validated Drucker-Prager settings.
 
@@ -136,6 +168,7 @@ class PlasticityConfig:
         max_iterations: Newton iterations per increment (FEM).
         davis: Davis's associated equivalent instead of the given ψ (FEM).
         strength_reduction: the factor of safety's settings, or None (FEM).
+        ground_reaction: the ground reaction curve's settings, or None (FEM).
     """
 
     friction_angle: float
@@ -148,6 +181,7 @@ class PlasticityConfig:
     max_cuts: int = 4
     max_iterations: int = 25
     strength_reduction: StrengthReductionConfig | None = None
+    ground_reaction: GroundReactionConfig | None = None
     davis: bool = False
 
 
@@ -204,8 +238,88 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
     cuts = int(t.number("max_cuts", default=4, integer=True, minimum=0, maximum=30))
     its = int(t.number("max_iterations", default=25, integer=True, minimum=1, maximum=1000))
     reduction = _reduction(t, ctx)
+    ground = _ground_reaction(t, ctx) if t.has("ground_reaction") else None
+    if ground is not None and reduction is not None:
+        raise t.error("ground_reaction", "does not apply with strength_reduction = true")
     davis = t.boolean("davis", default=False)
-    return PlasticityConfig(phi, c, psi, law, match, cutoff, steps, cuts, its, reduction, davis)
+    return PlasticityConfig(
+        phi, c, psi, law, match, cutoff, steps, cuts, its, reduction, ground, davis
+    )
+
+
+def _ground_reaction(t: Table, ctx: ConfigureContext) -> GroundReactionConfig:
+    """``ground_reaction``: the group must carry numeric ``pressure`` loads only."""
+    g = Table(
+        ctx.file, t.path("ground_reaction"), t.data["ground_reaction"], allowed=GROUND_REACTION_KEYS
+    )
+    probe = g.string("probe")
+    group = g.string("group")
+    if ctx.groups.get(group) != ctx.gdim - 1:
+        raise g.error("group", f"'{group}' is not a boundary group (dimension {ctx.gdim - 1})")
+    mine = [load for load in ctx.loads if load.group == group]
+    if not mine or any(load.type != "pressure" for load in mine):
+        raise g.error("group", f"'{group}' must carry [[load]] entries of type 'pressure' only")
+    values = [load.value[0] for load in mine]
+    if not all(isinstance(v, int | float) for v in values):
+        raise g.error("group", f"the pressure on '{group}' must be a number, not an expression")
+    centre = g.vector("centre", ctx.gdim, g.data.get("centre", [0.0] * ctx.gdim))
+    outer = float(g.number("outer_radius", default=math.inf, positive=True))
+    return GroundReactionConfig(probe, group, float(sum(values)), centre, outer)  # type: ignore[arg-type]
+
+
+def check_scene(
+    config: PlasticityConfig,
+    *,
+    file: str,
+    probes: dict[str, tuple[float, ...]],
+    initial: Any,
+    fields: tuple[str, ...] = (),
+) -> None:
+    """The checks that need the whole scene (FEM): output fields, the ground reaction curve.
+
+    ``fields`` (``output.fields``) may not hold ``stress_nodal``: the stress lives at
+    quadrature points, written as cell means (``stress``). ``initial``: the scene's
+    :class:`~geofrac.model.scene.InitialStress`, or None. The ground reaction curve needs
+    a constant initial stress that is isotropic in the plane (σxx = σyy, σxy = 0: the
+    in-situ pressure p0 = −σxx) with the wall among its ``loaded`` sides, or none
+    (p0 = 0). Raises SceneError naming the key.
+    """
+    if "stress_nodal" in fields:
+        raise SceneError(
+            file,
+            "output.fields",
+            "'stress_nodal' is not written with plasticity: the stress lives at quadrature "
+            "points ('stress' writes its cell means)",
+        )
+    ground = config.ground_reaction
+    if ground is None:
+        return
+    key = "plasticity.ground_reaction"
+    if ground.probe not in probes:
+        raise SceneError(
+            file, f"{key}.probe", f"'{ground.probe}' is not in output.probes {sorted(probes)}"
+        )
+    a = math.dist(probes[ground.probe], ground.centre)
+    if a <= 0.0:
+        raise SceneError(file, f"{key}.centre", "the probe lies at the centre")
+    if not ground.outer_radius > a:
+        raise SceneError(file, f"{key}.outer_radius", f"must exceed the wall's radius {a:.6g}")
+    if initial is None:
+        return
+    if initial.kind != "constant" or len(initial.stress) != 3:
+        raise SceneError(file, key, "needs a constant 2D [initial_stress] (or none)")
+    sxx, syy, sxy = initial.stress
+    if sxx != syy or sxy != 0.0:
+        raise SceneError(
+            file,
+            key,
+            "needs an in-plane isotropic initial stress (xx = yy, xy = 0), got "
+            f"{list(initial.stress)}",
+        )
+    if ground.group not in initial.loaded:
+        raise SceneError(
+            file, key, f"the wall '{ground.group}' must be in initial_stress.loaded (it carries p0)"
+        )
 
 
 def _reduction(t: Table, ctx: ConfigureContext) -> StrengthReductionConfig | None:
@@ -250,6 +364,8 @@ def driver(
         law,
         solution,
         say,
+        write=write,
+        ground=config.ground_reaction,
         steps=config.load_steps,
         max_cuts=config.max_cuts,
         max_iterations=config.max_iterations,

@@ -321,10 +321,12 @@ class PlasticProblem:
         max_cuts: int = 4,
         say: Callable[[str], None] | None = None,
         monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None = None,
+        on_step: Callable[[StepRecord], None] | None = None,
     ) -> PlasticResult:
         """Load factor 0 → 1 in ``steps`` increments, halving a diverged increment.
 
-        ``say`` receives one line per attempted step (the caller prints on rank 0).
+        ``say`` receives one line per attempted step (the caller prints on rank 0);
+        ``on_step`` is called (collectively) after each accepted step is committed.
 
         Returns:
             the result; ``converged = False`` with the last converged factor when an
@@ -343,6 +345,8 @@ class PlasticProblem:
                 plastic = self._commit()
                 records.append(StepRecord(target, report, True, plastic))
                 done, cuts = target, 0
+                if on_step is not None:
+                    on_step(records[-1])
                 if say is not None:
                     eta = (time.perf_counter() - t0) * (1.0 - done) / done
                     say(

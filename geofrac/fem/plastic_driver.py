@@ -32,6 +32,12 @@ from mpi4py import MPI
 
 from geofrac.fem.insitu import in_plane
 from geofrac.fem.plastic import Law, PlasticProblem
+from geofrac.fem.plastic_outputs import (
+    ProbeHistory,
+    cell_fields,
+    plot_cell_field,
+    write_reduction_csv,
+)
 from geofrac.fem.solution import Solution
 from geofrac.fem.strength_reduction import factor_of_safety, largest_monitor, point_monitor
 from geofrac.plasticity.strength_reduction import reduce_strength
@@ -99,21 +105,47 @@ def run(
     steps: int,
     max_cuts: int,
     max_iterations: int,
+    write: bool = False,
+    ground: Any = None,
 ) -> dict[str, Any]:
-    """Solve ``steps`` load increments; copy u into the elastic problem's ``uh``; the results."""
+    """Solve ``steps`` load increments; copy u into the elastic problem's ``uh``; the results.
+
+    The probes are evaluated at every converged step (``steps[i].probes``; with ``write``
+    ``load_steps.csv``); ``ground`` (the effect's ``GroundReactionConfig``) adds the
+    ground reaction curve. The DG0 stress, von Mises and plastic shear strain go to
+    ``solution.fields`` (``results.xdmf``); with ``write`` rank 0 also draws
+    ``plastic_shear_strain.png``.
+    """
     problem = solution.problem
+    scene = solution.scene
     plastic = _factory(solution, ramp_terms=False, max_iterations=max_iterations)(law)
-    talk = say if solution.tagged.mesh.comm.rank == 0 else None
+    comm = solution.tagged.mesh.comm
+    talk = say if comm.rank == 0 else None
+    initial = scene.initial_stress
+    history = ProbeHistory(
+        plastic.u,
+        scene.output.probes,
+        ground=ground,
+        # the loader checked: with a ground reaction, σ0 is constant and isotropic in-plane
+        p0=0.0 if initial is None or ground is None else -float(initial.stress[0]),
+        law=law,
+    )
+    probes_at: dict[float, dict[str, list[float]]] = {}
+
+    def on_step(record: Any) -> None:
+        probes_at[record.factor] = history.record(record.factor)
+
     try:
-        result = plastic.solve_steps(steps, max_cuts=max_cuts, say=talk)
+        result = plastic.solve_steps(steps, max_cuts=max_cuts, say=talk, on_step=on_step)
         problem.uh.x.array[:] = plastic.u.x.array
+        solution.fields = cell_fields(plastic)
         if not result.converged:
             say(
                 f"plastic: NOT CONVERGED: the increment beyond factor {result.factor:.4f} "
                 f"diverged after {max_cuts} halvings; the fields are those of the "
                 "last converged factor"
             )
-        return {
+        out: dict[str, Any] = {
             "converged": result.converged,
             "end_reason": result.end_reason,
             "factor": result.factor,
@@ -130,12 +162,28 @@ def run(
                     "residual": s.report.residuals[-1] if s.report.residuals else None,
                     "plastic_points": s.plastic_points,
                 }
+                | ({"probes": probes_at[s.factor]} if s.accepted and history.names else {})
                 for s in result.steps
             ],
             "solver": plastic.newton.describe(),
         }
     finally:
         plastic.destroy()
+    directory = scene.output.dir if write and comm.rank == 0 else None
+    if ground is not None:
+        title = f"{scene.name}: ground reaction curve"
+        out["ground_reaction"] = history.ground_reaction(directory, title=title, units=scene.units)
+    if directory is not None and history.names:
+        history.write_steps(directory / "load_steps.csv")
+    if write:
+        plot_cell_field(
+            solution.fields["plastic_shear_strain"],
+            scene.output.dir / "plastic_shear_strain.png",
+            title=f"{scene.name}: plastic shear strain (load factor {result.factor:.4g})",
+            label="plastic shear strain γᵖ (−)",
+            length=scene.units.length,
+        )
+    return out
 
 
 def run_reduction(
@@ -152,9 +200,11 @@ def run_reduction(
     """The factor of safety (``config``: the effect's ``StrengthReductionConfig``).
 
     Bisection on F, then the last stable F re-solved: its displacement copied into the
-    elastic problem's ``uh`` (probes, XDMF), its plastic zone in the results. With
-    ``write``, rank 0 draws ``strength_reduction.png`` (monitor |u| against F) into
-    ``output.dir``.
+    elastic problem's ``uh`` (probes, XDMF), its DG0 stress and plastic shear strain into
+    ``solution.fields`` (XDMF: the failure mechanism), its plastic zone in the results.
+    With ``write``, rank 0 draws ``strength_reduction.png`` (monitor |u| against F) and
+    writes ``strength_reduction.csv`` (every trial) into ``output.dir``; the ranks
+    draw ``failure_mechanism.png`` (γᵖ at the last stable F) together.
     """
     problem = solution.problem
     ramp = problem.insitu is None
@@ -177,6 +227,7 @@ def run_reduction(
     try:
         last = plastic.solve_steps(steps, max_cuts=max_cuts)
         problem.uh.x.array[:] = plastic.u.x.array
+        solution.fields = cell_fields(plastic)
         shear = plastic.plastic_shear_strain()
         owned = plastic.eps.function_space.dofmap.index_map.size_local
         local = float(shear[:owned].max()) if owned else 0.0
@@ -199,6 +250,16 @@ def run_reduction(
         plastic.destroy()
     if write and problem.mesh.comm.rank == 0:
         _plot(result, solution)
+        write_reduction_csv(result.trials, solution.scene.output.dir / "strength_reduction.csv")
+    if write:
+        plot_cell_field(
+            solution.fields["plastic_shear_strain"],
+            solution.scene.output.dir / "failure_mechanism.png",
+            title=f"{solution.scene.name}: plastic shear strain at F = {stable:.4f} "
+            f"(FoS {result.factor_of_safety:.3f})",
+            label="plastic shear strain γᵖ (−)",
+            length=solution.scene.units.length,
+        )
     if not out["last_stable"]["converged"]:  # type: ignore[index]
         say("strength reduction: WARNING: the last stable factor did not converge when re-solved")
     return out

@@ -40,6 +40,10 @@ class Solution:
     #: a staged run's steps for ``results.xdmf`` (:class:`geofrac.fem.stages.Frame`), one
     #: time step each; empty: the single solve's fields.
     frames: list[Any] = field(default_factory=list)
+    #: an effect loop's own fields for ``results.xdmf`` by name (plasticity: the returned
+    #: stress, von Mises and plastic shear strain as DG0), written in place of the ones
+    #: computed from ``problem.uh`` with the same name; empty: none.
+    fields: dict[str, Any] = field(default_factory=dict)
 
     def mesh_counts(self) -> dict[str, int]:
         """Global numbers of cells and vertices, and the topological dimension."""

@@ -1171,6 +1171,16 @@ def _validate(
             element=discretization.element,
             specs=specs,
         )
+    for spec in specs:  # the plastic ground reaction curve reads the probes and p0
+        if spec.name == "plasticity":
+            check = effects.load("plasticity").check_scene
+            check(
+                spec.config,
+                file=str(file),
+                probes=output.probes,
+                initial=initial,
+                fields=output.fields,
+            )
     _switches(file, _stage_names(data.get("stages")), bcs=bcs, loads=loads, declared=declared)
     stages: tuple[Stage, ...] = ()
     if "stages" in data:

@@ -31,6 +31,7 @@ CHAPTERS = (
     "Fracture networks",
     "Cracking",
     "In-situ stress and stages",
+    "Plasticity and factor of safety",
     "MPM dynamics",
     "MPM under gravity and friction",
     "Blocks",
@@ -301,7 +302,170 @@ def kirsch_wall_displacement(p: float, k: float, theta_deg: float, *, E: float, 
     return ((sx + sy) + (sx - sy) * (3 - 4 * nu) * c2) / (4 * g)
 
 
+#: jobs/opening_mohr_coulomb.toml: the quarter ring a <= r <= b with the outer pressure p0
+#: held, the internal pressure lowered from p0 to pi; E, nu, c, phi, psi of its rock.
+OPENING = {
+    "a": 1.0,
+    "b": 10.0,
+    "p0": 10.0,
+    "pi": 1.0,
+    "E": 1.0e4,
+    "nu": 0.3,
+    "c": 1.0,
+    "phi": 30.0,
+    "psi": 0.0,
+}
+
+
+def salencon_ring(
+    a: float,
+    b: float,
+    *,
+    p0: float,
+    pi: float,
+    E: float,
+    nu: float,
+    c: float,
+    phi: float,
+    psi: float,
+) -> tuple[float, float]:
+    """(plastic radius ρ, wall displacement u_r(a)) of a circular opening in Mohr-Coulomb rock.
+
+    Salençon (1969); Carranza-Torres and Fairhurst (1999): plane strain, elastic-perfectly
+    plastic, hydrostatic p0, internal pressure pi (compression positive), here for the
+    ring a <= r <= b with p0 held at b (b = inf: the opening in an infinite medium).
+    K_p = (1 + sin φ)/(1 − sin φ), σ_c = 2c cos φ/(1 − sin φ), A = c cot φ.
+
+    - plastic zone (σ_θ = K_p σ_r + σ_c with equilibrium): σ_r(r) = (pi + A)(r/a)^(K_p − 1) − A;
+    - elastic zone (Lamé's ring, Timoshenko and Goodier (1970), §28), at yield at ρ:
+      σ_θ(ρ) = (2 p0 b² − p_ρ (b² + ρ²))/(b² − ρ²) = K_p p_ρ + σ_c gives the radial
+      stress p_ρ = (2 p0 b² − σ_c (b² − ρ²))/((b² + ρ²) + K_p (b² − ρ²)) (b → ∞:
+      (2 p0 − σ_c)/(1 + K_p)); ρ is where the two σ_r meet (bisection);
+    - u(ρ) = ρ ε_θ(ρ) from Hooke's law of the stress change from p0 (plane strain,
+      tension positive): ε_θ = (1 + ν)/E ((1 − ν) Δσ_θ − ν Δσ_r);
+    - plastic zone: the flow rule εᵖ_r + K_ψ εᵖ_θ = 0 (K_ψ = (1 + sin ψ)/(1 − sin ψ))
+      makes d(u r^K_ψ)/dr = r^K_ψ (εᵉ_r + K_ψ εᵉ_θ), integrated from ρ to a by
+      64-point Gauss-Legendre quadrature (the integrand is smooth).
+
+    No plastic zone (ρ = a) when the elastic wall is below yield.
+    """
+    sin_phi, sin_psi = math.sin(math.radians(phi)), math.sin(math.radians(psi))
+    kp, kpsi = (1 + sin_phi) / (1 - sin_phi), (1 + sin_psi) / (1 - sin_psi)
+    sc = 2 * c * math.cos(math.radians(phi)) / (1 - sin_phi)
+    att = c / math.tan(math.radians(phi))
+
+    def p_elastic(rho: float) -> float:
+        if math.isinf(b):
+            return (2 * p0 - sc) / (1 + kp)
+        return (2 * p0 * b * b - sc * (b * b - rho * rho)) / (
+            (b * b + rho * rho) + kp * (b * b - rho * rho)
+        )
+
+    def p_plastic(rho: float) -> float:
+        return (pi + att) * (rho / a) ** (kp - 1) - att
+
+    def strains(sr: Any, st: Any) -> tuple[Any, Any]:
+        """(ε_r, ε_θ) of the stress change from p0 (compression-positive σ_r, σ_θ)."""
+        dr, dt = p0 - sr, p0 - st  # tension-positive changes
+        g = (1 + nu) / E
+        return g * ((1 - nu) * dr - nu * dt), g * ((1 - nu) * dt - nu * dr)
+
+    if p_plastic(a) >= p_elastic(a):  # pi above the critical pressure: elastic
+        if math.isinf(b):
+            st = 2 * p0 - pi
+        else:
+            st = (2 * p0 * b * b - pi * (b * b + a * a)) / (b * b - a * a)
+        return a, a * strains(pi, st)[1]
+    lo, hi = a, (b if math.isfinite(b) else 1e3 * a)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if p_plastic(mid) < p_elastic(mid) else (lo, mid)
+    rho = 0.5 * (lo + hi)
+    p_rho = p_plastic(rho)
+    u_rho = rho * strains(p_rho, kp * p_rho + sc)[1]
+    x, w = np.polynomial.legendre.leggauss(64)
+    r = a + (rho - a) * (x + 1) / 2
+    sr = (pi + att) * (r / a) ** (kp - 1) - att
+    er, et = strains(sr, kp * sr + sc)
+    integral = float(np.sum(w * r**kpsi * (er + kpsi * et))) * (rho - a) / 2
+    return rho, (rho**kpsi * u_rho - integral) / a**kpsi
+
+
 # -- measures ----------------------------------------------------------------------------
+
+
+def _opening_plastic_radius(summary: dict[str, Any], out: Path) -> float:
+    """ρ from the yielded area of the quarter ring: π/4 (ρ² − a²) (plastic quadrature points)."""
+    area = _results(summary)["plasticity"]["yielded_area"]
+    return math.sqrt(OPENING["a"] ** 2 + 4.0 * area / math.pi)
+
+
+def _opening_wall(summary: dict[str, Any], out: Path) -> float:
+    """u_x at the wall probe (a, 0): the radial wall displacement."""
+    return float(_results(summary)["probes"]["wall"][0])
+
+
+def _factor_of_safety(summary: dict[str, Any], out: Path) -> float:
+    return float(_results(summary)["plasticity"]["factor_of_safety"])
+
+
+def _plot_ground_reaction(summary: dict[str, Any], out: Path, path: Path) -> None:
+    """The run's ground reaction curve (ground_reaction.csv) beside :func:`salencon_ring`."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from geofrac.bench.report import save_figure
+
+    with open(out / "ground_reaction.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    o = OPENING
+    fine = np.linspace(o["p0"], o["pi"], 91)
+    exact = [-salencon_ring(o["a"], o["b"], **{**_ring_data(), "pi": float(p)})[1] for p in fine]
+    fig, ax = plt.subplots(figsize=(6.0, 4.0), constrained_layout=True)
+    ax.plot(exact, fine, "k-", label="closed form: Salençon (1969), the ring of b = 10a")
+    ax.plot(
+        [-float(r["u_r"]) for r in rows],
+        [float(r["p_i"]) for r in rows],
+        "o",
+        mfc="none",
+        label="geofrac (P2, load steps)",
+    )
+    ax.set_xlabel("wall convergence −u_r (m)")
+    title = "opening_mohr_coulomb: ground reaction curve"
+    save_figure(fig, [ax], path, title=title, ylabel="internal pressure p_i (MPa)")
+
+
+def _ring_data() -> dict[str, float]:
+    """:data:`OPENING` as :func:`salencon_ring`'s keyword arguments."""
+    return {k: v for k, v in OPENING.items() if k not in ("a", "b")}
+
+
+def _plot_reduction(summary: dict[str, Any], out: Path, path: Path) -> None:
+    """Monitor displacement against the trial factor F, stable and failed trials."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from geofrac.bench.report import save_figure
+
+    entry = _results(summary)["plasticity"]
+    trials = sorted(entry["trials"], key=lambda t: t["factor"])
+    fig, ax = plt.subplots(figsize=(6.0, 4.0), constrained_layout=True)
+    for stable, mark, label in (
+        (True, "o", "stable"),
+        (False, "x", "failed (last converged load)"),
+    ):
+        pts = [(t["factor"], 1e3 * t["monitor"]) for t in trials if t["stable"] == stable]
+        if pts:
+            ax.plot(*zip(*pts, strict=True), mark, label=label)
+    ax.axvline(1.4, color="k", lw=0.8, ls="--", label="Griffiths and Lane (1999): 1.4")
+    ax.axvline(entry["factor_of_safety"], color="C2", lw=0.8, label="geofrac's FoS")
+    ax.set_xlabel("trial factor F")
+    title = "slope_griffiths_lane: strength reduction, crest displacement"
+    save_figure(fig, [ax], path, title=title, ylabel="|u| at the crest's edge (mm)")
 
 
 def _tip_deflection(summary: dict[str, Any], out: Path) -> float:
@@ -777,6 +941,57 @@ CASES: tuple[Case, ...] = (
             "cracking.mls_gradient=consistent",
             "cracking.max_events=1",
         ),
+    ),
+    Case(
+        "opening_plastic_radius",
+        "Plasticity and factor of safety",
+        "circular opening in Mohr-Coulomb rock (c = 1, φ = 30°, ψ = 0), p0 = 10 lowered to "
+        "pi = 1 in 5 load steps, P2, h = 0.2a: radius of the plastic zone",
+        "ρ/a from the yielded area π/4 (ρ² − a²)",
+        Reference(
+            salencon_ring(OPENING["a"], OPENING["b"], **_ring_data())[0],
+            "closed form: Salençon (1969); Carranza-Torres and Fairhurst (1999), for the "
+            "ring a ≤ r ≤ 10a with p0 held outside",
+            rtol=0.02,
+        ),
+        _opening_plastic_radius,
+        scene="jobs/validation/opening_mohr_coulomb.toml",
+        ci=True,
+        plot=_plot_ground_reaction,
+    ),
+    Case(
+        "opening_wall_displacement",
+        "Plasticity and factor of safety",
+        "the same opening: radial wall displacement at pi = 1 (the end of the ground "
+        "reaction curve)",
+        "u_r(a) (m)",
+        Reference(
+            salencon_ring(OPENING["a"], OPENING["b"], **_ring_data())[1],
+            "closed form: Salençon (1969); Carranza-Torres and Fairhurst (1999), flow "
+            "rule εᵖ_r + K_ψ εᵖ_θ = 0",
+            rtol=0.02,
+        ),
+        _opening_wall,
+        scene="jobs/validation/opening_mohr_coulomb.toml",
+        ci=True,
+    ),
+    Case(
+        "slope_fos",
+        "Plasticity and factor of safety",
+        "2:1 slope, H = 10 m, c/(γH) = 0.05, φ = 20°, ψ = 0 (Griffiths and Lane (1999), "
+        "example 1), P2, h = 1 m: factor of safety by strength reduction",
+        "factor of safety",
+        Reference(
+            1.4,
+            "literature: Griffiths and Lane (1999), Géotechnique 49(3), example 1 "
+            "(Bishop's simplified method: about 1.38)",
+            rtol=0.03,
+        ),
+        _factor_of_safety,
+        scene="jobs/validation/slope_griffiths_lane.toml",
+        quick=False,
+        plot=_plot_reduction,
+        estimate_s=200.0,
     ),
     Case(
         "mpm_bar",
