@@ -1,7 +1,7 @@
 """The ``plasticity`` effect's loop for FEM scenes: the elasto-plastic load-stepped solve.
 
 Builds :class:`geofrac.fem.plastic.PlasticProblem` on the scene's set-up elastic problem
-(its P2 space, Dirichlet conditions and load forms), with the law the effect built from
+(its P2 or P3 space, Dirichlet conditions and load forms), with the law the effect built from
 its validated ``[plasticity]`` table. The load factor λ goes 0 → 1: the scene's ``[[load]]`` entries
 are scaled by λ; the effects' terms (gravity) and, with ``[initial_stress]``, the
 ``loaded`` sides' σ0·n act in full from the start, the initial stress σ0 being the
@@ -30,9 +30,9 @@ from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
-import ufl
 import dolfinx
 import numpy as np
+import ufl
 from mpi4py import MPI
 
 from geofrac.fem.insitu import in_plane

@@ -31,6 +31,7 @@ CHAPTERS = (
     "Fracture networks",
     "Cracking",
     "In-situ stress and stages",
+    "Plasticity and factor of safety",
     "MPM dynamics",
     "MPM under gravity and friction",
     "Blocks",
@@ -531,6 +532,16 @@ def _column_k0(summary: dict[str, Any], out: Path) -> float:
     return float(np.median(s[:, 0] / s[:, 4]))
 
 
+#: the half-width B/2 of jobs/footing_prandtl.toml's footing (its reaction acts over it).
+FOOTING_HALF_WIDTH = 1.0
+
+
+def _footing_pressure(summary: dict[str, Any], out: Path) -> float:
+    """−R_y / (B/2) of the footing's reaction at the last accepted step (the plateau)."""
+    steps = [s for s in _results(summary)["plasticity"]["steps"] if s["accepted"]]
+    return -float(steps[-1]["reactions"]["footing"][1]) / FOOTING_HALF_WIDTH
+
+
 def _runout(summary: dict[str, Any], out: Path) -> float:
     return _results(summary)["runout_m"]
 
@@ -656,6 +667,21 @@ CASES: tuple[Case, ...] = (
         scene="jobs/validation/joint_slip_opening.toml",
         overrides=("cracking.max_events=1",),
         estimate_s=20.0,
+    ),
+    Case(
+        "footing_prandtl",
+        "Plasticity and factor of safety",
+        "rigid smooth strip footing on weightless Tresca soil (φ = ψ = 0, c = 100 kPa), "
+        "pushed down by a prescribed settlement, P2: the collapse pressure",
+        "footing reaction / (B/2) at the plateau (kPa)",
+        Reference(
+            (2.0 + math.pi) * 100.0,
+            "closed form: (2 + π) c, Prandtl (1920); Hill (1950)",
+            rtol=0.03,
+        ),
+        _footing_pressure,
+        scene="jobs/validation/footing_prandtl.toml",
+        estimate_s=60.0,
     ),
     Case(
         "lame_cylinder",
