@@ -45,7 +45,7 @@ def _curve(results: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 @pytest.fixture(scope="module")
 def coarse() -> dict[str, Any]:
-    """The job on the coarse mesh (frontal-Delaunay, 403 cells: about 8 s)."""
+    """The job on the coarse mesh (frontal-Delaunay, 403 cells: 8-14 s)."""
     solution = solve_job("footing_prandtl", *COARSE)
     try:
         return solution.results
