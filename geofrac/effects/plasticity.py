@@ -1,8 +1,9 @@
 """Effect ``plasticity``: perfect plasticity of MPM particles and of the finite-element solve.
 
 MPM (Edo (2016), §4.3.2): Drucker-Prager of the particles. FEM: an elasto-plastic static
-solve (Mohr-Coulomb with tension cut-off or Drucker-Prager, plane strain or 3D, P2) that replaces
-the single elastic solve: :func:`driver` runs :mod:`geofrac.fem.plastic` (docs/plasticity.md).
+solve (Mohr-Coulomb with tension cut-off or Drucker-Prager, plane strain or 3D, P2 or P3)
+that replaces the single elastic solve: :func:`driver` runs :mod:`geofrac.fem.plastic`
+(docs/plasticity.md).
 
 Yield function f = β I₁ + √J₂ − k (eqs. 4.39-4.43) with return mapping, the Jaumann rate
 (D.30-D.31) applied before each increment: the model :mod:`geofrac.mpm.plasticity` (registry
@@ -108,8 +109,9 @@ LAWS = ("mohr_coulomb", "drucker_prager")
 #: Drucker-Prager matches.
 MATCHES = ("plane_strain", "outer", "inner")
 #: Elements the FEM solver is valid for (P1 locks under plastic flow at psi = 0; the
-#: enriched and gradient elements have no quadrature-point stress update).
-FEM_ELEMENTS = ("p2",)
+#: enriched and gradient elements have no quadrature-point stress update; P2 and P3
+#: reach Prandtl's footing load within 3 %, docs/plasticity.md).
+FEM_ELEMENTS = ("p2", "p3")
 #: Largest cohesion (stress units; the bound of ``material.E``).
 MAX_COHESION = 1e15
 

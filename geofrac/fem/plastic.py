@@ -82,12 +82,15 @@ class StepRecord:
         report: its Newton report (reason, residual norms).
         accepted: whether it was committed.
         plastic_points: quadrature points (all ranks) whose return was plastic.
+        observed: what the ``observe`` callback of :meth:`PlasticProblem.solve_steps`
+            returned at this accepted step (e.g. the reactions), or None.
     """
 
     factor: float
     report: NewtonReport
     accepted: bool
     plastic_points: int
+    observed: Any = None
 
 
 @dataclass
@@ -113,6 +116,17 @@ class PlasticResult:
     steps: list[StepRecord] = field(default_factory=list)
     monitor: np.ndarray | None = None
     ellipticity: tuple[int, int] | None = None
+
+
+def _bc_view(bc: dolfinx.fem.DirichletBC) -> np.ndarray:
+    """A writable view of a Dirichlet condition's value (a constant's or a function's array)."""
+    g = bc.g
+    if hasattr(g, "x"):  # a Function's values
+        return np.asarray(g.x.array)
+    view = g.value
+    if not isinstance(view, np.ndarray):
+        raise RunError("plasticity: a Dirichlet value that is not an array cannot be ramped")
+    return view
 
 
 def _check_space(V: dolfinx.fem.FunctionSpace) -> int:
@@ -144,7 +158,9 @@ class PlasticProblem:
         law: the plastic law (its E, ν are the elasticity).
         external: (load factor constant, test function) → the external work form at that
             factor (e.g. tractions that move from their initial to final values).
-        bcs: Dirichlet conditions (held through the steps).
+        bcs: Dirichlet conditions; their values g are ramped with the load factor (λ g
+            at factor λ: a prescribed displacement under displacement control; zero
+            supports are held) and restored to g when :meth:`solve_steps` ends.
         initial_stress: σ₀ at u = 0 (in equilibrium with the external loads at factor
             0): a constant array, shape=(3, 3), a 3×3 UFL tensor (interpolated at the
             quadrature points; :mod:`geofrac.fem.insitu`'s field), or None for zero.
@@ -204,6 +220,8 @@ class PlasticProblem:
         #: accumulated plastic strain, shape=(n, 3, 3).
         self.plastic_strain = np.zeros((n, 3, 3))
         self._ret: Any = None
+        #: (writable view of each Dirichlet value, its full value g), shape=(k,) each.
+        self._bc_values = [(view, view.copy()) for view in map(_bc_view, bcs)]
         self.factor = dolfinx.fem.Constant(self.mesh, SCALAR(0.0))
         v, du = ufl.TestFunction(V), ufl.TrialFunction(V)
         index = {pair: k for k, pair in enumerate(layout.stress)}
@@ -322,17 +340,43 @@ class PlasticProblem:
         say: Callable[[str], None] | None = None,
         monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None = None,
         on_step: Callable[[StepRecord], None] | None = None,
+        observe: Callable[[PlasticProblem], Any] | None = None,
     ) -> PlasticResult:
         """Load factor 0 → 1 in ``steps`` increments, halving a diverged increment.
 
         ``say`` receives one line per attempted step (the caller prints on rank 0);
-        ``on_step`` is called (collectively) after each accepted step is committed.
+        ``observe`` (collective) is called after each accepted step, its value kept in
+        the step's record; then ``on_step`` (collective) with that record. The Dirichlet
+        values are λ g during the run, g after it.
 
         Returns:
             the result; ``converged = False`` with the last converged factor when an
             increment cut ``max_cuts`` times still diverged (the state is the last
             converged one).
         """
+        try:
+            return self._steps(
+                steps, max_cuts=max_cuts, say=say, monitor=monitor, observe=observe, on_step=on_step
+            )
+        finally:
+            self._ramp_bcs(1.0)
+
+    def _ramp_bcs(self, factor: float) -> None:
+        """Set every Dirichlet value to ``factor`` times its full value g."""
+        for view, full in self._bc_values:
+            view[...] = factor * full
+
+    def _steps(
+        self,
+        steps: int,
+        *,
+        max_cuts: int,
+        say: Callable[[str], None] | None,
+        monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None,
+        observe: Callable[[PlasticProblem], Any] | None,
+        on_step: Callable[[StepRecord], None] | None,
+    ) -> PlasticResult:
+        """The loop of :meth:`solve_steps` (the Dirichlet values left ramped)."""
         records: list[StepRecord] = []
         done, inc, cuts = 0.0, 1.0 / steps, 0
         t0 = time.perf_counter()
@@ -340,10 +384,12 @@ class PlasticProblem:
             target = min(1.0, done + inc)
             u_saved = self.u.x.array.copy()
             self.factor.value = target
+            self._ramp_bcs(target)
             report = self.newton.solve()
             if report.converged:
                 plastic = self._commit()
-                records.append(StepRecord(target, report, True, plastic))
+                seen = None if observe is None else observe(self)
+                records.append(StepRecord(target, report, True, plastic, seen))
                 done, cuts = target, 0
                 if on_step is not None:
                     on_step(records[-1])
@@ -358,6 +404,7 @@ class PlasticProblem:
             records.append(StepRecord(target, report, False, 0))
             self.u.x.array[:] = u_saved
             self.factor.value = done
+            self._ramp_bcs(done)
             self._update()
             stop = cuts >= max_cuts
             lost = self.ellipticity() if stop else None
@@ -375,6 +422,18 @@ class PlasticProblem:
                 )
             inc, cuts = inc / 2, cuts + 1
         return PlasticResult(True, 1.0, "converged", records, self._monitor(monitor))
+
+    def residual(self) -> np.ndarray:
+        """F(u; ·) = I(σ) − λ-scaled external forces without the Dirichlet rows replaced.
+
+        At the current state (after a converged step: the committed stress). On the
+        held DOFs its sum is the reaction the supports carry (collective), owned entries,
+        shape=(owned nodes × gdim,).
+        """
+        vec = dolfinx.fem.assemble_vector(self.newton.F)
+        vec.scatter_reverse(dolfinx.la.InsertMode.add)
+        imap = self.V.dofmap.index_map
+        return vec.array[: imap.size_local * self.V.dofmap.index_map_bs].copy()
 
     def _monitor(self, monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None) -> Any:
         return None if monitor is None else monitor(self.u)

@@ -1,14 +1,17 @@
 """The ``plasticity`` effect's loop for FEM scenes: the elasto-plastic load-stepped solve.
 
 Builds :class:`geofrac.fem.plastic.PlasticProblem` on the scene's set-up elastic problem
-(its P2 space, Dirichlet conditions and load forms), with the law the effect built from
+(its P2 or P3 space, Dirichlet conditions and load forms), with the law the effect built from
 its validated ``[plasticity]`` table. The load factor λ goes 0 → 1: the scene's ``[[load]]`` entries
 are scaled by λ; the effects' terms (gravity) and, with ``[initial_stress]``, the
 ``loaded`` sides' σ0·n act in full from the start, the initial stress σ0 being the
 starting stress at the quadrature points (it must balance them: the initial state of
 docs/insitu.md). The displacement is measured from the initial state. The results hold
 every attempted step (factor, SNES converged reason, iterations, final residual,
-plastic points); a run whose increment could not converge after ``max_cuts`` halvings
+plastic points, and the reaction force per ``[[bc]]`` group: the sum of F(u) = I(σ) − λ
+F_ext over the group's held DOFs, per component); a ``[[bc]]`` with a nonzero value is
+a prescribed displacement ramped with λ (displacement control: the reaction of its
+group is the load it takes). A run whose increment could not converge after ``max_cuts`` halvings
 ends with ``converged = false``, ``end_reason = "step_too_small"`` and the displacement
 of the last converged factor (never of the failed one).
 
@@ -27,6 +30,8 @@ from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
+import dolfinx
+import numpy as np
 import ufl
 from mpi4py import MPI
 
@@ -97,6 +102,37 @@ def _factory(
     return make
 
 
+def _reactions(solution: Solution) -> Callable[[PlasticProblem], dict[str, list[float]]]:
+    """The map problem ↦ per ``[[bc]]`` group the reaction per component (collective).
+
+    Held components only, others 0; summed over the group's owned held DOFs of
+    F(u) = I(σ) − λ F_ext (the force the support exerts on the body).
+    """
+    problem = solution.problem
+    V, gdim = problem.element.space, problem.mesh.geometry.dim
+    owned = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+    rows: dict[str, list[tuple[int, np.ndarray]]] = {}
+    for i, bc in enumerate(problem.scene.bcs):
+        dim, entities = problem._bc_entities(i)
+        for c in bc.components:
+            dofs = dolfinx.fem.locate_dofs_topological(V.sub(c), dim, entities)
+            rows.setdefault(bc.group, []).append((c, np.unique(dofs[dofs < owned])))
+
+    def observe(plastic: PlasticProblem) -> dict[str, list[float]]:
+        r = plastic.residual()
+        out: dict[str, list[float]] = {}
+        for group, held in rows.items():
+            sums = np.zeros(gdim)
+            for c, dofs in held:
+                sums[c] = float(np.sum(r[dofs]))
+            total = np.empty_like(sums)
+            problem.mesh.comm.Allreduce(sums, total, op=MPI.SUM)
+            out[group] = [float(x) + 0.0 for x in total]
+        return out
+
+    return observe
+
+
 def run(
     law: Law,
     solution: Solution,
@@ -136,7 +172,9 @@ def run(
         probes_at[record.factor] = history.record(record.factor)
 
     try:
-        result = plastic.solve_steps(steps, max_cuts=max_cuts, say=talk, on_step=on_step)
+        result = plastic.solve_steps(
+            steps, max_cuts=max_cuts, say=talk, on_step=on_step, observe=_reactions(solution)
+        )
         problem.uh.x.array[:] = plastic.u.x.array
         solution.fields = cell_fields(plastic)
         if not result.converged:
@@ -161,6 +199,7 @@ def run(
                     "iterations": s.report.iterations,
                     "residual": s.report.residuals[-1] if s.report.residuals else None,
                     "plastic_points": s.plastic_points,
+                    "reactions": s.observed,
                 }
                 | ({"probes": probes_at[s.factor]} if s.accepted and history.names else {})
                 for s in result.steps

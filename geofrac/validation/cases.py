@@ -695,6 +695,38 @@ def _column_k0(summary: dict[str, Any], out: Path) -> float:
     return float(np.median(s[:, 0] / s[:, 4]))
 
 
+#: the half-width B/2 of jobs/footing_prandtl.toml's footing (its reaction acts over it).
+FOOTING_HALF_WIDTH = 1.0
+
+
+def _footing_pressure(summary: dict[str, Any], out: Path) -> float:
+    """−R_y / (B/2) of the footing's reaction at the last accepted step (the plateau)."""
+    steps = [s for s in _results(summary)["plasticity"]["steps"] if s["accepted"]]
+    return -float(steps[-1]["reactions"]["footing"][1]) / FOOTING_HALF_WIDTH
+
+
+def _plot_footing(summary: dict[str, Any], out: Path, path: Path) -> None:
+    """The footing's pressure against its settlement, with (2 + π) c."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from geofrac.bench.report import save_figure
+
+    results = _results(summary)
+    steps = [s for s in results["plasticity"]["steps"] if s["accepted"]]
+    settlement = -float(results["probes"]["centre"][1])  # the prescribed one, at factor 1
+    x = [0.0] + [s["factor"] * settlement for s in steps]
+    q = [0.0] + [-s["reactions"]["footing"][1] / FOOTING_HALF_WIDTH for s in steps]
+    fig, ax = plt.subplots(figsize=(6.0, 4.0), constrained_layout=True)
+    ax.axhline((2.0 + math.pi) * 100.0, color="k", lw=0.8, label="(2 + π) c, Prandtl (1920)")
+    ax.plot(x, q, "o-", ms=3, label="geofrac (P2, footing reaction / (B/2))")
+    ax.set_xlabel("settlement (m)")
+    title = "footing_prandtl: pressure against settlement"
+    save_figure(fig, [ax], path, title=title, ylabel="footing pressure (kPa)")
+
+
 def _runout(summary: dict[str, Any], out: Path) -> float:
     return _results(summary)["runout_m"]
 
@@ -820,6 +852,22 @@ CASES: tuple[Case, ...] = (
         scene="jobs/validation/joint_slip_opening.toml",
         overrides=("cracking.max_events=1",),
         estimate_s=20.0,
+    ),
+    Case(
+        "footing_prandtl",
+        "Plasticity and factor of safety",
+        "rigid smooth strip footing on weightless Tresca soil (φ = ψ = 0, c = 100 kPa), "
+        "pushed down by a prescribed settlement, P2: the collapse pressure",
+        "footing reaction / (B/2) at the plateau (kPa)",
+        Reference(
+            (2.0 + math.pi) * 100.0,
+            "closed form: (2 + π) c, Prandtl (1920); Hill (1950)",
+            rtol=0.03,
+        ),
+        _footing_pressure,
+        scene="jobs/validation/footing_prandtl.toml",
+        plot=_plot_footing,
+        estimate_s=60.0,
     ),
     Case(
         "lame_cylinder",
