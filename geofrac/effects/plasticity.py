@@ -27,6 +27,13 @@ match):
 - ``load_steps``: equal increments of the load factor 0 → 1 (default 10);
 - ``max_cuts``: halvings of a diverged increment before the run ends (default 4);
 - ``max_iterations``: Newton iterations per increment (default 25);
+- ``joints``: ``[plasticity.joints.NAME]`` tables with ``friction`` (μ, required) and
+  ``cohesion`` (c, default 0), the keys of ``[cracking.joints.NAME]``: the curve group
+  NAME is a joint split in the geometry, its faces tied by Coulomb springs with no
+  tensile strength (:mod:`geofrac.fem.joints`; c and μ divided by the trial factor in
+  strength reduction);
+- ``contact_penalty``: the joints' spring stiffness in units of E / facet length
+  (default 100, as ``cracking.contact_penalty``; needs ``joints``);
 - ``strength_reduction``: true: the factor of safety by shear strength reduction
   (:mod:`geofrac.fem.strength_reduction`) instead of one solve at full strength
   (default false); then also
@@ -46,18 +53,20 @@ from dataclasses import dataclass
 from typing import Any
 
 from geofrac.effects import ConfigureContext
-from geofrac.model.errors import SceneError
+from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import Table
 
 __all__ = [
     "FEM_ELEMENTS",
     "FEM_KEYS",
+    "JOINT_KEYS",
     "KEYS",
     "LAWS",
     "MATCHES",
     "MAX_COHESION",
     "METHODS",
     "REDUCTION_KEYS",
+    "JointConfig",
     "PlasticityConfig",
     "StrengthReductionConfig",
     "configure",
@@ -78,6 +87,8 @@ KEYS = (
     "load_steps",
     "max_cuts",
     "max_iterations",
+    "joints",
+    "contact_penalty",
     "strength_reduction",
     "reduction_tolerance",
     "reduction_bracket",
@@ -96,6 +107,23 @@ MATCHES = ("plane_strain", "outer", "inner")
 FEM_ELEMENTS = ("p2",)
 #: Largest cohesion (stress units; the bound of ``material.E``).
 MAX_COHESION = 1e15
+#: Keys of a ``[plasticity.joints.NAME]`` table (those of ``[cracking.joints.NAME]``).
+JOINT_KEYS = ("friction", "cohesion")
+
+
+@dataclass(frozen=True)
+class JointConfig:
+    """One joint group of ``[plasticity.joints.NAME]``.
+
+    Attributes:
+        name: the curve group (split in the geometry).
+        friction: μ = tan φ of the joint.
+        cohesion: c of the joint.
+    """
+
+    name: str
+    friction: float
+    cohesion: float
 
 
 @dataclass(frozen=True)
@@ -130,6 +158,8 @@ class PlasticityConfig:
         max_cuts: halvings of a diverged increment (FEM).
         max_iterations: Newton iterations per increment (FEM).
         strength_reduction: the factor of safety's settings, or None (FEM).
+        joints: the split joints' strengths (FEM).
+        contact_penalty: the joints' springs in units of E / facet length (FEM).
     """
 
     friction_angle: float
@@ -142,6 +172,8 @@ class PlasticityConfig:
     max_cuts: int = 4
     max_iterations: int = 25
     strength_reduction: StrengthReductionConfig | None = None
+    joints: tuple[JointConfig, ...] = ()
+    contact_penalty: float = 100.0
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
@@ -201,7 +233,34 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
     cuts = int(t.number("max_cuts", default=4, integer=True, minimum=0, maximum=30))
     its = int(t.number("max_iterations", default=25, integer=True, minimum=1, maximum=1000))
     reduction = _reduction(t, ctx)
-    return PlasticityConfig(phi, c, psi, law, match, cutoff, steps, cuts, its, reduction)
+    joints = _joints(t, ctx)
+    if t.has("contact_penalty") and not joints:
+        raise t.error("contact_penalty", "needs plasticity.joints")
+    penalty = float(t.number("contact_penalty", default=100.0, positive=True, maximum=1e8))
+    return PlasticityConfig(
+        phi, c, psi, law, match, cutoff, steps, cuts, its, reduction, joints, penalty
+    )
+
+
+def _joints(t: Table, ctx: ConfigureContext) -> tuple[JointConfig, ...]:
+    """The ``[plasticity.joints.NAME]`` tables: curve groups of the geometry, μ and c."""
+    raw = t.data.get("joints", {})
+    if not isinstance(raw, dict):
+        raise t.error("joints", "must be a table of [plasticity.joints.NAME]")
+    out = []
+    curves = [g for g, d in ctx.groups.items() if d == ctx.gdim - 1]
+    for name, entry in raw.items():
+        if ctx.groups and name not in curves:
+            raise SceneError(
+                ctx.file,
+                f"plasticity.joints.{name}",
+                "names no curve group of the geometry" + did_you_mean(name, curves),
+            )
+        j = Table(ctx.file, f"plasticity.joints.{name}", entry, allowed=JOINT_KEYS)
+        mu = float(j.number("friction", required=True, minimum=0.0, maximum=10.0))  # type: ignore[arg-type]
+        cj = float(j.number("cohesion", default=0.0, minimum=0.0, maximum=MAX_COHESION))
+        out.append(JointConfig(str(name), mu, cj))
+    return tuple(out)
 
 
 def _reduction(t: Table, ctx: ConfigureContext) -> StrengthReductionConfig | None:
@@ -241,6 +300,8 @@ def driver(
             steps=config.load_steps,
             max_cuts=config.max_cuts,
             max_iterations=config.max_iterations,
+            joints=config.joints,
+            penalty=config.contact_penalty,
         )
     return run(
         law,
@@ -249,6 +310,8 @@ def driver(
         steps=config.load_steps,
         max_cuts=config.max_cuts,
         max_iterations=config.max_iterations,
+        joints=config.joints,
+        penalty=config.contact_penalty,
     )
 
 

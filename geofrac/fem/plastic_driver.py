@@ -22,7 +22,7 @@ fields left in the scene's outputs are those of the last stable F, re-solved.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -31,9 +31,11 @@ import ufl
 from mpi4py import MPI
 
 from geofrac.fem.insitu import in_plane
+from geofrac.fem.joints import JointInterface, joint_springs
 from geofrac.fem.plastic import Law, PlasticProblem
 from geofrac.fem.solution import Solution
 from geofrac.fem.strength_reduction import factor_of_safety, largest_monitor, point_monitor
+from geofrac.plasticity.interface import JointStrength
 from geofrac.plasticity.strength_reduction import reduce_strength
 from geofrac_forms import elasticity as forms
 
@@ -69,12 +71,23 @@ def _external(problem: Any, *, ramp_terms: bool = False) -> Callable[[Any, Any],
 
 
 def _factory(
-    solution: Solution, *, ramp_terms: bool, max_iterations: int
+    solution: Solution,
+    *,
+    ramp_terms: bool,
+    max_iterations: int,
+    joints: Callable[[Law], JointInterface] | None = None,
 ) -> Callable[[Law], PlasticProblem]:
-    """The map law ↦ the scene's elasto-plastic problem with that law."""
+    """The map law ↦ the scene's elasto-plastic problem with that law (and its joints).
+
+    With joints the line search defaults to ``bt`` (``l2`` stalled on the springs'
+    stick/slip switches: docs/plasticity.md, "Joints in the strength reduction").
+    """
     problem = solution.problem
     sigma0 = None if problem.insitu is None else problem.insitu.sigma0
     external = _external(problem, ramp_terms=ramp_terms)
+    options = dict(solution.scene.solver.options)
+    if joints is not None:
+        options = {"snes_linesearch_type": "bt", **options}
 
     def make(law: Law) -> PlasticProblem:
         return PlasticProblem(
@@ -84,11 +97,29 @@ def _factory(
             bcs=problem.bcs,
             initial_stress=sigma0,
             prefix="geofrac_plastic_",
-            options=dict(solution.scene.solver.options),
+            options=options,
             max_it=max_iterations,
+            joints=None if joints is None else joints(law),
         )
 
     return make
+
+
+def _joints(
+    solution: Solution, law: Law, joints: Sequence[Any], penalty: float
+) -> Callable[[Law], JointInterface] | None:
+    """The scene's ``plasticity.joints`` as springs (:func:`geofrac.fem.joints.joint_springs`)."""
+    if not joints:
+        return None
+    problem = solution.problem
+    return joint_springs(
+        problem.element.space,
+        solution.tagged,
+        [(j.name, JointStrength(j.cohesion, j.friction)) for j in joints],
+        bcs=problem.bcs,
+        rock=law,
+        penalty=penalty,
+    )
 
 
 def run(
@@ -99,10 +130,18 @@ def run(
     steps: int,
     max_cuts: int,
     max_iterations: int,
+    joints: Sequence[Any] = (),
+    penalty: float = 100.0,
 ) -> dict[str, Any]:
-    """Solve ``steps`` load increments; copy u into the elastic problem's ``uh``; the results."""
+    """Solve ``steps`` load increments; copy u into the elastic problem's ``uh``; the results.
+
+    ``joints``: the effect's ``JointConfig`` entries (springs of ``penalty`` · E / ℓ).
+    """
     problem = solution.problem
-    plastic = _factory(solution, ramp_terms=False, max_iterations=max_iterations)(law)
+    springs = _joints(solution, law, joints, penalty)
+    plastic = _factory(solution, ramp_terms=False, max_iterations=max_iterations, joints=springs)(
+        law
+    )
     talk = say if solution.tagged.mesh.comm.rank == 0 else None
     try:
         result = plastic.solve_steps(steps, max_cuts=max_cuts, say=talk)
@@ -132,6 +171,7 @@ def run(
                 for s in result.steps
             ],
             "solver": plastic.newton.describe(),
+            **({} if plastic.joints is None else {"joints": plastic.joints.summary()}),
         }
     finally:
         plastic.destroy()
@@ -147,8 +187,13 @@ def run_reduction(
     steps: int,
     max_cuts: int,
     max_iterations: int,
+    joints: Sequence[Any] = (),
+    penalty: float = 100.0,
 ) -> dict[str, Any]:
     """The factor of safety (``config``: the effect's ``StrengthReductionConfig``).
+
+    ``joints``: the effect's ``JointConfig`` entries, whose c and μ each trial divides
+    by its F with the rock's.
 
     Bisection on F, then the last stable F re-solved: its displacement copied into the
     elastic problem's ``uh`` (probes, XDMF), its plastic zone in the results. With
@@ -157,7 +202,8 @@ def run_reduction(
     """
     problem = solution.problem
     ramp = problem.insitu is None
-    make = _factory(solution, ramp_terms=ramp, max_iterations=max_iterations)
+    springs = _joints(solution, law, joints, penalty)
+    make = _factory(solution, ramp_terms=ramp, max_iterations=max_iterations, joints=springs)
     monitor = largest_monitor if config.monitor is None else point_monitor(config.monitor)
     talk = say if solution.tagged.mesh.comm.rank == 0 else None
     result = factor_of_safety(
@@ -190,6 +236,7 @@ def run_reduction(
                     "plastic_points": plastic.plastic_points(),
                     "yielded_area": plastic.yielded_area(),
                     "max_plastic_shear_strain": problem.mesh.comm.allreduce(local, op=MPI.MAX),
+                    **({} if plastic.joints is None else {"joints": plastic.joints.summary()}),
                 },
                 "solver": plastic.newton.describe(),
             }
