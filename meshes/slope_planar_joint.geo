@@ -24,7 +24,7 @@ x1 = yd / Tan(alpha * Pi / 180);
 x2 = H / Tan(alpha * Pi / 180);
 x3 = x1 + (H - yd) / Tan(psi * Pi / 180);
 xb = x3 + L;
-nj = Ceil((H - yd) / Sin(psi * Pi / 180) / h);
+nj = Ceil((H - yd) / Sin(psi * Pi / 180) / h - 1e-6);
 // the rock below the joint
 Point(1) = {0, 0, 0, h};
 Point(2) = {xb, 0, 0, h};

@@ -88,7 +88,7 @@ def _face_nodes(
         normal = np.array([-t[1], t[0]]) / length
         if normal[1] < 0 or (normal[1] == 0 and normal[0] < 0):
             normal = -normal
-        centre = geom.x[geom.dofmap[cell], :2].mean(axis=0)
+        centre = geom.x[geom.dofmaps[0][cell], :2].mean(axis=0)
         side = 1.0 if np.dot(centre - xy[mid], normal) > 0 else -1.0
         glob = imap.local_to_global(nodes[order].astype(np.int32))
         for k in range(3):

@@ -24,7 +24,7 @@ KN, KS, C, MU = 2.0e4, 1.5e4, 3.0, 0.6
 
 
 def test_shear_under_pressure_sticks_then_slips() -> None:
-    """p fixed, δₛ from −1e-3 to 1e-3: τ = kₛ δₛ below c + μ p, ±(c + μ p) above."""
+    """P fixed, δₛ from −1e-3 to 1e-3: τ = kₛ δₛ below c + μ p, ±(c + μ p) above."""
     p = 5.0
     ds = np.linspace(-1e-3, 1e-3, 41)
     dn = np.full_like(ds, -p / KN)
