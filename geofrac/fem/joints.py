@@ -93,9 +93,7 @@ def _face_nodes(
         glob = imap.local_to_global(nodes[order].astype(np.int32))
         for k in range(3):
             i = order[k]
-            rows.append(
-                [glob[k], side, *xy[i], SIMPSON[k] * length, *normal, length]  # type: ignore[list-item]
-            )
+            rows.append([glob[k], side, *xy[i], SIMPSON[k] * length, *normal, length])
     return np.asarray(rows, dtype=float).reshape(-1, 8)
 
 
