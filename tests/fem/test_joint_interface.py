@@ -271,3 +271,22 @@ def test_two_ranks_same_joint_solution() -> None:
     gap = float(np.abs(two[:, 2:4] - one[:, 2:4]).max()) / scale
     assert world.allreduce(gap, op=MPI.MAX) <= 1e-8
     assert world.allreduce(int(verdicts[0] != verdicts[1]), op=MPI.SUM) == 0
+
+
+def test_dirichlet_dofs_found_per_component() -> None:
+    """Pairs on the rollers (x fixed) and on the base (both fixed) get no spring rows there."""
+    from geofrac.fem.joints import _fixed
+
+    tagged = joint_mesh(MPI.COMM_WORLD, h=2.0)
+    V, bcs = _space_and_bcs(tagged)
+    imap = V.dofmap.index_map
+    x = V.tabulate_dof_coordinates()[: imap.size_local]
+    glob = imap.local_to_global(np.arange(imap.size_local, dtype=np.int32))
+    back = glob[np.isclose(x[:, 0], x[:, 0].max()) & (x[:, 1] > 1e-9)]
+    base = glob[np.isclose(x[:, 1], 0.0)]
+    back = np.concatenate(MPI.COMM_WORLD.allgather(back))
+    base = np.concatenate(MPI.COMM_WORLD.allgather(base))
+    m = min(len(back), len(base))
+    assert m > 0
+    fixed = _fixed(V, bcs, back[:m], base[:m])  # (u⁺ on the back, u⁻ on the base)
+    assert fixed[:, 0].all() and not fixed[:, 1].any() and fixed[:, 2:].all()
