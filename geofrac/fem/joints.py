@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -349,8 +350,16 @@ class JointInterface:
             "max_opening": float(opening.max(initial=0.0)),
         }
 
+    def write_csv(self, path: Path) -> None:
+        """The :meth:`table` as CSV (one rank writes: the table is the same on every rank)."""
+        header = "x,y,normal_traction,shear_traction,opening,slip,state"
+        np.savetxt(path, self.table(), delimiter=",", header=header, comments="", fmt="%.10g")
+
     def table(self) -> np.ndarray:
-        """Per pair: x, y, σₙ, τ, opening, slip, state, shape=(m, 7) (the same on every rank)."""
+        """Per pair: x, y, σₙ, τ, opening δₙ, slip s, state (0 closed, 1 slip, 2 open).
+
+        Shape=(m, 7), the same on every rank.
+        """
         assert self.ret is not None
         return np.column_stack(
             [

@@ -198,7 +198,8 @@ def run_reduction(
     Bisection on F, then the last stable F re-solved: its displacement copied into the
     elastic problem's ``uh`` (probes, XDMF), its plastic zone in the results. With
     ``write``, rank 0 draws ``strength_reduction.png`` (monitor |u| against F) into
-    ``output.dir``.
+    ``output.dir`` and, with joints, writes ``joints.csv`` (each pair's x, y, σₙ, τ,
+    opening, slip and state at the last stable F).
     """
     problem = solution.problem
     ramp = problem.insitu is None
@@ -245,6 +246,8 @@ def run_reduction(
         plastic.destroy()
     if write and problem.mesh.comm.rank == 0:
         _plot(result, solution)
+        if plastic.joints is not None:  # the last stable F's joint pairs
+            plastic.joints.write_csv(solution.scene.output.dir / "joints.csv")
     if not out["last_stable"]["converged"]:  # type: ignore[index]
         say("strength reduction: WARNING: the last stable factor did not converge when re-solved")
     return out

@@ -40,7 +40,7 @@ from geofrac.plasticity import MohrCoulomb
 from geofrac.plasticity.interface import JointStrength
 from geofrac.plasticity.strength_reduction import reduce_strength, trial_factor
 from geofrac.scene.load import load_scene
-from tests.fem.helpers import JOBS, solve_job
+from tests.fem.helpers import JOBS
 
 GEO = Path(__file__).resolve().parents[2] / "meshes" / "slope_planar_joint.geo"
 JOB = JOBS / "slope_planar_joint.toml"
@@ -223,13 +223,23 @@ def test_scene_bad_joint_keys_named(override: str, key: str) -> None:
     assert info.value.key.startswith(key), info.value
 
 
-def test_scene_runs_the_planar_slide() -> None:
-    """The job on the coarse mesh, bisection to 0.05 from [1.4, 1.7]: within 3 % of 1.5459."""
-    solution = solve_job(
-        "slope_planar_joint",
+def test_scene_runs_the_planar_slide(tmp_path: Path) -> None:
+    """The job on the coarse mesh, bisection to 0.05 from [1.4, 1.7]: within 3 % of 1.5459.
+
+    With output on, ``joints.csv`` has one row per pair (17), every pair in compression
+    or open (σₙ <= 0), the shear holding the block: the joint's force on the block,
+    −w τ t, points up the dip (t = (n_y, −n_x) runs up the dip), so Σ τ < 0.
+    """
+    from geofrac.runner import solve_scene
+    from geofrac.scene import load_scene_collective
+
+    overrides = [
         "geometry.parameters.h=2.0",
         "plasticity.reduction_tolerance=0.05",
-    )
+        f"output.dir='{tmp_path}'",
+    ]
+    scene = load_scene_collective(MPI.COMM_WORLD, JOB, overrides)
+    solution = solve_scene(scene, MPI.COMM_WORLD, verbose=False, write=True)
     try:
         out = solution.results["plasticity"]
     finally:
@@ -238,6 +248,9 @@ def test_scene_runs_the_planar_slide() -> None:
     assert out["failed"] - out["stable"] <= 0.05
     joints = out["last_stable"]["joints"]
     assert joints["groups"] == ["joint"] and joints["pairs"] == 2 * 8 + 1
+    table = np.loadtxt(tmp_path / "joints.csv", delimiter=",", skiprows=1)
+    assert table.shape == (17, 7)
+    assert np.all(table[:, 2] <= 0.0) and np.sum(table[:, 3]) < 0
 
 
 @pytest.mark.mpi(min_size=2)
