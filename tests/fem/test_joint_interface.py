@@ -303,3 +303,32 @@ def test_dirichlet_dofs_found_per_component() -> None:
     assert m > 0
     fixed = _fixed(V, bcs, back[:m], base[:m])  # (u⁺ on the back, u⁻ on the base)
     assert fixed[:, 0].all() and not fixed[:, 1].any() and fixed[:, 2:].all()
+
+
+def test_scene_single_solve_with_joints(tmp_path: Path) -> None:
+    """Without strength reduction: one load-stepped solve at full strength, the joints' summary.
+
+    FoS 1.55 > 1: the block holds, part of the joint sticks (not every pair slips).
+    """
+    from geofrac.runner import solve_scene
+    from geofrac.scene import load_scene_collective
+
+    text = JOB.read_text()
+    kept = [
+        line
+        for line in text.splitlines()
+        if not line.startswith(("strength_reduction", "reduction_"))
+    ]
+    job = tmp_path / "single.toml"
+    job.write_text("\n".join(kept).replace("../meshes/", f"{GEO.parent}/"))
+    overrides = ["geometry.parameters.h=2.0"]
+    scene = load_scene_collective(MPI.COMM_WORLD, job, overrides)
+    solution = solve_scene(scene, MPI.COMM_WORLD, verbose=False)
+    try:
+        out = solution.results["plasticity"]
+    finally:
+        solution.problem.destroy()
+    assert out["converged"] and out["plastic_points"] == 0
+    joints = out["joints"]
+    assert joints["pairs"] == 17 and 0 <= joints["slipping"] < 17
+    assert out["solver"]["linesearch"] == "bt"
