@@ -32,6 +32,13 @@ match):
   material (c* = β c, tan φ* = β tan φ, ψ* = φ*, β = cos φ cos ψ / (1 − sin φ sin ψ);
   :mod:`geofrac.plasticity.davis`), in strength reduction with the factored angles
   (default false: the given ψ);
+- ``joints``: ``[plasticity.joints.NAME]`` tables with ``friction`` (μ, required) and
+  ``cohesion`` (c, default 0), the keys of ``[cracking.joints.NAME]``: the curve group
+  NAME is a joint split in the geometry, its faces tied by Coulomb springs with no
+  tensile strength (:mod:`geofrac.fem.joints`; c and μ divided by the trial factor in
+  strength reduction);
+- ``contact_penalty``: the joints' spring stiffness in units of E / facet length
+  (default 100, as ``cracking.contact_penalty``; needs ``joints``);
 - ``strength_reduction``: true: the factor of safety by shear strength reduction
   (:mod:`geofrac.fem.strength_reduction`) instead of one solve at full strength
   (default false); then also
@@ -56,13 +63,14 @@ from dataclasses import dataclass
 from typing import Any
 
 from geofrac.effects import ConfigureContext
-from geofrac.model.errors import SceneError
+from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import Table
 
 __all__ = [
     "FEM_ELEMENTS",
     "FEM_KEYS",
     "GROUND_REACTION_KEYS",
+    "JOINT_KEYS",
     "KEYS",
     "LAWS",
     "MATCHES",
@@ -70,6 +78,7 @@ __all__ = [
     "METHODS",
     "REDUCTION_KEYS",
     "GroundReactionConfig",
+    "JointConfig",
     "PlasticityConfig",
     "StrengthReductionConfig",
     "check_scene",
@@ -92,6 +101,8 @@ KEYS = (
     "max_cuts",
     "max_iterations",
     "davis",
+    "joints",
+    "contact_penalty",
     "strength_reduction",
     "reduction_tolerance",
     "reduction_bracket",
@@ -114,6 +125,23 @@ MATCHES = ("plane_strain", "outer", "inner")
 FEM_ELEMENTS = ("p2", "p3")
 #: Largest cohesion (stress units; the bound of ``material.E``).
 MAX_COHESION = 1e15
+#: Keys of a ``[plasticity.joints.NAME]`` table (those of ``[cracking.joints.NAME]``).
+JOINT_KEYS = ("friction", "cohesion")
+
+
+@dataclass(frozen=True)
+class JointConfig:
+    """One joint group of ``[plasticity.joints.NAME]``.
+
+    Attributes:
+        name: the curve group (split in the geometry).
+        friction: μ = tan φ of the joint.
+        cohesion: c of the joint.
+    """
+
+    name: str
+    friction: float
+    cohesion: float
 
 
 @dataclass(frozen=True)
@@ -171,6 +199,8 @@ class PlasticityConfig:
         davis: Davis's associated equivalent instead of the given ψ (FEM).
         strength_reduction: the factor of safety's settings, or None (FEM).
         ground_reaction: the ground reaction curve's settings, or None (FEM).
+        joints: the split joints' strengths (FEM).
+        contact_penalty: the joints' springs in units of E / facet length (FEM).
     """
 
     friction_angle: float
@@ -185,6 +215,8 @@ class PlasticityConfig:
     strength_reduction: StrengthReductionConfig | None = None
     ground_reaction: GroundReactionConfig | None = None
     davis: bool = False
+    joints: tuple[JointConfig, ...] = ()
+    contact_penalty: float = 100.0
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
@@ -244,8 +276,25 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
     if ground is not None and reduction is not None:
         raise t.error("ground_reaction", "does not apply with strength_reduction = true")
     davis = t.boolean("davis", default=False)
+    joints = _joints(t, ctx)
+    if t.has("contact_penalty") and not joints:
+        raise t.error("contact_penalty", "needs plasticity.joints")
+    penalty = float(t.number("contact_penalty", default=100.0, positive=True, maximum=1e8))
     return PlasticityConfig(
-        phi, c, psi, law, match, cutoff, steps, cuts, its, reduction, ground, davis
+        phi,
+        c,
+        psi,
+        law,
+        match,
+        cutoff,
+        steps,
+        cuts,
+        its,
+        reduction,
+        ground,
+        davis,
+        joints,
+        penalty,
     )
 
 
@@ -324,6 +373,27 @@ def check_scene(
         )
 
 
+def _joints(t: Table, ctx: ConfigureContext) -> tuple[JointConfig, ...]:
+    """The ``[plasticity.joints.NAME]`` tables: curve groups of the geometry, μ and c."""
+    raw = t.data.get("joints", {})
+    if not isinstance(raw, dict):
+        raise t.error("joints", "must be a table of [plasticity.joints.NAME]")
+    out = []
+    curves = [g for g, d in ctx.groups.items() if d == ctx.gdim - 1]
+    for name, entry in raw.items():
+        if ctx.groups and name not in curves:
+            raise SceneError(
+                ctx.file,
+                f"plasticity.joints.{name}",
+                "names no curve group of the geometry" + did_you_mean(name, curves),
+            )
+        j = Table(ctx.file, f"plasticity.joints.{name}", entry, allowed=JOINT_KEYS)
+        mu = float(j.number("friction", required=True, minimum=0.0, maximum=10.0))  # type: ignore[arg-type]
+        cj = float(j.number("cohesion", default=0.0, minimum=0.0, maximum=MAX_COHESION))
+        out.append(JointConfig(str(name), mu, cj))
+    return tuple(out)
+
+
 def _reduction(t: Table, ctx: ConfigureContext) -> StrengthReductionConfig | None:
     """The strength-reduction keys (only with ``strength_reduction = true``)."""
     if not t.boolean("strength_reduction", default=False):
@@ -361,6 +431,8 @@ def driver(
             steps=config.load_steps,
             max_cuts=config.max_cuts,
             max_iterations=config.max_iterations,
+            joints=config.joints,
+            penalty=config.contact_penalty,
         )
     return run(
         law,
@@ -371,6 +443,8 @@ def driver(
         steps=config.load_steps,
         max_cuts=config.max_cuts,
         max_iterations=config.max_iterations,
+        joints=config.joints,
+        penalty=config.contact_penalty,
     )
 
 

@@ -33,6 +33,7 @@ import ufl
 from mpi4py import MPI
 
 from geofrac.errors import RunError
+from geofrac.fem.joints import JointInterface
 from geofrac.plasticity import DruckerPrager, MohrCoulomb
 from geofrac.plasticity.davis import Davis
 from geofrac.plasticity.elasticity import VOIGT, to_voigt
@@ -166,6 +167,8 @@ class PlasticProblem:
             quadrature points; :mod:`geofrac.fem.insitu`'s field), or None for zero.
         prefix: PETSc options prefix of the Newton solver.
         options: user PETSc options (without prefix).
+        joints: Coulomb springs across split joints (:class:`geofrac.fem.joints.JointInterface`),
+            updated with the quadrature points and committed with them, or None.
     """
 
     def __init__(
@@ -181,8 +184,10 @@ class PlasticProblem:
         atol: float = 1e-10,
         rtol: float = 1e-9,
         max_it: int = 25,
+        joints: JointInterface | None = None,
     ) -> None:
         degree = _check_space(V)
+        self.joints = joints
         self.V, self.law, self.mesh = V, law, V.mesh
         self.comm: MPI.Comm = V.mesh.comm
         qdeg = 2 * (degree - 1)
@@ -247,6 +252,7 @@ class PlasticProblem:
             atol=atol,
             rtol=rtol,
             max_it=max_it,
+            extra=joints,
         )
 
     def _initial(self, initial_stress: Any, n: int, cell: Any, qdeg: int) -> np.ndarray:
@@ -282,6 +288,8 @@ class PlasticProblem:
         rows = list(layout.voigt)
         D = to_voigt(ret.tangent)[:, rows][:, :, rows]
         self.tan.x.array[:] = D.reshape(-1)
+        if self.joints is not None:
+            self.joints.update(self.u)
 
     def _commit(self) -> int:
         """Accept the current state as converged; the number of plastic points (all ranks)."""
@@ -290,6 +298,8 @@ class PlasticProblem:
         self.stress_n = ret.stress.copy()
         self.strain_n = self._eps_now.copy()
         self.plastic_strain += ret.plastic_strain
+        if self.joints is not None:
+            self.joints.commit()
         owned = self.eps.function_space.dofmap.index_map.size_local
         return int(self.comm.allreduce(int(np.count_nonzero(ret.kind[:owned])), op=MPI.SUM))
 

@@ -25,7 +25,7 @@ fields left in the scene's outputs are those of the last stable F, re-solved.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -36,6 +36,7 @@ import ufl
 from mpi4py import MPI
 
 from geofrac.fem.insitu import in_plane
+from geofrac.fem.joints import JointInterface, joint_springs
 from geofrac.fem.plastic import Law, PlasticProblem
 from geofrac.fem.plastic_outputs import (
     ProbeHistory,
@@ -45,6 +46,7 @@ from geofrac.fem.plastic_outputs import (
 )
 from geofrac.fem.solution import Solution
 from geofrac.fem.strength_reduction import factor_of_safety, largest_monitor, point_monitor
+from geofrac.plasticity.interface import JointStrength
 from geofrac.plasticity.strength_reduction import reduce_strength
 from geofrac_forms import elasticity as forms
 
@@ -80,12 +82,23 @@ def _external(problem: Any, *, ramp_terms: bool = False) -> Callable[[Any, Any],
 
 
 def _factory(
-    solution: Solution, *, ramp_terms: bool, max_iterations: int
+    solution: Solution,
+    *,
+    ramp_terms: bool,
+    max_iterations: int,
+    joints: Callable[[Law], JointInterface] | None = None,
 ) -> Callable[[Law], PlasticProblem]:
-    """The map law ↦ the scene's elasto-plastic problem with that law."""
+    """The map law ↦ the scene's elasto-plastic problem with that law (and its joints).
+
+    With joints the line search defaults to ``bt`` (``l2`` stalled on the springs'
+    stick/slip switches: docs/plasticity.md, "Joints in the strength reduction").
+    """
     problem = solution.problem
     sigma0 = None if problem.insitu is None else problem.insitu.sigma0
     external = _external(problem, ramp_terms=ramp_terms)
+    options = dict(solution.scene.solver.options)
+    if joints is not None:
+        options = {"snes_linesearch_type": "bt", **options}
 
     def make(law: Law) -> PlasticProblem:
         return PlasticProblem(
@@ -95,8 +108,9 @@ def _factory(
             bcs=problem.bcs,
             initial_stress=sigma0,
             prefix="geofrac_plastic_",
-            options=dict(solution.scene.solver.options),
+            options=options,
             max_it=max_iterations,
+            joints=None if joints is None else joints(law),
         )
 
     return make
@@ -133,6 +147,23 @@ def _reactions(solution: Solution) -> Callable[[PlasticProblem], dict[str, list[
     return observe
 
 
+def _joints(
+    solution: Solution, law: Law, joints: Sequence[Any], penalty: float
+) -> Callable[[Law], JointInterface] | None:
+    """The scene's ``plasticity.joints`` as springs (:func:`geofrac.fem.joints.joint_springs`)."""
+    if not joints:
+        return None
+    problem = solution.problem
+    return joint_springs(
+        problem.element.space,
+        solution.tagged,
+        [(j.name, JointStrength(j.cohesion, j.friction)) for j in joints],
+        bcs=problem.bcs,
+        rock=law,
+        penalty=penalty,
+    )
+
+
 def run(
     law: Law,
     solution: Solution,
@@ -143,6 +174,8 @@ def run(
     max_iterations: int,
     write: bool = False,
     ground: Any = None,
+    joints: Sequence[Any] = (),
+    penalty: float = 100.0,
 ) -> dict[str, Any]:
     """Solve ``steps`` load increments; copy u into the elastic problem's ``uh``; the results.
 
@@ -150,11 +183,14 @@ def run(
     ``load_steps.csv``); ``ground`` (the effect's ``GroundReactionConfig``) adds the
     ground reaction curve. The DG0 stress, von Mises and plastic shear strain go to
     ``solution.fields`` (``results.xdmf``); with ``write`` rank 0 also draws
-    ``plastic_shear_strain.png``.
+    ``plastic_shear_strain.png``. ``joints``: the effect's ``JointConfig`` entries
+    (springs of ``penalty`` · E / ℓ).
     """
     problem = solution.problem
     scene = solution.scene
-    plastic = _factory(solution, ramp_terms=False, max_iterations=max_iterations)(law)
+    springs = _joints(solution, law, joints, penalty)
+    make = _factory(solution, ramp_terms=False, max_iterations=max_iterations, joints=springs)
+    plastic = make(law)
     comm = solution.tagged.mesh.comm
     talk = say if comm.rank == 0 else None
     initial = scene.initial_stress
@@ -205,6 +241,7 @@ def run(
                 for s in result.steps
             ],
             "solver": plastic.newton.describe(),
+            **({} if plastic.joints is None else {"joints": plastic.joints.summary()}),
         }
     finally:
         plastic.destroy()
@@ -235,19 +272,27 @@ def run_reduction(
     steps: int,
     max_cuts: int,
     max_iterations: int,
+    joints: Sequence[Any] = (),
+    penalty: float = 100.0,
 ) -> dict[str, Any]:
     """The factor of safety (``config``: the effect's ``StrengthReductionConfig``).
+
+    ``joints``: the effect's ``JointConfig`` entries, whose c and μ each trial divides
+    by its F with the rock's.
 
     Bisection on F, then the last stable F re-solved: its displacement copied into the
     elastic problem's ``uh`` (probes, XDMF), its DG0 stress and plastic shear strain into
     ``solution.fields`` (XDMF: the failure mechanism), its plastic zone in the results.
     With ``write``, rank 0 draws ``strength_reduction.png`` (monitor |u| against F) and
-    writes ``strength_reduction.csv`` (every trial) into ``output.dir``; the ranks
-    draw ``failure_mechanism.png`` (γᵖ at the last stable F) together.
+    writes ``strength_reduction.csv`` (every trial) and, with joints, ``joints.csv``
+    (each pair's x, y, σₙ, τ, opening, slip and state at the last stable F) into
+    ``output.dir``; the ranks draw ``failure_mechanism.png`` (γᵖ at the last stable F)
+    together.
     """
     problem = solution.problem
     ramp = problem.insitu is None
-    make = _factory(solution, ramp_terms=ramp, max_iterations=max_iterations)
+    springs = _joints(solution, law, joints, penalty)
+    make = _factory(solution, ramp_terms=ramp, max_iterations=max_iterations, joints=springs)
     monitor = largest_monitor if config.monitor is None else point_monitor(config.monitor)
     talk = say if solution.tagged.mesh.comm.rank == 0 else None
     result = factor_of_safety(
@@ -281,6 +326,7 @@ def run_reduction(
                     "plastic_points": plastic.plastic_points(),
                     "yielded_area": plastic.yielded_area(),
                     "max_plastic_shear_strain": problem.mesh.comm.allreduce(local, op=MPI.MAX),
+                    **({} if plastic.joints is None else {"joints": plastic.joints.summary()}),
                 },
                 "solver": plastic.newton.describe(),
             }
@@ -290,6 +336,8 @@ def run_reduction(
     if write and problem.mesh.comm.rank == 0:
         _plot(result, solution)
         write_reduction_csv(result.trials, solution.scene.output.dir / "strength_reduction.csv")
+        if plastic.joints is not None:  # the last stable F's joint pairs
+            plastic.joints.write_csv(solution.scene.output.dir / "joints.csv")
     if write:
         plot_cell_field(
             solution.fields["plastic_shear_strain"],

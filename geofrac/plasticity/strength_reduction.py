@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-__all__ = ["Bracket", "bisect_factor", "reduce_strength"]
+__all__ = ["Bracket", "bisect_factor", "reduce_strength", "trial_factor"]
 
 
 def _reduced_angle(angle: float, factor: float) -> float:
@@ -42,6 +42,24 @@ def reduce_strength[L](law: L, factor: float) -> L:
     if getattr(law, "tension", None) is not None:
         changes["tension"] = law.tension / factor  # type: ignore[attr-defined]
     return replace(law, **changes)  # type: ignore[type-var]
+
+
+def trial_factor(law: Any, reduced: Any) -> float:
+    """The factor F of ``reduced = reduce_strength(law, F)``, from the two laws.
+
+    tan φ / tan φ_F when φ > 0, else c / c_F (a law has φ > 0 or c > 0): what a problem
+    factory that receives only the reduced rock law needs to reduce other strengths (the
+    joints' c and μ) by the same F. Exact to round-off (relative 1e-15).
+
+    Raises:
+        ValueError: neither φ nor c of ``law`` is positive.
+    """
+    if law.friction_angle > 0:
+        tan = math.tan(math.radians(law.friction_angle))
+        return tan / math.tan(math.radians(reduced.friction_angle))
+    if law.cohesion > 0:
+        return float(law.cohesion / reduced.cohesion)
+    raise ValueError("strength reduction: a law with neither friction nor cohesion")
 
 
 @dataclass

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -29,7 +30,23 @@ from petsc4py import PETSc
 
 from geofrac.errors import RunError
 
-__all__ = ["NewtonReport", "NewtonSolver", "snes_reason_name"]
+__all__ = ["ExtraTerms", "NewtonReport", "NewtonSolver", "snes_reason_name"]
+
+
+class ExtraTerms(Protocol):
+    """Terms added to the assembled residual and Jacobian, by global index (e.g. joint springs).
+
+    Each rank gives only rows it owns (global scalar DOF indices); Dirichlet rows and
+    columns are the caller's to leave out of the Jacobian.
+    """
+
+    def residual_entries(self) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, values), shape=(k,) each."""
+        ...
+
+    def jacobian_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(rows, cols, values), shape=(k,) each (summed where repeated)."""
+        ...
 
 
 def snes_reason_name(reason: int) -> str:
@@ -77,6 +94,7 @@ class NewtonSolver:
         atol: absolute tolerance on ||F||.
         rtol: relative tolerance on ||F|| / ||F₀||.
         max_it: the most Newton iterations.
+        extra: terms added to F and J after their assembly (None: none).
     """
 
     def __init__(
@@ -92,7 +110,9 @@ class NewtonSolver:
         atol: float = 1e-10,
         rtol: float = 1e-9,
         max_it: int = 25,
+        extra: ExtraTerms | None = None,
     ) -> None:
+        self.extra = extra
         self.F, self.J, self.u, self.bcs, self.update = F, J, u, list(bcs), update
         self.prefix = prefix
         self.options = {
@@ -106,6 +126,8 @@ class NewtonSolver:
         self.residuals: list[float] = []
         self._last: np.ndarray | None = None
         self.A = dolfinx.fem.petsc.create_matrix(J)
+        if extra is not None:  # its entries couple DOFs of no common cell
+            self.A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
         self.b = dolfinx.fem.petsc.create_vector(u.function_space)
         self.x = dolfinx.fem.petsc.create_vector(u.function_space)
         self.snes = PETSc.SNES().create(u.function_space.mesh.comm)
@@ -144,12 +166,25 @@ class NewtonSolver:
         dolfinx.fem.petsc.assemble_vector(b, self.F)
         dolfinx.fem.petsc.apply_lifting(b, [self.J], [self.bcs], x0=[x], alpha=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self.extra is not None:
+            rows, values = self.extra.residual_entries()
+            start = b.getOwnershipRange()[0]
+            with b.localForm() as local:
+                np.add.at(local.array, rows - start, values)
         dolfinx.fem.petsc.set_bc(b, self.bcs, x, -1.0)
 
     def _jacobian(self, _snes: PETSc.SNES, x: PETSc.Vec, A: PETSc.Mat, _P: PETSc.Mat) -> None:
         self._set_u(x)
         A.zeroEntries()
         dolfinx.fem.petsc.assemble_matrix(A, self.J, bcs=self.bcs)
+        if self.extra is not None:
+            A.assemble(PETSc.Mat.AssemblyType.FLUSH)  # the Dirichlet diagonal was inserted
+            rows, cols, values = self.extra.jacobian_entries()
+            for row in np.unique(rows):
+                at = rows == row
+                A.setValues(
+                    [int(row)], cols[at].astype(PETSc.IntType), values[at], PETSc.InsertMode.ADD
+                )
         A.assemble()
 
     def solve(self) -> NewtonReport:

@@ -1,0 +1,409 @@
+"""Joints in the elasto-plastic solve: node-to-node Coulomb springs across a split joint.
+
+The mesh is split along the joint in the geometry (the two sides are separate surfaces
+whose common curve is drawn twice, e.g. meshes/slope_planar_joint.geo), so the P2
+displacement is discontinuous there and the two faces' nodes lie on top of each other.
+:class:`JointGeometry` finds the faces' P2 nodes (each face facet through its one cell),
+decides each facet's side from its cell (the + side is where the joint normal n points,
+n oriented upwards: n_y > 0, or n_x > 0 on a vertical joint), lumps the facet's length
+on its nodes with Simpson's weights (L/6, 2L/3, L/6: Newton-Cotes lumping, which keeps
+the tractions of a P2 interface free of oscillations) and pairs the + and − nodes by
+their coordinates. Every rank gathers every pair (their global indices and weights, the
+same arrays in the same order on every rank), so the joint's arithmetic is the same on
+1 and N ranks; each rank adds the rows it owns.
+
+:class:`JointInterface` holds the pairs' Coulomb strengths and slips; at each Newton
+update it gathers u at the joint nodes (an allreduce), forms the jump δ = u⁺ − u⁻, the
+law (:func:`geofrac.plasticity.interface.coulomb_joint`) and the pair forces
+f = w (σₙ n + τ t) on u⁺ (−f on u⁻) with the Jacobian blocks ±w Q D Qᵀ, Q = [n t]. The
+springs: kₙ = kₛ = penalty · E / ℓ (ℓ the mean length of the pair's joint facets), as the
+crack-face contact of the cracking work (docs/cracking.md). See docs/plasticity.md,
+"Joints in the strength reduction".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
+
+import dolfinx
+import numpy as np
+from mpi4py import MPI
+
+from geofrac.errors import RunError
+from geofrac.meshing.distribute import TaggedMesh
+from geofrac.plasticity.interface import SLIP, JointReturn, JointStrength, coulomb_joint
+
+__all__ = ["JointGeometry", "JointInterface"]
+
+#: Simpson's weights of a P2 edge's nodes (end, end, middle) per unit length.
+SIMPSON = np.array([1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0])
+
+
+def _face_nodes(
+    V: dolfinx.fem.FunctionSpace, tagged: TaggedMesh, group: str, key: str
+) -> np.ndarray:
+    """This rank's owned facets of ``group`` as node rows.
+
+    Returns:
+        rows (global node, side ±1, x, y, weight, n_x, n_y, facet length), shape=(3 m, 8)
+        for m owned facets.
+    """
+    mesh = V.mesh
+    tdim = mesh.topology.dim
+    dim, facets = tagged.entities(group)
+    if dim != tdim - 1:
+        raise RunError(f"{key}: the group '{group}' is not a curve group")
+    facets = tagged.owned(dim, facets)
+    mesh.topology.create_connectivity(dim, tdim)
+    mesh.topology.create_connectivity(tdim, dim)
+    f2c = mesh.topology.connectivity(dim, tdim)
+    c2f = mesh.topology.connectivity(tdim, dim)
+    coords = V.tabulate_dof_coordinates()
+    imap = V.dofmap.index_map
+    layout = V.dofmap.dof_layout
+    geom = mesh.geometry
+    rows = []
+    for f in facets:
+        cells = f2c.links(f)
+        if len(cells) != 1:
+            raise RunError(
+                f"{key}: the joint '{group}' is not split (a facet with {len(cells)} cells); "
+                "draw it twice, one curve per side (meshes/slope_planar_joint.geo)"
+            )
+        cell = cells[0]
+        local = int(np.flatnonzero(c2f.links(cell) == f)[0])
+        nodes = V.dofmap.cell_dofs(cell)[layout.entity_closure_dofs(dim, local)]
+        xy = coords[nodes, :2]
+        # the two ends are the farthest apart; the third is the middle node
+        d = np.linalg.norm(xy[:, None] - xy[None], axis=2)
+        a, b = np.unravel_index(np.argmax(d), d.shape)
+        mid = 3 - a - b
+        order = np.array([a, b, mid])
+        t = xy[b] - xy[a]
+        length = float(np.linalg.norm(t))
+        normal = np.array([-t[1], t[0]]) / length
+        if normal[1] < 0 or (normal[1] == 0 and normal[0] < 0):
+            normal = -normal
+        centre = geom.x[geom.dofmaps[0][cell], :2].mean(axis=0)
+        side = 1.0 if np.dot(centre - xy[mid], normal) > 0 else -1.0
+        glob = imap.local_to_global(nodes[order].astype(np.int32))
+        for k in range(3):
+            i = order[k]
+            rows.append([glob[k], side, *xy[i], SIMPSON[k] * length, *normal, length])
+    return np.asarray(rows, dtype=float).reshape(-1, 8)
+
+
+def _merge(rows: np.ndarray) -> np.ndarray:
+    """One row per (side, node): weights summed, normals weight-averaged, lengths averaged.
+
+    Args:
+        rows: facet node rows of :func:`_face_nodes`, all ranks, shape=(k, 8).
+
+    Returns:
+        (global node, side, x, y, weight, n_x, n_y, mean facet length), shape=(m, 8),
+        sorted by (side, node).
+    """
+    keys = rows[:, :2]
+    uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    out = np.zeros((len(uniq), 8))
+    out[:, :2] = uniq
+    count = np.bincount(inverse, minlength=len(uniq)).astype(float)
+    w = np.bincount(inverse, weights=rows[:, 4], minlength=len(uniq))
+    out[:, 4] = w
+    for col in (2, 3, 7):
+        out[:, col] = np.bincount(inverse, weights=rows[:, col], minlength=len(uniq)) / count
+    for col in (5, 6):
+        out[:, col] = np.bincount(inverse, weights=rows[:, col] * rows[:, 4], minlength=len(uniq))
+    out[:, 5:7] /= np.linalg.norm(out[:, 5:7], axis=1)[:, None]
+    return out
+
+
+@dataclass
+class JointGeometry:
+    """The node pairs of the split joints (the same arrays on every rank).
+
+    Attributes:
+        names: the joint groups, in the order of ``group``'s indices.
+        plus: global node of the + face, shape=(m,).
+        minus: global node of the − face, shape=(m,).
+        x: coordinates of the pairs, shape=(m, 2).
+        normal: unit normal n (from − to +), shape=(m, 2).
+        weight: tributary length w, shape=(m,).
+        length: the mean facet length ℓ at the pair, shape=(m,).
+        group: index into ``names`` of each pair, shape=(m,).
+        fixed: the pair's four DOFs (u⁺_x, u⁺_y, u⁻_x, u⁻_y) are Dirichlet DOFs, shape=(m, 4).
+    """
+
+    names: tuple[str, ...]
+    plus: np.ndarray
+    minus: np.ndarray
+    x: np.ndarray
+    normal: np.ndarray
+    weight: np.ndarray
+    length: np.ndarray
+    group: np.ndarray
+    fixed: np.ndarray
+
+    @classmethod
+    def build(
+        cls,
+        V: dolfinx.fem.FunctionSpace,
+        tagged: TaggedMesh,
+        groups: Sequence[str],
+        *,
+        bcs: Sequence[dolfinx.fem.DirichletBC] = (),
+        key: str = "plasticity.joints",
+    ) -> JointGeometry:
+        """Find, weigh and pair the faces' nodes of each group (collective).
+
+        Raises:
+            RunError: (every rank) a group is missing, is not split, or its faces' nodes
+                do not pair one to one (the two curves not meshed alike).
+        """
+        comm = V.mesh.comm
+        parts: list[list[np.ndarray]] = [[] for _ in range(7)]
+        for g, name in enumerate(groups):
+            where = f"{key}.{name}"
+            if name not in tagged.groups:
+                known = ", ".join(sorted(tagged.groups))
+                raise RunError(f"{where}: no group '{name}' in the mesh (groups: {known})")
+            message, rows = None, np.zeros((0, 8))
+            try:
+                rows = _face_nodes(V, tagged, name, where)
+            except RunError as exc:
+                message = str(exc)
+            messages = [m for m in comm.allgather(message) if m]
+            if messages:
+                raise RunError(messages[0])
+            rows = _merge(np.concatenate(comm.allgather(rows)))
+            pairs = _pair(rows, where)
+            for part, value in zip(parts, (*pairs, np.full(len(pairs[0]), g)), strict=True):
+                part.append(value)
+        cat = [np.concatenate(p) if p else np.zeros(0) for p in parts]
+        plus, minus = cat[0].astype(np.int64), cat[1].astype(np.int64)
+        x, normal = cat[2].reshape(-1, 2), cat[3].reshape(-1, 2)
+        fixed = _fixed(V, bcs, plus, minus)
+        return cls(tuple(groups), plus, minus, x, normal, cat[4], cat[5], cat[6].astype(int), fixed)
+
+    @property
+    def size(self) -> int:
+        """The number of pairs."""
+        return len(self.plus)
+
+
+def _pair(rows: np.ndarray, key: str) -> tuple[np.ndarray, ...]:
+    """Pair the + and − rows by coordinates.
+
+    Returns:
+        plus, minus (global nodes), x (m, 2), normal (m, 2), weight (m,), length (m,).
+    """
+    up, down = rows[rows[:, 1] > 0], rows[rows[:, 1] < 0]
+    if len(up) == 0 or len(up) != len(down):
+        raise RunError(
+            f"{key}: the joint's faces have {len(up)} and {len(down)} nodes; they must be "
+            "meshed alike (the same curve drawn twice, e.g. transfinite)"
+        )
+    tol = 1e-6 * float(rows[:, 7].min())
+    d = np.linalg.norm(up[:, None, 2:4] - down[None, :, 2:4], axis=2)
+    match = np.argmin(d, axis=1)
+    if np.any(d[np.arange(len(up)), match] > tol) or len(np.unique(match)) != len(up):
+        raise RunError(
+            f"{key}: the nodes of the joint's two faces do not lie on each other; mesh the "
+            "two curves alike (the same points, transfinite)"
+        )
+    down = down[match]
+    normal = up[:, 5:7] + down[:, 5:7]
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    return (
+        up[:, 0],
+        down[:, 0],
+        up[:, 2:4],
+        normal,
+        0.5 * (up[:, 4] + down[:, 4]),
+        0.5 * (up[:, 7] + down[:, 7]),
+    )
+
+
+def _gather(V: dolfinx.fem.FunctionSpace, array: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """Values of a blocked local array at global nodes, shape=(len(nodes), bs); collective."""
+    imap = V.dofmap.index_map
+    bs = V.dofmap.index_map_bs
+    local = imap.global_to_local(nodes.astype(np.int64))
+    owned = (local >= 0) & (local < imap.size_local)
+    out = np.zeros((len(nodes), bs))
+    out[owned] = array.reshape(-1, bs)[local[owned]]
+    return np.asarray(V.mesh.comm.allreduce(out, op=MPI.SUM))
+
+
+def _fixed(
+    V: dolfinx.fem.FunctionSpace,
+    bcs: Sequence[dolfinx.fem.DirichletBC],
+    plus: np.ndarray,
+    minus: np.ndarray,
+) -> np.ndarray:
+    """Whether each pair DOF (u⁺_x, u⁺_y, u⁻_x, u⁻_y) is a Dirichlet DOF, shape=(m, 4)."""
+    bs = V.dofmap.index_map_bs
+    imap = V.dofmap.index_map
+    marker = np.zeros((imap.size_local + imap.num_ghosts) * bs)
+    for bc in bcs:
+        marker[bc.dof_indices()[0]] = 1.0
+    both = _gather(V, marker, np.concatenate([plus, minus]))
+    m = len(plus)
+    return np.concatenate([both[:m], both[m:]], axis=1) > 0
+
+
+class JointInterface:
+    """The joints' springs at one strength, with their slips (the state).
+
+    Args:
+        geometry: the pairs.
+        V: the displacement space (P2 vector).
+        strengths: each group's strength (``geometry.names`` order), already reduced.
+        penalty: kₙ = kₛ = penalty · E / ℓ.
+        E: Young's modulus of the rock.
+    """
+
+    def __init__(
+        self,
+        geometry: JointGeometry,
+        V: dolfinx.fem.FunctionSpace,
+        strengths: Sequence[JointStrength],
+        *,
+        penalty: float,
+        E: float,
+    ) -> None:
+        self.geometry, self.V = geometry, V
+        self.cohesion = np.array([s.cohesion for s in strengths])[geometry.group]
+        self.friction = np.array([s.friction for s in strengths])[geometry.group]
+        self.k = penalty * E / geometry.length
+        self.slip_n = np.zeros(geometry.size)
+        self.ret: JointReturn | None = None
+        bs = V.dofmap.index_map_bs
+        comps = np.arange(bs)
+        plus, minus = geometry.plus[:, None], geometry.minus[:, None]
+        #: the pairs' global scalar DOFs (u⁺_x, u⁺_y, u⁻_x, u⁻_y), shape=(m, 4)
+        self._dofs = np.concatenate([bs * plus + comps, bs * minus + comps], axis=1)
+        lo, hi = V.dofmap.index_map.local_range
+        self._owned = (self._dofs >= bs * lo) & (self._dofs < bs * hi) & ~geometry.fixed
+        n = geometry.normal
+        self._q = np.stack([n, np.stack([n[:, 1], -n[:, 0]], axis=1)], axis=2)  # (m, 2, 2): [n t]
+
+    def update(self, u: dolfinx.fem.Function) -> None:
+        """The law at the jump of u (collective)."""
+        g = self.geometry
+        values = _gather(self.V, u.x.array, np.concatenate([g.plus, g.minus]))
+        jump = values[: g.size] - values[g.size :]
+        local = np.einsum("mij,mi->mj", self._q, jump)  # (δₙ, δₛ)
+        self.ret = coulomb_joint(
+            local[:, 0],
+            local[:, 1],
+            self.slip_n,
+            kn=self.k,
+            ks=self.k,
+            cohesion=self.cohesion,
+            friction=self.friction,
+        )
+        self._jump = local
+
+    def commit(self) -> None:
+        """Accept the current slips as converged."""
+        assert self.ret is not None
+        self.slip_n = self.ret.slip.copy()
+
+    def residual_entries(self) -> tuple[np.ndarray, np.ndarray]:
+        """(owned global rows, values): +w T on u⁺, −w T on u⁻, T = σₙ n + τ t."""
+        assert self.ret is not None
+        trac = np.einsum("mij,mj->mi", self._q, np.stack([self.ret.normal, self.ret.shear], 1))
+        force = self.geometry.weight[:, None] * trac
+        values = np.concatenate([force, -force], axis=1)  # (m, 4)
+        return self._dofs[self._owned], values[self._owned]
+
+    def jacobian_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(rows, cols, values) of the owned rows, Dirichlet rows and columns left out."""
+        assert self.ret is not None
+        q = self._q
+        K = self.geometry.weight[:, None, None] * np.einsum(
+            "mij,mjk,mlk->mil", q, self.ret.tangent, q
+        )
+        block = np.block([[K, -K], [-K, K]])  # (m, 4, 4)
+        rows = np.broadcast_to(self._dofs[:, :, None], block.shape)
+        cols = np.broadcast_to(self._dofs[:, None, :], block.shape)
+        keep = self._owned[:, :, None] & ~self.geometry.fixed[:, None, :]
+        return rows[keep], cols[keep], block[keep]
+
+    def summary(self) -> dict[str, object]:
+        """Pairs, slipping and open pairs, the largest slip and opening (JSON-ready)."""
+        assert self.ret is not None
+        opening = np.maximum(self._jump[:, 0], 0.0)
+        return {
+            "groups": list(self.geometry.names),
+            "pairs": int(self.geometry.size),
+            "slipping": int(np.count_nonzero(self.ret.state == SLIP)),
+            "open": int(np.count_nonzero(self._jump[:, 0] > 0)),
+            "max_slip": float(np.abs(self.ret.slip).max(initial=0.0)),
+            "max_opening": float(opening.max(initial=0.0)),
+        }
+
+    def write_csv(self, path: Path) -> None:
+        """The :meth:`table` as CSV (one rank writes: the table is the same on every rank)."""
+        header = "x,y,normal_traction,shear_traction,opening,slip,state"
+        np.savetxt(path, self.table(), delimiter=",", header=header, comments="", fmt="%.10g")
+
+    def table(self) -> np.ndarray:
+        """Per pair: x, y, σₙ, τ, opening δₙ, slip s, state (0 closed, 1 slip, 2 open).
+
+        Shape=(m, 7), the same on every rank.
+        """
+        assert self.ret is not None
+        return np.column_stack(
+            [
+                self.geometry.x,
+                self.ret.normal,
+                self.ret.shear,
+                self._jump[:, 0],
+                self.ret.slip,
+                self.ret.state,
+            ]
+        )
+
+
+def joint_springs(
+    V: dolfinx.fem.FunctionSpace,
+    tagged: TaggedMesh,
+    joints: Sequence[tuple[str, JointStrength]],
+    *,
+    bcs: Sequence[dolfinx.fem.DirichletBC],
+    rock: Any,
+    penalty: float,
+) -> Callable[[Any], JointInterface]:
+    """The map reduced rock law ↦ the joints' springs at the same trial factor (collective).
+
+    The pairs are found once; each call divides every joint's c and μ by the factor F
+    that divided the rock's (:func:`geofrac.plasticity.strength_reduction.trial_factor`
+    of ``rock`` and the law given: F = 1 for ``rock`` itself).
+
+    Args:
+        V: the displacement space (P2 vector).
+        tagged: the mesh with its groups.
+        joints: (curve group, strength at F = 1) per joint group.
+        bcs: the Dirichlet conditions (their DOFs get no spring rows or columns).
+        rock: the rock's law at full strength (its E sets the springs).
+        penalty: kₙ = kₛ = penalty · E / ℓ.
+    """
+    from geofrac.plasticity.strength_reduction import trial_factor
+
+    geometry = JointGeometry.build(V, tagged, [name for name, _ in joints], bcs=bcs)
+    strengths = [s for _, s in joints]
+
+    def make(law: Any) -> JointInterface:
+        factor = 1.0 if law is rock else trial_factor(rock, law)
+        reduced = [s.reduced(factor) for s in strengths]
+        return JointInterface(geometry, V, reduced, penalty=penalty, E=float(rock.E))
+
+    return make
