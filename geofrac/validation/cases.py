@@ -282,6 +282,22 @@ KIRSCH_FINE = (
 )
 
 
+def planar_sliding_fos(
+    c: float, phi_deg: float, *, psi_deg: float, alpha_deg: float, height: float, gamma: float
+) -> float:
+    """Hoek and Bray's factor of safety of a block on one daylighting joint, per unit thickness.
+
+    (c A + W cos ψ tan φ)/(W sin ψ) with the joint (dip ψ) from the face (dip α) at
+    ``height`` below the crest up to the crest: A = height/sin ψ, W = γ height² (cot ψ −
+    cot α)/2 (Hoek and Bray, Rock Slope Engineering; Wyllie and Mah (2004), §6.3).
+    """
+    psi, alpha = math.radians(psi_deg), math.radians(alpha_deg)
+    area = height / math.sin(psi)
+    weight = 0.5 * gamma * height**2 * (1 / math.tan(psi) - 1 / math.tan(alpha))
+    resisting = c * area + weight * math.cos(psi) * math.tan(math.radians(phi_deg))
+    return resisting / (weight * math.sin(psi))
+
+
 def kirsch_wall_hoop(p: float, k: float, theta_deg: float) -> float:
     """σθθ on the wall of a circular opening under σyy = −p, σxx = −K p (tension positive).
 
@@ -1040,6 +1056,25 @@ CASES: tuple[Case, ...] = (
         quick=False,
         plot=_plot_reduction,
         estimate_s=200.0,
+    ),
+    Case(
+        "planar_sliding_fos",
+        "Plasticity and factor of safety",
+        "rock slope (60° face, H = 10 m) cut by one joint dipping 30° that daylights 2 m "
+        "above the toe, joint c = 10 kPa, φ = 35°, strong rock, P2, h = 1 m: factor of "
+        "safety by strength reduction with the joint's c and tan φ reduced",
+        "factor of safety",
+        Reference(
+            planar_sliding_fos(10.0, 35.0, psi_deg=30.0, alpha_deg=60.0, height=8.0, gamma=26.0),
+            "closed form: planar sliding, (c A + W cos ψ tan φ)/(W sin ψ), Hoek and Bray, "
+            "Rock Slope Engineering; Wyllie and Mah (2004)",
+            rtol=0.03,
+        ),
+        _factor_of_safety,
+        scene="jobs/validation/slope_planar_joint.toml",
+        quick=False,
+        plot=_plot_reduction,
+        estimate_s=80.0,
     ),
     Case(
         "mpm_bar",

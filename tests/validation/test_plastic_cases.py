@@ -57,3 +57,20 @@ def test_plasticity_chapter_cases() -> None:
     assert by_name["opening_wall_displacement"].reference.rtol == 0.02
     slope = by_name["slope_fos"]
     assert (slope.reference.value, slope.reference.rtol, slope.quick) == (1.4, 0.03, False)
+
+
+def test_planar_sliding_reference_by_hand() -> None:
+    """Without cohesion tan φ / tan ψ whatever the block; c > 0 adds c A / (W sin ψ)."""
+    import math
+
+    from geofrac.validation.cases import planar_sliding_fos
+
+    kw = {"psi_deg": 30.0, "alpha_deg": 60.0, "height": 8.0, "gamma": 26.0}
+    assert planar_sliding_fos(0.0, 35.0, **kw) == pytest.approx(
+        math.tan(math.radians(35.0)) / math.tan(math.radians(30.0)), rel=1e-14
+    )
+    weight = 0.5 * 26.0 * 64.0 * (math.sqrt(3) - 1 / math.sqrt(3))  # 960.71 kN/m
+    extra = 10.0 * 16.0 / (weight * 0.5)
+    assert planar_sliding_fos(10.0, 35.0, **kw) == pytest.approx(
+        math.tan(math.radians(35.0)) / math.tan(math.radians(30.0)) + extra, rel=1e-14
+    )
