@@ -41,6 +41,7 @@ from geofrac.fem.plastic import Law, PlasticProblem
 from geofrac.fem.plastic_outputs import (
     ProbeHistory,
     cell_fields,
+    displacement_magnitude,
     plot_cell_field,
     write_reduction_csv,
 )
@@ -339,17 +340,36 @@ def run_reduction(
         if plastic.joints is not None:  # the last stable F's joint pairs
             plastic.joints.write_csv(solution.scene.output.dir / "joints.csv")
     if write:
-        plot_cell_field(
-            solution.fields["plastic_shear_strain"],
-            solution.scene.output.dir / "failure_mechanism.png",
-            title=f"{solution.scene.name}: plastic shear strain at F = {stable:.4f} "
-            f"(FoS {result.factor_of_safety:.3f})",
-            label="plastic shear strain γᵖ (−)",
-            length=solution.scene.units.length,
-        )
+        _plot_mechanism(solution, plastic, stable=stable, fos=result.factor_of_safety)
     if not out["last_stable"]["converged"]:  # type: ignore[index]
         say("strength reduction: WARNING: the last stable factor did not converge when re-solved")
     return out
+
+
+def _plot_mechanism(
+    solution: Solution, plastic: PlasticProblem, *, stable: float, fos: float
+) -> None:
+    """``failure_mechanism.png`` (collective): the mechanism at the last stable F.
+
+    γᵖ; with joints |u| and the joint pairs' states instead (a block sliding on a joint in
+    strong rock has no γᵖ).
+    """
+    scene = solution.scene
+    length = scene.units.length
+    if plastic.joints is None:
+        field, label = solution.fields["plastic_shear_strain"], "plastic shear strain γᵖ (−)"
+        what = "plastic shear strain"
+    else:
+        field, label = displacement_magnitude(solution.problem.uh), f"|u| ({length})"
+        what = "|u| and joint states"
+    plot_cell_field(
+        field,
+        scene.output.dir / "failure_mechanism.png",
+        title=f"{scene.name}: {what} at F = {stable:.4f} (FoS {fos:.3f})",
+        label=label,
+        length=length,
+        joints=None if plastic.joints is None else plastic.joints.table(),
+    )
 
 
 def _plot(result: Any, solution: Solution) -> None:

@@ -33,7 +33,13 @@ from geofrac.fem.plastic import PlasticProblem
 from geofrac.fem.post import locate_points, probe
 from geofrac.plasticity import MohrCoulomb
 
-__all__ = ["ProbeHistory", "cell_fields", "plot_cell_field", "write_reduction_csv"]
+__all__ = [
+    "ProbeHistory",
+    "cell_fields",
+    "displacement_magnitude",
+    "plot_cell_field",
+    "write_reduction_csv",
+]
 
 
 def _cell_mean(
@@ -89,14 +95,32 @@ def cell_fields(plastic: PlasticProblem) -> dict[str, dolfinx.fem.Function]:
     }
 
 
+def displacement_magnitude(u: dolfinx.fem.Function) -> dolfinx.fem.Function:
+    """|u| at each cell's midpoint as a DG0 function (for a picture of the mechanism)."""
+    mesh = u.function_space.mesh
+    space = dolfinx.fem.functionspace(mesh, ("DG", 0))
+    out = dolfinx.fem.Function(space, name="displacement_magnitude")
+    expr = ufl.sqrt(ufl.inner(u, u))
+    out.interpolate(dolfinx.fem.Expression(expr, space.element.interpolation_points))
+    return out
+
+
 def plot_cell_field(
-    fn: dolfinx.fem.Function, path: Path, *, title: str, label: str, length: str
+    fn: dolfinx.fem.Function,
+    path: Path,
+    *,
+    title: str,
+    label: str,
+    length: str,
+    joints: np.ndarray | None = None,
 ) -> None:
     """Draw the scalar DG0 ``fn`` on the mesh's straight-sided cells into ``path`` (rank 0).
 
     Collective: every rank sends its owned cells' corners and values to rank 0.
-    ``label`` names the colour bar, ``length`` the axes' unit. 2D meshes only: in 3D
-    nothing is drawn (the field is in the XDMF for ParaView).
+    ``label`` names the colour bar, ``length`` the axes' unit. ``joints``: the joint
+    pairs' table (:meth:`geofrac.fem.joints.JointInterface.table`, columns x, y, …,
+    state), drawn as points coloured by state (closed, slipping, open). 2D meshes only: in
+    3D nothing is drawn (the field is in the XDMF for ParaView).
     """
     mesh = fn.function_space.mesh
     if mesh.geometry.dim != 2:
@@ -123,6 +147,17 @@ def plot_cell_field(
     triangles = np.arange(len(xy)).reshape(-1, 3)
     art = ax.tripcolor(xy[:, 0], xy[:, 1], triangles, facecolors=v, cmap="viridis")
     ax.set_aspect("equal")
+    if joints is not None and len(joints):
+        state = joints[:, -1].astype(int)
+        for code, colour, name in (
+            (0, "white", "closed"),
+            (1, "red", "slipping"),
+            (2, "k", "open"),
+        ):
+            at = state == code
+            if at.any():
+                ax.plot(*joints[at, :2].T, "o", ms=3, color=colour, mec="k", mew=0.3, label=name)
+        ax.legend(title="joint pairs", fontsize=8, loc="upper left", framealpha=0.8)
     fig.colorbar(art, ax=ax, label=label, orientation="horizontal" if wide else "vertical")
     ax.set_xlabel(f"x ({length})")
     ax.set_ylabel(f"y ({length})")
