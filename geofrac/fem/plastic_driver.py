@@ -32,6 +32,7 @@ from mpi4py import MPI
 
 from geofrac.fem.insitu import in_plane
 from geofrac.fem.plastic import Law, PlasticProblem
+from geofrac.fem.plastic_checkpoint import LoadHooks, ReductionHooks
 from geofrac.fem.solution import Solution
 from geofrac.fem.strength_reduction import factor_of_safety, largest_monitor, point_monitor
 from geofrac.plasticity.strength_reduction import reduce_strength
@@ -104,8 +105,10 @@ def run(
     problem = solution.problem
     plastic = _factory(solution, ramp_terms=False, max_iterations=max_iterations)(law)
     talk = say if solution.tagged.mesh.comm.rank == 0 else None
+    control = solution.control
+    hooks = None if control is None else LoadHooks(control, say)
     try:
-        result = plastic.solve_steps(steps, max_cuts=max_cuts, say=talk)
+        result = plastic.solve_steps(steps, max_cuts=max_cuts, say=talk, hooks=hooks)
         problem.uh.x.array[:] = plastic.u.x.array
         if not result.converged:
             say(
@@ -161,6 +164,8 @@ def run_reduction(
     make = _factory(solution, ramp_terms=ramp, max_iterations=max_iterations)
     monitor = largest_monitor if config.monitor is None else point_monitor(config.monitor)
     talk = say if solution.tagged.mesh.comm.rank == 0 else None
+    control = solution.control
+    hooks = None if control is None else ReductionHooks(control, say)
     result = factor_of_safety(
         make,
         law,
@@ -171,11 +176,13 @@ def run_reduction(
         max_cuts=max_cuts,
         monitor=monitor,
         say=talk,
+        hooks=hooks,
     )
     stable = result.bracket.stable
     plastic = make(reduce_strength(law, stable))
+    resolve = None if hooks is None else hooks.trial(stable, result.trials, final=True)
     try:
-        last = plastic.solve_steps(steps, max_cuts=max_cuts)
+        last = plastic.solve_steps(steps, max_cuts=max_cuts, hooks=resolve)
         problem.uh.x.array[:] = plastic.u.x.array
         shear = plastic.plastic_shear_strain()
         owned = plastic.eps.function_space.dofmap.index_map.size_local
