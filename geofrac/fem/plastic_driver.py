@@ -123,6 +123,7 @@ def run(
             "law": type(law).__name__,
             "plastic_points": plastic.plastic_points(),
             "yielded_area": plastic.yielded_area(),
+            "max_plastic_shear_strain": _max_shear(plastic),
             "ellipticity_lost": None if result.ellipticity is None else result.ellipticity[0],
             "steps": [
                 {
@@ -139,6 +140,14 @@ def run(
         }
     finally:
         plastic.destroy()
+
+
+def _max_shear(plastic: PlasticProblem) -> float:
+    """The largest accumulated plastic shear strain over the owned points (all ranks)."""
+    shear = plastic.plastic_shear_strain()
+    owned = plastic.eps.function_space.dofmap.index_map.size_local
+    local = float(shear[:owned].max()) if owned else 0.0
+    return float(plastic.comm.allreduce(local, op=MPI.MAX))
 
 
 def run_reduction(
