@@ -19,7 +19,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -28,7 +28,7 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.errors import RunError
-from geofrac.fem.plastic import Law, PlasticProblem, solve_plastic
+from geofrac.fem.plastic import Law, PlasticProblem, StepHooks, solve_plastic
 from geofrac.plasticity.strength_reduction import (
     Bracket,
     bisect_factor,
@@ -36,11 +36,9 @@ from geofrac.plasticity.strength_reduction import (
     trials_left,
 )
 
-if TYPE_CHECKING:
-    from geofrac.fem.plastic_checkpoint import ReductionHooks
-
 __all__ = [
     "Monitor",
+    "ReductionHooks",
     "ReductionResult",
     "Trial",
     "factor_of_safety",
@@ -111,6 +109,26 @@ class Trial:
     iterations: int
     seconds: float
     diverged: dict[str, int] = field(default_factory=dict)
+
+
+class ReductionHooks(Protocol):
+    """Checkpoints and resume of :func:`factor_of_safety` (collective methods).
+
+    :class:`geofrac.fem.plastic_checkpoint.ReductionHooks` implements them on the run's
+    control.
+    """
+
+    def replay(self, factor: float) -> Trial | None:
+        """A finished trial at ``factor`` known from a checkpoint (not solved again)."""
+        ...
+
+    def trial(self, factor: float, trials: list[Trial], *, final: bool = False) -> StepHooks:
+        """The load-step hooks of the solve at ``factor`` (``trials``: those so far)."""
+        ...
+
+    def finished(self, trials: list[Trial]) -> None:
+        """After a finished trial (the last of ``trials``): checkpoint, stop on a signal."""
+        ...
 
 
 @dataclass
