@@ -292,20 +292,6 @@ def test_two_ranks_resume_to_the_whole_run_and_refuse_one_rank(tmp_path, monkeyp
     assert comm.bcast(error, root=0)
 
 
-@pytest.mark.mpi(min_size=2)
-def test_two_ranks_strength_reduction_resumes_inside_a_trial(tmp_path, monkeypatch):
-    comm = MPI.COMM_WORLD
-    root = _shared(tmp_path, comm)
-    whole = root / "whole"
-    counts = _whole(SLOPE, SLOPE_SETS, whole, monkeypatch)
-    out = root / "stopped"
-    before = _stopped(SLOPE, SLOPE_SETS, out, monkeypatch, STOPS["inside_trial"])
-    again = _resumed(SLOPE, SLOPE_SETS, out, monkeypatch)
-    assert before.newton + again.newton == counts.newton
-    comm.barrier()
-    _on_root(_same, out, whole, rtol=1e-10)
-
-
 @pytest.mark.parametrize("threshold", [1.2345, 1.0001, 1.9999, 0.7, 3.1])
 def test_trials_left_counts_the_bisections_to_come(threshold: float) -> None:
     """The per-trial estimate of the trials left, against bisect_factor's actual calls.
