@@ -235,3 +235,56 @@ def test_a_killed_run_resumes_to_the_uninterrupted_result(tmp_path, references, 
     _same_series(out / series, reference / series, rtol)
     if case != "mpm":
         _same_series(out / "results.h5", reference / "results.h5", rtol)
+
+
+def _checkpoints(directory: Path, k: int) -> bool:
+    """Whether ``directory`` holds a checkpoint of step ``k`` or later."""
+    try:
+        names = [p.name for p in directory.iterdir()]
+    except OSError:
+        return False
+    return any(n[5:].isdigit() and int(n[5:]) >= k for n in names if n.startswith("ckpt-"))
+
+
+def test_a_terminated_plastic_run_resumes_to_the_uninterrupted_result(tmp_path):
+    """The elasto-plastic opening (20 load steps, 1 rank): SIGTERM, --resume, the same run.
+
+    No streamed log here: with a checkpoint after every load step, SIGTERM goes once a
+    checkpoint of step 3 or later exists (the run then stops at its next poll, short of
+    the last step). Summary results and ``results.h5`` (u) equal the uninterrupted run's bit for bit
+    (docs/plasticity.md, "Stopping and resuming").
+    """
+    sets = ("plasticity.load_steps=20", "output.checkpoint_every=1", "output.xdmf=true")
+    reference = tmp_path / "reference"
+    _run(_command("opening_mohr_coulomb", reference, sets, 1), tmp_path)
+    out = tmp_path / "out"
+    cmd = _command("opening_mohr_coulomb", out, sets, 1)
+    proc = subprocess.Popen(
+        cmd, cwd=tmp_path, env=subprocess_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while not _checkpoints(out / "incomplete" / "checkpoint", 3):
+            assert proc.poll() is None, "the run ended before its third load step"
+            assert time.monotonic() < deadline, "no third checkpoint after 120 s"
+            time.sleep(0.005)
+        os.kill(proc.pid, signal.SIGTERM)
+        proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 128 + signal.SIGTERM
+    status = json.loads((out / "incomplete" / "summary.json").read_text())
+    assert status["status"] == "interrupted", status["status"]
+    assert "load step" in status["interrupted"]["after"]
+    _run(_command("opening_mohr_coulomb", out, sets, 1, "--resume"), tmp_path)
+    a = json.loads((out / "summary.json").read_text())
+    b = json.loads((reference / "summary.json").read_text())
+    assert a["status"] == "ok" and a["resumed_from"]["k"] >= 3
+    pa, pb = a["results"]["plasticity"], b["results"]["plasticity"]
+    assert pa["converged"] and pa["plastic_points"] > 0
+    for key in ("steps", "plastic_points", "yielded_area", "max_plastic_shear_strain"):
+        assert pa[key] == pb[key], key
+    assert a["results"]["probes"] == b["results"]["probes"]
+    _same_series(out / "results.h5", reference / "results.h5", 0.0)

@@ -22,7 +22,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -41,7 +41,14 @@ from geofrac.plasticity.ellipticity import lost_ellipticity
 from geofrac.solvers.snes import NewtonReport, NewtonSolver
 from geofrac.solvers.types import SCALAR
 
-__all__ = ["PlasticProblem", "PlasticResult", "StepRecord", "solve_plastic"]
+__all__ = [
+    "LoadState",
+    "PlasticProblem",
+    "PlasticResult",
+    "StepHooks",
+    "StepRecord",
+    "solve_plastic",
+]
 
 #: Plane strain: tensor index pairs of the stored stress (xx, yy, zz, xy).
 STRESS_2D = ((0, 0), (1, 1), (2, 2), (0, 1))
@@ -128,6 +135,36 @@ def _bc_view(bc: dolfinx.fem.DirichletBC) -> np.ndarray:
     if not isinstance(view, np.ndarray):
         raise RunError("plasticity: a Dirichlet value that is not an array cannot be ramped")
     return view
+
+
+@dataclass
+class LoadState:
+    """Where a load-stepped solve stands after a converged step (checkpoint and resume).
+
+    Attributes:
+        done: the last converged load factor.
+        inc: the current increment (halved by cuts, kept once a step converges).
+        records: every attempted step so far.
+    """
+
+    done: float
+    inc: float
+    records: list[StepRecord]
+
+
+class StepHooks(Protocol):
+    """Checkpoint and resume of :meth:`PlasticProblem.solve_steps` (collective methods).
+
+    :mod:`geofrac.fem.plastic_checkpoint` implements them on the run's control.
+    """
+
+    def restore(self, problem: PlasticProblem) -> LoadState | None:
+        """Put a checkpoint's state into ``problem``; where to continue (None: from 0)."""
+        ...
+
+    def after_step(self, problem: PlasticProblem, state: LoadState) -> None:
+        """After a converged step short of factor 1: checkpoint, stop on a signal."""
+        ...
 
 
 def _check_space(V: dolfinx.fem.FunctionSpace) -> int:
@@ -291,6 +328,34 @@ class PlasticProblem:
         if self.joints is not None:
             self.joints.update(self.u)
 
+    def state(self) -> dict[str, np.ndarray]:
+        """This rank's arrays of the converged state (local, with ghosts).
+
+        ``u`` shape=(dofs × gdim,); ``stress_n``, ``strain_n``, ``plastic_strain``
+        shape=(n, 3, 3) at the local quadrature points; with joints ``joint_slip``, the
+        committed slip of every pair, shape=(pairs,) (the same on every rank).
+        """
+        arrays = {
+            "u": self.u.x.array.copy(),
+            "stress_n": self.stress_n.copy(),
+            "strain_n": self.strain_n.copy(),
+            "plastic_strain": self.plastic_strain.copy(),
+        }
+        if self.joints is not None:
+            arrays["joint_slip"] = self.joints.slip_n.copy()
+        return arrays
+
+    def set_state(self, arrays: dict[str, np.ndarray], factor: float) -> None:
+        """Put back a :meth:`state` reached at load ``factor`` (same mesh distribution)."""
+        self.u.x.array[:] = arrays["u"]
+        self.stress_n = np.array(arrays["stress_n"], dtype=float)
+        self.strain_n = np.array(arrays["strain_n"], dtype=float)
+        self.plastic_strain = np.array(arrays["plastic_strain"], dtype=float)
+        if self.joints is not None:
+            self.joints.slip_n = np.array(arrays["joint_slip"], dtype=float)
+        self.factor.value = factor
+        self._update()
+
     def _commit(self) -> int:
         """Accept the current state as converged; the number of plastic points (all ranks)."""
         self._update()
@@ -349,15 +414,16 @@ class PlasticProblem:
         max_cuts: int = 4,
         say: Callable[[str], None] | None = None,
         monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None = None,
-        on_step: Callable[[StepRecord], None] | None = None,
         observe: Callable[[PlasticProblem], Any] | None = None,
+        hooks: StepHooks | None = None,
     ) -> PlasticResult:
         """Load factor 0 → 1 in ``steps`` increments, halving a diverged increment.
 
         ``say`` receives one line per attempted step (the caller prints on rank 0);
         ``observe`` (collective) is called after each accepted step, its value kept in
-        the step's record; then ``on_step`` (collective) with that record. The Dirichlet
-        values are λ g during the run, g after it.
+        the step's record (JSON-ready: it is checkpointed). The Dirichlet values are λ g
+        during the run, g after it. ``hooks``: a checkpoint to continue from, and the
+        poll after each converged step (:mod:`geofrac.fem.plastic_checkpoint`).
 
         Returns:
             the result; ``converged = False`` with the last converged factor when an
@@ -366,7 +432,7 @@ class PlasticProblem:
         """
         try:
             return self._steps(
-                steps, max_cuts=max_cuts, say=say, monitor=monitor, observe=observe, on_step=on_step
+                steps, max_cuts=max_cuts, say=say, monitor=monitor, observe=observe, hooks=hooks
             )
         finally:
             self._ramp_bcs(1.0)
@@ -384,12 +450,13 @@ class PlasticProblem:
         say: Callable[[str], None] | None,
         monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None,
         observe: Callable[[PlasticProblem], Any] | None,
-        on_step: Callable[[StepRecord], None] | None,
+        hooks: StepHooks | None,
     ) -> PlasticResult:
         """The loop of :meth:`solve_steps` (the Dirichlet values left ramped)."""
-        records: list[StepRecord] = []
-        done, inc, cuts = 0.0, 1.0 / steps, 0
-        t0 = time.perf_counter()
+        start = None if hooks is None else hooks.restore(self)
+        records: list[StepRecord] = [] if start is None else list(start.records)
+        done, inc, cuts = (0.0, 1.0 / steps, 0) if start is None else (start.done, start.inc, 0)
+        t0, done0 = time.perf_counter(), done
         while done < 1.0 - 1e-12:
             target = min(1.0, done + inc)
             u_saved = self.u.x.array.copy()
@@ -401,15 +468,15 @@ class PlasticProblem:
                 seen = None if observe is None else observe(self)
                 records.append(StepRecord(target, report, True, plastic, seen))
                 done, cuts = target, 0
-                if on_step is not None:
-                    on_step(records[-1])
                 if say is not None:
-                    eta = (time.perf_counter() - t0) * (1.0 - done) / done
+                    eta = (time.perf_counter() - t0) * (1.0 - done) / (done - done0)
                     say(
                         f"plastic: factor {done:.4f} converged ({report.reason_name}, "
                         f"{report.iterations} its, |F| {report.residuals[-1]:.2e}), "
                         f"{plastic} plastic points, ETA {eta:.1f} s"
                     )
+                if hooks is not None and done < 1.0 - 1e-12:
+                    hooks.after_step(self, LoadState(done, inc, records))
                 continue
             records.append(StepRecord(target, report, False, 0))
             self.u.x.array[:] = u_saved
@@ -460,14 +527,16 @@ def solve_plastic(
     steps: int,
     monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None = None,
     max_cuts: int = 4,
+    hooks: StepHooks | None = None,
 ) -> PlasticResult:
     """Build the problem for ``law`` (e.g. reduced c, φ), solve it and free it.
 
     The entry point for strength reduction: whether the load steps converged and the
-    monitor displacement, with every PETSc object destroyed.
+    monitor displacement, with every PETSc object destroyed. ``hooks``: checkpoint and
+    resume (:meth:`PlasticProblem.solve_steps`).
     """
     problem = problem_factory(law)
     try:
-        return problem.solve_steps(steps, max_cuts=max_cuts, monitor=monitor)
+        return problem.solve_steps(steps, max_cuts=max_cuts, monitor=monitor, hooks=hooks)
     finally:
         problem.destroy()

@@ -38,6 +38,7 @@ from mpi4py import MPI
 from geofrac.fem.insitu import in_plane
 from geofrac.fem.joints import JointInterface, joint_springs
 from geofrac.fem.plastic import Law, PlasticProblem
+from geofrac.fem.plastic_checkpoint import LoadHooks, ReductionHooks
 from geofrac.fem.plastic_outputs import (
     ProbeHistory,
     cell_fields,
@@ -203,15 +204,18 @@ def run(
         p0=0.0 if initial is None or ground is None else -float(initial.stress[0]),
         law=law,
     )
-    probes_at: dict[float, dict[str, list[float]]] = {}
+    reactions = _reactions(solution)
 
-    def on_step(record: Any) -> None:
-        probes_at[record.factor] = history.record(record.factor)
+    def observe(p: PlasticProblem) -> dict[str, Any]:
+        return {"reactions": reactions(p), "probes": history.record()}
 
+    control = solution.control
+    hooks = None if control is None else LoadHooks(control, say)
     try:
         result = plastic.solve_steps(
-            steps, max_cuts=max_cuts, say=talk, on_step=on_step, observe=_reactions(solution)
+            steps, max_cuts=max_cuts, say=talk, observe=observe, hooks=hooks
         )
+        history.replay([(s.factor, s.observed["probes"]) for s in result.steps if s.accepted])
         problem.uh.x.array[:] = plastic.u.x.array
         solution.fields = cell_fields(plastic)
         if not result.converged:
@@ -227,6 +231,7 @@ def run(
             "law": type(law).__name__,
             "plastic_points": plastic.plastic_points(),
             "yielded_area": plastic.yielded_area(),
+            "max_plastic_shear_strain": _max_shear(plastic),
             "ellipticity_lost": None if result.ellipticity is None else result.ellipticity[0],
             "steps": [
                 {
@@ -236,9 +241,9 @@ def run(
                     "iterations": s.report.iterations,
                     "residual": s.report.residuals[-1] if s.report.residuals else None,
                     "plastic_points": s.plastic_points,
-                    "reactions": s.observed,
+                    "reactions": None if s.observed is None else s.observed["reactions"],
                 }
-                | ({"probes": probes_at[s.factor]} if s.accepted and history.names else {})
+                | ({"probes": s.observed["probes"]} if s.accepted and history.names else {})
                 for s in result.steps
             ],
             "solver": plastic.newton.describe(),
@@ -261,6 +266,14 @@ def run(
             length=scene.units.length,
         )
     return out
+
+
+def _max_shear(plastic: PlasticProblem) -> float:
+    """The largest accumulated plastic shear strain over the owned points (all ranks)."""
+    shear = plastic.plastic_shear_strain()
+    owned = plastic.eps.function_space.dofmap.index_map.size_local
+    local = float(shear[:owned].max()) if owned else 0.0
+    return float(plastic.comm.allreduce(local, op=MPI.MAX))
 
 
 def run_reduction(
@@ -296,6 +309,8 @@ def run_reduction(
     make = _factory(solution, ramp_terms=ramp, max_iterations=max_iterations, joints=springs)
     monitor = largest_monitor if config.monitor is None else point_monitor(config.monitor)
     talk = say if solution.tagged.mesh.comm.rank == 0 else None
+    control = solution.control
+    hooks = None if control is None else ReductionHooks(control, say)
     result = factor_of_safety(
         make,
         law,
@@ -306,11 +321,13 @@ def run_reduction(
         max_cuts=max_cuts,
         monitor=monitor,
         say=talk,
+        hooks=hooks,
     )
     stable = result.bracket.stable
     plastic = make(reduce_strength(law, stable))
+    resolve = None if hooks is None else hooks.trial(stable, result.trials, final=True)
     try:
-        last = plastic.solve_steps(steps, max_cuts=max_cuts)
+        last = plastic.solve_steps(steps, max_cuts=max_cuts, hooks=resolve)
         problem.uh.x.array[:] = plastic.u.x.array
         solution.fields = cell_fields(plastic)
         shear = plastic.plastic_shear_strain()

@@ -228,26 +228,39 @@ class ProbeHistory:
         law: Any = None,
     ) -> None:
         self.u, self.names = u, list(probes)
+        self.gdim = u.function_space.mesh.geometry.dim
         self.points = np.zeros((len(self.names), 3))
         for i, name in enumerate(self.names):
-            self.points[i, :2] = probes[name][:2]
+            self.points[i, : self.gdim] = probes[name][: self.gdim]
         labels = [f"output.probes.{n}" for n in self.names]
         self.cells = locate_points(u.function_space.mesh, self.points, labels)
         self.ground, self.p0, self.law = ground, p0, law
-        #: (load factor, probe displacements shape=(num_probes, 2)) per converged step.
-        self.rows: list[tuple[float, np.ndarray]] = [(0.0, np.zeros((len(self.names), 2)))]
+        #: (load factor, probe displacements shape=(num_probes, gdim)) per converged step,
+        #: filled by :meth:`replay`.
+        self.rows: list[tuple[float, np.ndarray]] = []
 
-    def record(self, factor: float) -> dict[str, list[float]]:
-        """Evaluate the probes now (collective); the values by name."""
+    def record(self) -> dict[str, list[float]]:
+        """Evaluate the probes now (collective); the values by name (JSON-ready)."""
         values = probe(self.u, self.points, self.cells) if self.names else np.zeros((0, 2))
-        self.rows.append((factor, values))
         return {n: [float(c) for c in values[i]] for i, n in enumerate(self.names)}
+
+    def replay(self, steps: list[tuple[float, dict[str, list[float]]]]) -> None:
+        """The rows from the converged steps' recorded values (a resumed run's included).
+
+        Args:
+            steps: (load factor, :meth:`record`'s values) of every converged step, in order.
+        """
+        zero = np.zeros((len(self.names), self.gdim))
+        self.rows = [(0.0, zero)] + [
+            (f, np.array([v[n] for n in self.names]).reshape(len(self.names), -1)) for f, v in steps
+        ]
 
     def write_steps(self, path: Path) -> None:
         """``load_steps.csv``: load factor and every probe's u_x, u_y per converged step."""
         with open(path, "w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(["load_factor", *(f"{n}_{c}" for n in self.names for c in ("ux", "uy"))])
+            axes = ("ux", "uy", "uz")[: self.gdim]
+            w.writerow(["load_factor", *(f"{n}_{c}" for n in self.names for c in axes)])
             for factor, values in self.rows:
                 w.writerow([f"{factor:.10g}", *(f"{v:.10g}" for v in values.ravel())])
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
 
@@ -27,11 +28,17 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.errors import RunError
-from geofrac.fem.plastic import Law, PlasticProblem, solve_plastic
-from geofrac.plasticity.strength_reduction import Bracket, bisect_factor, reduce_strength
+from geofrac.fem.plastic import Law, PlasticProblem, StepHooks, solve_plastic
+from geofrac.plasticity.strength_reduction import (
+    Bracket,
+    bisect_factor,
+    reduce_strength,
+    trials_left,
+)
 
 __all__ = [
     "Monitor",
+    "ReductionHooks",
     "ReductionResult",
     "Trial",
     "factor_of_safety",
@@ -104,6 +111,26 @@ class Trial:
     diverged: dict[str, int] = field(default_factory=dict)
 
 
+class ReductionHooks(Protocol):
+    """Checkpoints and resume of :func:`factor_of_safety` (collective methods).
+
+    :class:`geofrac.fem.plastic_checkpoint.ReductionHooks` implements them on the run's
+    control.
+    """
+
+    def replay(self, factor: float) -> Trial | None:
+        """A finished trial at ``factor`` known from a checkpoint (not solved again)."""
+        ...
+
+    def trial(self, factor: float, trials: list[Trial], *, final: bool = False) -> StepHooks:
+        """The load-step hooks of the solve at ``factor`` (``trials``: those so far)."""
+        ...
+
+    def finished(self, trials: list[Trial]) -> None:
+        """After a finished trial (the last of ``trials``): checkpoint, stop on a signal."""
+        ...
+
+
 @dataclass
 class ReductionResult:
     """The factor of safety with its bracket and every trial.
@@ -145,16 +172,44 @@ def factor_of_safety(
     max_cuts: int = 4,
     monitor: Monitor | None = None,
     say: Callable[[str], None] | None = None,
+    hooks: ReductionHooks | None = None,
 ) -> ReductionResult:
     """Bisection on the trial factor F between a stable ``low`` and a failed ``high``.
 
     ``problem_factory(reduced law)`` builds a fresh problem per trial (freed after it);
     ``monitor(u)`` gives the monitor point's displacement components, shape=(gdim,),
-    the same on every rank; ``say`` gets one line per trial (the caller prints on rank 0).
+    the same on every rank; ``say`` gets one line per trial with the time so far and an
+    estimate of the trials left (the caller prints on rank 0). ``hooks``: checkpoints
+    after every load step and trial, and the trials a resumed run replays
+    (:mod:`geofrac.fem.plastic_checkpoint`).
     """
     trials: list[Trial] = []
+    start = time.perf_counter()
+
+    def progress(trial: Trial, *, replayed: bool) -> None:
+        if say is None:
+            return
+        tried = [(t.factor, t.stable) for t in trials]
+        left = trials_left(tried, low=low, high=high, tolerance=tolerance)
+        solved = [t.seconds for t in trials]
+        eta = left * sum(solved) / len(solved)
+        state = "stable" if trial.stable else f"FAILED at load factor {trial.load_factor:.4f}"
+        shown = "" if trial.monitor is None else f", monitor |u| {trial.monitor:.4e}"
+        if trial.diverged:
+            shown += ", rejected: " + ", ".join(f"{k} x{v}" for k, v in trial.diverged.items())
+        how = "replayed from the checkpoint" if replayed else f"{trial.seconds:.1f} s"
+        say(
+            f"strength reduction: F = {trial.factor:.4f} {state} ({trial.iterations} Newton "
+            f"its{shown}, {how}); {time.perf_counter() - start:.1f} s so far, about "
+            f"{left} trial(s) left, ETA {eta:.0f} s"
+        )
 
     def is_stable(factor: float) -> bool:
+        known = None if hooks is None else hooks.replay(factor)
+        if known is not None:
+            trials.append(known)
+            progress(known, replayed=True)
+            return known.stable
         t0 = time.perf_counter()
         result = solve_plastic(
             problem_factory,
@@ -162,6 +217,7 @@ def factor_of_safety(
             steps=steps,
             monitor=monitor,
             max_cuts=max_cuts,
+            hooks=None if hooks is None else hooks.trial(factor, trials),
         )
         its = sum(s.report.iterations for s in result.steps)
         diverged: dict[str, int] = {}
@@ -180,15 +236,9 @@ def factor_of_safety(
             diverged,
         )
         trials.append(trial)
-        if say is not None:
-            state = "stable" if trial.stable else f"FAILED at load factor {result.factor:.4f}"
-            shown = "" if u is None else f", monitor |u| {u:.4e}"
-            if diverged:
-                shown += ", rejected: " + ", ".join(f"{k} x{v}" for k, v in diverged.items())
-            say(
-                f"strength reduction: F = {factor:.4f} {state} ({its} Newton its{shown}, "
-                f"{trial.seconds:.1f} s)"
-            )
+        progress(trial, replayed=False)
+        if hooks is not None:
+            hooks.finished(trials)
         return trial.stable
 
     bracket = bisect_factor(is_stable, low=low, high=high, tolerance=tolerance)

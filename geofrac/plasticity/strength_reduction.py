@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-__all__ = ["Bracket", "bisect_factor", "reduce_strength", "trial_factor"]
+__all__ = ["Bracket", "bisect_factor", "reduce_strength", "trial_factor", "trials_left"]
 
 
 def _reduced_angle(angle: float, factor: float) -> float:
@@ -85,6 +85,32 @@ class Bracket:
     def width(self) -> float:
         """The width failed − stable."""
         return self.failed - self.stable
+
+
+def trials_left(
+    tried: list[tuple[float, bool]], *, low: float, high: float, tolerance: float
+) -> int:
+    """How many more trials :func:`bisect_factor` needs after ``tried`` (an estimate).
+
+    Exact once a stable and a failed factor are known: the halvings of the bracket
+    [largest stable, smallest failed] until its width is <= ``tolerance``. Before that,
+    the missing end(s) of [``low``, ``high``] count one trial each, assuming no move of
+    the bracket (a moved bracket adds its moves).
+    """
+    stable = [f for f, ok in tried if ok]
+    failed = [f for f, ok in tried if not ok]
+    lo = max(stable) if stable else low
+    hi = min(failed) if failed else max(high, lo)
+    if not failed and stable and max(stable) >= high:  # moved up: the next end is 2 x
+        hi = 2.0 * max(stable)
+    if not stable and failed and min(failed) <= low:  # moved down: the next end is / 2
+        lo = 0.5 * min(failed)
+    count = int(not stable) + int(not failed)
+    width = hi - lo
+    while width > tolerance:
+        width *= 0.5
+        count += 1
+    return count
 
 
 def bisect_factor(
