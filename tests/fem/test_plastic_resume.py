@@ -314,3 +314,24 @@ def test_trials_left_counts_the_bisections_to_come(threshold: float) -> None:
         assert estimates == actual
     else:
         assert all(e >= 1 for e in estimates[:-1])
+
+
+JOINT = JOBS / "slope_planar_joint.toml"
+JOINT_SETS = ("geometry.parameters.h=2.0", "plasticity.reduction_tolerance=0.2", "output.xdmf=true")
+
+
+def test_a_stopped_joint_reduction_resumes_to_the_whole_run(tmp_path, monkeypatch):
+    """The joints' slip is part of the checkpointed state.
+
+    The planar joint slope (h = 2, trials F = 1.4, 1.7, 1.55) stopped at poll 13: the
+    third trial's fourth load step, F = 1.55 just above the FoS, its joint slipping;
+    resumed: the same trials, bracket and joint summary, bit for bit.
+    """
+    whole = tmp_path / "whole"
+    _whole(JOINT, JOINT_SETS, whole, monkeypatch)
+    out = tmp_path / "stopped"
+    _stopped(JOINT, JOINT_SETS, out, monkeypatch, 13)
+    _resumed(JOINT, JOINT_SETS, out, monkeypatch)
+    results = _same(out, whole, rtol=0.0)
+    joints = results["plasticity"]["last_stable"]["joints"]
+    assert joints["slipping"] > 0 and joints["max_slip"] > 0.0
