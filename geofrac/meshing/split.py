@@ -19,15 +19,21 @@ their number, order and shape; only their node numbers change.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from types import ModuleType
+from typing import Any
+
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-__all__ = ["split_along"]
+__all__ = ["split_along", "split_model"]
 
 #: local vertices of a triangle's edges 01, 12, 20 (gmsh and VTK order; the midpoints of
 #: a 6-node triangle follow in the same order).
 EDGES = np.array([[0, 1], [1, 2], [2, 0]])
+#: gmsh element types of the 3- and 6-node triangle
+TRIANGLES = (2, 9)
 
 
 def _shared_edges(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -151,3 +157,119 @@ def _split_midpoints(
     source = out[c2, 3 + e2].copy()
     out[c2, 3 + e2] = first + np.arange(len(c2))
     return source
+
+
+def _cells(model: Any) -> tuple[list[tuple[int, int, np.ndarray, int]], np.ndarray]:
+    """The model's triangles (rank 0).
+
+    Returns:
+        (blocks: (surface, element type, element tags, first row), the cells' node tags,
+        shape=(n, 3) or (n, 6)).
+
+    Raises:
+        ValueError: the model is not 2D, or its cells are not all 3- or all 6-node triangles.
+    """
+    if model.getDimension() != 2:
+        raise ValueError("splitting joints needs a 2D mesh (3D joints are not split)")
+    blocks, rows = [], []
+    count = 0
+    for _, s in model.getEntities(2):
+        types, tags, nodes = model.mesh.getElements(2, s)
+        for kind, et, nt in zip(types, tags, nodes, strict=True):
+            if int(kind) not in TRIANGLES:
+                name = model.mesh.getElementProperties(kind)[0]
+                raise ValueError(f"splitting joints needs triangles, the mesh has {name}")
+            blocks.append((int(s), int(kind), np.asarray(et), count))
+            rows.append(np.asarray(nt, dtype=np.int64).reshape(len(et), -1))
+            count += len(et)
+    if len({r.shape[1] for r in rows}) > 1:
+        raise ValueError("splitting joints needs cells of one order (all 3- or all 6-node)")
+    return blocks, np.concatenate(rows)
+
+
+def _edge_cells(cells: np.ndarray) -> dict[tuple[int, int], list[int]]:
+    """Vertex edge (sorted node pair) -> the cells holding it."""
+    out: dict[tuple[int, int], list[int]] = {}
+    for c, row in enumerate(cells[:, :3].tolist()):
+        for i, j in EDGES.tolist():
+            a, b = row[i], row[j]
+            out.setdefault((min(a, b), max(a, b)), []).append(c)
+    return out
+
+
+def _remap_curves(model: Any, cells: np.ndarray, out: np.ndarray, joints: set[int]) -> None:
+    """Renumber every curve element after the cells (rank 0, in place).
+
+    A curve element takes the nodes of its cell after the split; an element of a joint
+    curve cut in two becomes two, one per side (the second with a new element tag).
+    """
+    edges = _edge_cells(cells)
+    next_tag = int(model.mesh.getMaxElementTag()) + 1
+    for _, e in model.getEntities(1):
+        types, tags, nodes = model.mesh.getElements(1, e)
+        for kind, et, nt in zip(types, tags, nodes, strict=True):
+            rows = np.asarray(nt, dtype=np.int64).reshape(len(et), -1)
+            new_tags, new_rows = [], []
+            for tag, row in zip(np.asarray(et).tolist(), rows.tolist(), strict=True):
+                held = edges.get((min(row[:2]), max(row[:2])), [])
+                sides = []
+                for c in held:
+                    where = [int(np.flatnonzero(cells[c] == n)[0]) for n in row]
+                    sides.append(out[c, where].tolist())
+                if not sides:
+                    sides = [row]
+                if len(sides) == 2 and (e not in joints or sides[0] == sides[1]):
+                    sides = sides[:1]
+                for k, side in enumerate(sides):
+                    new_tags.append(tag if k == 0 else next_tag)
+                    next_tag += k
+                    new_rows.append(side)
+            if new_rows == rows.tolist():
+                continue
+            model.mesh.removeElements(1, e, et)
+            model.mesh.addElementsByType(e, kind, new_tags, np.ravel(new_rows))
+
+
+def split_model(gmsh: ModuleType, groups: Sequence[str]) -> int:
+    """Cut the meshed 2D gmsh model along the curve groups ``groups`` (rank 0, in place).
+
+    The cells' nodes are split by :func:`split_along`; the new nodes are added to the
+    model (classified on its first surface), the cells renumbered, and every curve
+    element follows its cell, a joint's element becoming one per side, so a joint's
+    physical group holds the facets of both faces once DOLFINx has the mesh.
+
+    Returns:
+        the number of nodes added.
+
+    Raises:
+        ValueError: a group is not a curve group of the model, or the mesh is not one of
+            2D triangles of one order.
+    """
+    model = gmsh.model
+    names = {model.getPhysicalName(d, t): (d, t) for d, t in model.getPhysicalGroups()}
+    entities: set[int] = set()
+    for group in groups:
+        if group not in names or names[group][0] != 1:
+            raise ValueError(f"no curve group '{group}' to split in the mesh")
+        entities.update(int(e) for e in model.getEntitiesForPhysicalGroup(*names[group]))
+    blocks, cells = _cells(model)
+    joint = [
+        np.asarray(nt, dtype=np.int64).reshape(len(et), -1)[:, :2]
+        for e in sorted(entities)
+        for et, nt in zip(*model.mesh.getElements(1, e)[1:], strict=True)
+    ]
+    first = int(model.mesh.getMaxNodeTag()) + 1
+    edges = np.concatenate(joint) if joint else np.zeros((0, 2), dtype=np.int64)
+    out, source = split_along(cells, edges, first_new=first)
+    if len(source) == 0:
+        return 0
+    tags, coords, _ = model.mesh.getNodes()
+    coords = np.asarray(coords).reshape(-1, 3)
+    order = np.argsort(tags)
+    where = order[np.searchsorted(np.asarray(tags)[order], source)]
+    model.mesh.addNodes(2, blocks[0][0], first + np.arange(len(source)), coords[where].ravel())
+    for surface, kind, et, start in blocks:
+        model.mesh.removeElements(2, surface, et)
+        model.mesh.addElementsByType(surface, kind, et, out[start : start + len(et)].ravel())
+    _remap_curves(model, cells, out, entities)
+    return len(source)
