@@ -42,6 +42,8 @@ __all__ = ["JointGeometry", "JointInterface"]
 
 #: Simpson's weights of a P2 edge's nodes (end, end, middle) per unit length.
 SIMPSON = np.array([1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0])
+#: |n_y| below which a unit joint normal counts as horizontal (the joint as vertical).
+VERTICAL = 1e-9
 
 
 def _face_facets(
@@ -93,7 +95,8 @@ def _face_facets(
         t = xy[b] - xy[a]
         length = float(np.linalg.norm(t))
         normal = np.array([-t[1], t[0]]) / length
-        if normal[1] < 0 or (normal[1] == 0 and normal[0] < 0):
+        # upwards, or +x on a joint vertical to round-off (both faces agree)
+        if normal[1] < -VERTICAL or (abs(normal[1]) <= VERTICAL and normal[0] < 0):
             normal = -normal
         centre = geom.x[geom.dofmaps[0][cell], :2].mean(axis=0)
         side = 1.0 if np.dot(centre - xy[order[2]], normal) > 0 else -1.0

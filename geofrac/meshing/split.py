@@ -258,12 +258,14 @@ def split_model(gmsh: ModuleType, groups: Sequence[str]) -> int:
         for e in sorted(entities)
         for et, nt in zip(*model.mesh.getElements(1, e)[1:], strict=True)
     ]
-    first = int(model.mesh.getMaxNodeTag()) + 1
+    tags, coords, _ = model.mesh.getNodes()
+    # the next tag after the nodes there are (getMaxNodeTag may count removed nodes, and
+    # DOLFINx wants the tags 1 ... N without gaps)
+    first = int(np.max(tags)) + 1
     edges = np.concatenate(joint) if joint else np.zeros((0, 2), dtype=np.int64)
     out, source = split_along(cells, edges, first_new=first)
     if len(source) == 0:
         return 0
-    tags, coords, _ = model.mesh.getNodes()
     coords = np.asarray(coords).reshape(-1, 3)
     order = np.argsort(tags)
     where = order[np.searchsorted(np.asarray(tags)[order], source)]
