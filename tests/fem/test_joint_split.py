@@ -13,6 +13,7 @@ from pathlib import Path
 
 import dolfinx_solver  # noqa: F401
 
+import dolfinx
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -160,3 +161,75 @@ def test_two_ranks_same_split_joint() -> None:
     assert np.allclose(two[:, :2], one[:, :2], rtol=0, atol=1e-12)
     gap = float(np.abs(two[:, 2:4] - one[:, 2:4]).max()) / np.abs(one[:, 2:4]).max()
     assert world.allreduce(gap, op=MPI.MAX) <= 1e-8
+
+
+#: jobs/slope_joint_set.toml: the free block between the face, J1 and the tension crack
+SET_JOB = JOB.parent / "slope_joint_set.toml"
+
+
+def tension_crack_fos(cohesion: float) -> float:
+    """Hoek and Bray's planar sliding with a dry vertical tension crack at x = 10 m."""
+    t = math.tan(math.radians(ALPHA))
+    x1, x2, xt = YD / t, H / t, 10.0
+    psi = math.radians(PSI)
+    yt = YD + (xt - x1) * math.tan(psi)
+    corners = [(x1, YD), (xt, yt), (xt, H), (x2, H)]
+    area = 0.5 * abs(
+        sum(
+            a[0] * b[1] - b[0] * a[1]
+            for a, b in zip(corners, corners[1:] + corners[:1], strict=True)
+        )
+    )
+    W, A = 26.0 * area, (xt - x1) / math.cos(psi)
+    return (cohesion * A + W * math.cos(psi) * math.tan(math.radians(35.0))) / (W * math.sin(psi))
+
+
+def test_joint_set_closed_form() -> None:
+    """The job's header numbers: area 29.7014 m², A = 10.2137 m, FoS 1.4773."""
+    assert tension_crack_fos(10.0) == pytest.approx(1.4773, abs=5e-5)
+
+
+def test_joint_set_scene_factor_of_safety() -> None:
+    """The DFN joint set (tips, a T junction) on a coarse mesh: 0.97 FoS holds, 1.03 FoS fails."""
+    from geofrac.runner import solve_scene
+    from geofrac.scene import load_scene_collective
+
+    fos = tension_crack_fos(10.0)
+    overrides = [
+        "dfn.mesh_size=2.0",
+        "dfn.fracture_mesh_size=1.0",
+        "plasticity.max_cuts=1",
+        f"plasticity.reduction_bracket=[{(1 - REL) * fos}, {(1 + REL) * fos}]",
+        "plasticity.reduction_tolerance=0.2",
+        "output.xdmf=false",
+    ]
+    scene = load_scene_collective(MPI.COMM_WORLD, SET_JOB, overrides)
+    assert scene.geometry is not None and scene.geometry.split == ("fractures",)
+    solution = solve_scene(scene, MPI.COMM_WORLD, verbose=False)
+    try:
+        out = solution.results["plasticity"]
+    finally:
+        solution.problem.destroy()
+    assert out["stable"] == pytest.approx((1 - REL) * fos, rel=1e-12)
+    assert out["failed"] == pytest.approx((1 + REL) * fos, rel=1e-12)
+    assert out["factor_of_safety"] == pytest.approx(fos, rel=REL)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_two_ranks_same_joint_set_pairs() -> None:
+    """The DFN joint set cut on rank 0: the same pairs (places, weights) on 2 ranks as on 1."""
+    from geofrac.scene.load import load_scene
+
+    scene = load_scene(SET_JOB, ["dfn.mesh_size=2.0", "dfn.fracture_mesh_size=1.0"])
+    assert scene.geometry is not None
+    world = MPI.COMM_WORLD
+    out = []
+    for comm in (world, MPI.COMM_SELF):
+        tagged = build_mesh(scene.geometry, comm)
+        V = dolfinx.fem.functionspace(tagged.mesh, ("Lagrange", 2, (2,)))
+        g = JointGeometry.build(V, tagged, ["fractures"])
+        table = np.column_stack([g.x, g.weight, g.normal])
+        out.append(table[np.lexsort((table[:, 1], table[:, 0]))])
+    two, one = out
+    assert two.shape == one.shape
+    assert world.allreduce(float(np.abs(two - one).max()), op=MPI.MAX) <= 1e-12
