@@ -1,16 +1,19 @@
 """Joints in the elasto-plastic solve: node-to-node Coulomb springs across a split joint.
 
-The mesh is split along the joint in the geometry (the two sides are separate surfaces
-whose common curve is drawn twice, e.g. meshes/slope_planar_joint.geo), so the P2
-displacement is discontinuous there and the two faces' nodes lie on top of each other.
-:class:`JointGeometry` finds the faces' P2 nodes (each face facet through its one cell),
+The mesh is split along the joint, when meshed (:mod:`geofrac.meshing.split`: a node
+gets a copy per side, tips none, junctions 3 or 4) or in the geometry (the two sides
+separate surfaces whose common curve is drawn twice, e.g. meshes/slope_planar_joint.geo),
+so the P2 displacement is discontinuous there and the two faces' nodes lie on top of
+each other. :class:`JointGeometry` finds the faces' facets (each through its one cell),
 decides each facet's side from its cell (the + side is where the joint normal n points,
-n oriented upwards: n_y > 0, or n_x > 0 on a vertical joint), lumps the facet's length
+n oriented upwards: n_y > 0, or n_x > 0 on a vertical joint), matches each + facet with
+the − facet at the same place, pairs their nodes by position, lumps the facet's length
 on its nodes with Simpson's weights (L/6, 2L/3, L/6: Newton-Cotes lumping, which keeps
-the tractions of a P2 interface free of oscillations) and pairs the + and − nodes by
-their coordinates. Every rank gathers every pair (their global indices and weights, the
-same arrays in the same order on every rank), so the joint's arithmetic is the same on
-1 and N ranks; each rank adds the rows it owns.
+the tractions of a P2 interface free of oscillations) and merges the pairs of the same
+two nodes (at a junction each facet pairs the copies of its own two sides; a tip, not
+split, pairs with itself and is left out). Every rank gathers every pair (their global
+indices and weights, the same arrays in the same order on every rank), so the joint's
+arithmetic is the same on 1 and N ranks; each rank adds the rows it owns.
 
 :class:`JointInterface` holds the pairs' Coulomb strengths and slips; at each Newton
 update it gathers u at the joint nodes (an allreduce), forms the jump δ = u⁺ − u⁻, the
