@@ -229,7 +229,12 @@ def test_two_ranks_same_joint_set_pairs() -> None:
         V = dolfinx.fem.functionspace(tagged.mesh, ("Lagrange", 2, (2,)))
         g = JointGeometry.build(V, tagged, ["fractures"])
         table = np.column_stack([g.x, g.weight, g.normal])
-        out.append(table[np.lexsort((table[:, 1], table[:, 0]))])
+        # by place, then (several pairs at a junction) by normal
+        out.append(table[np.lexsort(np.round(table[:, [4, 3, 2, 1, 0]].T, 9))])
     two, one = out
     assert two.shape == one.shape
     assert world.allreduce(float(np.abs(two - one).max()), op=MPI.MAX) <= 1e-12
+    # the T junction where the tension crack meets J1: three pairs at one place
+    place = np.round(one[:, :2], 9)
+    _, count = np.unique(place, axis=0, return_counts=True)
+    assert count.max() == 3
