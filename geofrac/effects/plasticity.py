@@ -34,7 +34,8 @@ match):
   (default false: the given ψ);
 - ``joints``: ``[plasticity.joints.NAME]`` tables with ``friction`` (μ, required) and
   ``cohesion`` (c, default 0), the keys of ``[cracking.joints.NAME]``: the curve group
-  NAME is a joint split in the geometry, its faces tied by Coulomb springs with no
+  NAME is a joint (cut along when meshed, :mod:`geofrac.meshing.split`, unless drawn
+  twice in the geometry), its faces tied by Coulomb springs with no
   tensile strength (:mod:`geofrac.fem.joints`; c and μ divided by the trial factor in
   strength reduction);
 - ``contact_penalty``: the joints' spring stiffness in units of E / facet length

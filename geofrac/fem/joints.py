@@ -1,16 +1,19 @@
 """Joints in the elasto-plastic solve: node-to-node Coulomb springs across a split joint.
 
-The mesh is split along the joint in the geometry (the two sides are separate surfaces
-whose common curve is drawn twice, e.g. meshes/slope_planar_joint.geo), so the P2
-displacement is discontinuous there and the two faces' nodes lie on top of each other.
-:class:`JointGeometry` finds the faces' P2 nodes (each face facet through its one cell),
+The mesh is split along the joint, when meshed (:mod:`geofrac.meshing.split`: a node
+gets a copy per side, tips none, junctions 3 or 4) or in the geometry (the two sides
+separate surfaces whose common curve is drawn twice, e.g. meshes/slope_planar_joint.geo),
+so the P2 displacement is discontinuous there and the two faces' nodes lie on top of
+each other. :class:`JointGeometry` finds the faces' facets (each through its one cell),
 decides each facet's side from its cell (the + side is where the joint normal n points,
-n oriented upwards: n_y > 0, or n_x > 0 on a vertical joint), lumps the facet's length
+n oriented upwards: n_y > 0, or n_x > 0 on a vertical joint), matches each + facet with
+the − facet at the same place, pairs their nodes by position, lumps the facet's length
 on its nodes with Simpson's weights (L/6, 2L/3, L/6: Newton-Cotes lumping, which keeps
-the tractions of a P2 interface free of oscillations) and pairs the + and − nodes by
-their coordinates. Every rank gathers every pair (their global indices and weights, the
-same arrays in the same order on every rank), so the joint's arithmetic is the same on
-1 and N ranks; each rank adds the rows it owns.
+the tractions of a P2 interface free of oscillations) and merges the pairs of the same
+two nodes (at a junction each facet pairs the copies of its own two sides; a tip, not
+split, pairs with itself and is left out). Every rank gathers every pair (their global
+indices and weights, the same arrays in the same order on every rank), so the joint's
+arithmetic is the same on 1 and N ranks; each rank adds the rows it owns.
 
 :class:`JointInterface` holds the pairs' Coulomb strengths and slips; at each Newton
 update it gathers u at the joint nodes (an allreduce), forms the jump δ = u⁺ − u⁻, the
@@ -42,16 +45,22 @@ __all__ = ["JointGeometry", "JointInterface"]
 
 #: Simpson's weights of a P2 edge's nodes (end, end, middle) per unit length.
 SIMPSON = np.array([1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0])
+#: |n_y| below which a unit joint normal counts as horizontal (the joint as vertical).
+VERTICAL = 1e-9
 
 
-def _face_nodes(
+def _face_facets(
     V: dolfinx.fem.FunctionSpace, tagged: TaggedMesh, group: str, key: str
 ) -> np.ndarray:
-    """This rank's owned facets of ``group`` as node rows.
+    """This rank's owned facets of ``group`` with one cell, as rows.
+
+    A facet with two cells is a piece of a split joint that stayed whole (a one-edge
+    joint between two tips: no jump) and is left out; in a group that was not split
+    (``tagged.split``) it is an error.
 
     Returns:
-        rows (global node, side ±1, x, y, weight, n_x, n_y, facet length), shape=(3 m, 8)
-        for m owned facets.
+        (global nodes of the two ends and the middle (3), side ±1, their x, y (6),
+        n_x, n_y, facet length), shape=(m, 13) for m owned facets with one cell.
     """
     mesh = V.mesh
     tdim = mesh.topology.dim
@@ -71,9 +80,12 @@ def _face_nodes(
     for f in facets:
         cells = f2c.links(f)
         if len(cells) != 1:
+            if group in tagged.split:
+                continue
             raise RunError(
                 f"{key}: the joint '{group}' is not split (a facet with {len(cells)} cells); "
-                "draw it twice, one curve per side (meshes/slope_planar_joint.geo)"
+                "draw it twice, one curve per side (meshes/slope_planar_joint.geo), or let "
+                "the scene split it (a [plasticity.joints.NAME] group is split when meshed)"
             )
         cell = cells[0]
         local = int(np.flatnonzero(c2f.links(cell) == f)[0])
@@ -82,46 +94,92 @@ def _face_nodes(
         # the two ends are the farthest apart; the third is the middle node
         d = np.linalg.norm(xy[:, None] - xy[None], axis=2)
         a, b = np.unravel_index(np.argmax(d), d.shape)
-        mid = 3 - a - b
-        order = np.array([a, b, mid])
+        order = np.array([a, b, 3 - a - b])
         t = xy[b] - xy[a]
         length = float(np.linalg.norm(t))
         normal = np.array([-t[1], t[0]]) / length
-        if normal[1] < 0 or (normal[1] == 0 and normal[0] < 0):
+        # upwards, or +x on a joint vertical to round-off (both faces agree)
+        if normal[1] < -VERTICAL or (abs(normal[1]) <= VERTICAL and normal[0] < 0):
             normal = -normal
         centre = geom.x[geom.dofmaps[0][cell], :2].mean(axis=0)
-        side = 1.0 if np.dot(centre - xy[mid], normal) > 0 else -1.0
+        side = 1.0 if np.dot(centre - xy[order[2]], normal) > 0 else -1.0
         glob = imap.local_to_global(nodes[order].astype(np.int32))
-        for k in range(3):
-            i = order[k]
-            rows.append([glob[k], side, *xy[i], SIMPSON[k] * length, *normal, length])
-    return np.asarray(rows, dtype=float).reshape(-1, 8)
+        rows.append([*glob, side, *xy[order].ravel(), *normal, length])
+    return np.asarray(rows, dtype=float).reshape(-1, 13)
 
 
-def _merge(rows: np.ndarray) -> np.ndarray:
-    """One row per (side, node): weights summed, normals weight-averaged, lengths averaged.
+def _facet_pairs(rows: np.ndarray, key: str) -> np.ndarray:
+    """Each + facet with the − facet at the same place; their node pairs.
+
+    At a junction the joint node has several copies (one per sector), and each facet
+    pairs the copies of its own two sides; a tip (a node not split) pairs with itself
+    and is left out (its jump is zero).
 
     Args:
-        rows: facet node rows of :func:`_face_nodes`, all ranks, shape=(k, 8).
+        rows: the facets of :func:`_face_facets`, all ranks, shape=(k, 13).
+        key: the scene key named in errors.
 
     Returns:
-        (global node, side, x, y, weight, n_x, n_y, mean facet length), shape=(m, 8),
-        sorted by (side, node).
+        (plus node, minus node, x, y, weight, n_x, n_y, facet length) per facet node,
+        shape=(p, 8); a node pair appears once per facet it belongs to.
+
+    Raises:
+        RunError: a facet without a facet on the other side at the same place.
     """
-    keys = rows[:, :2]
-    uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
+    from scipy.spatial import cKDTree
+
+    up, down = rows[rows[:, 3] > 0], rows[rows[:, 3] < 0]
+    tol = 1e-6 * float(rows[:, 12].min()) if len(rows) else 0.0
+    match = np.full(len(up), -1)
+    if len(up) and len(down):
+        dist, near = cKDTree(down[:, 8:10]).query(up[:, 8:10])
+        match = np.where(dist <= tol, near, -1)
+    if len(up) == 0 or len(up) != len(down) or np.any(match < 0):
+        raise RunError(
+            f"{key}: the joint's faces have {len(up)} and {len(down)} facets, "
+            f"{int(np.count_nonzero(match < 0))} with no facet at the same place on the other "
+            "side; a joint must be split (meshed alike on both faces)"
+        )
+    if len(np.unique(match)) != len(up):
+        raise RunError(f"{key}: two facets of one face lie on each other")
+    down = down[match]
+    flip = np.linalg.norm(up[:, 4:6] - down[:, 4:6], axis=1) > tol
+    minus = down[:, :3].copy()
+    minus[flip, 0], minus[flip, 1] = down[flip, 1], down[flip, 0]
+    length = 0.5 * (up[:, 12] + down[:, 12])
+    out = np.zeros((3 * len(up), 8))
+    for k in range(3):
+        part = out[k::3]
+        part[:, 0], part[:, 1] = up[:, k], minus[:, k]
+        part[:, 2:4] = up[:, 4 + 2 * k : 6 + 2 * k]
+        part[:, 4] = SIMPSON[k] * length
+        part[:, 5:7] = up[:, 10:12]
+        part[:, 7] = length
+    return out[out[:, 0] != out[:, 1]]
+
+
+def _merge(rows: np.ndarray) -> tuple[np.ndarray, ...]:
+    """One pair per (plus, minus) node: weights summed, normals weight-averaged.
+
+    Args:
+        rows: the facet node pairs of :func:`_facet_pairs`, shape=(k, 8).
+
+    Returns:
+        plus, minus (global nodes), x (m, 2), normal (m, 2), weight (m,), length (m,)
+        (the mean facet length), sorted by (plus, minus).
+    """
+    uniq, inverse = np.unique(rows[:, :2], axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
-    out = np.zeros((len(uniq), 8))
-    out[:, :2] = uniq
-    count = np.bincount(inverse, minlength=len(uniq)).astype(float)
-    w = np.bincount(inverse, weights=rows[:, 4], minlength=len(uniq))
-    out[:, 4] = w
-    for col in (2, 3, 7):
-        out[:, col] = np.bincount(inverse, weights=rows[:, col], minlength=len(uniq)) / count
-    for col in (5, 6):
-        out[:, col] = np.bincount(inverse, weights=rows[:, col] * rows[:, 4], minlength=len(uniq))
-    out[:, 5:7] /= np.linalg.norm(out[:, 5:7], axis=1)[:, None]
-    return out
+    m = len(uniq)
+    count = np.bincount(inverse, minlength=m).astype(float)
+    weight = np.bincount(inverse, weights=rows[:, 4], minlength=m)
+    x = np.stack([np.bincount(inverse, weights=rows[:, c], minlength=m) for c in (2, 3)], 1)
+    length = np.bincount(inverse, weights=rows[:, 7], minlength=m) / count
+    normal = np.stack(
+        [np.bincount(inverse, weights=rows[:, c] * rows[:, 4], minlength=m) for c in (5, 6)], 1
+    )
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    return uniq[:, 0], uniq[:, 1], x / count[:, None], normal, weight, length
 
 
 @dataclass
@@ -173,16 +231,15 @@ class JointGeometry:
             if name not in tagged.groups:
                 known = ", ".join(sorted(tagged.groups))
                 raise RunError(f"{where}: no group '{name}' in the mesh (groups: {known})")
-            message, rows = None, np.zeros((0, 8))
+            message, rows = None, np.zeros((0, 13))
             try:
-                rows = _face_nodes(V, tagged, name, where)
+                rows = _face_facets(V, tagged, name, where)
             except RunError as exc:
                 message = str(exc)
             messages = [m for m in comm.allgather(message) if m]
             if messages:
                 raise RunError(messages[0])
-            rows = _merge(np.concatenate(comm.allgather(rows)))
-            pairs = _pair(rows, where)
+            pairs = _merge(_facet_pairs(np.concatenate(comm.allgather(rows)), where))
             for part, value in zip(parts, (*pairs, np.full(len(pairs[0]), g)), strict=True):
                 part.append(value)
         cat = [np.concatenate(p) if p else np.zeros(0) for p in parts]
@@ -195,39 +252,6 @@ class JointGeometry:
     def size(self) -> int:
         """The number of pairs."""
         return len(self.plus)
-
-
-def _pair(rows: np.ndarray, key: str) -> tuple[np.ndarray, ...]:
-    """Pair the + and − rows by coordinates.
-
-    Returns:
-        plus, minus (global nodes), x (m, 2), normal (m, 2), weight (m,), length (m,).
-    """
-    up, down = rows[rows[:, 1] > 0], rows[rows[:, 1] < 0]
-    if len(up) == 0 or len(up) != len(down):
-        raise RunError(
-            f"{key}: the joint's faces have {len(up)} and {len(down)} nodes; they must be "
-            "meshed alike (the same curve drawn twice, e.g. transfinite)"
-        )
-    tol = 1e-6 * float(rows[:, 7].min())
-    d = np.linalg.norm(up[:, None, 2:4] - down[None, :, 2:4], axis=2)
-    match = np.argmin(d, axis=1)
-    if np.any(d[np.arange(len(up)), match] > tol) or len(np.unique(match)) != len(up):
-        raise RunError(
-            f"{key}: the nodes of the joint's two faces do not lie on each other; mesh the "
-            "two curves alike (the same points, transfinite)"
-        )
-    down = down[match]
-    normal = up[:, 5:7] + down[:, 5:7]
-    normal /= np.linalg.norm(normal, axis=1)[:, None]
-    return (
-        up[:, 0],
-        down[:, 0],
-        up[:, 2:4],
-        normal,
-        0.5 * (up[:, 4] + down[:, 4]),
-        0.5 * (up[:, 7] + down[:, 7]),
-    )
 
 
 def _gather(V: dolfinx.fem.FunctionSpace, array: np.ndarray, nodes: np.ndarray) -> np.ndarray:

@@ -15,6 +15,7 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.meshing.geo import failure_message, gmsh_session, meshed_model
+from geofrac.meshing.split import split_model
 from geofrac.model.scene import Geometry
 
 __all__ = ["TaggedMesh", "build_mesh", "check_fracture_cover", "renumber_model"]
@@ -33,6 +34,8 @@ class TaggedMesh:
         report: what the geometry builder reported (JSON-ready; empty for a file).
         fractures: the builder's payload, the same on every rank (the ``dfn`` effect's
             :class:`~geofrac.dfn.clean.CleanNetwork`), or None.
+        split: the curve groups the mesh was cut along before distribution
+            (:attr:`~geofrac.model.scene.Geometry.split`).
     """
 
     def __init__(
@@ -42,8 +45,10 @@ class TaggedMesh:
         fractures: Any = None,
         *,
         tags: dict[int, Any] | None = None,
+        split: tuple[str, ...] = (),
     ) -> None:
         self.mesh = data.mesh
+        self.split = split
         self.report = report or {}
         self.fractures = fractures
         self.groups = {name: (g.dim, g.tag) for name, g in data.physical_groups.items()}
@@ -260,7 +265,9 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, *, verbose: bool = False) -> 
     meshes the model itself in-process; its report and payload reach every rank
     (:attr:`TaggedMesh.report`, :attr:`TaggedMesh.fractures`). Physical groups of a
     lower dimension may overlap (each keeps all its entities); cell groups may not.
-    With ``geometry.renumber`` the mesh is renumbered first (:func:`renumber_model`).
+    With ``geometry.renumber`` the mesh is renumbered first (:func:`renumber_model`);
+    with ``geometry.split`` it is then cut along those curve groups
+    (:func:`~geofrac.meshing.split.split_model`).
 
     Raises:
         RunError: gmsh (or the builder) failed or timed out, or cell groups overlap
@@ -272,7 +279,9 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, *, verbose: bool = False) -> 
         if message is not None:
             raise RunError(message)
         data = gmshio.model_to_mesh(None, comm, 0, gdim=geometry.dim)
-        return TaggedMesh(data, report, payload, tags=_group_tags(None, data, dims))
+        return TaggedMesh(
+            data, report, payload, tags=_group_tags(None, data, dims), split=geometry.split
+        )
     builder = geometry.builder
     with ExitStack() as stack:
         message, report, payload, dims = None, None, None, {}
@@ -302,6 +311,8 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, *, verbose: bool = False) -> 
                 raise RuntimeError("gmsh produced no nodes")
             if geometry.renumber is not None:
                 renumber_model(gmsh, geometry.renumber)
+            if geometry.split:
+                split_model(gmsh, geometry.split)
             _check_groups_on_cells(gmsh.model, geometry.dim)
             overlap, dims = _overlaps(gmsh.model, geometry.dim)
             if overlap is not None:
@@ -315,14 +326,44 @@ def build_mesh(geometry: Geometry, comm: MPI.Comm, *, verbose: bool = False) -> 
             raise RunError(message)
         assert gmsh is not None  # no message: the model was made
         data = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=geometry.dim)
-        return TaggedMesh(data, report, payload, tags=_group_tags(gmsh.model, data, dims))
+        return TaggedMesh(
+            data, report, payload, tags=_group_tags(gmsh.model, data, dims), split=geometry.split
+        )
+
+
+def _upper_face(tagged: TaggedMesh, dim: int, facets: np.ndarray) -> np.ndarray:
+    """Which facets (local indices, shape=(n,)) to count once on a cut joint, shape=(n,).
+
+    A facet with two cells (a piece of the joint that stayed whole) counts; of a facet
+    with one cell, only the face whose cell lies on the side the facet's upward normal
+    (n_y > 0, or n_x > 0 when vertical to 1e-9) points to.
+    """
+    mesh = tagged.mesh
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(dim, tdim)
+    f2c = mesh.topology.connectivity(dim, tdim)
+    xy = tagged.vertex_coordinates(dim, facets)[:, :, :2]
+    keep = np.ones(len(facets), dtype=bool)
+    for k, f in enumerate(facets):
+        cells = f2c.links(f)
+        if len(cells) != 1:
+            continue
+        t = xy[k, 1] - xy[k, 0]
+        n = np.array([-t[1], t[0]]) / np.linalg.norm(t)
+        if n[1] < -1e-9 or (abs(n[1]) <= 1e-9 and n[0] < 0):
+            n = -n
+        centre = tagged.vertex_coordinates(tdim, cells)[0, :, :2].mean(axis=0)
+        keep[k] = float(np.dot(centre - xy[k].mean(axis=0), n)) > 0
+    return keep
 
 
 def check_fracture_cover(tagged: TaggedMesh, group: str = "fractures") -> dict[str, Any]:
     """Check that the facets tagged ``group`` cover the network exactly (collective).
 
     Each rank matches the facets it owns to the network edges
-    (:func:`geofrac.dfn.check.match_facets`); lengths are summed over ranks. Every
+    (:func:`geofrac.dfn.check.match_facets`); lengths are summed over ranks. When the
+    mesh was cut along ``group`` (:attr:`TaggedMesh.split`), one face of each cut facet
+    counts. Every
     tagged facet must lie on a network edge and every fracture's tagged length must
     equal its length in the cleaned network within 1e-9 relative.
 
@@ -343,6 +384,8 @@ def check_fracture_cover(tagged: TaggedMesh, group: str = "fractures") -> dict[s
     else:
         facets = np.empty(0, dtype=np.int32)
         dim = tagged.mesh.topology.dim - 1
+    if group in tagged.split:  # a cut joint has a facet per face: count one face
+        facets = facets[_upper_face(tagged, dim, facets)]
     xy = tagged.vertex_coordinates(dim, facets)[:, :, :2]
     off = int(np.count_nonzero(match_facets(xy, clean) < 0))
     covered = comm.allreduce(covered_length(xy, clean), op=MPI.SUM)

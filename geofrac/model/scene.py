@@ -82,6 +82,9 @@ class Geometry:
         renumber: seed of a random renumbering of the mesh's nodes and cells before it
             is distributed (:func:`geofrac.meshing.distribute.renumber_model`), or None
             (gmsh's numbering); set from ``discretization.renumber``.
+        split: curve groups along which the mesh is cut before it is distributed
+            (:func:`geofrac.meshing.split.split_model`: each joint node gets one copy per
+            side, tips stay whole); set from the ``[plasticity.joints.NAME]`` tables.
     """
 
     file: Path | None
@@ -95,6 +98,7 @@ class Geometry:
     order: int = 1
     renumber: int | None = None
     algorithm: str | None = None
+    split: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
