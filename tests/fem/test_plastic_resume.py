@@ -180,13 +180,22 @@ def _numbers(value: object, path: str = "") -> dict[str, object]:
     return {path: value}
 
 
-def _same(resumed: Path, whole: Path, rtol: float) -> dict[str, Any]:
+def _same(resumed: Path, whole: Path, rtol: float, *, newton: bool = True) -> dict[str, Any]:
+    """The resumed run's summary and results.h5 equal the whole run's (to ``rtol``).
+
+    ``newton = False`` leaves out the Newton iteration counts and final residuals: on 2
+    ranks MUMPS's parallel factorisation is not bitwise repeatable, and a step whose
+    residual after k iterations lies near the tolerance then takes k or k + 1 (measured:
+    11 against 12 in 1 of 4 resumed runs), while the converged state agrees to round-off.
+    """
     a = json.loads((resumed / "summary.json").read_text())
     b = json.loads((whole / "summary.json").read_text())
     assert a["status"] == "ok" and a["resumed_from"]["k"] >= 1
     na, nb = _numbers(a["results"]), _numbers(b["results"])
     assert sorted(na) == sorted(nb)
     for key, x in na.items():
+        if not newton and key.endswith(("/iterations", "/residual")):
+            continue
         y = nb[key]
         if isinstance(x, float) and isinstance(y, float):
             # a converged step's final |F| is round-off below the Newton atol
@@ -280,7 +289,7 @@ def test_two_ranks_resume_to_the_whole_run_and_refuse_one_rank(tmp_path, monkeyp
     _stopped(OPENING, OPENING_SETS, out, monkeypatch, 2)
     _resumed(OPENING, OPENING_SETS, out, monkeypatch)
     comm.barrier()
-    _on_root(_same, out, whole, rtol=1e-10)
+    _on_root(_same, out, whole, rtol=1e-10, newton=False)
     again = root / "again"
     _stopped(OPENING, OPENING_SETS, again, monkeypatch, 2)
     comm.barrier()
