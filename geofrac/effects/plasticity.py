@@ -454,31 +454,15 @@ def make_law(config: PlasticityConfig, *, E: float, nu: float) -> Any:
     from geofrac.plasticity import DruckerPrager, MohrCoulomb
     from geofrac.plasticity.davis import Davis
 
+    common = {
+        "E": E,
+        "nu": nu,
+        "cohesion": config.cohesion,
+        "friction_angle": config.friction_angle,
+        "dilatancy_angle": config.dilatancy_angle,
+    }
     if config.davis:
-        return Davis(
-            E=E,
-            nu=nu,
-            cohesion=config.cohesion,
-            friction_angle=config.friction_angle,
-            dilatancy_angle=config.dilatancy_angle,
-            law=config.law,
-            tension=config.tension_cutoff,
-            match=config.match,
-        )
+        return Davis(**common, law=config.law, tension=config.tension_cutoff, match=config.match)
     if config.law == "mohr_coulomb":
-        return MohrCoulomb(
-            E=E,
-            nu=nu,
-            cohesion=config.cohesion,
-            friction_angle=config.friction_angle,
-            dilatancy_angle=config.dilatancy_angle,
-            tension=config.tension_cutoff,
-        )
-    return DruckerPrager(
-        E=E,
-        nu=nu,
-        cohesion=config.cohesion,
-        friction_angle=config.friction_angle,
-        dilatancy_angle=config.dilatancy_angle,
-        match=config.match,
-    )
+        return MohrCoulomb(**common, tension=config.tension_cutoff)
+    return DruckerPrager(**common, match=config.match)

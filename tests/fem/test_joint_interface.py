@@ -167,11 +167,12 @@ def test_block_in_equilibrium_on_the_joint() -> None:
         problem.destroy()
 
 
-@pytest.mark.parametrize("cohesion", [10.0, 0.0])
-def test_planar_sliding_factor_of_safety(cohesion: float) -> None:
-    """F = 0.97 FoS holds and F = 1.03 FoS fails (h = 2): the FoS within 3 % of Hoek-Bray."""
-    fos = hoek_bray(cohesion)
-    tagged = joint_mesh(MPI.COMM_WORLD, h=2.0)
+def bracket_trials(tagged: TaggedMesh, cohesion: float, fos: float) -> dict[float, Any]:
+    """The trials F = 0.97, 1.03 and 1.0 × ``fos`` on ``tagged``, keyed by F / fos.
+
+    Asserts 0.97 FoS holds (to λ = 1), 1.03 FoS fails and the bisection's factor of
+    safety lies within 3 % of ``fos``.
+    """
     result = factor_of_safety(
         factory(tagged, cohesion),
         ROCK,
@@ -184,8 +185,17 @@ def test_planar_sliding_factor_of_safety(cohesion: float) -> None:
     )
     trials = {round(t.factor / fos, 6): t for t in result.trials}
     assert trials[1 - REL].stable and trials[1 - REL].load_factor == 1.0
-    assert not trials[1 + REL].stable and trials[1 + REL].end_reason == "step_too_small"
+    assert not trials[1 + REL].stable
     assert result.factor_of_safety == pytest.approx(fos, rel=REL)
+    return trials
+
+
+@pytest.mark.parametrize("cohesion", [10.0, 0.0])
+def test_planar_sliding_factor_of_safety(cohesion: float) -> None:
+    """F = 0.97 FoS holds and F = 1.03 FoS fails (h = 2): the FoS within 3 % of Hoek-Bray."""
+    fos = hoek_bray(cohesion)
+    trials = bracket_trials(joint_mesh(MPI.COMM_WORLD, h=2.0), cohesion, fos)
+    assert trials[1 + REL].end_reason == "step_too_small"
 
 
 def test_trial_factor_recovers_the_reduction() -> None:

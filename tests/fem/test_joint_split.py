@@ -20,7 +20,6 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.fem.joints import JointGeometry
-from geofrac.fem.strength_reduction import factor_of_safety
 from geofrac.meshing.distribute import TaggedMesh, build_mesh
 from geofrac.meshing.geo import inspect_geometry
 from geofrac.model.scene import Geometry
@@ -35,10 +34,10 @@ from tests.fem.test_joint_interface import (
     H,
     _space_and_bcs,
     block,
+    bracket_trials,
     factory,
     hoek_bray,
     joint_mesh,
-    monitor,
 )
 
 SINGLE = Path(__file__).resolve().parents[2] / "meshes" / "slope_planar_joint_single.geo"
@@ -115,21 +114,7 @@ def test_split_keeps_area_and_cell_count() -> None:
 def test_split_planar_sliding_factor_of_safety(algorithm: int) -> None:
     """F = 0.97 FoS holds and F = 1.03 FoS fails (h = 2), as with the hand-split joint."""
     fos = hoek_bray(10.0)
-    tagged = single_mesh(MPI.COMM_WORLD, h=2.0, algorithm=algorithm)
-    result = factor_of_safety(
-        factory(tagged, 10.0),
-        ROCK,
-        steps=5,
-        low=fos * (1 - REL),
-        high=fos * (1 + REL),
-        tolerance=0.04 * fos,  # stops after the middle, 1.0 FoS
-        max_cuts=2,
-        monitor=monitor,
-    )
-    trials = {round(t.factor / fos, 6): t for t in result.trials}
-    assert trials[1 - REL].stable and trials[1 - REL].load_factor == 1.0
-    assert not trials[1 + REL].stable
-    assert result.factor_of_safety == pytest.approx(fos, rel=REL)
+    bracket_trials(single_mesh(MPI.COMM_WORLD, h=2.0, algorithm=algorithm), 10.0, fos)
 
 
 def test_scene_splits_its_joint_group() -> None:
