@@ -250,9 +250,9 @@ class ProbeHistory:
         Args:
             steps: (load factor, :meth:`record`'s values) of every converged step, in order.
         """
-        zero = np.zeros((len(self.names), self.gdim))
-        self.rows = [(0.0, zero)] + [
-            (f, np.array([v[n] for n in self.names]).reshape(len(self.names), -1)) for f, v in steps
+        shape = (len(self.names), self.gdim)
+        self.rows = [(0.0, np.zeros(shape))] + [
+            (f, np.array([v[n] for n in self.names], dtype=float).reshape(shape)) for f, v in steps
         ]
 
     def write_steps(self, path: Path) -> None:

@@ -177,3 +177,25 @@ def test_bad_ground_reaction_named_before_meshing(override: str, key: str) -> No
     with pytest.raises(SceneError) as info:
         load_scene(OPENING, [override])
     assert info.value.key == key, info.value
+
+
+def test_a_scene_without_probes_runs() -> None:
+    """No ``output.probes``: the steps carry no probes and the run still ends.
+
+    (The probe history of zero points once failed to build its rows.)
+    """
+    from tests.fem.helpers import solve_job
+
+    solution = solve_job(
+        "footing_prandtl",
+        "output.probes={}",
+        "geometry.parameters.h=1.0",
+        "geometry.parameters.hf=0.2",
+        "plasticity.load_steps=4",
+    )
+    try:
+        plastic = solution.results["plasticity"]
+    finally:
+        solution.problem.destroy()
+    assert plastic["converged"] and plastic["factor"] == 1.0 and plastic["steps"]
+    assert all("probes" not in step for step in plastic["steps"])
