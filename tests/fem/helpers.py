@@ -1,5 +1,10 @@
 """Helpers shared by the finite element tests."""
 
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
 from mpi4py import MPI
 
 from geofrac.fem.solution import Solution
@@ -18,3 +23,21 @@ def errors_and_tip(solution: Solution) -> tuple[dict[str, float], float, float]:
     """(error norms, computed tip deflection, exact tip deflection)."""
     r = solution.results
     return r["errors"], r["probes"]["tip"][1], r["exact_probes"]["tip"][1]
+
+
+def h5_datasets(h5: Path) -> dict[str, np.ndarray]:
+    """Every dataset of an HDF5 file by its path (for comparing two runs' results.h5)."""
+    found: dict[str, np.ndarray] = {}
+    with h5py.File(h5, "r") as f:
+        f.visititems(
+            lambda n, o: found.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None
+        )
+    return found
+
+
+def check_interrupted(out: Path, at: int) -> None:
+    """A run stopped at poll ``at``: its status says so, its checkpoint is ``at``, no summary."""
+    status = json.loads((out / "incomplete" / "summary.json").read_text())
+    assert status["status"] == "interrupted"
+    assert status["interrupted"]["checkpoint"].endswith(f"ckpt-{at:09d}")
+    assert not (out / "summary.json").exists()

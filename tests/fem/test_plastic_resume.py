@@ -26,7 +26,6 @@ import signal
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -40,6 +39,7 @@ from geofrac.plasticity.strength_reduction import bisect_factor, trials_left
 from geofrac.scene import load_scene_collective
 from geofrac.solvers.snes import NewtonSolver
 from tests.conftest import JOBS
+from tests.fem.helpers import check_interrupted, h5_datasets
 
 OPENING = JOBS / "opening_mohr_coulomb.toml"
 SLOPE = JOBS / "slope_griffiths_lane.toml"
@@ -136,10 +136,7 @@ def _stopped(
         interrupt.reset()
         monkeypatch.undo()
     comm.barrier()  # rank 0 writes the status
-    status = json.loads((out / "incomplete" / "summary.json").read_text())
-    assert status["status"] == "interrupted"
-    assert status["interrupted"]["checkpoint"].endswith(f"ckpt-{at:09d}")
-    assert not (out / "summary.json").exists()
+    check_interrupted(out, at)
     assert counts.polls == at
     return counts
 
@@ -153,15 +150,6 @@ def _resumed(
     finally:
         monkeypatch.undo()
     return counts
-
-
-def _datasets(h5: Path) -> dict[str, np.ndarray]:
-    found: dict[str, np.ndarray] = {}
-    with h5py.File(h5, "r") as f:
-        f.visititems(
-            lambda n, o: found.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None
-        )
-    return found
 
 
 def _numbers(value: object, path: str = "") -> dict[str, object]:
@@ -203,7 +191,7 @@ def _same(resumed: Path, whole: Path, rtol: float, *, newton: bool = True) -> di
             assert abs(x - y) <= rtol * abs(y) + slack, (key, x, y)
         else:
             assert x == y, (key, x, y)
-    da, db = _datasets(resumed / "results.h5"), _datasets(whole / "results.h5")
+    da, db = h5_datasets(resumed / "results.h5"), h5_datasets(whole / "results.h5")
     assert sorted(da) == sorted(db) and da
     for name in da:
         x, y = np.asarray(da[name], dtype=float), np.asarray(db[name], dtype=float)

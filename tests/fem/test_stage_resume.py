@@ -16,7 +16,6 @@ import json
 import signal
 from pathlib import Path
 
-import h5py
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -27,6 +26,7 @@ from geofrac.io.checkpoint import RunControl
 from geofrac.pipeline import run_scene
 from geofrac.scene import load_scene_collective
 from tests.conftest import JOBS
+from tests.fem.helpers import check_interrupted, h5_datasets
 
 KIRSCH = JOBS / "kirsch_stages.toml"
 #: The coarse Kirsch scene of tests/fem/test_insitu.py (stages: excavate 0.4, support).
@@ -66,19 +66,7 @@ def _interrupted(out: Path, comm: MPI.Comm, monkeypatch: pytest.MonkeyPatch, at:
         interrupt.reset()
         monkeypatch.undo()
     comm.barrier()  # rank 0 writes the status
-    status = json.loads((out / "incomplete" / "summary.json").read_text())
-    assert status["status"] == "interrupted"
-    assert status["interrupted"]["checkpoint"].endswith(f"ckpt-{at:09d}")
-    assert not (out / "summary.json").exists()
-
-
-def _datasets(h5: Path) -> dict[str, np.ndarray]:
-    found: dict[str, np.ndarray] = {}
-    with h5py.File(h5, "r") as f:
-        f.visititems(
-            lambda n, o: found.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None
-        )
-    return found
+    check_interrupted(out, at)
 
 
 def _same(resumed: Path, whole: Path, rtol: float) -> None:
@@ -91,7 +79,7 @@ def _same(resumed: Path, whole: Path, rtol: float) -> None:
     for key in ra:
         if key != "solver":  # the solver's timing and iteration record
             np.testing.assert_allclose(_flat(ra[key]), _flat(rb[key]), rtol=rtol, atol=0.0)
-    da, db = _datasets(resumed / "results.h5"), _datasets(whole / "results.h5")
+    da, db = h5_datasets(resumed / "results.h5"), h5_datasets(whole / "results.h5")
     assert sorted(da) == sorted(db) and len(da) >= 3
     for name in da:
         x, y = np.asarray(da[name], dtype=float), np.asarray(db[name], dtype=float)
