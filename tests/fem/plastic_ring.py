@@ -35,10 +35,15 @@ def ring_mesh(comm: MPI.Comm, *, a: float, b: float, h: float) -> TaggedMesh:
 def ring_problem(
     tagged: TaggedMesh, law: Law, *, p0: float, pi: float, degree: int = 2, **kw: Any
 ) -> PlasticProblem:
-    """The elasto-plastic ring (P``degree`` displacements)."""
+    """The elasto-plastic ring (P``degree`` displacements).
+
+    In 3D (the slab of meshes/quarter_ring_slab.geo) also u_z = 0 on its faces ``back``
+    and ``front``: the plane-strain ring.
+    """
     mesh = tagged.mesh
-    V = dolfinx.fem.functionspace(mesh, ("Lagrange", degree, (2,)))
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged.tags[1])
+    gdim = mesh.geometry.dim
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", degree, (gdim,)))
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged.tags[gdim - 1])
     n = ufl.FacetNormal(mesh)
     wall, outer = tagged.groups["wall"][1], tagged.groups["outer"][1]
 
@@ -47,7 +52,8 @@ def ring_problem(
         return ufl.inner(-p_in * n, v) * ds(wall) + ufl.inner(-p0 * n, v) * ds(outer)
 
     bcs = []
-    for group, comp in (("bottom", 1), ("left", 0)):
+    held = [("bottom", 1), ("left", 0)] + ([("back", 2), ("front", 2)] if gdim == 3 else [])
+    for group, comp in held:
         dim, ents = tagged.entities(group)
         dofs = dolfinx.fem.locate_dofs_topological(V.sub(comp), dim, ents)
         bcs.append(dolfinx.fem.dirichletbc(0.0, dofs, V.sub(comp)))

@@ -28,6 +28,7 @@ from geofrac.meshing.geo import inspect_geometry
 from geofrac.model.scene import Geometry
 from geofrac.plasticity import MohrCoulomb
 from tests.fem.helpers import solve_job
+from tests.fem.plastic_ring import ring_problem
 
 GEO = Path(__file__).resolve().parents[2] / "meshes" / "quarter_ring_slab.geo"
 A, B, P0, PI, E, NU, C, PHI = 1.0, 10.0, 10.0, 1.0, 1e4, 0.3, 1.0, 30.0
@@ -37,24 +38,8 @@ def _slab(comm: MPI.Comm, psi: float, *, h: float, t: float) -> tuple[PlasticPro
     params = {"a": A, "b": B, "h": h, "t": t}
     info = inspect_geometry(GEO, params)
     tagged = build_mesh(Geometry(GEO, params, None, 3, info.groups, order=info.order), comm)
-    mesh = tagged.mesh
-    V = dolfinx.fem.functionspace(mesh, ("Lagrange", 2, (3,)))
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tagged.tags[2])
-    n = ufl.FacetNormal(mesh)
-    wall, outer = tagged.groups["wall"][1], tagged.groups["outer"][1]
-
-    def external(factor: Any, v: Any) -> Any:
-        p_in = P0 + factor * (PI - P0)
-        return ufl.inner(-p_in * n, v) * ds(wall) + ufl.inner(-P0 * n, v) * ds(outer)
-
-    bcs = []
-    for group, comp in (("bottom", 1), ("left", 0), ("back", 2), ("front", 2)):
-        dim, ents = tagged.entities(group)
-        dofs = dolfinx.fem.locate_dofs_topological(V.sub(comp), dim, ents)
-        bcs.append(dolfinx.fem.dirichletbc(0.0, dofs, V.sub(comp)))
-    sigma0 = -P0 * np.eye(3)
     law = MohrCoulomb(E=E, nu=NU, cohesion=C, friction_angle=PHI, dilatancy_angle=psi)
-    return PlasticProblem(V, law, external, bcs=bcs, initial_stress=sigma0), mesh
+    return ring_problem(tagged, law, p0=P0, pi=PI), tagged.mesh
 
 
 def _radial_wall(u: dolfinx.fem.Function, mesh: Any) -> float:
