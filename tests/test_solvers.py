@@ -156,3 +156,39 @@ def test_preconditioned_cg_and_add_values(comm):
         for obj in (cg, x, b, near, M):
             obj.destroy()
         solver.destroy()
+
+
+@pytest.mark.parametrize(
+    "comm",
+    [
+        pytest.param(MPI.COMM_SELF, id="self"),
+        pytest.param(MPI.COMM_WORLD, id="world", marks=pytest.mark.mpi(min_size=2)),
+    ],
+)
+def test_newton_solvers_one_after_another_whatever_the_garbage_collector(comm):
+    """A Newton solver makes no PETSc object it does not destroy itself.
+
+    u's wrapped PETSc vector would be freed by Python's garbage collector (u's owner is in a
+    reference cycle through ``update``) at a different moment on each rank; freeing the
+    last PETSc object of a communicator on one rank only makes the next solver's creation
+    duplicate the communicator on that rank alone, and the ranks deadlock. So the
+    solver must leave u without one, and a second solver built after the collector ran
+    on rank 0 only (as it may between two strength-reduction trials) must solve.
+    """
+    import gc
+
+    from geofrac.plasticity import MohrCoulomb
+    from tests.fem.plastic_ring import ring_mesh, ring_problem
+
+    tagged = ring_mesh(comm, a=1.0, b=10.0, h=0.5)
+    law = MohrCoulomb(E=1e4, nu=0.3, cohesion=1.0, friction_angle=30.0, dilatancy_angle=30.0)
+    converged = []
+    for _ in range(2):
+        problem = ring_problem(tagged, law, p0=10.0, pi=1.0)
+        converged.append(problem.solve_steps(2).converged)
+        problem.destroy()
+        assert problem.u.x._petsc_x is None
+        del problem
+        if comm.rank == 0:
+            gc.collect()
+    assert converged == [True, True]

@@ -154,7 +154,7 @@ class NewtonSolver:
         same = self._last is not None and np.array_equal(local, self._last)
         if self.u.function_space.mesh.comm.allreduce(same, op=MPI.LAND):
             return
-        x.copy(self.u.x.petsc_vec)
+        self.u.x.array[: local.size] = local
         self.u.x.scatter_forward()
         self.update()
         self._last = np.array(local, copy=True)
@@ -195,7 +195,8 @@ class NewtonSolver:
         """
         self.residuals = []
         self._last = None
-        self.u.x.petsc_vec.copy(self.x)
+        owned = self.x.getLocalSize()
+        self.x.array[:] = self.u.x.array[:owned]
         try:
             self.snes.solve(None, self.x)
         except PETSc.Error as exc:
@@ -232,7 +233,16 @@ class NewtonSolver:
         }
 
     def destroy(self) -> None:
-        """Free the SNES, matrix and vectors."""
+        """Free the SNES, matrix and vectors.
+
+        These are the only PETSc objects the solver makes: u is read and written through
+        its DOLFINx array, never its wrapped PETSc vector, which Python's garbage
+        collector would free at a different moment on each rank (u's owner sits in a
+        reference cycle through ``update``); freeing the last PETSc object of a
+        communicator on one rank only makes the next solver's creation call MPI_Comm_dup
+        on that rank alone, and the ranks deadlock (strength reduction builds one
+        solver per trial).
+        """
         self.snes.destroy()
         self.A.destroy()
         self.b.destroy()
