@@ -289,6 +289,22 @@ def test_two_ranks_resume_to_the_whole_run_and_refuse_one_rank(tmp_path, monkeyp
     assert comm.bcast(error, root=0)
 
 
+@pytest.mark.mpi(min_size=2)
+def test_two_ranks_strength_reduction_stopped_inside_a_trial_resumes_to_the_whole_run(
+    tmp_path, monkeypatch
+):
+    """2 ranks, the trial solvers built one after another (the hang of the SNES garbage fix)."""
+    root = _shared(tmp_path, MPI.COMM_WORLD)
+    counts = _whole(SLOPE, SLOPE_SETS, root / "whole", monkeypatch)
+    out = root / "stopped"
+    before = _stopped(SLOPE, SLOPE_SETS, out, monkeypatch, STOPS["inside_trial"])
+    again = _resumed(SLOPE, SLOPE_SETS, out, monkeypatch)
+    MPI.COMM_WORLD.barrier()
+    _on_root(_same, out, root / "whole", rtol=1e-10, newton=False)
+    assert before.trials + again.trials == counts.trials + 1  # the stopped trial, continued
+    assert before.polls + again.polls == counts.polls
+
+
 @pytest.mark.parametrize("threshold", [1.2345, 1.0001, 1.9999, 0.7, 3.1])
 def test_trials_left_counts_the_bisections_to_come(threshold: float) -> None:
     """The per-trial estimate of the trials left, against bisect_factor's actual calls.
