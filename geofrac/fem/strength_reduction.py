@@ -219,9 +219,9 @@ def factor_of_safety(
             max_cuts=max_cuts,
             hooks=None if hooks is None else hooks.trial(factor, trials),
         )
-        its = sum(s.report.iterations for s in result.steps)
+        its = sum(s.report.iterations for s in result.attempted)
         diverged: dict[str, int] = {}
-        for s in result.steps:
+        for s in result.attempted:
             if not s.accepted:
                 diverged[s.report.reason_name] = diverged.get(s.report.reason_name, 0) + 1
         u = None if result.monitor is None else float(np.linalg.norm(result.monitor))
