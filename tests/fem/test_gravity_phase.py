@@ -115,7 +115,7 @@ def test_level_layer_gravity_phase_is_geostatic_and_the_reset_leaves_it() -> Non
 
 
 def test_rankine_active_state_after_the_gravity_phase() -> None:
-    """c = 1, φ = 30°, ψ = 0, ν = 0.2: σ_xx = σ_zz = K_a σ_yy + 2c√K_a below 1.5 m.
+    """Cohesion 1, φ = 30°, ψ = 0, ν = 0.2: σ_xx = σ_zz = K_a σ_yy + 2c√K_a below 1.5 m.
 
     Measured: 1e-6 of γD in every cell below 1.1 m (σ_yy = γ y there to 2e-4 of γD; the
     cells at the elastic-plastic front, z = 0.69 m, carry the error of P2 at the kink).
@@ -256,8 +256,11 @@ def test_joints_and_gravity_phase_are_refused() -> None:
 
 @pytest.mark.mpi(min_size=2)
 def test_gravity_phase_on_two_ranks_equals_one() -> None:
-    """The Rankine layer on 2 ranks: the closed form as on 1, and the gravity phase's
-    numbers equal each rank's serial run (largest |u| to 1e-10, plastic points exactly)."""
+    """The Rankine layer on 2 ranks: the closed form as on 1.
+
+    The gravity phase's numbers equal each rank's serial run (largest |u| to 1e-10,
+    plastic points exactly).
+    """
     world = MPI.COMM_WORLD
     sets = ("plasticity.cohesion=1.0", "plasticity.gravity_steps=4")
     both = _layer(None, *sets, comm=world)
