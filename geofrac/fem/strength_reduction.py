@@ -194,6 +194,8 @@ def factor_of_safety(
         solved = [t.seconds for t in trials]
         eta = left * sum(solved) / len(solved)
         state = "stable" if trial.stable else f"FAILED at load factor {trial.load_factor:.4f}"
+        if trial.end_reason == "gravity_step_too_small":
+            state = "FAILED in the gravity phase"
         shown = "" if trial.monitor is None else f", monitor |u| {trial.monitor:.4e}"
         if trial.diverged:
             shown += ", rejected: " + ", ".join(f"{k} x{v}" for k, v in trial.diverged.items())

@@ -280,3 +280,43 @@ def test_gravity_phase_on_two_ranks_equals_one() -> None:
     finally:
         both.problem.destroy()
         alone.problem.destroy()
+
+
+SLOPE_SETS = (
+    "geometry.parameters.h=2.0",
+    "plasticity.max_cuts=1",
+    "plasticity.max_iterations=15",
+    "plasticity.reduction_tolerance=0.2",
+)
+
+
+def test_strength_reduction_with_a_gravity_phase_and_no_load_is_the_ramped_one() -> None:
+    """Griffiths-Lane's slope (h = 2): the same trials and factor as gravity ramped.
+
+    With no ``[[load]]`` the gravity phase of each trial is the ramped-gravity solve of
+    the plain strength reduction (the same steps with the same law), and the analysis
+    has nothing to carry: every trial's verdict and the bracket are the same; the
+    failed trials fail in the gravity phase; the monitor of a stable trial (measured in
+    the analysis, from the gravity state) stays 0 to round-off.
+    """
+    runs = []
+    for extra in ((), ("plasticity.gravity_phase=true",)):
+        solution = solve_job("slope_griffiths_lane", *SLOPE_SETS, *extra)
+        try:
+            runs.append(solution.results["plasticity"])
+        finally:
+            solution.problem.destroy()
+    ramped, phased = runs
+    assert ramped["gravity"] == "ramped" and phased["gravity"] == "gravity phase, then held"
+    assert [t["factor"] for t in phased["trials"]] == [t["factor"] for t in ramped["trials"]]
+    assert [t["stable"] for t in phased["trials"]] == [True, False, False]
+    assert [t["stable"] for t in ramped["trials"]] == [True, False, False]
+    assert phased["factor_of_safety"] == ramped["factor_of_safety"]
+    for t in phased["trials"]:
+        if t["stable"]:
+            assert t["end_reason"] == "converged" and t["monitor"] <= 1e-12
+        else:
+            assert t["end_reason"] == "gravity_step_too_small" and t["load_factor"] == 0.0
+    last = phased["last_stable"]
+    assert last["converged"] and last["gravity_phase"]["converged"]
+    assert last["gravity_phase"]["max_displacement"] > 1e-3  # it settled (the crest: 8.7 mm)
