@@ -14,7 +14,9 @@ increment whose Newton solve diverges is halved (up to ``max_cuts`` times in a r
 the state restored), and a run that still fails ends with ``converged = False`` and the
 last converged factor: a non-converged step is never the result. The solver is reusable
 for strength reduction: :func:`solve_plastic` takes the law (any c, φ) and returns
-whether it converged and the monitor displacement. See docs/plasticity.md.
+whether it converged and the monitor displacement. With a :class:`GravityPhase` the
+stepping runs twice: the gravity phase, the reset of u and εₙ, then the analysis.
+See docs/plasticity.md.
 """
 
 from __future__ import annotations

@@ -15,6 +15,12 @@ group is the load it takes). A run whose increment could not converge after ``ma
 ends with ``converged = false``, ``end_reason = "step_too_small"`` and the displacement
 of the last converged factor (never of the failed one).
 
+With ``gravity_phase`` (``gravity_steps`` > 0) a gravity phase comes first: the effects'
+terms ramped with the loads off and the Dirichlet values held at 0, the displacements
+reset (:meth:`~geofrac.fem.plastic.PlasticProblem.reset_displacement`), then the loads
+ramped with gravity held: one switch constant s in the external work, terms times
+λ + s (1 − λ), loads times s λ (docs/plasticity.md, "Gravity phase").
+
 With ``strength_reduction = true`` (:func:`run_reduction`) the solve is repeated for
 trial factors F (c, tan φ, tan ψ divided by F) in a bisection to the factor of safety
 (:mod:`geofrac.fem.strength_reduction`); without ``[initial_stress]`` the effects'
