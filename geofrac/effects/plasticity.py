@@ -295,6 +295,12 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
         raise t.error("contact_penalty", "needs plasticity.joints")
     penalty = float(t.number("contact_penalty", default=100.0, positive=True, maximum=1e8))
     gravity = _gravity_phase(t, steps=steps, joints=bool(joints))
+    if gravity and ground is not None:
+        raise t.error(
+            "ground_reaction",
+            "does not apply with gravity_phase = true (its closed form starts from an "
+            "isotropic in-situ pressure, not from a gravity phase)",
+        )
     return PlasticityConfig(
         phi,
         c,

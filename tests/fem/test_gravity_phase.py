@@ -241,11 +241,22 @@ def test_gravity_steps_need_the_gravity_phase() -> None:
     assert info.value.key == "plasticity.gravity_steps"
 
 
-def test_initial_stress_and_gravity_phase_are_alternatives() -> None:
+def test_initial_stress_and_gravity_phase_are_alternatives(tmp_path: Path) -> None:
     """A K0 start and a gravity phase together: refused by the loader, naming both."""
+    geo = (JOBS / "../meshes/footing_prandtl.geo").resolve()
+    text = LAYER.read_text().replace('"../../meshes/footing_prandtl.geo"', f'"{geo}"')
+    path = tmp_path / "k0.toml"
+    path.write_text(text + '\n[initial_stress]\nkind = "geostatic"\nsurface = 0.0\n')
+    load_scene(path, ["plasticity.gravity_phase=false"])  # the K0 start alone is fine
     with pytest.raises(SceneError, match=r"initial_stress") as info:
-        load_scene(JOBS / "opening_mohr_coulomb.toml", ["plasticity.gravity_phase=true"])
+        load_scene(path)
     assert info.value.key == "plasticity.gravity_phase"
+
+
+def test_ground_reaction_and_gravity_phase_are_refused() -> None:
+    with pytest.raises(SceneError, match="gravity_phase") as info:
+        load_scene(JOBS / "opening_mohr_coulomb.toml", ["plasticity.gravity_phase=true"])
+    assert info.value.key == "plasticity.ground_reaction"
 
 
 def test_joints_and_gravity_phase_are_refused() -> None:
