@@ -60,7 +60,7 @@ match):
   the stress and plastic strain kept), then the analysis (gravity held, the loads and
   ``[[bc]]`` values ramped); in strength reduction every trial does both (default
   false; not with ``[initial_stress]``, the K0 start being the alternative, nor with
-  ``joints``);
+  ``ground_reaction``; the joints keep their jump through the reset);
 - ``gravity_steps``: the gravity phase's increments (default ``load_steps``; needs
   ``gravity_phase``).
 """
@@ -294,7 +294,7 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
     if t.has("contact_penalty") and not joints:
         raise t.error("contact_penalty", "needs plasticity.joints")
     penalty = float(t.number("contact_penalty", default=100.0, positive=True, maximum=1e8))
-    gravity = _gravity_phase(t, steps=steps, joints=bool(joints))
+    gravity = _gravity_phase(t, steps=steps)
     if gravity and ground is not None:
         raise t.error(
             "ground_reaction",
@@ -320,18 +320,12 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
     )
 
 
-def _gravity_phase(t: Table, *, steps: int, joints: bool) -> int:
+def _gravity_phase(t: Table, *, steps: int) -> int:
     """``gravity_phase`` and ``gravity_steps``: the gravity phase's increments, or 0."""
     if not t.boolean("gravity_phase", default=False):
         if t.has("gravity_steps"):
             raise t.error("gravity_steps", "needs gravity_phase = true")
         return 0
-    if joints:
-        raise t.error(
-            "gravity_phase",
-            "does not take plasticity.joints yet (the joint springs would lose the gravity "
-            "phase's force when the displacements are reset)",
-        )
     return int(t.number("gravity_steps", default=steps, integer=True, minimum=1, maximum=100_000))
 
 

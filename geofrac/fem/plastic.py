@@ -260,8 +260,7 @@ class PlasticProblem:
             updated with the quadrature points and committed with them, or None.
         gravity: a gravity phase run by :meth:`solve_steps` before the analysis (the
             displacements reset between them: :meth:`reset_displacement`), or None.
-            Not with ``joints`` (their springs would lose the gravity phase's force
-            at the reset) nor ``initial_stress`` (a K0 start is the alternative).
+            Not with ``initial_stress`` (a K0 start is the alternative).
     """
 
     def __init__(
@@ -281,11 +280,10 @@ class PlasticProblem:
         gravity: GravityPhase | None = None,
     ) -> None:
         degree = _check_space(V)
-        if gravity is not None and (joints is not None or initial_stress is not None):
+        if gravity is not None and initial_stress is not None:
             raise RunError(
-                "plasticity: a gravity phase takes neither joints (their springs would lose "
-                "the gravity phase's force when the displacements are reset) nor an initial "
-                "stress (the K0 start is the alternative to a gravity phase)"
+                "plasticity: a gravity phase takes no initial stress (the K0 start is the "
+                "alternative to a gravity phase)"
             )
         self.joints, self.gravity = joints, gravity
         #: the gravity phase is running: the Dirichlet values are held at 0.
@@ -398,7 +396,9 @@ class PlasticProblem:
 
         ``u`` shape=(dofs × gdim,); ``stress_n``, ``strain_n``, ``plastic_strain``
         shape=(n, 3, 3) at the local quadrature points; with joints ``joint_slip``, the
-        committed slip of every pair, shape=(pairs,) (the same on every rank).
+        committed slip of every pair, shape=(pairs,), and with a gravity phase also
+        ``joint_offset``, the jump kept at the reset, shape=(pairs, 2) (the same on every
+        rank).
         """
         arrays = {
             "u": self.u.x.array.copy(),
@@ -408,6 +408,8 @@ class PlasticProblem:
         }
         if self.joints is not None:
             arrays["joint_slip"] = self.joints.slip_n.copy()
+            if self.gravity is not None:
+                arrays["joint_offset"] = self.joints.offset.copy()
         return arrays
 
     def set_state(self, arrays: dict[str, np.ndarray], factor: float) -> None:
@@ -418,6 +420,8 @@ class PlasticProblem:
         self.plastic_strain = np.array(arrays["plastic_strain"], dtype=float)
         if self.joints is not None:
             self.joints.slip_n = np.array(arrays["joint_slip"], dtype=float)
+            if self.gravity is not None:
+                self.joints.offset = np.array(arrays["joint_offset"], dtype=float)
         self.factor.value = factor
         self._update()
 
@@ -513,8 +517,11 @@ class PlasticProblem:
 
         The stress at every point is then σₙ (a zero strain increment from the
         committed state), in equilibrium with the gravity phase's loads; the
-        analysis's displacement is measured from here.
+        analysis's displacement is measured from here. The joints keep their jump
+        (:meth:`~geofrac.fem.joints.JointInterface.keep_jump`): their forces unchanged.
         """
+        if self.joints is not None:
+            self.joints.keep_jump()
         self.u.x.array[:] = 0.0
         self.strain_n[...] = 0.0
         self.factor.value = 0.0
