@@ -8,7 +8,8 @@ and the strength reduction also after every finished trial. A checkpoint holds:
 - per rank (``rank-<r>.npz``, this rank's local arrays with ghosts, as the staged runs'):
   the displacement ``u`` and, at every local quadrature point, the converged stress
   ``stress_n``, strain ``strain_n`` and accumulated plastic strain ``plastic_strain``
-  (shape=(n, 3, 3)) of the solve in progress;
+  (shape=(n, 3, 3)) of the solve in progress; with joints their slips (and with a
+  gravity phase the jump kept at the reset);
 - ``meta.json`` data: ``loop`` (``"plastic"`` or ``"strength_reduction"``), the load
   factor reached ``done``, the current increment ``inc`` (halved by earlier cuts) and
   every attempted step's record (factor, SNES reason, iterations, residuals, plastic

@@ -18,7 +18,9 @@ values ramped). References from closed forms:
   pressure moves the weightless layer (superposition; the loads are off in the gravity
   phase and ramped in the analysis);
 - Prandtl's footing on heavy clay (jobs/footing_heavy_clay.toml, φ = 0): the collapse
-  pressure (2 + π) c does not depend on the soil's weight, within 3 %.
+  pressure (2 + π) c does not depend on the soil's weight, within 3 %;
+- joints keep their forces through the reset (the planar slide's block); in strength
+  reduction a gravity phase without loads gives gravity ramped's trials.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from geofrac.fem.strength_reduction import largest_monitor
 from geofrac.model.errors import SceneError
 from geofrac.runner import solve_scene
 from geofrac.scene import load_scene_collective
@@ -259,12 +262,6 @@ def test_ground_reaction_and_gravity_phase_are_refused() -> None:
     assert info.value.key == "plasticity.ground_reaction"
 
 
-def test_joints_and_gravity_phase_are_refused() -> None:
-    with pytest.raises(SceneError, match="joints") as info:
-        load_scene(JOBS / "slope_planar_joint.toml", ["plasticity.gravity_phase=true"])
-    assert info.value.key == "plasticity.gravity_phase"
-
-
 @pytest.mark.mpi(min_size=2)
 def test_gravity_phase_on_two_ranks_equals_one() -> None:
     """The Rankine layer on 2 ranks: the closed form as on 1.
@@ -331,3 +328,49 @@ def test_strength_reduction_with_a_gravity_phase_and_no_load_is_the_ramped_one()
     last = phased["last_stable"]
     assert last["converged"] and last["gravity_phase"]["converged"]
     assert last["gravity_phase"]["max_displacement"] > 1e-3  # it settled (the crest: 8.7 mm)
+
+
+def _planar_joint(directory: Path) -> Path:
+    """jobs/slope_planar_joint.toml load-stepped (its strength-reduction keys dropped)."""
+    geo = (JOBS / "../meshes/slope_planar_joint.geo").resolve()
+    text = (JOBS / "slope_planar_joint.toml").read_text()
+    text = text.replace('"../meshes/slope_planar_joint.geo"', f'"{geo}"')
+    lines = text.splitlines()
+    path = directory / "planar_joint.toml"
+    if MPI.COMM_WORLD.rank == 0:
+        keep = [ln for ln in lines if not ln.startswith(("strength_reduction", "reduction_"))]
+        path.write_text("\n".join(keep) + "\n")
+    MPI.COMM_WORLD.barrier()
+    return path
+
+
+def test_joints_keep_their_forces_through_the_reset(tmp_path: Path) -> None:
+    """The planar slide's block on its joint: its springs keep their forces at the reset.
+
+    c = 10, μ = tan 35°: after the gravity phase and the reset an analysis without load
+    moves nothing, and the joint's state is that of gravity ramped without a phase (the
+    same steps), to 1e-9.
+
+    Break check: without the jump kept at the reset the springs lose their force and
+    the analysis does not converge (the block rests on nothing).
+    """
+    comm = MPI.COMM_WORLD
+    path = _planar_joint(Path(comm.bcast(str(tmp_path), root=0)))
+    runs = []
+    for sets in ((), ("plasticity.gravity_phase=true", "plasticity.load_steps=1")):
+        scene = load_scene_collective(comm, path, ("plasticity.max_cuts=0", *sets))
+        solution = solve_scene(scene, comm, verbose=False)
+        try:
+            runs.append((solution.results["plasticity"], largest_monitor(solution.problem.uh)[0]))
+        finally:
+            solution.problem.destroy()
+    (ramped, u_ramped), (phased, u_phased) = runs
+    assert ramped["converged"] and phased["converged"]
+    assert phased["gravity_phase"]["max_displacement"] == pytest.approx(u_ramped, rel=1e-9)
+    assert u_phased <= 1e-9 * u_ramped
+    a, b = phased["joints"], ramped["joints"]
+    counts = ("pairs", "slipping", "open")
+    assert [a[k] for k in counts] == [b[k] for k in counts]
+    assert a["max_slip"] == pytest.approx(b["max_slip"], rel=1e-9)
+    assert abs(a["max_opening"] - b["max_opening"]) <= 1e-9 * b["max_slip"]
+    assert a["slipping"] > 0  # the joint's state is not trivial
