@@ -21,6 +21,7 @@ from mpi4py import MPI
 from geofrac import interrupt
 from tests.conftest import JOBS
 from tests.fem.helpers import check_interrupted
+from tests.fem.test_gravity_phase import _planar_joint
 from tests.fem.test_plastic_resume import Counts, _on_root, _run, _same, _shared
 
 LAYER = Path(__file__).parent / "gravity_layer.toml"
@@ -88,6 +89,50 @@ def _check(out: Path, whole: Path, *, rtol: float) -> None:
     plastic = results["plasticity"]
     assert plastic["converged"] and len(plastic["gravity_phase"]["steps"]) == 4
     assert plastic["gravity_phase"]["plastic_points"] > 0
+
+
+def test_joints_resume_in_the_analysis_with_their_kept_jump(tmp_path, monkeypatch):
+    """The planar slide's block (tests/fem/test_gravity_phase.py): stopped in the analysis.
+
+    5 gravity steps, 2 analysis steps: poll 5 is after the first analysis step
+    (checkpoint 6). The resumed run equals the whole one: the joints' kept jump is in the
+    checkpoint (without it the block would rest on nothing after the resume).
+    """
+    comm = MPI.COMM_WORLD
+    base = _shared(tmp_path, comm)
+    job = _planar_joint(base)
+    sets = (
+        "plasticity.gravity_phase=true",
+        "plasticity.gravity_steps=5",
+        "plasticity.load_steps=2",
+        "output.xdmf=true",
+    )
+    whole = base / "whole"
+    counts = Counts(monkeypatch)
+    try:
+        _run(job, sets, whole, comm)
+    finally:
+        monkeypatch.undo()
+    assert counts.polls == 5
+    out = base / "stopped"
+    try:
+        Counts(monkeypatch, stop_at=5)
+        with pytest.raises(interrupt.Interrupted):
+            _run(job, sets, out, comm)
+    finally:
+        interrupt.reset()
+        monkeypatch.undo()
+    comm.barrier()
+    check_interrupted(out, 6)
+    _run(job, sets, out, comm, resume=True)
+    comm.barrier()
+    _on_root(_check_joints, out, whole)
+
+
+def _check_joints(out: Path, whole: Path) -> None:
+    results = _same(out, whole, rtol=0.0)
+    plastic = results["plasticity"]
+    assert plastic["converged"] and plastic["joints"]["slipping"] > 0
 
 
 @pytest.mark.mpi(min_size=2)
