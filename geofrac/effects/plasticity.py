@@ -53,7 +53,16 @@ match):
   ``strength_reduction``): the ground reaction curve of a circular opening, the wall's
   radial displacement at the ``output.probes`` point ``probe`` against the internal
   pressure on ``group`` at every converged load step, beside Salençon's closed form
-  (:mod:`geofrac.fem.plastic_outputs`).
+  (:mod:`geofrac.fem.plastic_outputs`);
+- ``gravity_phase``: true: a gravity-loading phase first (the effects' terms, gravity,
+  ramped from a stress-free start with the ``[[load]]`` entries off and the ``[[bc]]``
+  values held at 0), then the displacements reset (u = 0, the strains' reference 0,
+  the stress and plastic strain kept), then the analysis (gravity held, the loads and
+  ``[[bc]]`` values ramped); in strength reduction every trial does both (default
+  false; not with ``[initial_stress]``, the K0 start being the alternative, nor with
+  ``ground_reaction``; the joints keep their jump through the reset);
+- ``gravity_steps``: the gravity phase's increments (default ``load_steps``; needs
+  ``gravity_phase``).
 """
 
 from __future__ import annotations
@@ -109,6 +118,8 @@ KEYS = (
     "reduction_bracket",
     "reduction_monitor",
     "ground_reaction",
+    "gravity_phase",
+    "gravity_steps",
 )
 #: The FEM-only keys.
 FEM_KEYS = KEYS[3:]
@@ -202,6 +213,7 @@ class PlasticityConfig:
         ground_reaction: the ground reaction curve's settings, or None (FEM).
         joints: the split joints' strengths (FEM).
         contact_penalty: the joints' springs in units of E / facet length (FEM).
+        gravity_steps: the gravity phase's increments, 0 without a gravity phase (FEM).
     """
 
     friction_angle: float
@@ -218,6 +230,7 @@ class PlasticityConfig:
     davis: bool = False
     joints: tuple[JointConfig, ...] = ()
     contact_penalty: float = 100.0
+    gravity_steps: int = 0
 
 
 def configure(table: dict[str, Any], ctx: ConfigureContext) -> PlasticityConfig:
@@ -281,6 +294,13 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
     if t.has("contact_penalty") and not joints:
         raise t.error("contact_penalty", "needs plasticity.joints")
     penalty = float(t.number("contact_penalty", default=100.0, positive=True, maximum=1e8))
+    gravity = _gravity_phase(t, steps=steps)
+    if gravity and ground is not None:
+        raise t.error(
+            "ground_reaction",
+            "does not apply with gravity_phase = true (its closed form starts from an "
+            "isotropic in-situ pressure, not from a gravity phase)",
+        )
     return PlasticityConfig(
         phi,
         c,
@@ -296,7 +316,17 @@ def _fem(t: Table, ctx: ConfigureContext, phi: float, c: float, psi: float) -> P
         davis,
         joints,
         penalty,
+        gravity,
     )
+
+
+def _gravity_phase(t: Table, *, steps: int) -> int:
+    """``gravity_phase`` and ``gravity_steps``: the gravity phase's increments, or 0."""
+    if not t.boolean("gravity_phase", default=False):
+        if t.has("gravity_steps"):
+            raise t.error("gravity_steps", "needs gravity_phase = true")
+        return 0
+    return int(t.number("gravity_steps", default=steps, integer=True, minimum=1, maximum=100_000))
 
 
 def _ground_reaction(t: Table, ctx: ConfigureContext) -> GroundReactionConfig:
@@ -334,8 +364,15 @@ def check_scene(
     :class:`~geofrac.model.scene.InitialStress`, or None. The ground reaction curve needs
     a constant initial stress that is isotropic in the plane (σxx = σyy, σxy = 0: the
     in-situ pressure p0 = −σxx) with the wall among its ``loaded`` sides, or none
-    (p0 = 0). Raises SceneError naming the key.
+    (p0 = 0). A gravity phase refuses an initial stress. Raises SceneError naming the key.
     """
+    if config.gravity_steps and initial is not None:
+        raise SceneError(
+            file,
+            "plasticity.gravity_phase",
+            "does not go with [initial_stress]: they are alternative starts (a K0 initial "
+            "stress where the surface is level, or a gravity-loading phase); drop one",
+        )
     if "stress_nodal" in fields:
         raise SceneError(
             file,
@@ -434,6 +471,7 @@ def driver(
             max_iterations=config.max_iterations,
             joints=config.joints,
             penalty=config.contact_penalty,
+            gravity_steps=config.gravity_steps,
         )
     return run(
         law,
@@ -446,6 +484,7 @@ def driver(
         max_iterations=config.max_iterations,
         joints=config.joints,
         penalty=config.contact_penalty,
+        gravity_steps=config.gravity_steps,
     )
 
 

@@ -307,6 +307,9 @@ class JointInterface:
         self.friction = np.array([s.friction for s in strengths])[geometry.group]
         self.k = penalty * E / geometry.length
         self.slip_n = np.zeros(geometry.size)
+        #: the jump (δₙ, δₛ) the displacement lost at a reset (a gravity phase's end),
+        #: added to the jump of u, shape=(m, 2), the same on every rank.
+        self.offset = np.zeros((geometry.size, 2))
         self.ret: JointReturn | None = None
         bs = V.dofmap.index_map_bs
         comps = np.arange(bs)
@@ -319,11 +322,11 @@ class JointInterface:
         self._q = np.stack([n, np.stack([n[:, 1], -n[:, 0]], axis=1)], axis=2)  # (m, 2, 2): [n t]
 
     def update(self, u: dolfinx.fem.Function) -> None:
-        """The law at the jump of u (collective)."""
+        """The law at the jump of u plus :attr:`offset` (collective)."""
         g = self.geometry
         values = _gather(self.V, u.x.array, np.concatenate([g.plus, g.minus]))
         jump = values[: g.size] - values[g.size :]
-        local = np.einsum("mij,mi->mj", self._q, jump)  # (δₙ, δₛ)
+        local = np.einsum("mij,mi->mj", self._q, jump) + self.offset  # (δₙ, δₛ)
         self.ret = coulomb_joint(
             local[:, 0],
             local[:, 1],
@@ -339,6 +342,14 @@ class JointInterface:
         """Accept the current slips as converged."""
         assert self.ret is not None
         self.slip_n = self.ret.slip.copy()
+
+    def keep_jump(self) -> None:
+        """Before u is reset to 0: keep the current jump in :attr:`offset`.
+
+        The springs' forces, openings and slips are then unchanged by the reset (the
+        jump is measured from the stress-free state, as the slip).
+        """
+        self.offset = self._jump.copy()
 
     def residual_entries(self) -> tuple[np.ndarray, np.ndarray]:
         """(owned global rows, values): +w T on u⁺, −w T on u⁻, T = σₙ n + τ t."""

@@ -14,7 +14,9 @@ increment whose Newton solve diverges is halved (up to ``max_cuts`` times in a r
 the state restored), and a run that still fails ends with ``converged = False`` and the
 last converged factor: a non-converged step is never the result. The solver is reusable
 for strength reduction: :func:`solve_plastic` takes the law (any c, φ) and returns
-whether it converged and the monitor displacement. See docs/plasticity.md.
+whether it converged and the monitor displacement. With a :class:`GravityPhase` the
+stepping runs twice: the gravity phase, the reset of u and εₙ, then the analysis.
+See docs/plasticity.md.
 """
 
 from __future__ import annotations
@@ -42,6 +44,8 @@ from geofrac.solvers.snes import NewtonReport, NewtonSolver
 from geofrac.solvers.types import SCALAR
 
 __all__ = [
+    "GravityPhase",
+    "GravityRecord",
     "LoadState",
     "PlasticProblem",
     "PlasticResult",
@@ -101,6 +105,41 @@ class StepRecord:
     observed: Any = None
 
 
+@dataclass(frozen=True)
+class GravityPhase:
+    """A gravity-loading phase before the analysis (docs/plasticity.md, "Gravity phase").
+
+    Attributes:
+        switch: the constant the external work reads as its phase: 0 in the gravity
+            phase (the effects' terms times λ, the loads off), 1 in the analysis (the
+            terms held, the loads times λ); see :func:`geofrac.fem.plastic_driver`'s
+            ``_external``.
+        steps: load increments of the gravity phase (λ 0 → 1).
+    """
+
+    switch: dolfinx.fem.Constant
+    steps: int
+
+
+@dataclass
+class GravityRecord:
+    """What the gravity phase did, kept through the reset (and in checkpoints).
+
+    Attributes:
+        records: its attempted steps.
+        converged: it reached λ = 1.
+        factor: its last converged λ.
+        max_displacement: the largest nodal |u| (all ranks) before the reset.
+        plastic_points: points with plastic strain at its end (all ranks).
+    """
+
+    records: list[StepRecord]
+    converged: bool
+    factor: float
+    max_displacement: float
+    plastic_points: int
+
+
 @dataclass
 class PlasticResult:
     """The end of a load-stepped solve.
@@ -116,6 +155,9 @@ class PlasticResult:
         ellipticity: at the end of a run that did not converge, (plastic points whose
             tangent has lost ellipticity, plastic points) at the last converged factor
             (:meth:`PlasticProblem.ellipticity`); None for a converged run.
+        gravity: the gravity phase, or None without one. When it failed the analysis
+            was not run: ``end_reason = "gravity_step_too_small"``, ``factor`` 0,
+            ``steps`` empty, ``monitor`` at the gravity phase's last converged λ.
     """
 
     converged: bool
@@ -124,6 +166,12 @@ class PlasticResult:
     steps: list[StepRecord] = field(default_factory=list)
     monitor: np.ndarray | None = None
     ellipticity: tuple[int, int] | None = None
+    gravity: GravityRecord | None = None
+
+    @property
+    def attempted(self) -> list[StepRecord]:
+        """Every attempted step of both phases (the gravity phase's first)."""
+        return ([] if self.gravity is None else self.gravity.records) + self.steps
 
 
 def _bc_view(bc: dolfinx.fem.DirichletBC) -> np.ndarray:
@@ -144,12 +192,16 @@ class LoadState:
     Attributes:
         done: the last converged load factor.
         inc: the current increment (halved by cuts, kept once a step converges).
-        records: every attempted step so far.
+        records: every attempted step so far (of this phase).
+        phase: ``"gravity"`` or ``"analysis"`` (also without a gravity phase).
+        gravity: in the analysis after a gravity phase, that phase's record.
     """
 
     done: float
     inc: float
     records: list[StepRecord]
+    phase: str = "analysis"
+    gravity: GravityRecord | None = None
 
 
 class StepHooks(Protocol):
@@ -206,6 +258,9 @@ class PlasticProblem:
         options: user PETSc options (without prefix).
         joints: Coulomb springs across split joints (:class:`geofrac.fem.joints.JointInterface`),
             updated with the quadrature points and committed with them, or None.
+        gravity: a gravity phase run by :meth:`solve_steps` before the analysis (the
+            displacements reset between them: :meth:`reset_displacement`), or None.
+            Not with ``initial_stress`` (a K0 start is the alternative).
     """
 
     def __init__(
@@ -222,9 +277,17 @@ class PlasticProblem:
         rtol: float = 1e-9,
         max_it: int = 25,
         joints: JointInterface | None = None,
+        gravity: GravityPhase | None = None,
     ) -> None:
         degree = _check_space(V)
-        self.joints = joints
+        if gravity is not None and initial_stress is not None:
+            raise RunError(
+                "plasticity: a gravity phase takes no initial stress (the K0 start is the "
+                "alternative to a gravity phase)"
+            )
+        self.joints, self.gravity = joints, gravity
+        #: the gravity phase is running: the Dirichlet values are held at 0.
+        self._in_gravity = False
         self.V, self.law, self.mesh = V, law, V.mesh
         self.comm: MPI.Comm = V.mesh.comm
         qdeg = 2 * (degree - 1)
@@ -333,7 +396,9 @@ class PlasticProblem:
 
         ``u`` shape=(dofs × gdim,); ``stress_n``, ``strain_n``, ``plastic_strain``
         shape=(n, 3, 3) at the local quadrature points; with joints ``joint_slip``, the
-        committed slip of every pair, shape=(pairs,) (the same on every rank).
+        committed slip of every pair, shape=(pairs,), and with a gravity phase also
+        ``joint_offset``, the jump kept at the reset, shape=(pairs, 2) (the same on every
+        rank).
         """
         arrays = {
             "u": self.u.x.array.copy(),
@@ -343,6 +408,8 @@ class PlasticProblem:
         }
         if self.joints is not None:
             arrays["joint_slip"] = self.joints.slip_n.copy()
+            if self.gravity is not None:
+                arrays["joint_offset"] = self.joints.offset.copy()
         return arrays
 
     def set_state(self, arrays: dict[str, np.ndarray], factor: float) -> None:
@@ -353,6 +420,8 @@ class PlasticProblem:
         self.plastic_strain = np.array(arrays["plastic_strain"], dtype=float)
         if self.joints is not None:
             self.joints.slip_n = np.array(arrays["joint_slip"], dtype=float)
+            if self.gravity is not None:
+                self.joints.offset = np.array(arrays["joint_offset"], dtype=float)
         self.factor.value = factor
         self._update()
 
@@ -438,9 +507,33 @@ class PlasticProblem:
             self._ramp_bcs(1.0)
 
     def _ramp_bcs(self, factor: float) -> None:
-        """Set every Dirichlet value to ``factor`` times its full value g."""
+        """Set every Dirichlet value to ``factor`` times its full value g (gravity phase: 0)."""
+        scale = 0.0 if self._in_gravity else factor
         for view, full in self._bc_values:
-            view[...] = factor * full
+            view[...] = scale * full
+
+    def reset_displacement(self) -> None:
+        """The end of the gravity phase: u = 0 and εₙ = 0, σₙ and the plastic strain kept.
+
+        The stress at every point is then σₙ (a zero strain increment from the
+        committed state), in equilibrium with the gravity phase's loads; the
+        analysis's displacement is measured from here. The joints keep their jump
+        (:meth:`~geofrac.fem.joints.JointInterface.keep_jump`): their forces unchanged.
+        """
+        if self.joints is not None:
+            self.joints.keep_jump()
+        self.u.x.array[:] = 0.0
+        self.strain_n[...] = 0.0
+        self.factor.value = 0.0
+        self._update()
+
+    def _max_displacement(self) -> float:
+        """The largest nodal |u| over the owned nodes (all ranks)."""
+        bs = self.V.dofmap.index_map_bs
+        owned = self.V.dofmap.index_map.size_local
+        nodes = self.u.x.array[: owned * bs].reshape(-1, bs)
+        local = float(np.linalg.norm(nodes, axis=1).max()) if len(nodes) else 0.0
+        return float(self.comm.allreduce(local, op=MPI.MAX))
 
     def _steps(
         self,
@@ -452,8 +545,71 @@ class PlasticProblem:
         observe: Callable[[PlasticProblem], Any] | None,
         hooks: StepHooks | None,
     ) -> PlasticResult:
-        """The loop of :meth:`solve_steps` (the Dirichlet values left ramped)."""
+        """The phases of :meth:`solve_steps` (the Dirichlet values left ramped).
+
+        With a gravity phase: unless the checkpoint is of the analysis, the gravity
+        phase (switch 0, no observe), the reset, then the analysis (switch 1).
+        """
         start = None if hooks is None else hooks.restore(self)
+        loop: dict[str, Any] = {
+            "max_cuts": max_cuts,
+            "say": say,
+            "monitor": monitor,
+            "hooks": hooks,
+        }
+        if self.gravity is None:
+            return self._phase(steps, start, observe=observe, **loop)
+        gravity = None if start is None else start.gravity
+        if gravity is None:  # not yet through the gravity phase
+            self._in_gravity, self.gravity.switch.value = True, 0.0
+            try:
+                first = self._phase(self.gravity.steps, start, observe=None, **loop)
+            finally:
+                self._in_gravity = False
+            gravity = GravityRecord(
+                first.steps,
+                first.converged,
+                first.factor,
+                self._max_displacement(),
+                self.plastic_points(),
+            )
+            if not first.converged:
+                return PlasticResult(
+                    False,
+                    0.0,
+                    "gravity_step_too_small",
+                    [],
+                    first.monitor,
+                    first.ellipticity,
+                    gravity,
+                )
+            self.reset_displacement()
+            start = LoadState(0.0, 1.0 / steps, [], gravity=gravity)
+            if say is not None:
+                say(
+                    f"plastic: gravity phase done (max |u| {gravity.max_displacement:.4e}, "
+                    f"{gravity.plastic_points} plastic points); displacements reset"
+                )
+        self.gravity.switch.value = 1.0
+        result = self._phase(steps, start, observe=observe, **loop)
+        result.gravity = gravity
+        return result
+
+    def _phase(
+        self,
+        steps: int,
+        start: LoadState | None,
+        *,
+        max_cuts: int,
+        say: Callable[[str], None] | None,
+        monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None,
+        observe: Callable[[PlasticProblem], Any] | None,
+        hooks: StepHooks | None,
+    ) -> PlasticResult:
+        """One phase's load factor 0 → 1 from ``start`` (a checkpoint's state, or None)."""
+        phase = "gravity" if self._in_gravity else "analysis"
+        label = "" if self.gravity is None else f" ({phase} phase)"
+        gravity = None if start is None else start.gravity
         records: list[StepRecord] = [] if start is None else list(start.records)
         done, inc, cuts = (0.0, 1.0 / steps, 0) if start is None else (start.done, start.inc, 0)
         t0, done0 = time.perf_counter(), done
@@ -471,12 +627,12 @@ class PlasticProblem:
                 if say is not None:
                     eta = (time.perf_counter() - t0) * (1.0 - done) / (done - done0)
                     say(
-                        f"plastic: factor {done:.4f} converged ({report.reason_name}, "
+                        f"plastic{label}: factor {done:.4f} converged ({report.reason_name}, "
                         f"{report.iterations} its, |F| {report.residuals[-1]:.2e}), "
                         f"{plastic} plastic points, ETA {eta:.1f} s"
                     )
                 if hooks is not None and done < 1.0 - 1e-12:
-                    hooks.after_step(self, LoadState(done, inc, records))
+                    hooks.after_step(self, LoadState(done, inc, records, phase, gravity))
                 continue
             records.append(StepRecord(target, report, False, 0))
             self.u.x.array[:] = u_saved
@@ -492,7 +648,7 @@ class PlasticProblem:
                         f"; the tangent has lost ellipticity at {lost[0]} of {lost[1]} "
                         "plastic points (non-associated flow: docs/plasticity.md)"
                     )
-                say(f"plastic: factor {target:.4f} diverged ({report.reason_name}), {what}")
+                say(f"plastic{label}: factor {target:.4f} diverged ({report.reason_name}), {what}")
             if stop:
                 return PlasticResult(
                     False, done, "step_too_small", records, self._monitor(monitor), lost

@@ -8,13 +8,17 @@ and the strength reduction also after every finished trial. A checkpoint holds:
 - per rank (``rank-<r>.npz``, this rank's local arrays with ghosts, as the staged runs'):
   the displacement ``u`` and, at every local quadrature point, the converged stress
   ``stress_n``, strain ``strain_n`` and accumulated plastic strain ``plastic_strain``
-  (shape=(n, 3, 3)) of the solve in progress;
+  (shape=(n, 3, 3)) of the solve in progress; with joints their slips (and with a
+  gravity phase the jump kept at the reset);
 - ``meta.json`` data: ``loop`` (``"plastic"`` or ``"strength_reduction"``), the load
   factor reached ``done``, the current increment ``inc`` (halved by earlier cuts) and
   every attempted step's record (factor, SNES reason, iterations, residuals, plastic
-  points); for the strength reduction also the finished trials (F, verdict, load factor,
-  monitor, iterations, time) and which solve was in progress (a trial F, or the final
-  re-solve of the last stable F), or none between trials.
+  points) of the ``phase`` in progress (``"gravity"`` or ``"analysis"``), and in the
+  analysis after a gravity phase that phase's record (``gravity``: its steps, its
+  largest |u| before the reset, its plastic points); for the strength reduction also
+  the finished trials (F, verdict, load factor, monitor, iterations, time) and which
+  solve was in progress (a trial F, or the final re-solve of the last stable F), or
+  none between trials.
 
 A resume rebuilds the problem from the scene, puts the arrays back and continues the
 same arithmetic, so on the same number of ranks it repeats the uninterrupted run bit for
@@ -29,7 +33,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from geofrac.errors import RunError
-from geofrac.fem.plastic import LoadState, PlasticProblem, StepRecord
+from geofrac.fem.plastic import GravityRecord, LoadState, PlasticProblem, StepRecord
 from geofrac.fem.strength_reduction import Trial
 from geofrac.io.checkpoint import Checkpoint, RunControl
 from geofrac.solvers.snes import NewtonReport
@@ -40,30 +44,26 @@ _LOAD = "plastic"
 _REDUCTION = "strength_reduction"
 
 
-def load_data(state: LoadState) -> dict[str, Any]:
-    """The JSON-ready ``done``, ``inc`` and step records of a load-stepped solve."""
-    return {
-        "done": state.done,
-        "inc": state.inc,
-        "records": [
-            {
-                "factor": r.factor,
-                "accepted": r.accepted,
-                "plastic_points": r.plastic_points,
-                "reason": r.report.reason,
-                "reason_name": r.report.reason_name,
-                "iterations": r.report.iterations,
-                "residuals": list(r.report.residuals),
-                "observed": r.observed,
-            }
-            for r in state.records
-        ],
-    }
+def _records(records: list[StepRecord]) -> list[dict[str, Any]]:
+    """JSON-ready step records."""
+    return [
+        {
+            "factor": r.factor,
+            "accepted": r.accepted,
+            "plastic_points": r.plastic_points,
+            "reason": r.report.reason,
+            "reason_name": r.report.reason_name,
+            "iterations": r.report.iterations,
+            "residuals": list(r.report.residuals),
+            "observed": r.observed,
+        }
+        for r in records
+    ]
 
 
-def load_state(data: dict[str, Any]) -> LoadState:
-    """The :class:`~geofrac.fem.plastic.LoadState` of :func:`load_data`'s dictionary."""
-    records = [
+def _read_records(rows: list[dict[str, Any]]) -> list[StepRecord]:
+    """The step records of :func:`_records`'s rows."""
+    return [
         StepRecord(
             float(r["factor"]),
             NewtonReport(
@@ -76,9 +76,52 @@ def load_state(data: dict[str, Any]) -> LoadState:
             int(r["plastic_points"]),
             r.get("observed"),
         )
-        for r in data["records"]
+        for r in rows
     ]
-    return LoadState(float(data["done"]), float(data["inc"]), records)
+
+
+def load_data(state: LoadState) -> dict[str, Any]:
+    """The JSON-ready ``done``, ``inc``, step records, phase and gravity phase's record."""
+    g = state.gravity
+    gravity = None
+    if g is not None:
+        gravity = {
+            "records": _records(g.records),
+            "converged": g.converged,
+            "factor": g.factor,
+            "max_displacement": g.max_displacement,
+            "plastic_points": g.plastic_points,
+        }
+    return {
+        "done": state.done,
+        "inc": state.inc,
+        "records": _records(state.records),
+        "phase": state.phase,
+        "gravity": gravity,
+    }
+
+
+def load_state(data: dict[str, Any]) -> LoadState:
+    """The :class:`~geofrac.fem.plastic.LoadState` of :func:`load_data`'s dictionary."""
+    g = data.get("gravity")
+    gravity = None
+    if g is not None:
+        gravity = GravityRecord(
+            _read_records(g["records"]),
+            bool(g["converged"]),
+            float(g["factor"]),
+            float(g["max_displacement"]),
+            int(g["plastic_points"]),
+        )
+    records = _read_records(data["records"])
+    phase = str(data.get("phase", "analysis"))
+    return LoadState(float(data["done"]), float(data["inc"]), records, phase, gravity)
+
+
+def _steps_done(state: LoadState) -> int:
+    """Converged steps of both phases (the poll count)."""
+    earlier = [] if state.gravity is None else state.gravity.records
+    return sum(r.accepted for r in earlier + state.records)
 
 
 def _restore(problem: PlasticProblem, ck: Checkpoint, data: dict[str, Any]) -> LoadState:
@@ -127,18 +170,20 @@ class LoadHooks:
         self.control.check_resume()  # the same scene, kind and number of ranks
         _check_loop(ck, _LOAD, "a load-stepped plastic run")
         state = _restore(problem, ck, ck.data)
-        self.say(f"plastic: resuming after load factor {state.done:.4f} from {ck.path}")
+        phase = "" if problem.gravity is None else f" of the {state.phase} phase"
+        self.say(f"plastic: resuming after load factor {state.done:.4f}{phase} from {ck.path}")
         return state
 
     def after_step(self, problem: PlasticProblem, state: LoadState) -> None:
         """Poll; checkpoint when due or signalled; stop on a signal (collective)."""
-        k = sum(r.accepted for r in state.records)
+        k = _steps_done(state)
         save, stop = self.control.poll(k)
         if save:
             data = {"loop": _LOAD} | load_data(state)
             self.control.save(k, data, local=problem.state())
         if stop:
-            self.control.interrupt(f"load step {k} (factor {state.done:.4f})")
+            phase = "" if problem.gravity is None else f"{state.phase} phase, "
+            self.control.interrupt(f"load step {k} ({phase}factor {state.done:.4f})")
 
 
 @dataclass
@@ -162,16 +207,18 @@ class TrialHooks:
         self.owner.partial = None
         state = _restore(problem, ck, partial)
         what = "the re-solve of" if self.final else "the trial"
+        phase = "" if problem.gravity is None else f" of the {state.phase} phase"
         self.owner.say(
             f"strength reduction: resuming {what} F = {self.factor:.4f} after load factor "
-            f"{state.done:.4f}"
+            f"{state.done:.4f}{phase}"
         )
         return state
 
     def after_step(self, problem: PlasticProblem, state: LoadState) -> None:
         """Poll; checkpoint the finished trials and this solve's state; stop on a signal."""
         partial = {"factor": self.factor, "final": self.final} | load_data(state)
-        where = f"F = {self.factor:.4f}, load factor {state.done:.4f}"
+        phase = "" if problem.gravity is None else f"{state.phase} phase, "
+        where = f"F = {self.factor:.4f}, {phase}load factor {state.done:.4f}"
         self.owner.poll(self.trials, partial, problem.state(), where=where)
 
 

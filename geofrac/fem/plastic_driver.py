@@ -15,6 +15,12 @@ group is the load it takes). A run whose increment could not converge after ``ma
 ends with ``converged = false``, ``end_reason = "step_too_small"`` and the displacement
 of the last converged factor (never of the failed one).
 
+With ``gravity_phase`` (``gravity_steps`` > 0) a gravity phase comes first: the effects'
+terms ramped with the loads off and the Dirichlet values held at 0, the displacements
+reset (:meth:`~geofrac.fem.plastic.PlasticProblem.reset_displacement`), then the loads
+ramped with gravity held: one switch constant s in the external work, terms times
+λ + s (1 − λ), loads times s λ (docs/plasticity.md, "Gravity phase").
+
 With ``strength_reduction = true`` (:func:`run_reduction`) the solve is repeated for
 trial factors F (c, tan φ, tan ψ divided by F) in a bisection to the factor of safety
 (:mod:`geofrac.fem.strength_reduction`); without ``[initial_stress]`` the effects'
@@ -37,7 +43,7 @@ from mpi4py import MPI
 
 from geofrac.fem.insitu import in_plane
 from geofrac.fem.joints import JointInterface, joint_springs
-from geofrac.fem.plastic import Law, PlasticProblem
+from geofrac.fem.plastic import GravityPhase, GravityRecord, Law, PlasticProblem
 from geofrac.fem.plastic_checkpoint import LoadHooks, ReductionHooks
 from geofrac.fem.plastic_outputs import (
     ProbeHistory,
@@ -50,22 +56,31 @@ from geofrac.fem.solution import Solution
 from geofrac.fem.strength_reduction import factor_of_safety, largest_monitor, point_monitor
 from geofrac.plasticity.interface import JointStrength
 from geofrac.plasticity.strength_reduction import reduce_strength
+from geofrac.solvers.types import SCALAR
 from geofrac_forms import elasticity as forms
 
-__all__ = ["run", "run_reduction"]
+__all__ = ["gravity_summary", "run", "run_reduction"]
 
 
-def _external(problem: Any, *, ramp_terms: bool = False) -> Callable[[Any, Any], Any]:
+def _external(
+    problem: Any, *, ramp_terms: bool = False, switch: Any = None
+) -> Callable[[Any, Any], Any]:
     """(λ, v) → the external work.
 
     The effects' terms (times λ when ``ramp_terms``) and σ0·n of the loaded sides held,
-    the scene's loads times λ.
+    the scene's loads times λ. With a gravity phase's ``switch`` s (a constant: 0 in the
+    gravity phase, 1 in the analysis) the terms are scaled by λ + s (1 − λ) and the
+    loads by s λ: gravity ramped with the loads off, then gravity held with the loads
+    ramped.
     """
     scene = problem.scene
 
     def external(factor: Any, v: Any) -> Any:
         ctx = problem.form_context(v)
-        scale = factor if ramp_terms else 1.0
+        scale: Any = factor if ramp_terms else 1.0
+        load_scale: Any = factor
+        if switch is not None:
+            scale, load_scale = factor + switch * (1.0 - factor), switch * factor
         held = [scale * term(ctx) for term in problem.terms]
         if scene.initial_stress is not None and problem.insitu is not None:
             gdim = problem.mesh.geometry.dim
@@ -76,7 +91,7 @@ def _external(problem: Any, *, ramp_terms: bool = False) -> Callable[[Any, Any],
                 )
                 for g in scene.initial_stress.loaded
             ]
-        ramped = [factor * problem._load_term(load, v) for load in scene.loads]
+        ramped = [load_scale * problem._load_term(load, v) for load in scene.loads]
         zero = ufl.inner(ufl.as_vector([0.0] * problem.mesh.geometry.dim), v) * problem.dx
         return sum(held + ramped, zero)
 
@@ -89,15 +104,24 @@ def _factory(
     ramp_terms: bool,
     max_iterations: int,
     joints: Callable[[Law], JointInterface] | None = None,
+    gravity_steps: int = 0,
 ) -> Callable[[Law], PlasticProblem]:
     """The map law ↦ the scene's elasto-plastic problem with that law (and its joints).
 
     With joints the line search defaults to ``bt`` (``l2`` stalled on the springs'
     stick/slip switches: docs/plasticity.md, "Joints in the strength reduction").
+    ``gravity_steps`` > 0: every problem runs a gravity phase of that many steps first
+    (one switch constant shared by the problems, which are solved one at a time).
     """
     problem = solution.problem
     sigma0 = None if problem.insitu is None else problem.insitu.sigma0
-    external = _external(problem, ramp_terms=ramp_terms)
+    gravity = None
+    if gravity_steps:
+        switch = dolfinx.fem.Constant(problem.mesh, SCALAR(1.0))
+        gravity = GravityPhase(switch, gravity_steps)
+    external = _external(
+        problem, ramp_terms=ramp_terms, switch=None if gravity is None else gravity.switch
+    )
     options = dict(solution.scene.solver.options)
     if joints is not None:
         options = {"snes_linesearch_type": "bt", **options}
@@ -113,6 +137,7 @@ def _factory(
             options=options,
             max_it=max_iterations,
             joints=None if joints is None else joints(law),
+            gravity=gravity,
         )
 
     return make
@@ -178,6 +203,7 @@ def run(
     ground: Any = None,
     joints: Sequence[Any] = (),
     penalty: float = 100.0,
+    gravity_steps: int = 0,
 ) -> dict[str, Any]:
     """Solve ``steps`` load increments; copy u into the elastic problem's ``uh``; the results.
 
@@ -186,12 +212,20 @@ def run(
     ground reaction curve. The DG0 stress, von Mises and plastic shear strain go to
     ``solution.fields`` (``results.xdmf``); with ``write`` rank 0 also draws
     ``plastic_shear_strain.png``. ``joints``: the effect's ``JointConfig`` entries
-    (springs of ``penalty`` · E / ℓ).
+    (springs of ``penalty`` · E / ℓ). ``gravity_steps`` > 0: a gravity phase of that
+    many steps first, the displacements reset, then the ``steps`` of the analysis
+    (``gravity_phase`` in the results; the probes and reactions are the analysis's).
     """
     problem = solution.problem
     scene = solution.scene
     springs = _joints(solution, law, joints, penalty)
-    make = _factory(solution, ramp_terms=False, max_iterations=max_iterations, joints=springs)
+    make = _factory(
+        solution,
+        ramp_terms=False,
+        max_iterations=max_iterations,
+        joints=springs,
+        gravity_steps=gravity_steps,
+    )
     plastic = make(law)
     comm = solution.tagged.mesh.comm
     talk = say if comm.rank == 0 else None
@@ -218,7 +252,15 @@ def run(
         history.replay([(s.factor, s.observed["probes"]) for s in result.steps if s.accepted])
         problem.uh.x.array[:] = plastic.u.x.array
         solution.fields = cell_fields(plastic)
-        if not result.converged:
+        gravity = result.gravity
+        if gravity is not None and not gravity.converged:
+            say(
+                "plastic: NOT CONVERGED: the gravity phase's increment beyond factor "
+                f"{gravity.factor:.4f} diverged after {max_cuts} halvings (the body cannot "
+                "carry its own weight); the analysis was not run, the fields are those of "
+                "the gravity phase's last converged factor"
+            )
+        elif not result.converged:
             say(
                 f"plastic: NOT CONVERGED: the increment beyond factor {result.factor:.4f} "
                 f"diverged after {max_cuts} halvings; the fields are those of the "
@@ -248,6 +290,7 @@ def run(
             ],
             "solver": plastic.newton.describe(),
             **({} if plastic.joints is None else {"joints": plastic.joints.summary()}),
+            **({} if gravity is None else {"gravity_phase": gravity_summary(gravity)}),
         }
     finally:
         plastic.destroy()
@@ -266,6 +309,27 @@ def run(
             length=scene.units.length,
         )
     return out
+
+
+def gravity_summary(gravity: GravityRecord) -> dict[str, Any]:
+    """The results' ``gravity_phase``: its verdict, largest |u| before the reset, steps."""
+    return {
+        "converged": gravity.converged,
+        "factor": gravity.factor,
+        "max_displacement": gravity.max_displacement,
+        "plastic_points": gravity.plastic_points,
+        "steps": [
+            {
+                "factor": s.factor,
+                "accepted": s.accepted,
+                "reason": s.report.reason_name,
+                "iterations": s.report.iterations,
+                "residual": s.report.residuals[-1] if s.report.residuals else None,
+                "plastic_points": s.plastic_points,
+            }
+            for s in gravity.records
+        ],
+    }
 
 
 def _max_shear(plastic: PlasticProblem) -> float:
@@ -288,11 +352,14 @@ def run_reduction(
     max_iterations: int,
     joints: Sequence[Any] = (),
     penalty: float = 100.0,
+    gravity_steps: int = 0,
 ) -> dict[str, Any]:
     """The factor of safety (``config``: the effect's ``StrengthReductionConfig``).
 
     ``joints``: the effect's ``JointConfig`` entries, whose c and μ each trial divides
-    by its F with the rock's.
+    by its F with the rock's. ``gravity_steps`` > 0: each trial is a gravity phase of
+    that many steps with the reduced law, the reset, then the analysis (the monitor
+    measured from the gravity state); a trial whose gravity phase fails is failed.
 
     Bisection on F, then the last stable F re-solved: its displacement copied into the
     elastic problem's ``uh`` (probes, XDMF), its DG0 stress and plastic shear strain into
@@ -304,9 +371,15 @@ def run_reduction(
     together.
     """
     problem = solution.problem
-    ramp = problem.insitu is None
+    ramp = problem.insitu is None and not gravity_steps
     springs = _joints(solution, law, joints, penalty)
-    make = _factory(solution, ramp_terms=ramp, max_iterations=max_iterations, joints=springs)
+    make = _factory(
+        solution,
+        ramp_terms=ramp,
+        max_iterations=max_iterations,
+        joints=springs,
+        gravity_steps=gravity_steps,
+    )
     monitor = largest_monitor if config.monitor is None else point_monitor(config.monitor)
     talk = say if solution.tagged.mesh.comm.rank == 0 else None
     control = solution.control
@@ -336,11 +409,20 @@ def run_reduction(
         out = result.as_dict()
         out.update(
             {
-                "gravity": "ramped" if ramp else "held (initial stress)",
+                "gravity": (
+                    "gravity phase, then held"
+                    if gravity_steps
+                    else ("ramped" if ramp else "held (initial stress)")
+                ),
                 "monitor": "largest nodal |u|" if config.monitor is None else list(config.monitor),
                 "last_stable": {
                     "factor": stable,
                     "converged": last.converged,
+                    **(
+                        {}
+                        if last.gravity is None
+                        else {"gravity_phase": gravity_summary(last.gravity)}
+                    ),
                     "plastic_points": plastic.plastic_points(),
                     "yielded_area": plastic.yielded_area(),
                     "max_plastic_shear_strain": problem.mesh.comm.allreduce(local, op=MPI.MAX),

@@ -194,6 +194,8 @@ def factor_of_safety(
         solved = [t.seconds for t in trials]
         eta = left * sum(solved) / len(solved)
         state = "stable" if trial.stable else f"FAILED at load factor {trial.load_factor:.4f}"
+        if trial.end_reason == "gravity_step_too_small":
+            state = "FAILED in the gravity phase"
         shown = "" if trial.monitor is None else f", monitor |u| {trial.monitor:.4e}"
         if trial.diverged:
             shown += ", rejected: " + ", ".join(f"{k} x{v}" for k, v in trial.diverged.items())
@@ -219,9 +221,9 @@ def factor_of_safety(
             max_cuts=max_cuts,
             hooks=None if hooks is None else hooks.trial(factor, trials),
         )
-        its = sum(s.report.iterations for s in result.steps)
+        its = sum(s.report.iterations for s in result.attempted)
         diverged: dict[str, int] = {}
-        for s in result.steps:
+        for s in result.attempted:
             if not s.accepted:
                 diverged[s.report.reason_name] = diverged.get(s.report.reason_name, 0) + 1
         u = None if result.monitor is None else float(np.linalg.norm(result.monitor))

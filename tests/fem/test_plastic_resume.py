@@ -171,10 +171,13 @@ def _numbers(value: object, path: str = "") -> dict[str, object]:
 def _same(resumed: Path, whole: Path, rtol: float, *, newton: bool = True) -> dict[str, Any]:
     """The resumed run's summary and results.h5 equal the whole run's (to ``rtol``).
 
-    ``newton = False`` leaves out the Newton iteration counts and final residuals: on 2
+    ``newton = False`` leaves out the Newton iteration counts and final residuals, and
+    compares the SNES reasons by their verdict only (CONVERGED or DIVERGED): on 2
     ranks MUMPS's parallel factorisation is not bitwise repeatable, and a step whose
     residual after k iterations lies near the tolerance then takes k or k + 1 (measured:
-    11 against 12 in 1 of 4 resumed runs), while the converged state agrees to round-off.
+    11 against 12 in 1 of 4 resumed runs), or meets the relative tolerance before the
+    absolute one or after it (FNORM_RELATIVE against FNORM_ABS: the gravity phase's
+    layer, 3 of 4 runs), while the converged state agrees to round-off.
     """
     a = json.loads((resumed / "summary.json").read_text())
     b = json.loads((whole / "summary.json").read_text())
@@ -185,6 +188,9 @@ def _same(resumed: Path, whole: Path, rtol: float, *, newton: bool = True) -> di
         if not newton and key.endswith(("/iterations", "/residual")):
             continue
         y = nb[key]
+        if not newton and key.endswith("/reason"):
+            assert str(x).split("_")[0] == str(y).split("_")[0], (key, x, y)
+            continue
         if isinstance(x, float) and isinstance(y, float):
             # a converged step's final |F| is round-off below the Newton atol
             slack = NEWTON_ATOL if rtol and key.endswith("/residual") else 0.0
