@@ -356,6 +356,7 @@ def check_scene(
     probes: dict[str, tuple[float, ...]],
     initial: Any,
     fields: tuple[str, ...] = (),
+    effects: tuple[str, ...] = ("gravity",),
 ) -> None:
     """The checks that need the whole scene (FEM): output fields, the ground reaction curve.
 
@@ -364,8 +365,16 @@ def check_scene(
     :class:`~geofrac.model.scene.InitialStress`, or None. The ground reaction curve needs
     a constant initial stress that is isotropic in the plane (σxx = σyy, σxy = 0: the
     in-situ pressure p0 = −σxx) with the wall among its ``loaded`` sides, or none
-    (p0 = 0). A gravity phase refuses an initial stress. Raises SceneError naming the key.
+    (p0 = 0). A gravity phase refuses an initial stress and needs the ``gravity`` effect
+    among ``effects`` (the scene's declared effects). Raises SceneError naming the key.
     """
+    if config.gravity_steps and "gravity" not in effects:
+        raise SceneError(
+            file,
+            "plasticity.gravity_phase",
+            "needs the 'gravity' effect: without it the gravity phase would load nothing; "
+            "add \"gravity\" to effects (with its [gravity] table) or drop gravity_phase",
+        )
     if config.gravity_steps and initial is not None:
         raise SceneError(
             file,

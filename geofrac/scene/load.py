@@ -1180,6 +1180,7 @@ def _validate(
                 probes=output.probes,
                 initial=initial,
                 fields=output.fields,
+                effects=tuple(other.name for other in specs),
             )
     _switches(file, _stage_names(data.get("stages")), bcs=bcs, loads=loads, declared=declared)
     stages: tuple[Stage, ...] = ()

@@ -374,3 +374,16 @@ def test_joints_keep_their_forces_through_the_reset(tmp_path: Path) -> None:
     assert a["max_slip"] == pytest.approx(b["max_slip"], rel=1e-9)
     assert abs(a["max_opening"] - b["max_opening"]) <= 1e-9 * b["max_slip"]
     assert a["slipping"] > 0  # the joint's state is not trivial
+
+
+def test_gravity_phase_without_gravity_is_refused(tmp_path: Path) -> None:
+    """Without the gravity effect the phase would load nothing: refused by the loader."""
+    geo = (JOBS / "../meshes/footing_prandtl.geo").resolve()
+    text = LAYER.read_text().replace('"../../meshes/footing_prandtl.geo"', f'"{geo}"')
+    head, tail = text.split("[gravity]")
+    path = tmp_path / "weightless.toml"
+    path.write_text(head.replace('"gravity", ', "") + tail[tail.index("\n[") :])
+    with pytest.raises(SceneError, match="'gravity' effect") as info:
+        load_scene(path)
+    assert info.value.key == "plasticity.gravity_phase"
+    load_scene(path, ["plasticity.gravity_phase=false"])  # the weightless layer alone is fine
