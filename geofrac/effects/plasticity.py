@@ -373,7 +373,7 @@ def check_scene(
             file,
             "plasticity.gravity_phase",
             "needs the 'gravity' effect: without it the gravity phase would load nothing; "
-            "add \"gravity\" to effects (with its [gravity] table) or drop gravity_phase",
+            'add "gravity" to effects (with its [gravity] table) or drop gravity_phase',
         )
     if config.gravity_steps and initial is not None:
         raise SceneError(
