@@ -87,7 +87,13 @@ def test_kirsch_wall_and_lines_within_one_percent(k):
             assert np.max(np.abs(stt - stt_ex)) < 0.01 * scale, (k, theta, "σθθ line")
         stages = solution.results["stages"]
         assert [s["name"] for s in stages] == ["initial", "excavate", "support"]
-        assert stages[0]["max_displacement"] < 1e-12 * abs(kirsch(k, r, 0.0)[2][0])
+        # the balanced initial state moves by its round-off imbalance (out_of_balance below
+        # 1e-12 of the load, asserted below; 1e-13 measured) times the flexibility, which
+        # turns it into about 10 times as much of the wall displacement (1.1e-12 measured
+        # at K = 0.5, 1.4e-12 at K = 2); the bound allows a factor 100 on the asserted
+        # imbalance, so that it does not flip with the BLAS kernel (1e-12 did, 3.4e-16
+        # against 3.1e-16), while an unbalanced state moves by O(1) of it
+        assert stages[0]["max_displacement"] < 100 * 1e-12 * abs(kirsch(k, r, 0.0)[2][0])
         assert stages[-1]["released"] == pytest.approx(1.0)
         assert stages[-1]["out_of_balance"] < 1e-8
         # the far sides' tractions do not change, so neither does any support's total
