@@ -298,6 +298,8 @@ class PlasticProblem:
         self._in_gravity = False
         #: the stage being solved (its name), or None: the Dirichlet values held in full.
         self._stage: str | None = None
+        #: :meth:`solve_steps` runs the gravity phase only (``analysis`` False).
+        self._skip_analysis = False
         self.alive = alive
         self.V, self.law, self.mesh = V, law, V.mesh
         self.comm: MPI.Comm = V.mesh.comm
@@ -507,6 +509,7 @@ class PlasticProblem:
         monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None = None,
         observe: Callable[[PlasticProblem], Any] | None = None,
         hooks: StepHooks | None = None,
+        analysis: bool = True,
     ) -> PlasticResult:
         """Load factor 0 → 1 in ``steps`` increments, halving a diverged increment.
 
@@ -515,6 +518,9 @@ class PlasticProblem:
         the step's record (JSON-ready: it is checkpointed). The Dirichlet values are λ g
         during the run, g after it. ``hooks``: a checkpoint to continue from, and the
         poll after each converged step (:mod:`geofrac.fem.plastic_checkpoint`).
+        ``analysis`` False: nothing to ramp (construction stages follow, with no loads and
+        no prescribed displacements): only the gravity phase, if any, is run (an analysis
+        from an equilibrium at round-off would never meet Newton's tolerances).
 
         Returns:
             the result; ``converged = False`` with the last converged factor when an
@@ -522,6 +528,9 @@ class PlasticProblem:
             converged one).
         """
         try:
+            if not analysis and self.gravity is None:
+                return PlasticResult(True, 1.0, "converged", [], self._monitor(monitor))
+            self._skip_analysis = not analysis
             return self._steps(
                 steps, max_cuts=max_cuts, say=say, monitor=monitor, observe=observe, hooks=hooks
             )
@@ -613,6 +622,9 @@ class PlasticProblem:
                     f"{gravity.plastic_points} plastic points); displacements reset"
                 )
         self.gravity.switch.value = 1.0
+        if self._skip_analysis:
+            self.factor.value = 1.0
+            return PlasticResult(True, 1.0, "converged", [], self._monitor(monitor), None, gravity)
         result = self._phase(steps, start, observe=observe, **loop)
         result.gravity = gravity
         return result

@@ -120,7 +120,8 @@ def _factory(
     :func:`_external`; the problem takes the scene's ``alive`` field.
     """
     problem = solution.problem
-    sigma0 = None if problem.insitu is None else problem.insitu.sigma0
+    insitu = None if solution.scene.initial_stress is None else problem.insitu  # (stages: zero)
+    sigma0 = None if insitu is None else insitu.sigma0
     gravity = None
     if gravity_steps:
         switch = dolfinx.fem.Constant(problem.mesh, SCALAR(1.0))
@@ -262,8 +263,15 @@ def run(
         hooks = _no_resume(control)
     staged: dict[str, Any] = {}
     try:
+        # staged without loads or moving supports: no analysis (nothing to ramp)
+        moving = any(bc.value == "exact" or any(v != 0 for v in bc.value) for bc in scene.bcs)
         result = plastic.solve_steps(
-            steps, max_cuts=max_cuts, say=talk, observe=observe, hooks=hooks
+            steps,
+            max_cuts=max_cuts,
+            say=talk,
+            observe=observe,
+            hooks=hooks,
+            analysis=not scene.stages or bool(scene.loads) or moving,
         )
         gravity_ok = result.gravity is None or result.gravity.converged
         if scene.stages and result.converged and gravity_ok:
@@ -282,7 +290,7 @@ def run(
                 "carry its own weight); the analysis was not run, the fields are those of "
                 "the gravity phase's last converged factor"
             )
-        elif not result.converged:
+        elif not result.converged and result.end_reason != "stage_step_too_small":
             say(
                 f"plastic: NOT CONVERGED: the increment beyond factor {result.factor:.4f} "
                 f"diverged after {max_cuts} halvings; the fields are those of the "
