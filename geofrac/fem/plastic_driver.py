@@ -46,7 +46,6 @@ from geofrac.fem.insitu import in_plane
 from geofrac.fem.joints import JointInterface, joint_springs
 from geofrac.fem.plastic import GravityPhase, GravityRecord, Law, PlasticProblem
 from geofrac.fem.plastic_checkpoint import LoadHooks, ReductionHooks
-from geofrac.fem.plastic_stages import PlasticStages
 from geofrac.fem.plastic_outputs import (
     ProbeHistory,
     cell_fields,
@@ -54,6 +53,7 @@ from geofrac.fem.plastic_outputs import (
     plot_cell_field,
     write_reduction_csv,
 )
+from geofrac.fem.plastic_stages import PlasticStages
 from geofrac.fem.solution import Solution
 from geofrac.fem.strength_reduction import factor_of_safety, largest_monitor, point_monitor
 from geofrac.plasticity.interface import JointStrength
@@ -259,8 +259,9 @@ def run(
 
     control = solution.control
     hooks = None if control is None else LoadHooks(control, say)
-    if scene.stages:
-        hooks = _no_resume(control)
+    if scene.stages:  # not checkpointed
+        _no_resume(control)
+        hooks = None
     staged: dict[str, Any] = {}
     try:
         # staged without loads or moving supports: no analysis (nothing to ramp)

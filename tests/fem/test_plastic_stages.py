@@ -76,13 +76,13 @@ def _solve(path: Path, *overrides: str, comm: MPI.Comm = MPI.COMM_WORLD):
     ("h", "algorithm"), [(0.1, "frontal-delaunay"), (0.2, "delaunay")], ids=["fine", "coarse"]
 )
 def test_excavated_opening_against_salencon(h: float, algorithm: str) -> None:
-    """The core removed with 80 % then all of its release: the ground reaction curve's
-    points at pᵢ = 0.2 p0 and 0 (both plastic, p_cr = 4.13), wall u and plastic radius
-    within 2 % (measured at h = 0.1: +0.32 % and -0.35 % for u, +0.31 % and +0.64 % for
-    ρ from the yielded area)."""
-    results = _staged(
-        f"geometry.parameters.h={h}", f'geometry.algorithm="{algorithm}"'
-    )
+    """The core removed with 80 % then all of its release: Salençon's points.
+
+    The ground reaction curve at pᵢ = 0.2 p0 and 0 (both plastic, p_cr = 4.13): wall u
+    and plastic radius within 2 % (measured at h = 0.1: +0.32 % and -0.35 % for u,
+    +0.31 % and +0.64 % for ρ from the yielded area).
+    """
+    results = _staged(f"geometry.parameters.h={h}", f'geometry.algorithm="{algorithm}"')
     plastic = results["plasticity"]
     assert plastic["converged"] and plastic["end_reason"] == "converged"
     advance, full = plastic["stages"]
@@ -99,7 +99,7 @@ def test_excavated_opening_against_salencon(h: float, algorithm: str) -> None:
 
 
 def test_half_release_is_on_the_elastic_branch(tmp_path: Path) -> None:
-    """relaxation 0.5: pᵢ = 5 > p_cr, Lamé's ring (no plastic point), within 2 %."""
+    """A relaxation of 0.5: pᵢ = 5 > p_cr, Lamé's ring (no plastic point), within 2 %."""
     path = _scene(tmp_path, '[[stages]]\nname = "half"\nremove = ["core"]\nrelaxation = 0.5\n')
     solution = _solve(path, "geometry.parameters.h=0.2")
     try:
@@ -112,7 +112,7 @@ def test_half_release_is_on_the_elastic_branch(tmp_path: Path) -> None:
 
 
 def test_never_yielding_rock_equals_the_elastic_stages(tmp_path: Path) -> None:
-    """c = 1e8: the staged plastic run equals geofrac/fem/stages.py on the same scene.
+    """With c = 1e8 the staged plastic run equals geofrac/fem/stages.py on the same scene.
 
     Two stages (60 % then the rest of the core's release), the same quadrature degree 2:
     every displacement to 1e-9 of max |u| (the shared machinery: alive, the orphans held,
@@ -124,8 +124,12 @@ def test_never_yielding_rock_equals_the_elastic_stages(tmp_path: Path) -> None:
     )
     common = ["geometry.parameters.h=0.25"]
     comm = MPI.COMM_WORLD
-    el = _solve(_scene(tmp_path, stages, elastic=True), *common, "discretization.quadrature_degree=2")
-    pl = _solve(_scene(tmp_path, stages), *common, "plasticity.cohesion=1e8", "plasticity.load_steps=1")
+    el = _solve(
+        _scene(tmp_path, stages, elastic=True), *common, "discretization.quadrature_degree=2"
+    )
+    pl = _solve(
+        _scene(tmp_path, stages), *common, "plasticity.cohesion=1e8", "plasticity.load_steps=1"
+    )
     try:
         plastic = pl.results["plasticity"]
         assert plastic["converged"] and plastic["plastic_points"] == 0
@@ -160,7 +164,7 @@ def test_gravity_phase_then_removing_the_upper_layer(tmp_path: Path) -> None:
     scene = tmp_path / "gravity.toml"
     scene.write_text(head + plastic + tail + '\n[[stages]]\nname = "strip"\nremove = ["upper"]\n')
     rho, g, d, width, nu = 3000.0, 9.81, 2.0, 10.0, 0.25
-    solution = _solve(scene, "material.density=3000.0", "output.probe_fields=[\"displacement\"]")
+    solution = _solve(scene, "material.density=3000.0", 'output.probe_fields=["displacement"]')
     try:
         results = solution.results["plasticity"]
         assert results["converged"] and results["gravity_phase"]["converged"]
@@ -194,16 +198,22 @@ def dolfinx_nodes(mesh, cells: np.ndarray) -> np.ndarray:
     [
         (
             '[[stages]]\nname = "a"\nremove = ["core"]\n\n[[stages]]\nname = "b"\nadd = ["core"]\n'
-            '[stages.material]\nE = 1e4\nnu = 0.2\n',
+            "[stages.material]\nE = 1e4\nnu = 0.2\n",
             None,
             "stages[1].add",
         ),
-        ('[[stages]]\nname = "a"\nremove = ["core"]\n', "plasticity.strength_reduction=true", "plasticity.strength_reduction"),
-        ('[[stages]]\nname = "a"\nremove = ["core"]\n', "bc.0.until=\"a\"", "bc[0].until"),
+        (
+            '[[stages]]\nname = "a"\nremove = ["core"]\n',
+            "plasticity.strength_reduction=true",
+            "plasticity.strength_reduction",
+        ),
+        ('[[stages]]\nname = "a"\nremove = ["core"]\n', 'bc.0.until="a"', "bc[0].until"),
     ],
     ids=["add", "strength_reduction", "switched_support"],
 )
-def test_refused_before_meshing(tmp_path: Path, stages: str, override: str | None, key: str) -> None:
+def test_refused_before_meshing(
+    tmp_path: Path, stages: str, override: str | None, key: str
+) -> None:
     """What the plastic stages do not run is refused by the loader, naming its key."""
     path = _scene(tmp_path, stages)
     with pytest.raises(SceneError) as info:
