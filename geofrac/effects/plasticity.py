@@ -63,6 +63,10 @@ match):
   ``ground_reaction``; the joints keep their jump through the reset);
 - ``gravity_steps``: the gravity phase's increments (default ``load_steps``; needs
   ``gravity_phase``).
+
+With ``[[stages]]`` that remove cell groups the stages follow the analysis, each
+releasing its share in ``load_steps`` increments (:mod:`geofrac.fem.plastic_stages`);
+not with ``strength_reduction``, ``joints`` or ``ground_reaction`` (:func:`check_scene`).
 """
 
 from __future__ import annotations

@@ -73,14 +73,15 @@ def _solve(path: Path, *overrides: str, comm: MPI.Comm = MPI.COMM_WORLD):
 
 
 @pytest.mark.parametrize(
-    ("h", "algorithm"), [(0.1, "frontal-delaunay"), (0.2, "delaunay")], ids=["fine", "coarse"]
+    ("h", "algorithm"), [(0.1, "frontal-delaunay"), (0.15, "meshadapt")], ids=["fine", "coarse"]
 )
 def test_excavated_opening_against_salencon(h: float, algorithm: str) -> None:
     """The core removed with 80 % then all of its release: Salençon's points.
 
     The ground reaction curve at pᵢ = 0.2 p0 and 0 (both plastic, p_cr = 4.13): wall u
     and plastic radius within 2 % (measured at h = 0.1: +0.32 % and -0.35 % for u,
-    +0.31 % and +0.64 % for ρ from the yielded area).
+    +0.31 % and +0.64 % for ρ from the yielded area; h = 0.15 meshadapt: the probe
+    -0.92 %; h = 0.2 is too coarse for the probe at θ = 0: -1.6 % to -4.1 % by algorithm).
     """
     results = _staged(f"geometry.parameters.h={h}", f'geometry.algorithm="{algorithm}"')
     plastic = results["plasticity"]
