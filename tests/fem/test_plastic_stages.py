@@ -246,3 +246,45 @@ def test_two_ranks_equal_one() -> None:
         gap_area = abs(a["yielded_area"] - b["yielded_area"]) / b["yielded_area"]
         assert world.allreduce(max(gap_u, gap_area), op=MPI.MAX) <= 1e-9
         assert world.allreduce(int(a["plastic_points"] != b["plastic_points"]), op=MPI.SUM) == 0
+
+
+def test_a_stage_past_collapse_ends_not_converged() -> None:
+    """c = 0.2, φ = ψ = 20°: the whole ring yields below pᵢ = p_c, 0.41 < p_c < 0.42.
+
+    Salençon's closed form has no elastic zone left below p_c (the plastic radius reaches
+    b = 10; 9.34 at pᵢ = 0.42): the stage that releases the rest cannot converge past
+    it, and says so: ``converged = false``, its last converged share, the wall pressure
+    (1 − released) p0 there within 10 % of p_c (measured 0.41 at h = 0.25).
+    """
+    with pytest.raises(ValueError, match="whole ring yields"):
+        _ = _weak(0.41).plastic_radius
+    assert _weak(0.42).plastic_radius < B
+    results = _staged(
+        "geometry.parameters.h=0.25",
+        "plasticity.cohesion=0.2",
+        "plasticity.friction_angle=20.0",
+        "plasticity.dilatancy_angle=20.0",
+        "plasticity.max_cuts=3",
+        "plasticity.load_steps=4",
+    )
+    plastic = results["plasticity"]
+    assert not plastic["converged"] and plastic["end_reason"] == "stage_step_too_small"
+    advance, full = plastic["stages"]
+    assert advance["converged"] and not full["converged"]
+    assert full["end_reason"] == "step_too_small" and 0.8 < full["released"] < 1.0
+    assert (1.0 - full["released"]) * P0 == pytest.approx(0.415, rel=0.1)
+    assert all(s["reason"].startswith("CONVERGED") for s in full["steps"] if s["accepted"])
+
+
+def _weak(pi: float) -> MohrCoulombOpening:
+    return MohrCoulombOpening(
+        a=A,
+        b=B,
+        p0=P0,
+        pi=pi,
+        E=1e4,
+        nu=0.3,
+        cohesion=0.2,
+        friction_angle=20.0,
+        dilatancy_angle=20.0,
+    )
