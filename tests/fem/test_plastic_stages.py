@@ -249,7 +249,7 @@ def test_two_ranks_equal_one() -> None:
 
 
 def test_a_stage_past_collapse_ends_not_converged() -> None:
-    """C = 0.2, φ = ψ = 20°: the whole ring yields below pᵢ = p_c, 0.41 < p_c < 0.42.
+    """With c = 0.2, φ = ψ = 20° the whole ring yields below pᵢ = p_c (0.41 < p_c < 0.42).
 
     Salençon's closed form has no elastic zone left below p_c (the plastic radius reaches
     b = 10; 9.34 at pᵢ = 0.42): the stage that releases the rest cannot converge past
