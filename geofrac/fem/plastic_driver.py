@@ -277,7 +277,9 @@ def run(
         gravity_ok = result.gravity is None or result.gravity.converged
         if scene.stages and result.converged and gravity_ok:
             assert hold is not None
-            staged = _stages(plastic, solution, say, hold=hold, steps=steps, max_cuts=max_cuts)
+            staged = _stages(
+                plastic, solution, say, hold=hold, steps=steps, max_cuts=max_cuts, history=history
+            )
             result.converged = staged["converged"]
             result.end_reason = staged.pop("end_reason")
         history.replay([(s.factor, s.observed["probes"]) for s in result.steps if s.accepted])
@@ -360,6 +362,7 @@ def _stages(
     hold: Any,
     steps: int,
     max_cuts: int,
+    history: ProbeHistory,
 ) -> dict[str, Any]:
     """The scene's ``[[stages]]`` after the analysis (:mod:`geofrac.fem.plastic_stages`).
 
@@ -371,6 +374,7 @@ def _stages(
     scene = solution.scene
     reactions = _reactions(solution)
     run = PlasticStages(plastic, solution, hold=hold, say=say)
+    run.probes = history.record if history.names else None
     frames = [run.frame(0, "initial")] if scene.output.xdmf else []
     entries: list[dict[str, Any]] = []
     converged = True

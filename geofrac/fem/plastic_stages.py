@@ -82,6 +82,8 @@ class PlasticStages:
         self.orphans = np.empty(0, dtype=np.int32)  # local blocks no live cell touches
         self.share = 1.0  # of the pending release applied so far
         self.scale = 0.0  # the largest |r| of the last removal
+        #: the probes' displacements now (collective), or None without probes.
+        self.probes: Callable[[], dict[str, list[float]]] | None = None
         hold.value = 1.0
 
     def remove(self, groups: Sequence[str]) -> None:
@@ -168,6 +170,7 @@ class PlasticStages:
             "share": self.share - before,
             "released": self.share,
             "max_displacement": self.max_displacement(),
+            **({} if self.probes is None else {"probes": self.probes()}),
             "reactions": last[-1].observed["reactions"] if last else None,
             "out_of_balance": self.out_of_balance(),
             "plastic_points": plastic.plastic_points(),

@@ -93,6 +93,7 @@ def test_excavated_opening_against_salencon(h: float, algorithm: str) -> None:
         assert exact.plastic_radius > A * 1.2  # a plastic zone forms
         assert entry["converged"] and entry["out_of_balance"] < 1e-8
         assert entry["max_displacement"] == pytest.approx(-exact.wall_displacement, rel=0.02)
+        assert entry["probes"]["wall"][0] == pytest.approx(exact.wall_displacement, rel=0.02)
         assert _radius(entry["yielded_area"]) == pytest.approx(exact.plastic_radius, rel=0.02)
     assert results["probes"]["wall"][0] == pytest.approx(_exact(0.0).wall_displacement, rel=0.02)
     # the removed core carries nothing: the supports take the far-field load p0 b
