@@ -260,7 +260,7 @@ def run(
     control = solution.control
     hooks = None if control is None else LoadHooks(control, say)
     if scene.stages:  # not checkpointed
-        _no_resume(control)
+        _no_resume(control, say=say)
         hooks = None
     staged: dict[str, Any] = {}
     try:
@@ -345,12 +345,19 @@ def run(
     return out
 
 
-def _no_resume(control: Any) -> None:
-    """A staged plastic run is not checkpointed: refuse to resume one (collective)."""
-    if control is not None and control.resume is not None:
+def _no_resume(control: Any, *, say: Callable[[str], None]) -> None:
+    """A staged plastic run is not checkpointed: refuse to resume one, say so (collective)."""
+    if control is None:
+        return
+    if control.resume is not None:
         raise RunError(
             "plasticity: a run with [[stages]] is not checkpointed yet and cannot be resumed "
             f"from {control.resume.path}; run it again from the start"
+        )
+    if control.policy.every or control.policy.minutes:
+        say(
+            "plastic: a run with [[stages]] writes no checkpoints yet: the checkpoint policy "
+            "is ignored and a stop signal does not stop it (a second one kills it)"
         )
 
 

@@ -229,10 +229,17 @@ def test_resume_refused() -> None:
 
     from geofrac.fem.plastic_driver import _no_resume
 
-    _no_resume(None)
-    _no_resume(SimpleNamespace(resume=None))
+    said: list[str] = []
+    _no_resume(None, say=said.append)
+    policy = SimpleNamespace(every=0, minutes=0.0)
+    _no_resume(SimpleNamespace(resume=None, policy=policy), say=said.append)
+    assert not said
+    policy.every = 5
+    _no_resume(SimpleNamespace(resume=None, policy=policy), say=said.append)
+    assert "writes no checkpoints" in said[0]
     with pytest.raises(RunError, match="cannot be resumed"):
-        _no_resume(SimpleNamespace(resume=SimpleNamespace(path="out/checkpoint")))
+        resume = SimpleNamespace(path="out/checkpoint")
+        _no_resume(SimpleNamespace(resume=resume, policy=policy), say=said.append)
 
 
 @pytest.mark.mpi(min_size=2)
