@@ -96,8 +96,57 @@ def test_excavated_opening_against_salencon(h: float, algorithm: str) -> None:
         assert entry["probes"]["wall"][0] == pytest.approx(exact.wall_displacement, rel=0.02)
         assert _radius(entry["yielded_area"]) == pytest.approx(exact.plastic_radius, rel=0.02)
     assert results["probes"]["wall"][0] == pytest.approx(_exact(0.0).wall_displacement, rel=0.02)
+    _statics(plastic, (0.8, 0.2))
     # the removed core carries nothing: the supports take the far-field load p0 b
     assert full["reactions"]["left"][0] == pytest.approx(P0 * B, rel=1e-6)
+
+
+def _statics(plastic: dict, shares: tuple[float, ...]) -> None:
+    """Every accepted step's support reactions against the quarter ring's statics.
+
+    The left side carries, in x, the outer side's load p0 b minus the wall's pressure
+    (1 − μ) p0 a not yet released (μ = the share applied at that step); the bottom the
+    same in y. To 1e-6 of p0 b.
+    """
+    start = 0.0
+    for entry, share in zip(plastic["stages"], shares, strict=True):
+        for step in (s for s in entry["steps"] if s["accepted"]):
+            mu = start + share * step["factor"]
+            expected = P0 * B - (1.0 - mu) * P0 * A
+            assert step["reactions"]["left"][0] == pytest.approx(expected, abs=1e-6 * P0 * B)
+            assert step["reactions"]["bottom"][1] == pytest.approx(expected, abs=1e-6 * P0 * B)
+        start += share
+
+
+def test_loads_held_through_the_stages(tmp_path: Path) -> None:
+    """−8 I with a far-field pressure 2 ramped on the outer side before the stages.
+
+    The solid quarter disc takes −2 I in the plane uniformly (σzz = −4 ν), so the state
+    before the excavation is the job's −10 I: the load held through the stages gives the
+    statics of every step (:func:`_statics`) and the job's closed-form points at pᵢ = 2
+    and 0 within 2 %, the wall's displacement counted from the state before the
+    excavation (measured at h = 0.15: -0.57 % and -1.18 %).
+    """
+    path = _scene(
+        tmp_path,
+        '[[stages]]\nname = "advance"\nremove = ["core"]\nrelaxation = 0.8\n\n'
+        '[[stages]]\nname = "full"\n\n'
+        '[[load]]\ntype = "pressure"\ngroup = "outer"\nvalue = [2.0]\n',
+    )
+    solution = _solve(path, "geometry.parameters.h=0.15", "initial_stress.stress=[-8.0, -8.0, 0.0]")
+    try:
+        plastic = solution.results["plasticity"]
+    finally:
+        solution.problem.destroy()
+    assert plastic["converged"]
+    _statics(plastic, (0.8, 0.2))
+    before = plastic["steps"][-1]["probes"]["wall"][0]  # the loads' elastic compression
+    assert before == pytest.approx(-2.0 * 1.3 * 0.4 * A / 1e4, rel=0.02)
+    for entry, pi in zip(plastic["stages"], (0.2 * P0, 0.0), strict=True):
+        exact = _exact(pi)
+        u = entry["probes"]["wall"][0] - before
+        assert u == pytest.approx(exact.wall_displacement, rel=0.02)
+        assert _radius(entry["yielded_area"]) == pytest.approx(exact.plastic_radius, rel=0.02)
 
 
 def test_half_release_is_on_the_elastic_branch(tmp_path: Path) -> None:
@@ -116,13 +165,15 @@ def test_half_release_is_on_the_elastic_branch(tmp_path: Path) -> None:
 def test_never_yielding_rock_equals_the_elastic_stages(tmp_path: Path) -> None:
     """With c = 1e8 the staged plastic run equals geofrac/fem/stages.py on the same scene.
 
-    Two stages (60 % then the rest of the core's release), the same quadrature degree 2:
-    every displacement to 1e-9 of max |u| (the shared machinery: alive, the orphans held,
-    the release of the remaining body).
+    A far-field pressure 2 on the outer side (the elastic initial step, the plastic
+    analysis; held through the stages), then two stages (60 % then the rest of the core's
+    release), the same quadrature degree 2: every displacement to 1e-9 of max |u| (the
+    shared machinery: alive, the orphans held, the release of the remaining body).
     """
     stages = (
         '[[stages]]\nname = "advance"\nremove = ["core"]\nrelaxation = 0.6\n\n'
-        '[[stages]]\nname = "full"\n'
+        '[[stages]]\nname = "full"\n\n'
+        '[[load]]\ntype = "pressure"\ngroup = "outer"\nvalue = [2.0]\n'
     )
     common = ["geometry.parameters.h=0.25"]
     comm = MPI.COMM_WORLD
