@@ -15,7 +15,10 @@ the state restored), and a run that still fails ends with ``converged = False`` 
 last converged factor: a non-converged step is never the result. The solver is reusable
 for strength reduction: :func:`solve_plastic` takes the law (any c, φ) and returns
 whether it converged and the monitor displacement. With a :class:`GravityPhase` the
-stepping runs twice: the gravity phase, the reset of u and εₙ, then the analysis.
+stepping runs twice: the gravity phase, the reset of u and εₙ, then the analysis. With
+``alive`` (construction stages, :mod:`geofrac.fem.plastic_stages`) the internal force
+and the tangent are those of the live cells, and :meth:`PlasticProblem.solve_stage`
+ramps a stage's release (:mod:`geofrac.fem.stage_release`) with the same stepping.
 See docs/plasticity.md.
 """
 

@@ -21,6 +21,10 @@ reset (:meth:`~geofrac.fem.plastic.PlasticProblem.reset_displacement`), then the
 ramped with gravity held: one switch constant s in the external work, terms times
 λ + s (1 − λ), loads times s λ (docs/plasticity.md, "Gravity phase").
 
+With ``[[stages]]`` the stages follow (:mod:`geofrac.fem.plastic_stages`): the problem
+carries the scene's ``alive`` field, the loads are held in full through them, and a
+scene with no loads and no prescribed displacement skips the analysis (nothing to ramp).
+
 With ``strength_reduction = true`` (:func:`run_reduction`) the solve is repeated for
 trial factors F (c, tan φ, tan ψ divided by F) in a bisection to the factor of safety
 (:mod:`geofrac.fem.strength_reduction`); without ``[initial_stress]`` the effects'
