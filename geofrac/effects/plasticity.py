@@ -63,6 +63,10 @@ match):
   ``ground_reaction``; the joints keep their jump through the reset);
 - ``gravity_steps``: the gravity phase's increments (default ``load_steps``; needs
   ``gravity_phase``).
+
+With ``[[stages]]`` that remove cell groups the stages follow the analysis, each
+releasing its share in ``load_steps`` increments (:mod:`geofrac.fem.plastic_stages`);
+not with ``strength_reduction``, ``joints`` or ``ground_reaction`` (:func:`check_scene`).
 """
 
 from __future__ import annotations
@@ -357,6 +361,7 @@ def check_scene(
     initial: Any,
     fields: tuple[str, ...] = (),
     effects: tuple[str, ...] = ("gravity",),
+    staged: bool = False,
 ) -> None:
     """The checks that need the whole scene (FEM): output fields, the ground reaction curve.
 
@@ -366,8 +371,23 @@ def check_scene(
     a constant initial stress that is isotropic in the plane (σxx = σyy, σxy = 0: the
     in-situ pressure p0 = −σxx) with the wall among its ``loaded`` sides, or none
     (p0 = 0). A gravity phase refuses an initial stress and needs the ``gravity`` effect
-    among ``effects`` (the scene's declared effects). Raises SceneError naming the key.
+    among ``effects`` (the scene's declared effects). ``staged``: the scene has
+    ``[[stages]]``, which strength reduction, joints and the ground reaction curve do
+    not take yet. Raises SceneError naming the key.
     """
+    if staged:
+        for key, given in (
+            ("strength_reduction", config.strength_reduction is not None),
+            ("joints", bool(config.joints)),
+            ("ground_reaction", config.ground_reaction is not None),
+        ):
+            if given:
+                raise SceneError(
+                    file,
+                    f"plasticity.{key}",
+                    "does not go with [[stages]] yet (the plastic stages run one analysis "
+                    "of the body as excavated); drop one of them",
+                )
     if config.gravity_steps and "gravity" not in effects:
         raise SceneError(
             file,

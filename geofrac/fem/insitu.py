@@ -42,6 +42,7 @@ __all__ = [
     "in_plane",
     "insitu_fields",
     "stress_field",
+    "untouched_blocks",
 ]
 
 
@@ -226,3 +227,20 @@ def insitu_fields(
 def in_plane(sigma0: dolfinx.fem.Function, gdim: int) -> Any:
     """The gdim×gdim block of a 3×3 field, as UFL."""
     return ufl.as_matrix([[sigma0[i, j] for j in range(gdim)] for i in range(gdim)])
+
+
+def untouched_blocks(V: dolfinx.fem.FunctionSpace, alive: dolfinx.fem.Function) -> np.ndarray:
+    """The DOF blocks (nodes) that no live cell touches, local with ghosts (collective).
+
+    The elastic and the elasto-plastic stages hold them where they are: with ``alive``
+    multiplying the stiffness they have no equation. Shape=(k,), int32, sorted.
+    """
+    mesh = V.mesh
+    cmap = mesh.topology.index_map(mesh.topology.dim)
+    cells = np.arange(cmap.size_local + cmap.num_ghosts, dtype=np.int32)
+    live = cells[alive.x.array[cell_dofs(alive, cells)] > 0.5]
+    touched = dolfinx.la.vector(V.dofmap.index_map, 1)
+    np.add.at(touched.array, V.dofmap.list[live].ravel(), 1.0)
+    touched.scatter_reverse(dolfinx.la.InsertMode.add)
+    touched.scatter_forward()
+    return np.flatnonzero(touched.array == 0.0).astype(np.int32)

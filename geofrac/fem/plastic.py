@@ -15,7 +15,10 @@ the state restored), and a run that still fails ends with ``converged = False`` 
 last converged factor: a non-converged step is never the result. The solver is reusable
 for strength reduction: :func:`solve_plastic` takes the law (any c, φ) and returns
 whether it converged and the monitor displacement. With a :class:`GravityPhase` the
-stepping runs twice: the gravity phase, the reset of u and εₙ, then the analysis.
+stepping runs twice: the gravity phase, the reset of u and εₙ, then the analysis. With
+``alive`` (construction stages, :mod:`geofrac.fem.plastic_stages`) the internal force
+and the tangent are those of the live cells, and :meth:`PlasticProblem.solve_stage`
+ramps a stage's release (:mod:`geofrac.fem.stage_release`) with the same stepping.
 See docs/plasticity.md.
 """
 
@@ -36,6 +39,7 @@ from mpi4py import MPI
 
 from geofrac.errors import RunError
 from geofrac.fem.joints import JointInterface
+from geofrac.fem.stage_release import StageRelease
 from geofrac.plasticity import DruckerPrager, MohrCoulomb
 from geofrac.plasticity.davis import Davis
 from geofrac.plasticity.elasticity import VOIGT, to_voigt
@@ -261,6 +265,10 @@ class PlasticProblem:
         gravity: a gravity phase run by :meth:`solve_steps` before the analysis (the
             displacements reset between them: :meth:`reset_displacement`), or None.
             Not with ``initial_stress`` (a K0 start is the alternative).
+        alive: construction stages (docs/plasticity.md, "Construction stages"): a DG0
+            indicator (1 live, 0 removed) multiplying the internal force and the
+            tangent (the external work's density is the caller's), with the stages'
+            release in the residual (:meth:`solve_stage`), or None. Not with ``joints``.
     """
 
     def __init__(
@@ -278,8 +286,11 @@ class PlasticProblem:
         max_it: int = 25,
         joints: JointInterface | None = None,
         gravity: GravityPhase | None = None,
+        alive: dolfinx.fem.Function | None = None,
     ) -> None:
         degree = _check_space(V)
+        if alive is not None and joints is not None:
+            raise RunError("plasticity: construction stages do not take joints yet")
         if gravity is not None and initial_stress is not None:
             raise RunError(
                 "plasticity: a gravity phase takes no initial stress (the K0 start is the "
@@ -288,6 +299,11 @@ class PlasticProblem:
         self.joints, self.gravity = joints, gravity
         #: the gravity phase is running: the Dirichlet values are held at 0.
         self._in_gravity = False
+        #: the stage being solved (its name), or None: the Dirichlet values held in full.
+        self._stage: str | None = None
+        #: :meth:`solve_steps` runs the gravity phase only (``analysis`` False).
+        self._skip_analysis = False
+        self.alive = alive
         self.V, self.law, self.mesh = V, law, V.mesh
         self.comm: MPI.Comm = V.mesh.comm
         qdeg = 2 * (degree - 1)
@@ -324,6 +340,8 @@ class PlasticProblem:
         self.strain_n = np.zeros((n, 3, 3))
         #: accumulated plastic strain, shape=(n, 3, 3).
         self.plastic_strain = np.zeros((n, 3, 3))
+        #: local quadrature points of removed cells (their state frozen), shape=(n,).
+        self.dead = np.zeros(n, dtype=bool)
         self._ret: Any = None
         #: (writable view of each Dirichlet value, its full value g), shape=(k,) each.
         self._bc_values = [(view, view.copy()) for view in map(_bc_view, bcs)]
@@ -338,8 +356,13 @@ class PlasticProblem:
             return ufl.as_vector([e[i, j] if i == j else 2 * e[i, j] for i, j in layout.strain])
 
         D = ufl.as_matrix([[self.tan[ne * i + j] for j in range(ne)] for i in range(ne)])
-        F = ufl.inner(sigma, ufl.sym(ufl.grad(v))) * self.dx - external(self.factor, v)
-        J = ufl.inner(D * voigt(du), voigt(v)) * self.dx
+        internal = ufl.inner(sigma, ufl.sym(ufl.grad(v)))
+        tangent = ufl.inner(D * voigt(du), voigt(v))
+        if alive is not None:  # removed cells carry nothing
+            internal, tangent = alive * internal, alive * tangent
+        F = internal * self.dx - external(self.factor, v)
+        J = tangent * self.dx
+        self.release = None if alive is None else StageRelease(V, self.factor)
         self._update()  # the initial state's stress and tangent
         self.newton = NewtonSolver(
             dolfinx.fem.form(F),
@@ -352,7 +375,7 @@ class PlasticProblem:
             atol=atol,
             rtol=rtol,
             max_it=max_it,
-            extra=joints,
+            extra=joints if self.release is None else self.release,
         )
 
     def _initial(self, initial_stress: Any, n: int, cell: Any, qdeg: int) -> np.ndarray:
@@ -379,7 +402,10 @@ class PlasticProblem:
         eps = np.zeros((e.shape[0], 3, 3))
         for k, (i, j) in enumerate(layout.strain):
             eps[:, i, j] = eps[:, j, i] = e[:, k]
+        dead = self.dead
+        eps[dead] = self.strain_n[dead]  # removed cells: no strain increment
         ret = self.law.update(self.stress_n, eps - self.strain_n, tangent=True)
+        ret.stress[dead], ret.kind[dead], ret.plastic_strain[dead] = self.stress_n[dead], 0, 0.0
         self._ret, self._eps_now = ret, eps
         st = self.sig.x.array.reshape(-1, len(layout.stress))
         for k, (i, j) in enumerate(layout.stress):
@@ -446,7 +472,8 @@ class PlasticProblem:
     def plastic_points(self) -> int:
         """Owned quadrature points (all ranks) with accumulated plastic strain."""
         owned = self.eps.function_space.dofmap.index_map.size_local
-        local = int(np.count_nonzero(self.plastic_shear_strain()[:owned] > 0.0))
+        yielded = (self.plastic_shear_strain() > 0.0) & ~self.dead
+        local = int(np.count_nonzero(yielded[:owned]))
         return int(self.comm.allreduce(local, op=MPI.SUM))
 
     def yielded_area(self) -> float:
@@ -456,7 +483,7 @@ class PlasticProblem:
             element = basix.ufl.quadrature_element(cell, value_shape=(), degree=self._qdeg)
             self._yielded = dolfinx.fem.Function(dolfinx.fem.functionspace(self.mesh, element))
             self._area = dolfinx.fem.form(self._yielded * self.dx)
-        self._yielded.x.array[:] = self.plastic_shear_strain() > 0.0
+        self._yielded.x.array[:] = (self.plastic_shear_strain() > 0.0) & ~self.dead
         local = dolfinx.fem.assemble_scalar(self._area)
         return float(self.comm.allreduce(local, op=MPI.SUM))
 
@@ -485,6 +512,7 @@ class PlasticProblem:
         monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None = None,
         observe: Callable[[PlasticProblem], Any] | None = None,
         hooks: StepHooks | None = None,
+        analysis: bool = True,
     ) -> PlasticResult:
         """Load factor 0 → 1 in ``steps`` increments, halving a diverged increment.
 
@@ -493,6 +521,9 @@ class PlasticProblem:
         the step's record (JSON-ready: it is checkpointed). The Dirichlet values are λ g
         during the run, g after it. ``hooks``: a checkpoint to continue from, and the
         poll after each converged step (:mod:`geofrac.fem.plastic_checkpoint`).
+        ``analysis`` False: nothing to ramp (construction stages follow, with no loads and
+        no prescribed displacements): only the gravity phase, if any, is run (an analysis
+        from an equilibrium at round-off would never meet Newton's tolerances).
 
         Returns:
             the result; ``converged = False`` with the last converged factor when an
@@ -500,6 +531,9 @@ class PlasticProblem:
             converged one).
         """
         try:
+            if not analysis and self.gravity is None:
+                return PlasticResult(True, 1.0, "converged", [], self._monitor(monitor))
+            self._skip_analysis = not analysis
             return self._steps(
                 steps, max_cuts=max_cuts, say=say, monitor=monitor, observe=observe, hooks=hooks
             )
@@ -508,7 +542,7 @@ class PlasticProblem:
 
     def _ramp_bcs(self, factor: float) -> None:
         """Set every Dirichlet value to ``factor`` times its full value g (gravity phase: 0)."""
-        scale = 0.0 if self._in_gravity else factor
+        scale = 0.0 if self._in_gravity else (1.0 if self._stage is not None else factor)
         for view, full in self._bc_values:
             view[...] = scale * full
 
@@ -591,6 +625,9 @@ class PlasticProblem:
                     f"{gravity.plastic_points} plastic points); displacements reset"
                 )
         self.gravity.switch.value = 1.0
+        if self._skip_analysis:
+            self.factor.value = 1.0
+            return PlasticResult(True, 1.0, "converged", [], self._monitor(monitor), None, gravity)
         result = self._phase(steps, start, observe=observe, **loop)
         result.gravity = gravity
         return result
@@ -609,6 +646,8 @@ class PlasticProblem:
         """One phase's load factor 0 → 1 from ``start`` (a checkpoint's state, or None)."""
         phase = "gravity" if self._in_gravity else "analysis"
         label = "" if self.gravity is None else f" ({phase} phase)"
+        if self._stage is not None:
+            label = f" (stage '{self._stage}')"
         gravity = None if start is None else start.gravity
         records: list[StepRecord] = [] if start is None else list(start.records)
         done, inc, cuts = (0.0, 1.0 / steps, 0) if start is None else (start.done, start.inc, 0)
@@ -666,7 +705,44 @@ class PlasticProblem:
         vec = dolfinx.fem.assemble_vector(self.newton.F)
         vec.scatter_reverse(dolfinx.la.InsertMode.add)
         imap = self.V.dofmap.index_map
-        return vec.array[: imap.size_local * self.V.dofmap.index_map_bs].copy()
+        out = vec.array[: imap.size_local * self.V.dofmap.index_map_bs].copy()
+        if self.release is not None:  # a stage's pending release
+            out += self.release.values()
+        return out
+
+    def set_alive(self) -> None:
+        """Take the removed cells from ``alive``: their points' state frozen from now on."""
+        assert self.alive is not None
+        alive = self.alive
+        cells = np.flatnonzero(alive.x.array[alive.function_space.dofmap.list[:, 0]] < 0.5)
+        points = self.eps.function_space.dofmap.list[cells.astype(np.int32)].ravel()
+        self.dead[:] = False
+        self.dead[points] = True
+        self._update()
+
+    def solve_stage(
+        self,
+        name: str,
+        steps: int,
+        *,
+        max_cuts: int = 4,
+        say: Callable[[str], None] | None = None,
+        observe: Callable[[PlasticProblem], Any] | None = None,
+    ) -> PlasticResult:
+        """Apply the share set in :attr:`release` in ``steps`` increments (λ 0 → 1).
+
+        The loads and Dirichlet values are held in full (the caller's external work must
+        hold the loads); the cuts and the verdict are those of :meth:`solve_steps`.
+        """
+        self._stage = name
+        try:
+            self.factor.value = 0.0
+            self._ramp_bcs(0.0)
+            return self._phase(
+                steps, None, max_cuts=max_cuts, say=say, monitor=None, observe=observe, hooks=None
+            )
+        finally:
+            self._stage = None
 
     def _monitor(self, monitor: Callable[[dolfinx.fem.Function], np.ndarray] | None) -> Any:
         return None if monitor is None else monitor(self.u)

@@ -21,6 +21,10 @@ reset (:meth:`~geofrac.fem.plastic.PlasticProblem.reset_displacement`), then the
 ramped with gravity held: one switch constant s in the external work, terms times
 λ + s (1 − λ), loads times s λ (docs/plasticity.md, "Gravity phase").
 
+With ``[[stages]]`` the stages follow (:mod:`geofrac.fem.plastic_stages`): the problem
+carries the scene's ``alive`` field, the loads are held in full through them, and a
+scene with no loads and no prescribed displacement skips the analysis (nothing to ramp).
+
 With ``strength_reduction = true`` (:func:`run_reduction`) the solve is repeated for
 trial factors F (c, tan φ, tan ψ divided by F) in a bisection to the factor of safety
 (:mod:`geofrac.fem.strength_reduction`); without ``[initial_stress]`` the effects'
@@ -41,6 +45,7 @@ import numpy as np
 import ufl
 from mpi4py import MPI
 
+from geofrac.errors import RunError
 from geofrac.fem.insitu import in_plane
 from geofrac.fem.joints import JointInterface, joint_springs
 from geofrac.fem.plastic import GravityPhase, GravityRecord, Law, PlasticProblem
@@ -52,6 +57,7 @@ from geofrac.fem.plastic_outputs import (
     plot_cell_field,
     write_reduction_csv,
 )
+from geofrac.fem.plastic_stages import PlasticStages
 from geofrac.fem.solution import Solution
 from geofrac.fem.strength_reduction import factor_of_safety, largest_monitor, point_monitor
 from geofrac.plasticity.interface import JointStrength
@@ -63,7 +69,7 @@ __all__ = ["gravity_summary", "run", "run_reduction"]
 
 
 def _external(
-    problem: Any, *, ramp_terms: bool = False, switch: Any = None
+    problem: Any, *, ramp_terms: bool = False, switch: Any = None, hold: Any = None
 ) -> Callable[[Any, Any], Any]:
     """(λ, v) → the external work.
 
@@ -71,16 +77,17 @@ def _external(
     the scene's loads times λ. With a gravity phase's ``switch`` s (a constant: 0 in the
     gravity phase, 1 in the analysis) the terms are scaled by λ + s (1 − λ) and the
     loads by s λ: gravity ramped with the loads off, then gravity held with the loads
-    ramped.
+    ramped. With construction stages' ``hold`` h (a constant: 0 before the stages, 1 in
+    them) the loads' factor λ becomes λ + h (1 − λ): held in full during the stages.
     """
     scene = problem.scene
 
     def external(factor: Any, v: Any) -> Any:
         ctx = problem.form_context(v)
         scale: Any = factor if ramp_terms else 1.0
-        load_scale: Any = factor
+        load_scale: Any = factor if hold is None else factor + hold * (1.0 - factor)
         if switch is not None:
-            scale, load_scale = factor + switch * (1.0 - factor), switch * factor
+            scale, load_scale = factor + switch * (1.0 - factor), switch * load_scale
         held = [scale * term(ctx) for term in problem.terms]
         if scene.initial_stress is not None and problem.insitu is not None:
             gdim = problem.mesh.geometry.dim
@@ -105,6 +112,7 @@ def _factory(
     max_iterations: int,
     joints: Callable[[Law], JointInterface] | None = None,
     gravity_steps: int = 0,
+    hold: Any = None,
 ) -> Callable[[Law], PlasticProblem]:
     """The map law ↦ the scene's elasto-plastic problem with that law (and its joints).
 
@@ -112,16 +120,23 @@ def _factory(
     stick/slip switches: docs/plasticity.md, "Joints in the strength reduction").
     ``gravity_steps`` > 0: every problem runs a gravity phase of that many steps first
     (one switch constant shared by the problems, which are solved one at a time).
+    ``hold``: a scene with ``[[stages]]``: the loads' holding constant of
+    :func:`_external`; the problem takes the scene's ``alive`` field.
     """
     problem = solution.problem
-    sigma0 = None if problem.insitu is None else problem.insitu.sigma0
+    insitu = None if solution.scene.initial_stress is None else problem.insitu  # (stages: zero)
+    sigma0 = None if insitu is None else insitu.sigma0
     gravity = None
     if gravity_steps:
         switch = dolfinx.fem.Constant(problem.mesh, SCALAR(1.0))
         gravity = GravityPhase(switch, gravity_steps)
     external = _external(
-        problem, ramp_terms=ramp_terms, switch=None if gravity is None else gravity.switch
+        problem,
+        ramp_terms=ramp_terms,
+        switch=None if gravity is None else gravity.switch,
+        hold=hold,
     )
+    alive = None if hold is None or problem.insitu is None else problem.insitu.alive
     options = dict(solution.scene.solver.options)
     if joints is not None:
         options = {"snes_linesearch_type": "bt", **options}
@@ -138,6 +153,7 @@ def _factory(
             max_it=max_iterations,
             joints=None if joints is None else joints(law),
             gravity=gravity,
+            alive=alive,
         )
 
     return make
@@ -219,12 +235,14 @@ def run(
     problem = solution.problem
     scene = solution.scene
     springs = _joints(solution, law, joints, penalty)
+    hold = dolfinx.fem.Constant(problem.mesh, SCALAR(0.0)) if scene.stages else None
     make = _factory(
         solution,
         ramp_terms=False,
         max_iterations=max_iterations,
         joints=springs,
         gravity_steps=gravity_steps,
+        hold=hold,
     )
     plastic = make(law)
     comm = solution.tagged.mesh.comm
@@ -245,10 +263,29 @@ def run(
 
     control = solution.control
     hooks = None if control is None else LoadHooks(control, say)
+    if scene.stages:  # not checkpointed
+        _no_resume(control, say=say)
+        hooks = None
+    staged: dict[str, Any] = {}
     try:
+        # staged without loads or moving supports: no analysis (nothing to ramp)
+        moving = any(bc.value == "exact" or any(v != 0 for v in bc.value) for bc in scene.bcs)
         result = plastic.solve_steps(
-            steps, max_cuts=max_cuts, say=talk, observe=observe, hooks=hooks
+            steps,
+            max_cuts=max_cuts,
+            say=talk,
+            observe=observe,
+            hooks=hooks,
+            analysis=not scene.stages or bool(scene.loads) or moving,
         )
+        gravity_ok = result.gravity is None or result.gravity.converged
+        if scene.stages and result.converged and gravity_ok:
+            assert hold is not None
+            staged = _stages(
+                plastic, solution, say, hold=hold, steps=steps, max_cuts=max_cuts, history=history
+            )
+            result.converged = staged["converged"]
+            result.end_reason = staged.pop("end_reason")
         history.replay([(s.factor, s.observed["probes"]) for s in result.steps if s.accepted])
         problem.uh.x.array[:] = plastic.u.x.array
         solution.fields = cell_fields(plastic)
@@ -260,7 +297,7 @@ def run(
                 "carry its own weight); the analysis was not run, the fields are those of "
                 "the gravity phase's last converged factor"
             )
-        elif not result.converged:
+        elif not result.converged and result.end_reason != "stage_step_too_small":
             say(
                 f"plastic: NOT CONVERGED: the increment beyond factor {result.factor:.4f} "
                 f"diverged after {max_cuts} halvings; the fields are those of the "
@@ -291,6 +328,7 @@ def run(
             "solver": plastic.newton.describe(),
             **({} if plastic.joints is None else {"joints": plastic.joints.summary()}),
             **({} if gravity is None else {"gravity_phase": gravity_summary(gravity)}),
+            **({"stages": staged["stages"]} if staged else {}),
         }
     finally:
         plastic.destroy()
@@ -309,6 +347,69 @@ def run(
             length=scene.units.length,
         )
     return out
+
+
+def _no_resume(control: Any, *, say: Callable[[str], None]) -> None:
+    """A staged plastic run is not checkpointed: refuse to resume one, say so (collective)."""
+    if control is None:
+        return
+    if control.resume is not None:
+        raise RunError(
+            "plasticity: a run with [[stages]] is not checkpointed yet and cannot be resumed "
+            f"from {control.resume.path}; run it again from the start"
+        )
+    if control.policy.every or control.policy.minutes:
+        say(
+            "plastic: a run with [[stages]] writes no checkpoints yet: the checkpoint policy "
+            "is ignored and a stop signal does not stop it (a second one kills it)"
+        )
+
+
+def _stages(
+    plastic: PlasticProblem,
+    solution: Solution,
+    say: Callable[[str], None],
+    *,
+    hold: Any,
+    steps: int,
+    max_cuts: int,
+    history: ProbeHistory,
+) -> dict[str, Any]:
+    """The scene's ``[[stages]]`` after the analysis (:mod:`geofrac.fem.plastic_stages`).
+
+    Their entries, the overall verdict and ``end_reason`` (``"stage_step_too_small"``
+    when a stage could not converge: the later stages are not run); with
+    ``output.xdmf`` the XDMF frames (the analysis's end, then each stage's) go to
+    ``solution.frames``.
+    """
+    scene = solution.scene
+    reactions = _reactions(solution)
+    run = PlasticStages(plastic, solution, hold=hold, say=say)
+    run.probes = history.record if history.names else None
+    frames = [run.frame(0, "initial")] if scene.output.xdmf else []
+    entries: list[dict[str, Any]] = []
+    converged = True
+    for k, stage in enumerate(scene.stages, start=1):
+        entry, converged = run.run(
+            k,
+            stage,
+            steps=steps,
+            max_cuts=max_cuts,
+            observe=lambda p: {"reactions": reactions(p)},
+        )
+        entries.append(entry)
+        if scene.output.xdmf:
+            frames.append(run.frame(k, stage.name))
+        if not converged:
+            say(
+                f"plastic: NOT CONVERGED: stage '{stage.name}' could not be applied beyond "
+                f"{entry['factor']:.4f} of its share after {max_cuts} halvings; the fields are "
+                "those of its last converged share, the later stages were not run"
+            )
+            break
+    solution.frames = frames
+    end = "converged" if converged else "stage_step_too_small"
+    return {"stages": entries, "converged": converged, "end_reason": end}
 
 
 def gravity_summary(gravity: GravityRecord) -> dict[str, Any]:

@@ -41,7 +41,13 @@ from mpi4py import MPI
 from geofrac.errors import RunError
 from geofrac.fem import stage_checkpoint
 from geofrac.fem.elastic import ElasticProblem
-from geofrac.fem.insitu import InsituFields, cell_dofs, group_cells, in_plane
+from geofrac.fem.insitu import (
+    InsituFields,
+    cell_dofs,
+    group_cells,
+    in_plane,
+    untouched_blocks,
+)
 from geofrac.fem.post import TENSOR_FIELDS, probe
 from geofrac.fem.stage_checkpoint import Frame
 from geofrac.fem.stage_switches import Switches, owned_rows
@@ -259,18 +265,9 @@ class StagedRun:
 
     def _hold_orphans(self) -> None:
         """Hold at their values the DOFs that no live cell touches (collective)."""
-        V, mesh = self.V, self.problem.mesh
-        imap = V.dofmap.index_map
-        tdim = mesh.topology.dim
-        cmap = mesh.topology.index_map(tdim)
-        cells = np.arange(cmap.size_local + cmap.num_ghosts, dtype=np.int32)
-        live = cells[self.insitu.alive.x.array[cell_dofs(self.insitu.alive, cells)] > 0.5]
-        touched = dolfinx.la.vector(imap, 1)
-        np.add.at(touched.array, V.dofmap.list[live].ravel(), 1.0)
-        touched.scatter_reverse(dolfinx.la.InsertMode.add)
-        touched.scatter_forward()
-        blocks = np.flatnonzero(touched.array == 0.0).astype(np.int32)
-        zero = dolfinx.fem.Function(V)
+        imap = self.V.dofmap.index_map
+        blocks = untouched_blocks(self.V, self.insitu.alive)
+        zero = dolfinx.fem.Function(self.V)
         self.bcs = [*self._supports(), dolfinx.fem.dirichletbc(zero, blocks)]
         owned = blocks[blocks < imap.size_local]
         self.orphans = (owned[:, None] * self.bs + np.arange(self.bs)).ravel().astype(np.int32)

@@ -389,6 +389,29 @@ def _staged_cracking(
             )
 
 
+def _staged_plastic(
+    file: Path, raw: list[Any], *, bcs: Sequence[Any], loads: Sequence[Any]
+) -> None:
+    """What the plastic stages do not run yet: ``add`` and switched loads or supports."""
+    for i, entry in enumerate(raw):
+        if isinstance(entry, dict) and "add" in entry:
+            raise SceneError(
+                file,
+                f"stages[{i}].add",
+                "the plastic stages only remove cell groups (and release a share); adding "
+                "groups (a lining) is not supported with plasticity yet",
+            )
+    for kind, entries in (("bc", bcs), ("load", loads)):
+        for i, e in enumerate(entries):
+            if e.switch_on is not None or e.switch_off is not None:
+                raise SceneError(
+                    file,
+                    f"{kind}[{i}].{'from' if e.switch_on is not None else 'until'}",
+                    "loads and supports switched at stages are not supported with "
+                    "plasticity yet: they act throughout (the loads ramped before the stages)",
+                )
+
+
 def stages(
     file: Path,
     raw: Any,
@@ -426,7 +449,10 @@ def stages(
         _staged_cracking(file, raw, initial=initial, bcs=bcs, loads=loads)
     else:
         _element(file, "stages", element)
-        _no_driver(file, "stages", declared)
+        # the FEM plasticity loop runs the stages (docs/plasticity.md, "Construction stages")
+        _no_driver(file, "stages", [d for d in declared if d != "plasticity"])
+    if "plasticity" in declared:
+        _staged_plastic(file, raw, bcs=bcs, loads=loads)
     cells = [g for g, d in geometry.groups.items() if d == geometry.dim]
     absent = _absent_at_start(raw)
     removed: set[str] = set(absent)

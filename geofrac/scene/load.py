@@ -1181,6 +1181,7 @@ def _validate(
                 initial=initial,
                 fields=output.fields,
                 effects=tuple(other.name for other in specs),
+                staged="stages" in data,
             )
     _switches(file, _stage_names(data.get("stages")), bcs=bcs, loads=loads, declared=declared)
     stages: tuple[Stage, ...] = ()

@@ -49,6 +49,17 @@ class ExtraTerms(Protocol):
         ...
 
 
+def _add_entries(A: PETSc.Mat, rows: np.ndarray, cols: np.ndarray, values: np.ndarray) -> None:
+    """Add values at (rows, cols) by global index, summed where repeated (none: nothing)."""
+    if not len(rows):
+        return
+    order = np.argsort(rows, kind="stable")  # one setValues per row, O(k log k)
+    rows, cols, values = rows[order], cols[order].astype(PETSc.IntType), values[order]
+    starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
+    for a, b in zip(starts, np.r_[starts[1:], len(rows)], strict=True):
+        A.setValues([int(rows[a])], cols[a:b], values[a:b], PETSc.InsertMode.ADD)
+
+
 def snes_reason_name(reason: int) -> str:
     """PETSc's name of a ``SNESConvergedReason`` code (e.g. ``DIVERGED_MAX_IT``)."""
     for name in dir(PETSc.SNES.ConvergedReason):
@@ -179,12 +190,7 @@ class NewtonSolver:
         dolfinx.fem.petsc.assemble_matrix(A, self.J, bcs=self.bcs)
         if self.extra is not None:
             A.assemble(PETSc.Mat.AssemblyType.FLUSH)  # the Dirichlet diagonal was inserted
-            rows, cols, values = self.extra.jacobian_entries()
-            order = np.argsort(rows, kind="stable")  # one setValues per row, O(k log k)
-            rows, cols, values = rows[order], cols[order].astype(PETSc.IntType), values[order]
-            starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
-            for a, b in zip(starts, np.r_[starts[1:], len(rows)], strict=True):
-                A.setValues([int(rows[a])], cols[a:b], values[a:b], PETSc.InsertMode.ADD)
+            _add_entries(A, *self.extra.jacobian_entries())
         A.assemble()
 
     def solve(self) -> NewtonReport:

@@ -100,14 +100,15 @@ def test_bad_keys_named_before_meshing(override: str, key: str) -> None:
     assert info.value.key.startswith(key), info.value
 
 
-def test_stages_refused_with_plasticity(tmp_path: Path) -> None:
-    """Construction stages are elastic analyses (not run by the plastic loop)."""
+def test_stages_with_the_ground_reaction_refused(tmp_path: Path) -> None:
+    """Construction stages run with plasticity, but not beside the ground reaction curve."""
     geo = (JOB.parent / "../meshes/quarter_ring.geo").resolve()
     text = JOB.read_text().replace('"../meshes/quarter_ring.geo"', f'"{geo}"')
     path = tmp_path / "staged.toml"
-    path.write_text(text + '\n[[stages]]\nname = "x"\nrelaxation = 0.5\n')
-    with pytest.raises(SceneError, match="does not run construction stages"):
+    path.write_text(text + '\n[[stages]]\nname = "x"\nremove = ["rock"]\n')
+    with pytest.raises(SceneError, match="does not go with \\[\\[stages\\]\\]") as info:
         load_scene(path)
+    assert info.value.key == "plasticity.ground_reaction"
 
 
 def test_huge_cohesion_scene_equals_the_elastic_scene(tmp_path: Path) -> None:
