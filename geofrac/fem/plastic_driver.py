@@ -55,6 +55,7 @@ from geofrac.fem.plastic_outputs import (
     cell_fields,
     displacement_magnitude,
     plot_cell_field,
+    step_rows,
     write_reduction_csv,
 )
 from geofrac.fem.plastic_stages import PlasticStages
@@ -312,19 +313,7 @@ def run(
             "yielded_area": plastic.yielded_area(),
             "max_plastic_shear_strain": _max_shear(plastic),
             "ellipticity_lost": None if result.ellipticity is None else result.ellipticity[0],
-            "steps": [
-                {
-                    "factor": s.factor,
-                    "accepted": s.accepted,
-                    "reason": s.report.reason_name,
-                    "iterations": s.report.iterations,
-                    "residual": s.report.residuals[-1] if s.report.residuals else None,
-                    "plastic_points": s.plastic_points,
-                    "reactions": None if s.observed is None else s.observed["reactions"],
-                }
-                | ({"probes": s.observed["probes"]} if s.accepted and history.names else {})
-                for s in result.steps
-            ],
+            "steps": step_rows(result.steps, probes=bool(history.names)),
             "solver": plastic.newton.describe(),
             **({} if plastic.joints is None else {"joints": plastic.joints.summary()}),
             **({} if gravity is None else {"gravity_phase": gravity_summary(gravity)}),
@@ -361,7 +350,7 @@ def _no_resume(control: Any, *, say: Callable[[str], None]) -> None:
     if control.policy.every or control.policy.minutes:
         say(
             "plastic: a run with [[stages]] writes no checkpoints yet: the checkpoint policy "
-            "is ignored and a stop signal does not stop it (a second one kills it)"
+            "is ignored, and a stop signal stops it after the current stage, to be run again"
         )
 
 
@@ -400,6 +389,9 @@ def _stages(
         entries.append(entry)
         if scene.output.xdmf:
             frames.append(run.frame(k, stage.name))
+        control = solution.control
+        if converged and k < len(scene.stages) and control is not None and control.poll(k)[1]:
+            control.interrupt(f"after stage {k} '{stage.name}' (not checkpointed: run it again)")
         if not converged:
             say(
                 f"plastic: NOT CONVERGED: stage '{stage.name}' could not be applied beyond "
@@ -419,17 +411,7 @@ def gravity_summary(gravity: GravityRecord) -> dict[str, Any]:
         "factor": gravity.factor,
         "max_displacement": gravity.max_displacement,
         "plastic_points": gravity.plastic_points,
-        "steps": [
-            {
-                "factor": s.factor,
-                "accepted": s.accepted,
-                "reason": s.report.reason_name,
-                "iterations": s.report.iterations,
-                "residual": s.report.residuals[-1] if s.report.residuals else None,
-                "plastic_points": s.plastic_points,
-            }
-            for s in gravity.records
-        ],
+        "steps": step_rows(gravity.records),
     }
 
 

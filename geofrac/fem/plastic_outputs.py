@@ -38,6 +38,7 @@ __all__ = [
     "cell_fields",
     "displacement_magnitude",
     "plot_cell_field",
+    "step_rows",
     "write_reduction_csv",
 ]
 
@@ -389,3 +390,25 @@ class ProbeHistory:
         fig.tight_layout()
         fig.savefig(path, dpi=90)
         plt.close(fig)
+
+
+def step_rows(records: Sequence[Any], *, probes: bool = False) -> list[dict[str, Any]]:
+    """The results' rows of a phase's attempted steps (:class:`~geofrac.fem.plastic.StepRecord`).
+
+    Factor, verdict, SNES reason, iterations, final residual, plastic points and the
+    reactions the step observed (None where nothing was observed); with ``probes`` the
+    accepted steps' probe values too.
+    """
+    return [
+        {
+            "factor": s.factor,
+            "accepted": s.accepted,
+            "reason": s.report.reason_name,
+            "iterations": s.report.iterations,
+            "residual": s.report.residuals[-1] if s.report.residuals else None,
+            "plastic_points": s.plastic_points,
+            "reactions": None if s.observed is None else s.observed["reactions"],
+        }
+        | ({"probes": s.observed["probes"]} if probes and s.accepted else {})
+        for s in records
+    ]

@@ -32,28 +32,12 @@ from mpi4py import MPI
 
 from geofrac.fem.insitu import cell_dofs, untouched_blocks
 from geofrac.fem.plastic import PlasticProblem, PlasticResult
-from geofrac.fem.plastic_outputs import cell_fields
+from geofrac.fem.plastic_outputs import cell_fields, step_rows
 from geofrac.fem.stage_checkpoint import Frame
 from geofrac.fem.stage_switches import owned_rows
 from geofrac.model.scene import Stage
 
-__all__ = ["PlasticStages", "step_rows"]
-
-
-def step_rows(result: PlasticResult) -> list[dict[str, Any]]:
-    """The results' rows of a phase's attempted steps (factor, verdict, reactions)."""
-    return [
-        {
-            "factor": s.factor,
-            "accepted": s.accepted,
-            "reason": s.report.reason_name,
-            "iterations": s.report.iterations,
-            "residual": s.report.residuals[-1] if s.report.residuals else None,
-            "plastic_points": s.plastic_points,
-            "reactions": None if s.observed is None else s.observed["reactions"],
-        }
-        for s in result.steps
-    ]
+__all__ = ["PlasticStages"]
 
 
 class PlasticStages:
@@ -175,7 +159,7 @@ class PlasticStages:
             "out_of_balance": self.out_of_balance(),
             "plastic_points": plastic.plastic_points(),
             "yielded_area": plastic.yielded_area(),
-            "steps": step_rows(result),
+            "steps": step_rows(result.steps),
         }
         verdict = "converged" if result.converged else "NOT CONVERGED"
         removed = f"removed {', '.join(stage.remove)}; " if stage.remove else ""

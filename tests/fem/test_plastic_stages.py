@@ -347,3 +347,34 @@ def _weak(pi: float) -> MohrCoulombOpening:
         friction_angle=20.0,
         dilatancy_angle=20.0,
     )
+
+
+def test_a_stop_signal_stops_after_the_current_stage(tmp_path: Path, monkeypatch) -> None:
+    """SIGTERM during stage 1 of 2: the run stops after it, interrupted, with no checkpoint."""
+    import json
+    import signal
+
+    from geofrac import interrupt
+    from geofrac.io.checkpoint import RunControl
+    from geofrac.pipeline import run_scene
+
+    poll = RunControl.poll
+    polled: list[int] = []
+
+    def polling(control: RunControl, k: int) -> tuple[bool, bool]:
+        polled.append(k)
+        interrupt._received.append(signal.SIGTERM)
+        return poll(control, k)
+
+    monkeypatch.setattr(RunControl, "poll", polling)
+    out = tmp_path / "stopped"
+    scene = load_scene_collective(MPI.COMM_WORLD, JOB, (), out=out)
+    try:
+        with pytest.raises(interrupt.Interrupted, match="after stage 1"):
+            run_scene(scene, MPI.COMM_WORLD, verbose=False)
+    finally:
+        interrupt.reset()
+    assert polled == [1]  # after stage 1 of 2, not after the last
+    status = json.loads((out / "incomplete" / "summary.json").read_text())
+    assert status["status"] == "interrupted"
+    assert not (out / "incomplete" / "checkpoint").exists()
