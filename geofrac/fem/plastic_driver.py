@@ -328,12 +328,16 @@ def run(
     if directory is not None and history.names:
         history.write_steps(directory / "load_steps.csv")
     if write:
+        at = f"at load factor {result.factor:.4g}"
+        if staged:
+            at = f"after stage '{staged['stages'][-1]['name']}'"
         plot_cell_field(
             solution.fields["plastic_shear_strain"],
             scene.output.dir / "plastic_shear_strain.png",
-            title=f"{scene.name}: plastic shear strain (load factor {result.factor:.4g})",
+            title=f"{scene.name}: plastic shear strain {at}",
             label="plastic shear strain γᵖ (−)",
             length=scene.units.length,
+            alive=plastic.alive,
         )
     return out
 

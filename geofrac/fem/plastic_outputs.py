@@ -36,6 +36,7 @@ from geofrac.plasticity import MohrCoulomb
 __all__ = [
     "ProbeHistory",
     "cell_fields",
+    "cell_triangles",
     "displacement_magnitude",
     "plot_cell_field",
     "step_rows",
@@ -106,6 +107,30 @@ def displacement_magnitude(u: dolfinx.fem.Function) -> dolfinx.fem.Function:
     return out
 
 
+def cell_triangles(
+    fn: dolfinx.fem.Function, *, alive: dolfinx.fem.Function | None = None
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The owned 2D cells' corners and ``fn``'s DG0 values, gathered on rank 0 (collective).
+
+    Returns (corners, shape=(3 m, 2); values, shape=(m,)) on rank 0, m the cells of all
+    ranks (those with ``alive`` > 0.5 when given), None on the other ranks.
+    """
+    mesh = fn.function_space.mesh
+    n = mesh.topology.index_map(mesh.topology.dim).size_local
+    keep = np.ones(n, dtype=bool)
+    if alive is not None:
+        keep = alive.x.array[alive.function_space.dofmap.list[:n, 0]] > 0.5
+    cells = mesh.geometry.dofmaps[0][:n, :3][keep]
+    corners = mesh.geometry.x[cells, :2]  # shape=(kept cells, 3, 2)
+    values = fn.x.array[fn.function_space.dofmap.list[:n, 0]][keep]
+    parts = mesh.comm.gather((corners, values), root=0)
+    if parts is None:
+        return None
+    return np.concatenate([p[0] for p in parts]).reshape(-1, 2), np.concatenate(
+        [p[1] for p in parts]
+    )
+
+
 def plot_cell_field(
     fn: dolfinx.fem.Function,
     path: Path,
@@ -114,27 +139,23 @@ def plot_cell_field(
     label: str,
     length: str,
     joints: np.ndarray | None = None,
+    alive: dolfinx.fem.Function | None = None,
 ) -> None:
     """Draw the scalar DG0 ``fn`` on the mesh's straight-sided cells into ``path`` (rank 0).
 
     Collective: every rank sends its owned cells' corners and values to rank 0.
     ``label`` names the colour bar, ``length`` the axes' unit. ``joints``: the joint
     pairs' table (:meth:`geofrac.fem.joints.JointInterface.table`, columns x, y, …,
-    state), drawn as points coloured by state (closed, slipping, open). 2D meshes only: in
-    3D nothing is drawn (the field is in the XDMF for ParaView).
+    state), drawn as points coloured by state (closed, slipping, open). ``alive``: the
+    DG0 indicator of construction stages; the removed cells (0) are left blank. 2D meshes
+    only: in 3D nothing is drawn (the field is in the XDMF for ParaView).
     """
-    mesh = fn.function_space.mesh
-    if mesh.geometry.dim != 2:
+    if fn.function_space.mesh.geometry.dim != 2:
         return
-    n = mesh.topology.index_map(mesh.topology.dim).size_local
-    corners = mesh.geometry.x[mesh.geometry.dofmaps[0][:n, :3], :2]  # shape=(n, 3, 2)
-    values = fn.x.array[fn.function_space.dofmap.list[:n, 0]]
-    parts = mesh.comm.gather((corners, values), root=0)
-    if mesh.comm.rank != 0:
+    gathered = cell_triangles(fn, alive=alive)
+    if gathered is None:
         return
-    assert parts is not None
-    xy = np.concatenate([p[0] for p in parts]).reshape(-1, 2)
-    v = np.concatenate([p[1] for p in parts])
+    xy, v = gathered
     import matplotlib
 
     matplotlib.use("Agg")

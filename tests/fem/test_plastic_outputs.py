@@ -199,3 +199,39 @@ def test_a_scene_without_probes_runs() -> None:
         solution.problem.destroy()
     assert plastic["converged"] and plastic["factor"] == 1.0 and plastic["steps"]
     assert all("probes" not in step for step in plastic["steps"])
+
+
+@pytest.mark.parametrize(
+    "comm",
+    [
+        pytest.param(MPI.COMM_SELF, id="self"),
+        pytest.param(MPI.COMM_WORLD, id="world", marks=pytest.mark.mpi(min_size=2)),
+    ],
+)
+def test_removed_cells_are_not_drawn(comm) -> None:
+    """The pictures of a staged run leave the excavated cells blank (``alive`` = 0).
+
+    The unit square, its cells left of x = 0.5 removed: the gathered triangles cover the
+    right half (area 0.5), every cell once, on 1 rank and gathered from 2.
+    """
+    import dolfinx
+
+    from geofrac.fem.plastic_outputs import cell_triangles
+
+    mesh = dolfinx.mesh.create_unit_square(comm, 8, 8)
+    Q = dolfinx.fem.functionspace(mesh, ("DG", 0))
+    fn, alive = dolfinx.fem.Function(Q), dolfinx.fem.Function(Q)
+    fn.interpolate(lambda x: x[0])
+    alive.interpolate(lambda x: (x[0] > 0.5).astype(float))
+    gathered = cell_triangles(fn, alive=alive)
+    if comm.rank != 0:
+        assert gathered is None
+        return
+    assert gathered is not None
+    xy, values = gathered
+    p = xy.reshape(-1, 3, 2)
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    assert len(values) == 64  # half of the 128 triangles
+    assert area.sum() == pytest.approx(0.5, rel=1e-12)
+    assert values.min() > 0.5  # only the right half's cell means
