@@ -28,7 +28,8 @@ LAYERS = JOBS.parent / "tests" / "fem" / "layers.toml"
 A, B, P0 = 1.0, 10.0, 10.0
 
 
-def _exact(pi: float) -> MohrCoulombOpening:
+def _exact(pi: float, *, cohesion: float = 1.0, phi: float = 30.0) -> MohrCoulombOpening:
+    """Salençon's finite ring of the job (ψ = φ) at the wall pressure ``pi``."""
     return MohrCoulombOpening(
         a=A,
         b=B,
@@ -36,9 +37,9 @@ def _exact(pi: float) -> MohrCoulombOpening:
         pi=pi,
         E=1e4,
         nu=0.3,
-        cohesion=1.0,
-        friction_angle=30.0,
-        dilatancy_angle=30.0,
+        cohesion=cohesion,
+        friction_angle=phi,
+        dilatancy_angle=phi,
     )
 
 
@@ -336,17 +337,7 @@ def test_a_stage_past_collapse_ends_not_converged() -> None:
 
 
 def _weak(pi: float) -> MohrCoulombOpening:
-    return MohrCoulombOpening(
-        a=A,
-        b=B,
-        p0=P0,
-        pi=pi,
-        E=1e4,
-        nu=0.3,
-        cohesion=0.2,
-        friction_angle=20.0,
-        dilatancy_angle=20.0,
-    )
+    return _exact(pi, cohesion=0.2, phi=20.0)
 
 
 def test_a_stop_signal_stops_after_the_current_stage(tmp_path: Path, monkeypatch) -> None:
