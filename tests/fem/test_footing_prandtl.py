@@ -164,7 +164,7 @@ def test_prescribed_displacement_ramped_with_the_factor() -> None:
 
 @pytest.mark.mpi(min_size=2)
 def test_two_ranks_same_footing_curve() -> None:
-    """The distributed footing's curve equals each rank's serial one (to 1e-9)."""
+    """The distributed footing's curve equals each rank's serial one (to 100 Newton rtol)."""
     world = MPI.COMM_WORLD
     curves = []
     for comm in (world, MPI.COMM_SELF):
@@ -183,4 +183,9 @@ def test_two_ranks_same_footing_curve() -> None:
     same = f2.shape == f1.shape and np.array_equal(f2, f1)
     gap = float(np.abs(q2 - q1).max() / np.abs(q1).max()) if same else math.inf
     assert world.allreduce(int(not same), op=MPI.SUM) == 0
-    assert world.allreduce(gap, op=MPI.MAX) <= 1e-9
+    # each run stops Newton once ||F|| <= 1e-9 ||F0|| (geofrac/solvers/snes.py): two
+    # converged iterates differ by up to that tolerance times the problem's amplification
+    # (measured 2.0e-9 on one venv, below 1e-9 on another: a bound at 1e-9 was the
+    # tolerance itself and flipped); stale ghost displacements (the scatter left out)
+    # change the accepted steps themselves
+    assert world.allreduce(gap, op=MPI.MAX) <= 100 * 1e-9
