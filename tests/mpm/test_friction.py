@@ -196,6 +196,73 @@ def test_a_block_dropped_on_a_frictional_floor_does_not_creep_up(shape, scheme):
     assert abs(rise) < 2 * RHO * G0 * 0.5**2 / (2 * MAT.E)
 
 
+def _centroid_rise(scheme: str, shape: str, t_end: float) -> float:
+    """Highest centroid above its start of a stress-free block dropped on a level floor."""
+    p, gravity = _block(0.0, prestress=False)
+    g = scene_grid((0.0, 0.0), (4.0, 1.5), CELL, padding=2)
+    s = _settings(g, gravity, 0.7, scheme, shape)
+    m = p.mass.sum()
+    y0 = p.mass @ p.x[:, 1] / m
+    rise = -np.inf
+    for _ in range(round(t_end / s.dt)):
+        step(g, p, MAT, settings=s)
+        rise = max(rise, p.mass @ p.x[:, 1] / m - y0)
+    return rise
+
+
+_RISES = pytest.mark.xfail(
+    strict=True,
+    reason="the strain at a contact node takes a velocity the contact clipped one way "
+    "(MUSL's re-mapped one, USF's mapped one): the centroid rises 0.085-0.088 mm in "
+    "0.5 s, energy created (docs/mpm_friction.md, 'Energy of a stress-free start')",
+)
+
+
+@_RISES
+@pytest.mark.parametrize(
+    ("shape", "scheme"),
+    [("cpgimp", "musl"), ("mpm", "musl"), ("cpgimp", "usf"), ("ugimp", "usavg")],
+)
+def test_a_block_dropped_on_a_frictional_floor_never_rises_above_its_start(shape, scheme):
+    """A stress-free block released at rest never lifts its centroid above its start.
+
+    Energy: from K = 0, W = 0, K + W + Π can only fall, so Π = −m g ȳ (relative to the
+    start) stays ≤ 0. Judged on the elastic settlement ρ g H² / (2 M) = 0.093 mm (M the
+    P-wave modulus): allowed 1 % of it. Measured: 0.085-0.088 mm in 0.5 s for every
+    pair here, 0.17-0.18 mm in 1 s (a fixed floor instead: never above its start).
+    """
+    modulus = MAT.E * (1 - MAT.nu) / ((1 + MAT.nu) * (1 - 2 * MAT.nu))
+    settlement = RHO * G0 * 0.5**2 / (2 * modulus)
+    assert _centroid_rise(scheme, shape, 0.5) <= 0.01 * settlement
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="MUSL's strain at contact nodes (clipped one way) creates energy: +9 % of "
+    "the gravity work in 0.5 s (docs/mpm_friction.md, 'Energy of a stress-free start')",
+)
+def test_a_stress_free_block_on_a_sticking_slope_creates_no_energy():
+    """A stress-free block on 30° with μ 0.7: the scheme adds under 1 % of gravity's work.
+
+    Released at rest (MUSL, cpGIMP, 0.5 s), the budget's ``numerical`` work (the energy
+    no physical term explains, docs/mpm_energy.md) stays within 1 % of the gravity work.
+    Measured: +10.3 J of 113 J (+9 %); the block slides 0.048 m in 0.5 s.
+    """
+    from geofrac.mpm.energy import StepBudget
+
+    p, gravity = _block(30.0, prestress=False)
+    g = scene_grid((0.0, 0.0), (4.0, 1.5), CELL, padding=2)
+    s = _settings(g, gravity, 0.7, "musl", "cpgimp")
+    numerical = gravity_work = 0.0
+    for _ in range(round(0.5 / s.dt)):
+        b = StepBudget()
+        step(g, p, MAT, settings=s, budget=b)
+        numerical += b.numerical()
+        gravity_work -= b.potential
+    assert gravity_work > 0
+    assert numerical <= 0.01 * gravity_work
+
+
 @pytest.mark.parametrize("shape", ["mpm"])
 def test_a_block_launched_down_a_sticking_slope_stays_on_it(shape):
     """μ = 0.7 on 30°, launched at 1 m/s downhill: the bottom layer stays on the floor.
