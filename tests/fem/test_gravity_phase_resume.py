@@ -18,11 +18,16 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
-from geofrac import interrupt
 from tests.conftest import JOBS
-from tests.fem.helpers import check_interrupted
 from tests.fem.test_gravity_phase import _planar_joint
-from tests.fem.test_plastic_resume import Counts, _on_root, _run, _same, _shared
+from tests.fem.test_plastic_resume import (
+    _on_root,
+    _resumed,
+    _same,
+    _shared,
+    _stopped,
+    _whole,
+)
 
 LAYER = Path(__file__).parent / "gravity_layer.toml"
 SETS = (
@@ -51,32 +56,16 @@ def test_a_run_stopped_in_either_phase_resumes_to_the_whole_run(tmp_path, monkey
     base = _shared(tmp_path, comm)
     job = _scene(base)
     whole = base / "whole"
-    counts = Counts(monkeypatch)
-    try:
-        _run(job, SETS, whole, comm)
-    finally:
-        monkeypatch.undo()
+    counts = _whole(job, SETS, whole, monkeypatch)
     assert counts.polls == 5
     out = base / "stopped"
-    stopping = Counts(monkeypatch, stop_at=at)
-    try:
-        with pytest.raises(interrupt.Interrupted):
-            _run(job, SETS, out, comm)
-    finally:
-        interrupt.reset()
-        monkeypatch.undo()
-    comm.barrier()
     k = at if phase == "gravity" else at + 1
-    check_interrupted(out, k)
+    stopping = _stopped(job, SETS, out, monkeypatch, at, checkpoint=k)
     meta = out / "incomplete" / "checkpoint" / f"ckpt-{k:09d}" / "meta.json"
     data = json.loads(meta.read_text())["data"]
     assert data["phase"] == phase
     assert (data["gravity"] is None) == (phase == "gravity")
-    again = Counts(monkeypatch)
-    try:
-        _run(job, SETS, out, comm, resume=True)
-    finally:
-        monkeypatch.undo()
+    again = _resumed(job, SETS, out, monkeypatch)
     comm.barrier()  # rank 0 writes the summary
     if comm.size == 1:
         assert stopping.newton + again.newton == counts.newton  # nothing solved twice
@@ -108,23 +97,10 @@ def test_joints_resume_in_the_analysis_with_their_kept_jump(tmp_path, monkeypatc
         "output.xdmf=true",
     )
     whole = base / "whole"
-    counts = Counts(monkeypatch)
-    try:
-        _run(job, sets, whole, comm)
-    finally:
-        monkeypatch.undo()
-    assert counts.polls == 5
+    assert _whole(job, sets, whole, monkeypatch).polls == 5
     out = base / "stopped"
-    try:
-        Counts(monkeypatch, stop_at=5)
-        with pytest.raises(interrupt.Interrupted):
-            _run(job, sets, out, comm)
-    finally:
-        interrupt.reset()
-        monkeypatch.undo()
-    comm.barrier()
-    check_interrupted(out, 6)
-    _run(job, sets, out, comm, resume=True)
+    _stopped(job, sets, out, monkeypatch, 5, checkpoint=6)
+    _resumed(job, sets, out, monkeypatch)
     comm.barrier()
     _on_root(_check_joints, out, whole)
 
