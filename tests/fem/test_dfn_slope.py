@@ -19,7 +19,6 @@ from typing import Any
 
 import dolfinx_solver  # noqa: F401
 
-import dolfinx
 import numpy as np
 import pytest
 import ufl
@@ -35,6 +34,7 @@ from geofrac.plasticity.interface import JointStrength
 from geofrac.plasticity.strength_reduction import reduce_strength
 from geofrac.scene.load import load_scene
 from tests.fem.helpers import JOBS
+from tests.fem.test_joint_interface import _space_and_bcs
 
 JOB = JOBS / "slope_dfn.toml"
 #: the job's rock (strong: it never yields) and unit weight γ = ρ g (kN/m³).
@@ -57,15 +57,7 @@ def dfn_trial(comm: MPI.Comm, factor: float) -> tuple[bool, float, int]:
     assert scene.geometry is not None and config is not None
     assert config.strength_reduction is not None
     tagged = build_mesh(scene.geometry, comm)
-    V = dolfinx.fem.functionspace(tagged.mesh, ("Lagrange", 2, (2,)))
-    dim, ents = tagged.entities("side_1")
-    base = dolfinx.fem.locate_dofs_topological(V, dim, ents)
-    dim, ents = tagged.entities("side_2")
-    back = dolfinx.fem.locate_dofs_topological(V.sub(0), dim, ents)
-    bcs = [
-        dolfinx.fem.dirichletbc(np.zeros(2), base, V),
-        dolfinx.fem.dirichletbc(0.0, back, V.sub(0)),
-    ]
+    V, bcs = _space_and_bcs(tagged, base_group="side_1", back_group="side_2")
     joints = [(j.name, JointStrength(j.cohesion, j.friction)) for j in config.joints]
     springs = joint_springs(V, tagged, joints, bcs=bcs, rock=ROCK, penalty=config.contact_penalty)
     mesh = tagged.mesh

@@ -76,11 +76,14 @@ def joint_mesh(comm: MPI.Comm, *, h: float, algorithm: int = 6) -> TaggedMesh:
     return build_mesh(Geometry(GEO, params, None, 2, info.groups, order=info.order), comm)
 
 
-def _space_and_bcs(tagged: TaggedMesh) -> tuple[Any, list[Any]]:
+def _space_and_bcs(
+    tagged: TaggedMesh, *, base_group: str = "base", back_group: str = "back"
+) -> tuple[Any, list[Any]]:
+    """The P2 space of a slope, its base fixed and its back on rollers (u_x = 0)."""
     V = dolfinx.fem.functionspace(tagged.mesh, ("Lagrange", 2, (2,)))
-    dim, ents = tagged.entities("base")
+    dim, ents = tagged.entities(base_group)
     base = dolfinx.fem.locate_dofs_topological(V, dim, ents)
-    dim, ents = tagged.entities("back")
+    dim, ents = tagged.entities(back_group)
     back = dolfinx.fem.locate_dofs_topological(V.sub(0), dim, ents)
     bcs = [
         dolfinx.fem.dirichletbc(np.zeros(2), base, V),
