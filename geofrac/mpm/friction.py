@@ -58,7 +58,7 @@ on every machine, instead of in and out of contact with the sign of the round-of
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING
 
@@ -79,6 +79,7 @@ __all__ = [
     "free_normals",
     "friction",
     "gaps",
+    "set_normal",
 ]
 
 #: A row's state (:func:`contact_states`): not in contact (moving away from the boundary,
@@ -109,12 +110,23 @@ class Friction:
         mu: Coulomb friction coefficients μ >= 0, shape=(k,) (Edo (2016): 0.1).
         offsets: the boundary's plane at the node, x·n = d, shape=(k,); None: the
             material always touches (no touch check).
+        held_vn: the step's memory (changed by every step that uses the boundary): per
+            row, the normal velocity v·n the contact left its node with in the last
+            grid update where it held the row (in contact), NaN where it did not,
+            shape=(k,). USF's strain takes it (:mod:`geofrac.mpm.schemes`); a
+            checkpoint keeps it (:func:`held_rows`).
     """
 
     nodes: np.ndarray
     normals: np.ndarray
     mu: np.ndarray
     offsets: np.ndarray | None = None
+    held_vn: np.ndarray = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        """A new boundary has held nothing yet (:attr:`held_vn` all NaN)."""
+        if self.held_vn is None:
+            object.__setattr__(self, "held_vn", np.full(len(self.nodes), np.nan))
 
     @cached_property
     def layer(self) -> np.ndarray:
@@ -443,3 +455,32 @@ def _corner(
         u = normal + t * (1.0 - min(budget, speed) / speed)
     v[node] = u
     return states
+
+
+def set_normal(
+    v: np.ndarray, fr: Friction, rows: np.ndarray, target: np.ndarray | None = None
+) -> np.ndarray:
+    """Set the normal velocity of ``rows``' nodes (in place and returned).
+
+    Args:
+        v: nodal velocities, shape=(num_nodes, dim).
+        fr: the boundary.
+        rows: the rows, shape=(m,) int.
+        target: per row, the normal velocity v·n to set, shape=(m,); None: keep an
+            approach (v·n > 0), remove a separation (v·n < 0 becomes 0).
+
+    A corner node's rows are taken in turn (exact for orthogonal normals, as the
+    contact's Gram-Schmidt step is).
+
+    Returns:
+        ``v``.
+    """
+    rows = np.asarray(rows, dtype=np.int64)
+    layer = fr.layer[rows]
+    for k in np.unique(layer):  # no node twice within a layer
+        mine = layer == k
+        ids, n = fr.nodes[rows[mine]], fr.normals[rows[mine]]
+        vn = np.einsum("ka,ka->k", v[ids], n)
+        want = np.maximum(vn, 0.0) if target is None else target[mine]
+        v[ids] += (want - vn)[:, None] * n
+    return v

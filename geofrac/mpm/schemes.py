@@ -459,6 +459,8 @@ class _Nodes:
         v: the nodal velocity, shape=(N, dim).
         allow: the contact's allowed approaches (friction), or None.
         v_mapped: the nodal velocity before the contact acted (friction), or None.
+        held: the frictional rows the contact held in the grid update (friction),
+            shape=(h,) int.
     """
 
     w: Weights
@@ -476,6 +478,7 @@ class _Nodes:
     v: np.ndarray = field(init=False, repr=False)
     allow: np.ndarray | None = field(default=None, init=False, repr=False)
     v_mapped: np.ndarray | None = field(default=None, init=False, repr=False)
+    held: np.ndarray | None = field(default=None, init=False, repr=False)
 
 
 def step(
@@ -522,7 +525,8 @@ def step(
     _velocity_and_contact(nodes, p, s)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):  # D.11-D.13, D.19-D.21: stress first
-        _update_stress(nodes.w, p, material, nodes.v, half * s.dt, s, nodes.smooth_at, budget)
+        v_strain = _strain_velocity(nodes, s)
+        _update_stress(nodes.w, p, material, v_strain, half * s.dt, s, nodes.smooth_at, budget)
     if s.scheme != "musl":
         nodes.f = _map_forces(nodes, p, s)
     a, v_new, f_damp = _grid_update(nodes, s)
@@ -544,7 +548,7 @@ def step(
         )
     _grid_to_particles(nodes, p, a, v_new, s.dt)
     if s.scheme in ("musl", "usavg"):  # D.6-D.8, D.26-D.28: stress from the re-mapped v
-        _remap_velocity(nodes, p, s)
+        _remap_velocity(nodes, p, s, moved=v_new)
         _update_stress(nodes.w, p, material, nodes.v, half * s.dt, s, nodes.smooth_at, budget)
     if budget is not None:
         budget.transfer += 0.5 * float(np.sum(p.mass * np.sum((p.v - v_start) ** 2, axis=1)))
@@ -671,6 +675,30 @@ def _velocity_and_contact(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
         apply_friction(nodes.v, s.friction, nodes.allow, tol=nodes.rest)
 
 
+def _strain_velocity(nodes: _Nodes, s: StepSettings) -> np.ndarray:
+    """The nodal velocity USF's (and USAVG's first) strain takes, shape=(N, dim).
+
+    The mapped velocity, contact held; with friction, on the rows the contact held in
+    the previous step's grid update (:attr:`Friction.held_vn`), its normal component is
+    the one the contact left there (the node's own velocity at the step's start), in
+    both directions. The mapped velocity of such a node mixes in the material above it,
+    and the contact clips it only one way (an approach removed, a separation kept), so
+    the strain saw the node rise with the layer above while it stood on the boundary:
+    the stored compression this added lifted a stress-free block dropped on a floor
+    (0.085 mm in 0.5 s; docs/mpm_friction.md, "Energy"). The motion keeps the mapped
+    velocity: the boundary never pulls.
+    """
+    fr = s.friction
+    if fr is None:
+        return nodes.v
+    rows = np.flatnonzero(np.isfinite(fr.held_vn))
+    if len(rows) == 0:
+        return nodes.v
+    from geofrac.mpm.friction import set_normal
+
+    return set_normal(nodes.v.copy(), fr, rows, fr.held_vn[rows])
+
+
 def _map_forces(nodes: _Nodes, p: Particles, s: StepSettings) -> np.ndarray:
     """Particles to grid: f_i = f_int + f_ext of the updated stresses (D.14, D.22).
 
@@ -723,7 +751,15 @@ def _grid_update(
     if s.friction is not None:
         from geofrac.mpm.friction import apply_friction
 
-        apply_friction(v_new, s.friction, nodes.allow, tol=nodes.rest)
+        fr = s.friction
+        vn = np.einsum("ka,ka->k", v_new[fr.nodes], fr.normals)
+        excess = vn if nodes.allow is None else vn - nodes.allow
+        # the rows the contact holds: in contact within the rest speed (contact_states)
+        nodes.held = np.flatnonzero(excess > -nodes.rest)
+        apply_friction(v_new, fr, nodes.allow, tol=nodes.rest)
+        fr.held_vn[:] = np.nan
+        held = nodes.held
+        fr.held_vn[held] = np.einsum("ka,ka->k", v_new[fr.nodes[held]], fr.normals[held])
         # the particles take every change the contact made, the mapped velocity's too
         # (else the approach it removed stays in their velocity, step after step, and
         # its friction is lost: a launched block slid 8 % too far)
@@ -745,8 +781,20 @@ def _grid_to_particles(
         p.x += dt * _from_grid(w, v_new)  # D.5, D.17, D.25
 
 
-def _remap_velocity(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
-    """MUSL's nodal velocity from the new particle momentum (D.6, D.26), contact held."""
+def _remap_velocity(nodes: _Nodes, p: Particles, s: StepSettings, *, moved: np.ndarray) -> None:
+    """MUSL's nodal velocity from the new particle momentum (D.6, D.26), contact held.
+
+    ``moved``: the updated nodal velocity the particles moved with, shape=(N, dim).
+
+    With friction, the contact holds the re-mapped velocity too, and on the rows it
+    held in the grid update (``nodes.held``) the normal component is then the one the
+    particles moved with, in both directions. The re-mapped velocity of such a node
+    mixes in the material above it, and the contact clips it only one way (an approach
+    removed, a separation kept), so the strain saw the node rise with the layer above
+    while it stood on the boundary: the stored compression this added lifted a
+    stress-free block dropped on a floor by 0.088 mm in 0.5 s (docs/mpm_friction.md,
+    "Energy").
+    """
     w, fast, dom, N, dim = nodes.w, nodes.fast, s.domain, nodes.num_nodes, p.dim
     bound = _mass_momentum_bounds(p, nodes.pmax, fast)[1:]
     if dom is not None:
@@ -767,9 +815,14 @@ def _remap_velocity(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
     else:
         nodes.v = _velocity(mom, nodes.mass, nodes.active, s.fixed)
     if s.friction is not None:
-        from geofrac.mpm.friction import apply_friction
+        from geofrac.mpm.friction import apply_friction, set_normal
 
-        apply_friction(nodes.v, s.friction, nodes.allow, tol=nodes.rest)
+        fr, rows = s.friction, nodes.held
+        apply_friction(nodes.v, fr, nodes.allow, tol=nodes.rest)
+        assert rows is not None  # set by the grid update
+        set_normal(
+            nodes.v, fr, rows, np.einsum("ka,ka->k", moved[fr.nodes[rows]], fr.normals[rows])
+        )
 
 
 def _outside(g: Grid, p: Particles, s: StepSettings) -> np.ndarray:
