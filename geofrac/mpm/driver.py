@@ -564,7 +564,7 @@ def _time_loop(
                 f"~{format_seconds((run.steps - k) * (now - t_wall) / done)})"
             )
         if control is not None:
-            _poll(run, loop, k, control)
+            _poll(run, loop, k, control, comm)
 
 
 def _frame(
@@ -588,18 +588,44 @@ def _frame(
             series.write(t, gathered.x, _fields(gathered, x0, fields))
 
 
-def _poll(run: MpmRun, loop: dict[str, Any], k: int, control: RunControl) -> None:
+def _poll(run: MpmRun, loop: dict[str, Any], k: int, control: RunControl, comm: MPI.Comm) -> None:
     """After step ``k``: write a checkpoint, or stop on a signal, as ``control`` says."""
     save, stop = control.poll(k)
     if save and k < run.steps:
         state = {"k": k, "log": loop["log"].state()}
         state |= {"front0": loop["front0"], "history": loop["history"], "probes": loop["probes"]}
         x0 = loop["x0"]
-        control.save(
-            k, state, shared=None if x0 is None else {"x0": x0}, local=run.particles.state()
-        )
+        shared = None if x0 is None else {"x0": x0}
+        held = _held_rows(run, comm)  # the contact's memory (friction.held_vn)
+        if shared is not None and held is not None:
+            shared |= {"held_keys": held[0], "held_vn": held[1]}
+        control.save(k, state, shared=shared, local=run.particles.state())
     if stop and k < run.steps:
         control.interrupt(f"step {k}")
+
+
+def _node_offset(run: MpmRun) -> int:
+    """The global id of this rank's local node 0 (node planes along axis 0)."""
+    dom = run.domain
+    if dom is None:
+        return 0
+    return int(dom.planes[dom.rank][0]) * int(np.prod(run.grid.shape[1:]))
+
+
+def _held_rows(run: MpmRun, comm: MPI.Comm) -> tuple[np.ndarray, np.ndarray] | None:
+    """Every rank's held contact rows (friction.held_rows), on rank 0 (collective).
+
+    None without friction, and on the other ranks.
+    """
+    fr = run.settings.friction
+    if fr is None:
+        return None
+    from geofrac.mpm.friction import held_rows
+
+    parts = comm.gather(held_rows(fr, _node_offset(run)), root=0)
+    if parts is None:
+        return None
+    return np.concatenate([q[0] for q in parts]), np.concatenate([q[1] for q in parts])
 
 
 def _results(
@@ -727,6 +753,13 @@ def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
         raise RunError(error)
     assert particles is not None
     run.particles = particles
+    if run.settings.friction is not None:
+        from geofrac.mpm.friction import restore_held
+
+        saved = ck.shared() if comm.rank == 0 else {}
+        held = comm.bcast((saved.get("held_keys"), saved.get("held_vn")), root=0)
+        if held[0] is not None:  # older checkpoints: no memory (the next step rebuilds it)
+            restore_held(run.settings.friction, _node_offset(run), held[0], held[1])
     return loop
 
 

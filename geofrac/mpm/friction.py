@@ -79,6 +79,8 @@ __all__ = [
     "free_normals",
     "friction",
     "gaps",
+    "held_rows",
+    "restore_held",
     "set_normal",
 ]
 
@@ -484,3 +486,39 @@ def set_normal(
         want = np.maximum(vn, 0.0) if target is None else target[mine]
         v[ids] += (want - vn)[:, None] * n
     return v
+
+
+#: A row's global key: KEY_LAYERS × its node's global id + its layer (a node has at
+#: most dim walls and the bed: fewer than KEY_LAYERS rows).
+KEY_LAYERS = 8
+
+
+def held_rows(fr: Friction, offset: int) -> tuple[np.ndarray, np.ndarray]:
+    """The rows holding a memory (:attr:`Friction.held_vn` finite), by global key.
+
+    Args:
+        fr: the boundary.
+        offset: the global id of this rank's local node 0 (0 without a domain).
+
+    Returns:
+        (keys shape=(h,) int64, their normal velocities shape=(h,)), for a checkpoint.
+    """
+    rows = np.flatnonzero(np.isfinite(fr.held_vn))
+    return KEY_LAYERS * (fr.nodes[rows] + offset) + fr.layer[rows], fr.held_vn[rows].copy()
+
+
+def restore_held(fr: Friction, offset: int, keys: np.ndarray, vn: np.ndarray) -> None:
+    """Set :attr:`Friction.held_vn` from :func:`held_rows`' arrays (any ranks' union).
+
+    Rows whose key is absent are not held (NaN). A key held on several ranks (a halo
+    node) has the same value on each: the nodal velocities are complete there.
+    """
+    mine = KEY_LAYERS * (fr.nodes + offset) + fr.layer
+    fr.held_vn[:] = np.nan
+    if len(keys) == 0:
+        return
+    order = np.argsort(keys, kind="stable")
+    keys, vn = np.asarray(keys)[order], np.asarray(vn)[order]
+    at = np.clip(np.searchsorted(keys, mine), 0, len(keys) - 1)
+    found = keys[at] == mine
+    fr.held_vn[found] = vn[at[found]]

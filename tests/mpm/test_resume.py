@@ -43,6 +43,8 @@ COARSE_SLIDE = [
 SCENES = {
     "bar": ("mpm_bar_w1000.toml", ["mpm.t_end=0.02", "mpm.frames=7"]),
     "slide": ("landslide_kita_uebaru.toml", [*COARSE_SLIDE, "mpm.t_end=0.6"]),
+    # USF: its strain reads the contact's memory of the previous step (friction.held_vn)
+    "slide_usf": ("landslide_kita_uebaru.toml", [*COARSE_SLIDE, "mpm.t_end=0.6", "mpm.scheme=usf"]),
     "mls": (
         "mpm_translating_bar.toml",
         ["mpm.t_end=12", "mpm.frames=9", 'effects=["mls_smoothing"]', "mpm.shape=cpgimp"],
@@ -277,7 +279,7 @@ def _shared_dir(comm, tmp_path_factory, name):
 
 
 @pytest.mark.mpi(min_size=2)
-@pytest.mark.parametrize("name", ["slide", "slide_mls", "moving"])
+@pytest.mark.parametrize("name", ["slide", "slide_usf", "slide_mls", "moving"])
 def test_a_decomposed_run_resumes_to_the_uninterrupted_result(tmp_path_factory, monkeypatch, name):
     comm = MPI.COMM_WORLD
     base = _shared_dir(comm, tmp_path_factory, f"mpi-{name}")
