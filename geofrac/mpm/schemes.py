@@ -61,6 +61,7 @@ __all__ = [
     "REST_TOL",
     "SCHEMES",
     "SMOOTHINGS",
+    "TOUCH_TOL",
     "ParticlesLeftGrid",
     "StepSettings",
     "local_damping",
@@ -96,6 +97,12 @@ MASS_FLOOR = 1e-12
 #: below; any motion lies far above. Used where a decision on the sign of a velocity
 #: jumps: the local damping's sign(v) and the contact's ties (:func:`rest_speed`).
 REST_TOL = 1e-9
+
+#: Material within this fraction of a cell of a frictional boundary touches it for the
+#: strain's held velocity (:func:`_touching`): far above the gaps a resting body's
+#: vibration opens (micrometres on 0.1 m cells), far below those a landing body closes
+#: in a step.
+TOUCH_TOL = 1e-2
 
 
 class ParticlesLeftGrid(RunError):
@@ -679,24 +686,44 @@ def _strain_velocity(nodes: _Nodes, s: StepSettings) -> np.ndarray:
     """The nodal velocity USF's (and USAVG's first) strain takes, shape=(N, dim).
 
     The mapped velocity, contact held; with friction, on the rows the contact held in
-    the previous step's grid update (:attr:`Friction.held_vn`), its normal component is
-    the one the contact left there (the node's own velocity at the step's start), in
-    both directions. The mapped velocity of such a node mixes in the material above it,
-    and the contact clips it only one way (an approach removed, a separation kept), so
-    the strain saw the node rise with the layer above while it stood on the boundary:
-    the stored compression this added lifted a stress-free block dropped on a floor
-    (0.085 mm in 0.5 s; docs/mpm_friction.md, "Energy"). The motion keeps the mapped
+    the previous step's grid update (:attr:`Friction.held_vn`) whose material touches
+    the boundary (:func:`_touching`), its normal component is the one the contact left
+    there (the node's own velocity at the step's start, no more than the approach its
+    gap now allows), in both directions. The mapped velocity of such a node mixes in
+    the material above it, and the contact clips it only one way (an approach removed,
+    a separation kept), so the strain saw the node rise with the layer above while it
+    stood on the boundary: the stored compression this added lifted a stress-free block
+    dropped on a floor (0.085 mm in 0.5 s; docs/mpm_friction.md, "Energy"). The motion
+    keeps the mapped
     velocity: the boundary never pulls.
     """
     fr = s.friction
     if fr is None:
         return nodes.v
-    rows = np.flatnonzero(np.isfinite(fr.held_vn))
+    rows = np.flatnonzero(np.isfinite(fr.held_vn) & _touching(nodes, fr))
     if len(rows) == 0:
         return nodes.v
     from geofrac.mpm.friction import set_normal
 
-    return set_normal(nodes.v.copy(), fr, rows, fr.held_vn[rows])
+    target = fr.held_vn[rows]
+    if nodes.allow is not None:  # no more than the approach its gap still allows
+        target = np.minimum(target, nodes.allow[rows])
+    return set_normal(nodes.v.copy(), fr, rows, target)
+
+
+def _touching(nodes: _Nodes, fr: Friction) -> np.ndarray:
+    """Rows whose material touches the boundary at the step's start, shape=(k,) bool.
+
+    Its gap g within :data:`TOUCH_TOL` of a cell. There the contact pins the node to
+    the boundary, and the strain takes its held normal velocity (at most the gap's
+    approach g/Δt: a hundredth of a cell per step). Elsewhere the material lands from
+    a gap: the node moves with its allowed approach, which on a light node (a particle
+    at the edge of its support) is the noise of f/m clipped to the gap (up to 435 m/s
+    for a 0.075 m gap): in a strain it crushed a point-MPM particle thrown at a wall.
+    """
+    if nodes.allow is None:
+        return np.ones(len(fr.nodes), dtype=bool)
+    return nodes.allow <= TOUCH_TOL * nodes.rest / REST_TOL  # g <= TOUCH_TOL L
 
 
 def _map_forces(nodes: _Nodes, p: Particles, s: StepSettings) -> np.ndarray:
@@ -755,7 +782,7 @@ def _grid_update(
         vn = np.einsum("ka,ka->k", v_new[fr.nodes], fr.normals)
         excess = vn if nodes.allow is None else vn - nodes.allow
         # the rows the contact holds: in contact within the rest speed (contact_states)
-        nodes.held = np.flatnonzero(excess > -nodes.rest)
+        nodes.held = np.flatnonzero((excess > -nodes.rest) & _touching(nodes, fr))
         apply_friction(v_new, fr, nodes.allow, tol=nodes.rest)
         fr.held_vn[:] = np.nan
         held = nodes.held
