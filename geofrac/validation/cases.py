@@ -22,6 +22,8 @@ from typing import Any
 
 import numpy as np
 
+from geofrac.analytic_sliding import incline_acceleration, ramped_motion
+
 __all__ = ["CASES", "CHAPTERS", "Case", "Reference", "select"]
 
 #: Chapters in page order.
@@ -1113,8 +1115,8 @@ CASES: tuple[Case, ...] = (
         "block sliding down a 30° slope, μ = 0.3: mean slide at t = 0.5 s",
         "mean displacement along the slope (m)",
         Reference(
-            10.0 * (math.sin(math.radians(30)) - 0.3 * math.cos(math.radians(30))) * 0.5**2 / 2,
-            "closed form: Coulomb friction, a = g (sin θ − μ cos θ)",
+            ramped_motion(incline_acceleration(30.0, 0.3), 0.5, ramp=0.1)[0],
+            "closed form: Coulomb friction, a = g (sin θ − μ cos θ), gravity ramped over 0.1 s",
             rtol=0.01,
         ),
         _incline_mean_slide,
