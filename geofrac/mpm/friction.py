@@ -123,7 +123,7 @@ class Friction:
     normals: np.ndarray
     mu: np.ndarray
     offsets: np.ndarray | None = None
-    held_vn: np.ndarray = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+    held_vn: np.ndarray = field(default=None, repr=False, compare=False)  # type: ignore[arg-type]
 
     def __post_init__(self) -> None:
         """A new boundary has held nothing yet (:attr:`held_vn` all NaN)."""
@@ -460,7 +460,7 @@ def _corner(
 
 
 def set_normal(
-    v: np.ndarray, fr: Friction, rows: np.ndarray, target: np.ndarray | None = None
+    v: np.ndarray, fr: Friction, rows: np.ndarray, *, target: np.ndarray | None = None
 ) -> np.ndarray:
     """Set the normal velocity of ``rows``' nodes (in place and returned).
 

@@ -708,7 +708,7 @@ def _strain_velocity(nodes: _Nodes, s: StepSettings) -> np.ndarray:
     target = fr.held_vn[rows]
     if nodes.allow is not None:  # no more than the approach its gap still allows
         target = np.minimum(target, nodes.allow[rows])
-    return set_normal(nodes.v.copy(), fr, rows, target)
+    return set_normal(nodes.v.copy(), fr, rows, target=target)
 
 
 def _touching(nodes: _Nodes, fr: Friction) -> np.ndarray:
@@ -848,7 +848,7 @@ def _remap_velocity(nodes: _Nodes, p: Particles, s: StepSettings, *, moved: np.n
         apply_friction(nodes.v, fr, nodes.allow, tol=nodes.rest)
         assert rows is not None  # set by the grid update
         set_normal(
-            nodes.v, fr, rows, np.einsum("ka,ka->k", moved[fr.nodes[rows]], fr.normals[rows])
+            nodes.v, fr, rows, target=np.einsum("ka,ka->k", moved[fr.nodes[rows]], fr.normals[rows])
         )
 
 
