@@ -18,7 +18,9 @@ validated :class:`~geofrac.model.scene.Scene`, decomposes them over the communic
   None when E₀ = 0, a body starting at rest), ``energy_drift_work_max`` (the same with
   the stored energy as stress work), ``energy_balance_error`` (the energy no physical
   term explains over the run's energy scale; defined for bodies starting at rest),
-  ``energy_budget_closure``, front and probe histories, and ``bodies`` (per body of
+  ``energy_budget_closure``, with friction the contact's invariant (``contact_work_max``,
+  ``numerical_over_gravity_work``, ``energy_invariant`` …: :meth:`~geofrac.mpm.energy.
+  EnergyLog.invariant`, docs/mpm_energy.md), front and probe histories, and ``bodies`` (per body of
   ``[[mpm.bodies]]``, or one ``"body"``: particles, first id, mass).
 
 Particles come from ``[mpm.particles]`` or from the bodies of ``[[mpm.bodies]]``, ids
@@ -647,10 +649,31 @@ def _results(
         "energy_drift_work_max": log.drift_work_max,
         "energy_balance_error": log.balance_error,
         "energy_budget_closure": log.closure / log.scale if log.scale > 0 else None,
+        **_invariant(run, log),
         "particle_steps_per_s": run.total * steps_done / seconds if seconds > 0 else None,
         "history": history,
         "probes": probes,
         "bodies": run.bodies,
+    }
+
+
+def _invariant(run: MpmRun, log: EnergyLog) -> dict[str, Any]:
+    """The contact's invariant (docs/mpm_energy.md): its measures, verdict and warnings.
+
+    Judged for a run with a contact (friction); the gravity bound only with gravity too.
+    """
+    s = run.settings
+    contact = s.friction is not None
+    verdict, warnings = log.invariant(contact=contact, gravity=bool(np.any(s.gravity != 0)))
+    return {
+        "contact_work_max": log.contact_max if contact else None,
+        "contact_work_total": log.contact_total if contact else None,
+        "contact_work_relative_max": log.contact_relative_max if contact else None,
+        "contact_work_positive_steps": log.contact_positive if contact else None,
+        "numerical_over_gravity_work": log.gravity_ratio if contact else None,
+        "numerical_over_gravity_work_max": log.gravity_ratio_max if contact else None,
+        "energy_invariant": verdict,
+        "energy_invariant_warnings": warnings,
     }
 
 
@@ -852,7 +875,8 @@ class MpmMethod:
             line += f" at friction angle {r['friction_angle_deg']:g} deg"
         if r["energy_drift_max"] is not None:
             line += f"; energy drift max {r['energy_drift_max']:.3g}"
-        return [line]
+        # the contact's invariant broken: one line per bound (older summaries have none)
+        return [line, *r.get("energy_invariant_warnings", [])]
 
 
 #: The MPM method (``method = "mpm"``).

@@ -58,7 +58,19 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["COLUMNS", "CSV_COLUMNS", "Budget", "EnergyLog", "StepBudget", "owned_nodes", "stored"]
+__all__ = [
+    "COLUMNS",
+    "CONTACT_FLOOR",
+    "CONTACT_ROUNDOFF",
+    "CSV_COLUMNS",
+    "GRAVITY_JUDGED",
+    "NUMERICAL_BOUND",
+    "Budget",
+    "EnergyLog",
+    "StepBudget",
+    "owned_nodes",
+    "stored",
+]
 
 #: Budget columns of ``energies.csv`` (after step, t, kinetic, strain, gravity, total,
 #: dissipated); every one but ``stored_work`` cumulative since t = 0.
@@ -71,6 +83,29 @@ COLUMNS = (
     "damping_dissipation",
     "numerical_work",
 )
+
+
+#: A step's contact work is positive (energy created by the contact) only above this
+#: fraction of its scale, the kinetic energy on the contact nodes before the contact
+#: (:attr:`StepBudget.contact_scale`) plus :data:`CONTACT_FLOOR`: the round-off of the
+#: per-node differences ½ m (v_after − v_before)·(v_after + v_before) is ~1e-16 of it.
+CONTACT_ROUNDOFF = 1e-12
+
+#: The absolute floor of the contact work's scale, J: the smallest normal double, only so
+#: that a step whose contact nodes hold no kinetic energy (nothing to change: its contact
+#: work is exactly 0) has a positive scale.
+CONTACT_FLOOR = float(np.finfo(float).tiny)
+
+#: The largest ``numerical_work`` allowed in a friction run with gravity, as a fraction of
+#: gravity's work W_g = −Π (one-sided: energy created; a loss is not judged).
+NUMERICAL_BOUND = 0.01
+
+#: The ratio numerical_work / W_g is judged at the steps where gravity's work W_g exceeds
+#: this fraction of the run's energy scale S so far (:class:`EnergyLog`): where gravity is
+#: a main source of the run's energy. A body released at rest has W_g ≈ S/2 from its
+#: first step; a block launched on a level floor has W_g ≤ 1e-3 S (gravity does no work
+#: there, and the ratio swings by ±3 with the numerical work of its elastic ringing).
+GRAVITY_JUDGED = 0.1
 
 
 def stored(
@@ -127,6 +162,12 @@ class StepBudget:
         plastic: the plastic dissipation (≥ 0).
         potential: ΔΠ of the particles' motion.
         damping: the energy the local damping took out (≥ 0).
+        contact: the contact's work at its own velocities (a diagnostic outside the
+            budget's identity, ≤ 0 up to round-off): Σ ½ m_i (|v_after|² − |v_before|²)
+            over the owned contact nodes, for the contact on the mapped and on the
+            updated nodal velocity (:meth:`contact_terms`).
+        contact_scale: Σ ½ m_i |v_before|² over the same nodes and applications, the
+            scale of the contact work's round-off (:data:`CONTACT_ROUNDOFF`).
     """
 
     internal: float = 0.0
@@ -140,6 +181,8 @@ class StepBudget:
     plastic: float = 0.0
     potential: float = 0.0
     damping: float = 0.0
+    contact: float = 0.0
+    contact_scale: float = 0.0
 
     def numerical(self) -> float:
         """K_tr + (P_raw + Q + W_int) + (W_g + ΔΠ): the time-integration and transfer error."""
@@ -154,7 +197,7 @@ class StepBudget:
         return self.power_raw + self.smoothing + self.quadratic - self.plastic
 
     def terms(self) -> np.ndarray:
-        """Every field, in declaration order, shape=(11,) (for a sum over the ranks)."""
+        """Every field, in declaration order, shape=(13,) (for a sum over the ranks)."""
         return np.array([getattr(self, f.name) for f in fields(self)])
 
     def grid_terms(
@@ -202,6 +245,32 @@ class StepBudget:
         self.gravity_grid += dt * float(np.sum(gravity_force * vs))
         self.internal += dt * float(np.sum((f - gravity_force) * vs))
 
+    def contact_terms(
+        self,
+        *,
+        before: np.ndarray,
+        after: np.ndarray,
+        mass: np.ndarray,
+        nodes: np.ndarray,
+        owned: np.ndarray | None,
+    ) -> None:
+        """Add one application of the contact: its work and scale on the owned contact nodes.
+
+        Args:
+            before: the nodal velocity before the contact, shape=(N, dim).
+            after: after it, shape=(N, dim).
+            mass: nodal mass, shape=(N,).
+            nodes: the contact's rows' nodes (a corner node repeats), shape=(k,).
+            owned: the nodes this rank counts (None: all).
+        """
+        ids = np.unique(nodes)
+        if owned is not None:
+            ids = ids[owned[ids]]
+        m, v0, v1 = mass[ids], before[ids], after[ids]
+        # ½ m (v1 − v0)·(v1 + v0): the difference per node, not of two sums (round-off)
+        self.contact += 0.5 * float(m @ np.sum((v1 - v0) * (v1 + v0), axis=1))
+        self.contact_scale += 0.5 * float(m @ np.sum(v0 * v0, axis=1))
+
 
 @dataclass
 class Budget:
@@ -225,8 +294,8 @@ class Budget:
     damping_dissipation: float = 0.0
     numerical_work: float = 0.0
 
-    def add(self, terms: np.ndarray) -> None:
-        """Add one step's :meth:`StepBudget.terms` (summed over the ranks)."""
+    def add(self, terms: np.ndarray) -> StepBudget:
+        """Add one step's :meth:`StepBudget.terms` (summed over the ranks); returns the step's."""
         s = StepBudget(*(float(t) for t in terms))
         self.stored_work += s.stored()
         self.wall_work += s.wall
@@ -235,6 +304,7 @@ class Budget:
         self.plastic_dissipation += s.plastic
         self.damping_dissipation += s.damping
         self.numerical_work += s.numerical()
+        return s
 
     def row(self) -> list[float]:
         """The values of :data:`COLUMNS`."""
@@ -289,6 +359,18 @@ class EnergyLog:
       term explains (walls, smoothing, time integration), meaningful for a body starting
       at rest (S > 0 once anything moves); None while S = 0;
     - ``closure_max``: the largest |K + W + Π − E₀ − (terms)|, round-off.
+
+    The contact's invariant (docs/mpm_energy.md, "The contact's invariant"), judged by
+    :meth:`invariant`:
+
+    - ``contact_max``: the largest per-step contact work (:attr:`StepBudget.contact`, J;
+      None before the first step), ``contact_relative_max`` the largest of it over its
+      scale (``contact_scale`` + :data:`CONTACT_FLOOR`), ``contact_positive`` the
+      number of steps where that exceeds :data:`CONTACT_ROUNDOFF`, ``contact_total`` the
+      sum over the steps;
+    - ``gravity_ratio``: ``numerical_work`` / W_g at the last step, W_g = −Π the work
+      gravity did, and ``gravity_ratio_max`` its largest (signed) value over the steps,
+      each taken only where W_g > :data:`GRAVITY_JUDGED` × S (None where not).
     """
 
     def __init__(self, kinetic: float, strain: float, potential: float = 0.0) -> None:
@@ -305,6 +387,12 @@ class EnergyLog:
         self.unexplained = 0.0
         self.scale = kinetic + strain
         self.closure = 0.0
+        self.contact_max: float | None = None
+        self.contact_relative_max: float | None = None
+        self.contact_positive = 0
+        self.contact_total = 0.0
+        self.gravity_ratio: float | None = None
+        self.gravity_ratio_max: float | None = None
 
     def potential(self, potential: float, factor: float = 1.0) -> float:
         """Π after a step, relative to t = 0: the work gravity did against the motion.
@@ -332,7 +420,7 @@ class EnergyLog:
             The row of ``energies.csv`` after ``step`` and ``t``.
         """
         b = self.budget
-        b.add(terms)
+        self._contact(b.add(terms))
         total = kinetic + strain + gravity
         total_work = kinetic + b.stored_work + gravity
         closure = total_work - self.e0 - b.explained()
@@ -344,7 +432,62 @@ class EnergyLog:
         )
         self.scale = max(self.scale, kinetic + b.stored_work + abs(gravity))
         self.closure = max(self.closure, abs(closure))
+        self._gravity(-gravity)
         return [kinetic, strain, gravity, total, self.e0 - total, *b.row(), total_work, closure]
+
+    def _contact(self, s: StepBudget) -> None:
+        """Track the step's contact work (:attr:`StepBudget.contact`)."""
+        relative = s.contact / (s.contact_scale + CONTACT_FLOOR)
+        self.contact_max = (
+            s.contact if self.contact_max is None else max(self.contact_max, s.contact)
+        )
+        self.contact_relative_max = (
+            relative
+            if self.contact_relative_max is None
+            else max(self.contact_relative_max, relative)
+        )
+        self.contact_positive += int(relative > CONTACT_ROUNDOFF)
+        self.contact_total += s.contact
+
+    def _gravity(self, work: float) -> None:
+        """Track numerical_work / W_g once gravity's work W_g is judged (GRAVITY_JUDGED)."""
+        if not work > GRAVITY_JUDGED * self.scale:
+            self.gravity_ratio = None
+            return
+        self.gravity_ratio = ratio = self.budget.numerical_work / work
+        if self.gravity_ratio_max is None or ratio > self.gravity_ratio_max:
+            self.gravity_ratio_max = ratio
+
+    def invariant(self, *, contact: bool, gravity: bool) -> tuple[str | None, list[str]]:
+        """The contact's invariant: its verdict and a warning line per broken bound.
+
+        Args:
+            contact: the run has a contact (friction): judge its per-step work.
+            gravity: it also has gravity: judge ``numerical_work`` against W_g.
+
+        Returns:
+            (None when nothing is judged, "ok", or the broken bounds in short, joined by
+            "; "; the warnings, one line each).
+        """
+        if not contact:
+            return None, []
+        broken, lines = [], []
+        if self.contact_positive:
+            broken.append(f"contact work > 0 in {self.contact_positive} step(s)")
+            lines.append(
+                f"warning: the contact created energy in {self.contact_positive} step(s), up "
+                f"to {self.contact_max:.3g} J = {self.contact_relative_max:.3g} of the "
+                f"contact nodes' kinetic energy (bound {CONTACT_ROUNDOFF:g}, round-off; "
+                "docs/mpm_energy.md)"
+            )
+        ratio = self.gravity_ratio_max
+        if gravity and ratio is not None and ratio > NUMERICAL_BOUND:
+            broken.append(f"numerical work {100 * ratio:+.3g} % of gravity work")
+            lines.append(
+                f"warning: numerical work {100 * ratio:+.3g} % of the gravity work (bound "
+                f"{100 * NUMERICAL_BOUND:g} %): the scheme created energy (docs/mpm_energy.md)"
+            )
+        return ("; ".join(broken) if broken else "ok"), lines
 
     def first_row(self) -> list[float]:
         """The row of t = 0."""
@@ -374,6 +517,14 @@ class EnergyLog:
             "budget": [getattr(self.budget, f.name) for f in fields(Budget)],
             "maxima": [self.drift, self.drift_work, self.unexplained, self.scale, self.closure],
             "gravity": [self.u0, self.last_potential, self.ramp_offset],
+            "contact": [
+                self.contact_max,
+                self.contact_relative_max,
+                self.contact_positive,
+                self.contact_total,
+                self.gravity_ratio,
+                self.gravity_ratio_max,
+            ],
         }
 
     @classmethod
@@ -386,4 +537,11 @@ class EnergyLog:
             float(v) for v in state["maxima"]
         )
         log.u0, log.last_potential, log.ramp_offset = (float(v) for v in state["gravity"])
+        # a checkpoint written before the contact's invariant has no "contact": its
+        # steps so far are not judged (the measures start at the resume)
+        c = state.get("contact", [None, None, 0, 0.0, None, None])
+        log.contact_max, log.contact_relative_max, log.gravity_ratio, log.gravity_ratio_max = (
+            None if v is None else float(v) for v in (c[0], c[1], c[4], c[5])
+        )
+        log.contact_positive, log.contact_total = int(c[2]), float(c[3])
         return log

@@ -529,14 +529,14 @@ def step(
         raise ValueError(f"the {material.name} material needs {dims} particles, got {p.dim}D")
     nodes = _start(g, p, s)
     _map_mass_momentum(nodes, p, s)
-    _velocity_and_contact(nodes, p, s)
+    _velocity_and_contact(nodes, p, s, budget=budget)
     half = 0.5 if s.scheme == "usavg" else 1.0
     if s.scheme in ("usf", "usavg"):  # D.11-D.13, D.19-D.21: stress first
         v_strain = _strain_velocity(nodes, s)
         _update_stress(nodes.w, p, material, v_strain, half * s.dt, s, nodes.smooth_at, budget)
     if s.scheme != "musl":
         nodes.f = _map_forces(nodes, p, s)
-    a, v_new, f_damp = _grid_update(nodes, s)
+    a, v_new, f_damp = _grid_update(nodes, s, budget=budget)
     if budget is not None:
         from geofrac.mpm.energy import owned_nodes
 
@@ -643,13 +643,15 @@ def _map_mass_momentum(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
     nodes.mass, nodes.mom, nodes.f = nodal[:, 0], nodal[:, 1 : 1 + dim], nodal[:, 1 + dim :]
 
 
-def _velocity_and_contact(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
+def _velocity_and_contact(
+    nodes: _Nodes, p: Particles, s: StepSettings, *, budget: StepBudget | None = None
+) -> None:
     """The active nodes and v_i = (m v)_i / m_i (D.6, D.10), then the contact on it.
 
     The contact (friction.py) holds every nodal velocity: the approaches it allows are
     decided here, from the material's deformed half-widths (cpGIMP's p.lp; also for the
     shapes that do not use them, or the compression of the bottom layer would read as a
-    gap).
+    gap). ``budget``: add the contact's work on the mapped velocity (:func:`_contact_work`).
     """
     mass, N, dim = nodes.mass, nodes.num_nodes, p.dim
     peak = mass.max(initial=0.0)
@@ -680,6 +682,29 @@ def _velocity_and_contact(nodes: _Nodes, p: Particles, s: StepSettings) -> None:
         )
         nodes.v_mapped = nodes.v.copy()
         apply_friction(nodes.v, s.friction, nodes.allow, tol=nodes.rest)
+        if budget is not None:
+            _contact_work(budget, nodes, s, before=nodes.v_mapped, after=nodes.v)
+
+
+def _contact_work(
+    budget: StepBudget, nodes: _Nodes, s: StepSettings, *, before: np.ndarray, after: np.ndarray
+) -> None:
+    """Add the contact's work on one nodal velocity (before → after) to ``budget``.
+
+    The kinetic energy change on the owned contact nodes (:meth:`~geofrac.mpm.energy.
+    StepBudget.contact_terms`); only for the velocities that move the particles (the
+    mapped and the updated one), not MUSL's re-mapped strain velocity.
+    """
+    from geofrac.mpm.energy import owned_nodes
+
+    assert s.friction is not None
+    budget.contact_terms(
+        before=before,
+        after=after,
+        mass=nodes.mass,
+        nodes=s.friction.nodes,
+        owned=owned_nodes(s.domain, nodes.num_nodes),
+    )
 
 
 def _strain_velocity(nodes: _Nodes, s: StepSettings) -> np.ndarray:
@@ -752,9 +777,11 @@ def _map_forces(nodes: _Nodes, p: Particles, s: StepSettings) -> np.ndarray:
 
 
 def _grid_update(
-    nodes: _Nodes, s: StepSettings
+    nodes: _Nodes, s: StepSettings, *, budget: StepBudget | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """The nodal acceleration and new velocity (D.4, D.15, D.23), damped, with contact.
+
+    ``budget``: add the contact's work on the updated velocity (:func:`_contact_work`).
 
     Returns:
         (a, v_new, the damping force or None), shape=(N, dim) each.
@@ -783,7 +810,10 @@ def _grid_update(
         excess = vn if nodes.allow is None else vn - nodes.allow
         # the rows the contact holds: in contact within the rest speed (contact_states)
         nodes.held = np.flatnonzero((excess > -nodes.rest) & _touching(nodes, fr))
+        trial = None if budget is None else v_new.copy()
         apply_friction(v_new, fr, nodes.allow, tol=nodes.rest)
+        if budget is not None and trial is not None:
+            _contact_work(budget, nodes, s, before=trial, after=v_new)
         fr.held_vn[:] = np.nan
         held = nodes.held
         fr.held_vn[held] = np.einsum("ka,ka->k", v_new[fr.nodes[held]], fr.normals[held])
