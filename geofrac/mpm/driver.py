@@ -600,7 +600,7 @@ def _poll(run: MpmRun, loop: dict[str, Any], k: int, control: RunControl, comm: 
         shared = None if x0 is None else {"x0": x0}
         held = _held_rows(run, comm)  # the contact's memory (friction.held_vn)
         if shared is not None and held is not None:
-            shared |= {"held_keys": held[0], "held_vn": held[1]}
+            shared |= {"held_keys": held[0], "held_vn": held[1], "held_stuck": held[2]}
         control.save(k, state, shared=shared, local=run.particles.state())
     if stop and k < run.steps:
         control.interrupt(f"step {k}")
@@ -614,7 +614,7 @@ def _node_offset(run: MpmRun) -> int:
     return int(dom.planes[dom.rank][0]) * int(np.prod(run.grid.shape[1:]))
 
 
-def _held_rows(run: MpmRun, comm: MPI.Comm) -> tuple[np.ndarray, np.ndarray] | None:
+def _held_rows(run: MpmRun, comm: MPI.Comm) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Every rank's held contact rows (friction.held_rows), on rank 0 (collective).
 
     None without friction, and on the other ranks.
@@ -627,7 +627,7 @@ def _held_rows(run: MpmRun, comm: MPI.Comm) -> tuple[np.ndarray, np.ndarray] | N
     parts = comm.gather(held_rows(fr, _node_offset(run)), root=0)
     if parts is None:
         return None
-    return np.concatenate([q[0] for q in parts]), np.concatenate([q[1] for q in parts])
+    return tuple(np.concatenate([q[i] for q in parts]) for i in range(3))  # type: ignore[return-value]
 
 
 def _results(
@@ -780,9 +780,12 @@ def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
         from geofrac.mpm.friction import restore_held
 
         saved = ck.shared() if comm.rank == 0 else {}
-        held = comm.bcast((saved.get("held_keys"), saved.get("held_vn")), root=0)
+        names = ("held_keys", "held_vn", "held_stuck")
+        held = comm.bcast(tuple(saved.get(n) for n in names), root=0)
         if held[0] is not None:  # older checkpoints: no memory (the next step rebuilds it)
-            restore_held(run.settings.friction, _node_offset(run), held[0], held[1])
+            restore_held(
+                run.settings.friction, _node_offset(run), held[0], vn=held[1], stuck=held[2]
+            )
     return loop
 
 

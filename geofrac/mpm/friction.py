@@ -80,8 +80,8 @@ __all__ = [
     "friction",
     "gaps",
     "held_rows",
+    "hold",
     "restore_held",
-    "set_normal",
 ]
 
 #: A row's state (:func:`contact_states`): not in contact (moving away from the boundary,
@@ -117,6 +117,10 @@ class Friction:
             grid update where it held the row (in contact), NaN where it did not,
             shape=(k,). USF's strain takes it (:mod:`geofrac.mpm.schemes`); a
             checkpoint keeps it (:func:`held_rows`).
+        held_stuck: the same memory: whether the row stuck then, shape=(k,) bool.
+
+    The memory belongs to one run: two runs stepped with the same boundary object
+    would read each other's (build or copy one per run).
     """
 
     nodes: np.ndarray
@@ -124,11 +128,14 @@ class Friction:
     mu: np.ndarray
     offsets: np.ndarray | None = None
     held_vn: np.ndarray = field(default=None, repr=False, compare=False)  # type: ignore[arg-type]
+    held_stuck: np.ndarray = field(default=None, repr=False, compare=False)  # type: ignore[arg-type]
 
     def __post_init__(self) -> None:
         """A new boundary has held nothing yet (:attr:`held_vn` all NaN)."""
         if self.held_vn is None:
             object.__setattr__(self, "held_vn", np.full(len(self.nodes), np.nan))
+        if self.held_stuck is None:
+            object.__setattr__(self, "held_stuck", np.zeros(len(self.nodes), dtype=bool))
 
     @cached_property
     def layer(self) -> np.ndarray:
@@ -459,17 +466,23 @@ def _corner(
     return states
 
 
-def set_normal(
-    v: np.ndarray, fr: Friction, rows: np.ndarray, *, target: np.ndarray | None = None
+def hold(
+    v: np.ndarray,
+    fr: Friction,
+    rows: np.ndarray,
+    *,
+    target: np.ndarray,
+    stuck: np.ndarray,
 ) -> np.ndarray:
-    """Set the normal velocity of ``rows``' nodes (in place and returned).
+    """Give ``rows``' nodes the velocity the contact held them at (in place and returned).
 
     Args:
         v: nodal velocities, shape=(num_nodes, dim).
         fr: the boundary.
         rows: the rows, shape=(m,) int.
-        target: per row, the normal velocity v·n to set, shape=(m,); None: keep an
-            approach (v·n > 0), remove a separation (v·n < 0 becomes 0).
+        target: per row, its normal velocity v·n, shape=(m,).
+        stuck: per row, whether it sticks (its node keeps no velocity tangential to its
+            rows' normals), shape=(m,) bool.
 
     A corner node's rows are taken in turn (exact for orthogonal normals, as the
     contact's Gram-Schmidt step is).
@@ -478,13 +491,13 @@ def set_normal(
         ``v``.
     """
     rows = np.asarray(rows, dtype=np.int64)
+    v[fr.nodes[rows[stuck]]] = 0.0  # then only the normal parts below
     layer = fr.layer[rows]
     for k in np.unique(layer):  # no node twice within a layer
         mine = layer == k
         ids, n = fr.nodes[rows[mine]], fr.normals[rows[mine]]
         vn = np.einsum("ka,ka->k", v[ids], n)
-        want = np.maximum(vn, 0.0) if target is None else target[mine]
-        v[ids] += (want - vn)[:, None] * n
+        v[ids] += (target[mine] - vn)[:, None] * n
     return v
 
 
@@ -493,7 +506,7 @@ def set_normal(
 KEY_LAYERS = 8
 
 
-def held_rows(fr: Friction, offset: int) -> tuple[np.ndarray, np.ndarray]:
+def held_rows(fr: Friction, offset: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rows holding a memory (:attr:`Friction.held_vn` finite), by global key.
 
     Args:
@@ -501,24 +514,31 @@ def held_rows(fr: Friction, offset: int) -> tuple[np.ndarray, np.ndarray]:
         offset: the global id of this rank's local node 0 (0 without a domain).
 
     Returns:
-        (keys shape=(h,) int64, their normal velocities shape=(h,)), for a checkpoint.
+        (keys shape=(h,) int64, their normal velocities shape=(h,), whether they stuck
+        shape=(h,) bool), for a checkpoint.
     """
     rows = np.flatnonzero(np.isfinite(fr.held_vn))
-    return KEY_LAYERS * (fr.nodes[rows] + offset) + fr.layer[rows], fr.held_vn[rows].copy()
+    keys = KEY_LAYERS * (fr.nodes[rows] + offset) + fr.layer[rows]
+    return keys, fr.held_vn[rows].copy(), fr.held_stuck[rows].copy()
 
 
-def restore_held(fr: Friction, offset: int, keys: np.ndarray, vn: np.ndarray) -> None:
-    """Set :attr:`Friction.held_vn` from :func:`held_rows`' arrays (any ranks' union).
+def restore_held(
+    fr: Friction, offset: int, keys: np.ndarray, *, vn: np.ndarray, stuck: np.ndarray
+) -> None:
+    """Set :attr:`Friction.held_vn` and ``held_stuck`` from :func:`held_rows`' arrays.
 
-    Rows whose key is absent are not held (NaN). A key held on several ranks (a halo
-    node) has the same value on each: the nodal velocities are complete there.
+    The arrays may be any ranks' union. Rows whose key is absent are not held (NaN). A
+    key held on several ranks (a halo node) has the same values on each: the nodal
+    velocities are complete there.
     """
     mine = KEY_LAYERS * (fr.nodes + offset) + fr.layer
     fr.held_vn[:] = np.nan
+    fr.held_stuck[:] = False
     if len(keys) == 0:
         return
     order = np.argsort(keys, kind="stable")
-    keys, vn = np.asarray(keys)[order], np.asarray(vn)[order]
+    keys = np.asarray(keys)[order]
     at = np.clip(np.searchsorted(keys, mine), 0, len(keys) - 1)
     found = keys[at] == mine
-    fr.held_vn[found] = vn[at[found]]
+    fr.held_vn[found] = np.asarray(vn)[order][at[found]]
+    fr.held_stuck[found] = np.asarray(stuck, dtype=bool)[order][at[found]]

@@ -466,8 +466,9 @@ class _Nodes:
         v: the nodal velocity, shape=(N, dim).
         allow: the contact's allowed approaches (friction), or None.
         v_mapped: the nodal velocity before the contact acted (friction), or None.
-        held: the frictional rows the contact held in the grid update (friction),
-            shape=(h,) int.
+        held: the frictional rows the contact held in the grid update where the
+            material touches the boundary (friction), shape=(h,) int.
+        stuck: whether each of ``held`` stuck, shape=(h,) bool.
     """
 
     w: Weights
@@ -486,6 +487,7 @@ class _Nodes:
     allow: np.ndarray | None = field(default=None, init=False, repr=False)
     v_mapped: np.ndarray | None = field(default=None, init=False, repr=False)
     held: np.ndarray | None = field(default=None, init=False, repr=False)
+    stuck: np.ndarray | None = field(default=None, init=False, repr=False)
 
 
 def step(
@@ -712,15 +714,15 @@ def _strain_velocity(nodes: _Nodes, s: StepSettings) -> np.ndarray:
 
     The mapped velocity, contact held; with friction, on the rows the contact held in
     the previous step's grid update (:attr:`Friction.held_vn`) whose material touches
-    the boundary (:func:`_touching`), its normal component is the one the contact left
-    there (the node's own velocity at the step's start, no more than the approach its
-    gap now allows), in both directions. The mapped velocity of such a node mixes in
-    the material above it, and the contact clips it only one way (an approach removed,
-    a separation kept), so the strain saw the node rise with the layer above while it
-    stood on the boundary: the stored compression this added lifted a stress-free block
-    dropped on a floor (0.085 mm in 0.5 s; docs/mpm_friction.md, "Energy"). The motion
-    keeps the mapped
-    velocity: the boundary never pulls.
+    the boundary (:func:`_touching`), the velocity that contact left there (the node's
+    own velocity at the step's start): its normal component, no more than the approach
+    its gap now allows, in both directions, and where the row stuck no tangential one.
+    The mapped velocity of such a node mixes in the material above it, and the contact
+    clips it only one way (an approach removed, a separation kept), so the strain saw
+    the node rise with the layer above while it stood on the boundary: the stored
+    compression this added lifted a stress-free block dropped on a floor (0.085 mm in
+    0.5 s; docs/mpm_friction.md, "Energy"). The motion keeps the mapped velocity: the
+    boundary never pulls.
     """
     fr = s.friction
     if fr is None:
@@ -728,12 +730,12 @@ def _strain_velocity(nodes: _Nodes, s: StepSettings) -> np.ndarray:
     rows = np.flatnonzero(np.isfinite(fr.held_vn) & _touching(nodes, fr))
     if len(rows) == 0:
         return nodes.v
-    from geofrac.mpm.friction import set_normal
+    from geofrac.mpm.friction import hold
 
     target = fr.held_vn[rows]
     if nodes.allow is not None:  # no more than the approach its gap still allows
         target = np.minimum(target, nodes.allow[rows])
-    return set_normal(nodes.v.copy(), fr, rows, target=target)
+    return hold(nodes.v.copy(), fr, rows, target=target, stuck=fr.held_stuck[rows])
 
 
 def _touching(nodes: _Nodes, fr: Friction) -> np.ndarray:
@@ -803,20 +805,23 @@ def _grid_update(
         a[s.fixed] = 0.0
         v_new = v + dt * a
     if s.friction is not None:
-        from geofrac.mpm.friction import apply_friction
+        from geofrac.mpm.friction import FREE, STICK, apply_friction, contact_states
 
         fr = s.friction
-        vn = np.einsum("ka,ka->k", v_new[fr.nodes], fr.normals)
-        excess = vn if nodes.allow is None else vn - nodes.allow
-        # the rows the contact holds: in contact within the rest speed (contact_states)
-        nodes.held = np.flatnonzero((excess > -nodes.rest) & _touching(nodes, fr))
+        states = contact_states(v_new, fr, nodes.allow, tol=nodes.rest)
+        # the rows the contact holds where the material touches the boundary (memory)
+        touching = _touching(nodes, fr)
+        nodes.held = np.flatnonzero((states != FREE) & touching)
+        nodes.stuck = states[nodes.held] == STICK
         trial = None if budget is None else v_new.copy()
         apply_friction(v_new, fr, nodes.allow, tol=nodes.rest)
         if budget is not None and trial is not None:
             _contact_work(budget, nodes, s, before=trial, after=v_new)
-        fr.held_vn[:] = np.nan
         held = nodes.held
+        fr.held_vn[:] = np.nan
         fr.held_vn[held] = np.einsum("ka,ka->k", v_new[fr.nodes[held]], fr.normals[held])
+        fr.held_stuck[:] = False
+        fr.held_stuck[held] = nodes.stuck
         # the particles take every change the contact made, the mapped velocity's too
         # (else the approach it removed stays in their velocity, step after step, and
         # its friction is lost: a launched block slid 8 % too far)
@@ -843,14 +848,18 @@ def _remap_velocity(nodes: _Nodes, p: Particles, s: StepSettings, *, moved: np.n
 
     ``moved``: the updated nodal velocity the particles moved with, shape=(N, dim).
 
-    With friction, the contact holds the re-mapped velocity too, and on the rows it
-    held in the grid update (``nodes.held``) the normal component is then the one the
-    particles moved with, in both directions. The re-mapped velocity of such a node
-    mixes in the material above it, and the contact clips it only one way (an approach
-    removed, a separation kept), so the strain saw the node rise with the layer above
-    while it stood on the boundary: the stored compression this added lifted a
-    stress-free block dropped on a floor by 0.088 mm in 0.5 s (docs/mpm_friction.md,
-    "Energy").
+    With friction, the re-mapped velocity of a node on the boundary mixes in the
+    material above it; the node itself moved as the grid update's contact left it. On
+    the rows that contact held where the material touches the boundary
+    (``nodes.held``), the strain therefore takes the node's held velocity: its normal
+    component in both directions, and where the row stuck no tangential one. Elsewhere
+    only an approach is removed (no friction: the particles took the update's).
+
+    Before, the contact clipped the re-mapped velocity one way (an approach removed, a
+    separation kept) and slowed it by μ times the mix's approach, which no particle
+    felt: the strain saw a floor node rise with the layer above while it stood on the
+    floor, and a stress-free block dropped on it rose 0.088 mm in 0.5 s (energy
+    created; docs/mpm_friction.md, "Energy").
     """
     w, fast, dom, N, dim = nodes.w, nodes.fast, s.domain, nodes.num_nodes, p.dim
     bound = _mass_momentum_bounds(p, nodes.pmax, fast)[1:]
@@ -872,14 +881,13 @@ def _remap_velocity(nodes: _Nodes, p: Particles, s: StepSettings, *, moved: np.n
     else:
         nodes.v = _velocity(mom, nodes.mass, nodes.active, s.fixed)
     if s.friction is not None:
-        from geofrac.mpm.friction import apply_friction, set_normal
+        from geofrac.mpm.friction import apply_friction, hold
 
         fr, rows = s.friction, nodes.held
-        apply_friction(nodes.v, fr, nodes.allow, tol=nodes.rest)
-        assert rows is not None  # set by the grid update
-        set_normal(
-            nodes.v, fr, rows, target=np.einsum("ka,ka->k", moved[fr.nodes[rows]], fr.normals[rows])
-        )
+        assert rows is not None and nodes.stuck is not None  # set by the grid update
+        apply_friction(nodes.v, fr, nodes.allow, sliding_only=True, tol=nodes.rest)
+        target = np.einsum("ka,ka->k", moved[fr.nodes[rows]], fr.normals[rows])
+        hold(nodes.v, fr, rows, target=target, stuck=nodes.stuck)
 
 
 def _outside(g: Grid, p: Particles, s: StepSettings) -> np.ndarray:

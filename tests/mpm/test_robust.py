@@ -378,12 +378,22 @@ def test_a_block_on_a_slope_with_mu_03_slips(name):
 
 
 def test_a_launched_block_slips_then_sticks():
-    """It slides on slipping nodes, stops at 0.2 s, and then nodes stick (with the ringing)."""
+    """It slides on slipping nodes, stops at 0.2 s, and then nodes stick (with the ringing).
+
+    Launched and stopped at once, the undamped block rings in its vertical mode by about
+    0.2 mm, more than its 0.09 mm settlement, so it leaves the floor for a few steps each
+    period (12 % of the last tenth's contacts have no row in contact) and lands on
+    slipping rows. Measured in the last tenth: a sticking row in 74 % of the contacts,
+    5.2 sticking and 5.6 slipping rows on average. (Before issue 47 the scheme created
+    energy at the floor nodes, +5 J here, and the block hovered 0.3-0.5 mm above its
+    start with a row sticking at every contact.)
+    """
     states = _updated("stopping")
     n = len(states)
     first, last = states[: n // 10], states[-n // 10 :]
     assert _counts(first, contact.SLIP).mean() > 2 * _counts(first, contact.STICK).mean()
-    assert _counts(last, contact.STICK).min() >= 1
+    assert np.mean(_counts(last, contact.STICK) >= 1) > 0.5
+    assert _counts(last, contact.STICK).mean() > 2
     assert abs(_baseline("stopping").v[:, 0].mean()) < 0.02  # from 1 m/s
 
 
