@@ -107,6 +107,14 @@ NUMERICAL_BOUND = 0.01
 #: there, and the ratio swings by ±3 with the numerical work of its elastic ringing).
 GRAVITY_JUDGED = 0.1
 
+#: The judged ratios are kept per bin of W_g, bins a factor 1 + GRAVITY_BIN wide: a step
+#: counts once W_g is at least :data:`GRAVITY_JUDGED` of its largest over the run (the
+#: start of a gravity ramp, where gravity has done a few millijoules and the scheme's
+#: start-up a few microjoules, is not judged against the run's gravity), to within this
+#: relative width at that threshold; the bins below it are dropped (at most
+#: log(1/GRAVITY_JUDGED) / log(1 + GRAVITY_BIN) ≈ 232 kept, for checkpoints).
+GRAVITY_BIN = 0.01
+
 
 def stored(
     stress: np.ndarray, stress_zz: np.ndarray, volume: np.ndarray, *, E: float, nu: float
@@ -370,7 +378,9 @@ class EnergyLog:
       sum over the steps;
     - ``gravity_ratio``: ``numerical_work`` / W_g at the last step, W_g = −Π the work
       gravity did, and ``gravity_ratio_max`` its largest (signed) value over the steps,
-      each taken only where W_g > :data:`GRAVITY_JUDGED` × S (None where not).
+      each taken only where W_g > :data:`GRAVITY_JUDGED` × S (None where not) and, for
+      the largest, W_g at least :data:`GRAVITY_JUDGED` of its largest over the run
+      (:data:`GRAVITY_BIN`).
     """
 
     def __init__(self, kinetic: float, strain: float, potential: float = 0.0) -> None:
@@ -392,7 +402,8 @@ class EnergyLog:
         self.contact_positive = 0
         self.contact_total = 0.0
         self.gravity_ratio: float | None = None
-        self.gravity_ratio_max: float | None = None
+        self.gravity_work_max = 0.0
+        self.gravity_bins: dict[int, float] = {}  # bin of W_g -> largest judged ratio
 
     def potential(self, potential: float, factor: float = 1.0) -> float:
         """Π after a step, relative to t = 0: the work gravity did against the motion.
@@ -451,12 +462,25 @@ class EnergyLog:
 
     def _gravity(self, work: float) -> None:
         """Track numerical_work / W_g once gravity's work W_g is judged (GRAVITY_JUDGED)."""
-        if not work > GRAVITY_JUDGED * self.scale:
+        if not (work > GRAVITY_JUDGED * self.scale and work > 0):
             self.gravity_ratio = None
             return
         self.gravity_ratio = ratio = self.budget.numerical_work / work
-        if self.gravity_ratio_max is None or ratio > self.gravity_ratio_max:
-            self.gravity_ratio_max = ratio
+        self.gravity_work_max = max(self.gravity_work_max, work)
+        b = _gravity_bin(work)
+        self.gravity_bins[b] = max(ratio, self.gravity_bins.get(b, ratio))
+        low = _gravity_bin(GRAVITY_JUDGED * self.gravity_work_max)
+        for old in [k for k in self.gravity_bins if k < low]:  # never judged again
+            del self.gravity_bins[old]
+
+    @property
+    def gravity_ratio_max(self) -> float | None:
+        """The largest judged ratio where W_g >= GRAVITY_JUDGED × its largest; or None."""
+        if not self.gravity_bins:
+            return None
+        low = _gravity_bin(GRAVITY_JUDGED * self.gravity_work_max)
+        judged = [r for b, r in self.gravity_bins.items() if b >= low]
+        return max(judged) if judged else None
 
     def invariant(self, *, contact: bool, gravity: bool) -> tuple[str | None, list[str]]:
         """The contact's invariant: its verdict and a warning line per broken bound.
@@ -523,7 +547,8 @@ class EnergyLog:
                 self.contact_positive,
                 self.contact_total,
                 self.gravity_ratio,
-                self.gravity_ratio_max,
+                self.gravity_work_max,
+                sorted(self.gravity_bins.items()),
             ],
         }
 
@@ -539,9 +564,17 @@ class EnergyLog:
         log.u0, log.last_potential, log.ramp_offset = (float(v) for v in state["gravity"])
         # a checkpoint written before the contact's invariant has no "contact": its
         # steps so far are not judged (the measures start at the resume)
-        c = state.get("contact", [None, None, 0, 0.0, None, None])
-        log.contact_max, log.contact_relative_max, log.gravity_ratio, log.gravity_ratio_max = (
-            None if v is None else float(v) for v in (c[0], c[1], c[4], c[5])
+        c = state.get("contact", [None, None, 0, 0.0, None, 0.0, []])
+        log.contact_max, log.contact_relative_max, log.gravity_ratio = (
+            None if v is None else float(v) for v in (c[0], c[1], c[4])
         )
         log.contact_positive, log.contact_total = int(c[2]), float(c[3])
+        if len(c) == 7:  # the binned ratios (older checkpoints: judged from the resume on)
+            log.gravity_work_max = float(c[5])
+            log.gravity_bins = {int(b): float(r) for b, r in c[6]}
         return log
+
+
+def _gravity_bin(work: float) -> int:
+    """The bin of gravity's work W_g > 0 (:data:`GRAVITY_BIN`)."""
+    return int(np.floor(np.log(work) / np.log1p(GRAVITY_BIN)))

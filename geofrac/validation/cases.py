@@ -745,6 +745,87 @@ def _plot_footing(summary: dict[str, Any], out: Path, path: Path) -> None:
     save_figure(fig, [ax], path, title=title, ylabel="footing pressure (kPa)")
 
 
+def _front_moved_max(summary: dict[str, Any], out: Path) -> float:
+    """The largest displacement of the front over the run (history, m)."""
+    front = np.asarray(_results(summary)["history"]["front_x"])
+    return float(np.max(np.abs(front - front[0])))
+
+
+def _numerical_over_gravity(summary: dict[str, Any], out: Path) -> float:
+    """The scheme's numerical work over gravity's, at its largest over the run."""
+    value = _results(summary)["numerical_over_gravity_work_max"]
+    return math.nan if value is None else float(value)
+
+
+#: The closed-form friction runs from a natural start (issue 47): every shape and scheme.
+INCLINE_PAIRS = [(sh, sc) for sh in ("mpm", "ugimp", "cpgimp") for sc in ("musl", "usf", "usavg")]
+
+
+def _incline_cases(shape: str, scheme: str) -> list[Case]:
+    """The stress-free block on 30°, gravity ramped over 0.1 s, 3 s: sticks, slides."""
+    pair = (f"mpm.shape={shape}", f"mpm.scheme={scheme}", "mpm.t_end=3")
+    stick = (*pair, "friction.boundaries.y_min=0.7")
+    slip = (*pair, "mpm.grid.upper=[14.0, 1.5]")  # 10.6 m of slide
+    tag = f"{shape}/{scheme}"
+    energy = Reference(
+        0.01, "the scheme creates at most 1 % of gravity's work (issue 47)", kind="at_most"
+    )
+    return [
+        Case(
+            f"incline_stick_{shape}_{scheme}",
+            "MPM under gravity and friction",
+            f"block released stress-free on 30°, μ = 0.7, 3 s ({tag}): settles and stays",
+            "largest front displacement (m)",
+            Reference(
+                0.005, "closed form: μ > tan θ, the block sticks (within 5 mm)", kind="at_most"
+            ),
+            _front_moved_max,
+            scene="jobs/validation/mpm_incline_block.toml",
+            overrides=stick,
+            quick=False,
+            estimate_s=30.0,
+        ),
+        Case(
+            f"incline_stick_energy_{shape}_{scheme}",
+            "MPM under gravity and friction",
+            f"the same settling block ({tag}): energy the scheme creates",
+            "numerical work / gravity work, largest",
+            energy,
+            _numerical_over_gravity,
+            scene="jobs/validation/mpm_incline_block.toml",
+            overrides=stick,
+            quick=False,
+        ),
+        Case(
+            f"incline_slip_{shape}_{scheme}",
+            "MPM under gravity and friction",
+            f"block released stress-free on 30°, μ = 0.3, 3 s ({tag}): mean slide",
+            "mean displacement along the slope (m)",
+            Reference(
+                ramped_motion(incline_acceleration(30.0, 0.3), 3.0, ramp=0.1)[0],
+                "closed form: a = g (sin θ − μ cos θ) after the 0.1 s gravity ramp",
+                rtol=0.01,
+            ),
+            _incline_mean_slide,
+            scene="jobs/validation/mpm_incline_block.toml",
+            overrides=slip,
+            quick=False,
+            estimate_s=40.0,
+        ),
+        Case(
+            f"incline_slip_energy_{shape}_{scheme}",
+            "MPM under gravity and friction",
+            f"the same sliding block ({tag}): energy the scheme creates",
+            "numerical work / gravity work, largest",
+            energy,
+            _numerical_over_gravity,
+            scene="jobs/validation/mpm_incline_block.toml",
+            overrides=slip,
+            quick=False,
+        ),
+    ]
+
+
 def _runout(summary: dict[str, Any], out: Path) -> float:
     return _results(summary)["runout_m"]
 
@@ -1123,6 +1204,7 @@ CASES: tuple[Case, ...] = (
         scene="jobs/validation/mpm_incline_block.toml",
         overrides=("mpm.t_end=0.5",),
     ),
+    *(case for shape, scheme in INCLINE_PAIRS for case in _incline_cases(shape, scheme)),
     Case(
         "mpm_column_weight",
         "MPM under gravity and friction",
