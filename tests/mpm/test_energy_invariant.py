@@ -149,6 +149,27 @@ def test_the_ratio_waits_for_gravity_to_matter():
     assert log.invariant(contact=True, gravity=True) == ("ok", [])
 
 
+def test_the_ratio_is_judged_where_gravity_did_a_tenth_of_its_work():
+    """A ramp's start-up does not decide the verdict once gravity has done far more.
+
+    The start-up: +33 µJ against 2.7 mJ (+1.2 %); later 0.33 J, the scheme then a loss.
+    While gravity has not done ten times the start-up's work, the start-up is judged.
+    """
+    start = (0.0027, -0.0027, StepBudget(transfer=3.3e-5))  # body at rest: judged
+    later = (0.33, -0.33, StepBudget(transfer=-0.003 - 3.3e-5))  # numerical −0.9 %
+    log = _log(start, later)
+    assert log.gravity_ratio == pytest.approx(-0.003 / 0.33)
+    assert log.gravity_ratio_max == pytest.approx(-0.003 / 0.33)
+    assert log.invariant(contact=True, gravity=True) == ("ok", [])
+    early = _log(start, (0.02, -0.02, StepBudget(transfer=-3.2e-5)))  # 0.02 < 10 × 2.7 mJ
+    assert early.gravity_ratio_max == pytest.approx(3.3e-5 / 0.0027)
+    assert (
+        early.invariant(contact=True, gravity=True)[0] == "numerical work +1.22 % of gravity work"
+    )
+    back = EnergyLog.from_state(early.state())
+    assert back.gravity_ratio_max == early.gravity_ratio_max
+
+
 def test_a_checkpoint_keeps_the_invariants_measures_and_an_older_one_loads():
     log = _log((1.0, -1.0, StepBudget(contact=3e-9, contact_scale=1e-3, transfer=0.5)))
     back = EnergyLog.from_state(log.state())

@@ -464,10 +464,11 @@ def test_a_block_on_a_30_degree_bed_slides_at_coulombs_rate_on_two_ranks():
 # --- walls: a closed box, and a roller wall meeting a frictional floor ---
 
 
-def _run_walled(p, walls, frictional, gravity, scheme, shape, t_end, up, dom=None):
+def _run_walled(p, walls, frictional, gravity, scheme, shape, t_end, up, dom=None, mu=0.5):
     """Step a block in the box [0, up] with ``walls``; returns (particles, energies).
 
-    Energies per step (kinetic + gravity potential + strain), summed over the ranks.
+    Energies per step (kinetic + gravity potential + strain), summed over the ranks;
+    ``mu`` on every frictional wall.
     """
     lo = (0.0, 0.0)
     g = scene_grid(lo, up, CELL, padding=2)
@@ -476,7 +477,7 @@ def _run_walled(p, walls, frictional, gravity, scheme, shape, t_end, up, dom=Non
     fixed, ids, nrm, planes, _ = boundary_rows(
         g, lo, up, walls=walls, bed=(), frictional=frictional
     )
-    fr = friction(ids, nrm, 0.5, offsets=planes)
+    fr = friction(ids, nrm, mu, offsets=planes)
     dt = time_step(0.2, CELL, MAT, density=RHO, dim=2)
     s = StepSettings(scheme, shape, dt, gravity, fixed, friction=fr, domain=dom)
     total = dom.allsum if dom is not None else float
