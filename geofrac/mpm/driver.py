@@ -607,11 +607,8 @@ def _poll(run: MpmRun, loop: dict[str, Any], k: int, control: RunControl, comm: 
 
 
 def _node_offset(run: MpmRun) -> int:
-    """The global id of this rank's local node 0 (node planes along axis 0)."""
-    dom = run.domain
-    if dom is None:
-        return 0
-    return int(dom.planes[dom.rank][0]) * int(np.prod(run.grid.shape[1:]))
+    """The global id of this rank's local node 0 (0 without a domain)."""
+    return 0 if run.domain is None else run.domain.node_offset
 
 
 def _held_rows(run: MpmRun, comm: MPI.Comm) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -767,7 +764,8 @@ def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
         assert particles is not None
         loop = dict(ck.data)
         loop["log"] = EnergyLog.from_state(loop["log"])
-        loop["x0"] = ck.shared().get("x0") if comm.rank == 0 else None
+        saved = ck.shared() if comm.rank == 0 else {}
+        loop["x0"] = saved.get("x0")
         broken = comm.rank == 0 and (loop["x0"] is None or len(loop["x0"]) != run.total)
         count = comm.allreduce(particles.n)
         if comm.allreduce(int(broken)) or count != run.total:
@@ -779,7 +777,6 @@ def _restore(run: MpmRun, ck: Any, comm: MPI.Comm) -> dict[str, Any]:
     if run.settings.friction is not None:
         from geofrac.mpm.friction import restore_held
 
-        saved = ck.shared() if comm.rank == 0 else {}
         names = ("held_keys", "held_vn", "held_stuck")
         held = comm.bcast(tuple(saved.get(n) for n in names), root=0)
         if held[0] is not None:  # older checkpoints: no memory (the next step rebuilds it)

@@ -124,6 +124,11 @@ class Domain:
         """Nodes per node plane along axis 0."""
         return int(np.prod(self.grid.shape[1:]))
 
+    @property
+    def node_offset(self) -> int:
+        """The global id of this rank's local node 0 (its sub-grid's first node plane)."""
+        return int(self.planes[self.rank][0]) * self._plane_nodes()
+
     def sum_halo(self, values: np.ndarray) -> np.ndarray:
         """Complete nodal sums of this rank's sub-grid with the other ranks' parts.
 

@@ -288,7 +288,7 @@ def _gathered(p: Particles, dom: Domain | None) -> tuple[np.ndarray, np.ndarray]
     return x[order], v[order]
 
 
-def _rows(spy: _Spy, g: Grid, dom: Domain | None) -> tuple[np.ndarray, np.ndarray, bool]:
+def _rows(spy: _Spy, dom: Domain | None) -> tuple[np.ndarray, np.ndarray, bool]:
     """The recorded states by global row, merged over the ranks.
 
     Returns:
@@ -296,7 +296,7 @@ def _rows(spy: _Spy, g: Grid, dom: Domain | None) -> tuple[np.ndarray, np.ndarra
         holding a row recorded the same states for it).
     """
     fr = spy.fr
-    offset = 0 if dom is None else int(dom.planes[dom.rank][0]) * int(np.prod(g.shape[1:]))
+    offset = 0 if dom is None else dom.node_offset
     keys = 4 * (fr.nodes + offset) + fr.layer
     states = np.array(spy.calls, dtype=np.int8).reshape(len(spy.calls), len(keys))
     if dom is not None:
@@ -322,7 +322,7 @@ def _outcome(name: str, q: Perturbation | None = None, dom: Domain | None = None
         mp.setattr(contact, "apply_friction", spy)
         for _ in range(round(scene.t_end / s.dt)):
             step(g, p, material, settings=s)
-    keys, states, agree = _rows(spy, g, dom)
+    keys, states, agree = _rows(spy, dom)
     x, v = _gathered(p, dom)
     return Outcome(keys, states, agree, x0, x, v, scene.t_end)
 
