@@ -298,6 +298,7 @@ def apply_friction(
     *,
     sliding_only: bool = False,
     tol: float = 0.0,
+    states: np.ndarray | None = None,
 ) -> np.ndarray:
     """Contact and Coulomb friction on nodal velocities (in place and returned).
 
@@ -312,11 +313,15 @@ def apply_friction(
         tol: the speed within which two velocities tie (the step's
             :func:`~geofrac.mpm.schemes.rest_speed`); 0: exact comparisons. Only a
             corner node's normals depend on it (the module's "Ties").
+        states: filled with the rows' states (:func:`contact_states`' decisions, taken
+            on the way), shape=(k,) int8; None: not kept.
 
     Returns:
         ``v``, changed on the nodes in contact.
     """
-    _contact(v, fr, allow, sliding_only, tol)
+    decided = _contact(v, fr, allow, sliding_only, tol)
+    if states is not None:
+        states[:] = decided
     return v
 
 

@@ -805,16 +805,15 @@ def _grid_update(
         a[s.fixed] = 0.0
         v_new = v + dt * a
     if s.friction is not None:
-        from geofrac.mpm.friction import FREE, STICK, apply_friction, contact_states
+        from geofrac.mpm.friction import FREE, STICK, apply_friction
 
         fr = s.friction
-        states = contact_states(v_new, fr, nodes.allow, tol=nodes.rest)
-        # the rows the contact holds where the material touches the boundary (memory)
-        touching = _touching(nodes, fr)
-        nodes.held = np.flatnonzero((states != FREE) & touching)
-        nodes.stuck = states[nodes.held] == STICK
         trial = None if budget is None else v_new.copy()
-        apply_friction(v_new, fr, nodes.allow, tol=nodes.rest)
+        states = np.empty(len(fr.nodes), dtype=np.int8)
+        apply_friction(v_new, fr, nodes.allow, tol=nodes.rest, states=states)
+        # the rows the contact held where the material touches the boundary (memory)
+        nodes.held = np.flatnonzero((states != FREE) & _touching(nodes, fr))
+        nodes.stuck = states[nodes.held] == STICK
         if budget is not None and trial is not None:
             _contact_work(budget, nodes, s, before=trial, after=v_new)
         held = nodes.held

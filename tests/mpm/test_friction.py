@@ -20,7 +20,7 @@ from mpi4py import MPI
 
 from geofrac.mpm.boundaries import boundary_rows, scene_grid
 from geofrac.mpm.elastic import Elastic
-from geofrac.mpm.friction import apply_friction, friction
+from geofrac.mpm.friction import FREE, SLIP, STICK, apply_friction, contact_states, friction
 from geofrac.mpm.parallel import decompose
 from geofrac.mpm.particles import lattice
 from geofrac.mpm.schemes import StepSettings, step, strain_energy, time_step
@@ -41,8 +41,12 @@ def test_contact_slip_stick_and_separation_on_single_nodes():
             [-2.0, -0.2],  # slip to the left: -2 + 0.1
         ]
     )
-    out = apply_friction(v.copy(), fr)
+    states = np.full(4, -1, dtype=np.int8)
+    out = apply_friction(v.copy(), fr, states=states)
     np.testing.assert_allclose(out, [[1.0, 0.5], [1.5, 0.0], [0.0, 0.0], [-1.9, 0.0]])
+    # the decisions it took: free, slip, stick, slip (as contact_states decides them)
+    np.testing.assert_array_equal(states, [FREE, SLIP, STICK, SLIP])
+    np.testing.assert_array_equal(states, contact_states(v, fr))
     # without friction only the approach is removed
     out = apply_friction(v.copy(), fr, sliding_only=True)
     np.testing.assert_allclose(out, [[1.0, 0.5], [2.0, 0.0], [0.3, 0.0], [-2.0, 0.0]])

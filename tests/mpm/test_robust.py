@@ -243,10 +243,11 @@ class _Spy:
         *,
         sliding_only: bool = False,
         tol: float = 0.0,
+        states: np.ndarray | None = None,
     ) -> np.ndarray:
         self.fr = fr
         self.calls.append(contact.contact_states(v, fr, allow, sliding_only=sliding_only, tol=tol))
-        return APPLY(v, fr, allow, sliding_only=sliding_only, tol=tol)
+        return APPLY(v, fr, allow, sliding_only=sliding_only, tol=tol, states=states)
 
 
 def _perturbed(scene: Scene, q: Perturbation) -> tuple[Particles, np.ndarray, Elastic, float]:
