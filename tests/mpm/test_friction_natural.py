@@ -15,6 +15,7 @@ Here: representative (shape, scheme) pairs covering every shape and scheme; all 
 pairs run in ``geofrac validate`` (cases ``incline_stick_*``, ``incline_slip_*``).
 """
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -23,6 +24,7 @@ from mpi4py import MPI
 
 from geofrac.analytic_sliding import incline_acceleration, ramped_motion, stop_distance
 from geofrac.mpm.boundaries import scene_grid
+from geofrac.mpm.driver import ramp_factor
 from geofrac.mpm.energy import StepBudget
 from geofrac.mpm.parallel import decompose
 from geofrac.mpm.schemes import StepSettings, step
@@ -35,15 +37,9 @@ SETTLE, CREEP = 0.005, 0.0005
 
 
 def _ramped(s: StepSettings, k: int) -> StepSettings:
-    """Step ``k``'s settings: gravity times the ramp's mean over the step."""
-    t0, t1 = k * s.dt, (k + 1) * s.dt
-    if t0 >= RAMP:
-        return s
-    mean = (min(t1, RAMP) ** 2 - t0**2) / (2 * RAMP) + max(t1 - RAMP, 0.0)
-    return StepSettings(
-        s.scheme, s.shape, s.dt, s.gravity * mean / s.dt, s.fixed,
-        friction=s.friction, domain=s.domain,
-    )  # fmt: skip
+    """Step ``k``'s settings: gravity times the ramp's mean over the step (as the driver)."""
+    factor = ramp_factor(RAMP, k * s.dt, (k + 1) * s.dt)
+    return s if factor == 1.0 else dataclasses.replace(s, gravity=factor * s.gravity)
 
 
 def _run(g, p, s, along, *, total=float):
