@@ -847,13 +847,18 @@ def _collapse_cases(cell: str) -> list[Case]:
         )
         estimate = 900.0
     source = "Bui et al. (2008), the experiment (digitised by Huo et al. 2025)"
-    size = cell.replace("_", ".")
+    unconverged = (
+        "the run-out grows and the failure line flattens as the cell shrinks (10, 5, 2.5 mm: "
+        "0.471, 0.474, 0.515 m; 34.5°, 31.0°, 29.1°): the perfectly plastic material "
+        "without dilatancy localises into bands a cell wide and the front is a few mm "
+        'thick (docs/mpm.md, "Column collapse")'
+    )
+    size = cell.replace("_", ".").replace("mm", " mm")
     kw: dict[str, Any] = dict(
         scene="jobs/validation/mpm_column_collapse.toml",
         overrides=overrides,
         quick=False,
         estimate_s=estimate,
-        plot=collapse.plot,
     )
     return [
         Case(
@@ -863,6 +868,8 @@ def _collapse_cases(cell: str) -> list[Case]:
             "run-out from the wall (m)",
             Reference(collapse.experiment_runout(), source, rtol=0.1),
             collapse.measure_runout,
+            known=unconverged,
+            plot=collapse.plot,
             **kw,
         ),
         Case(
@@ -872,6 +879,7 @@ def _collapse_cases(cell: str) -> list[Case]:
             "failure line's angle (deg)",
             Reference(collapse.experiment_failure_angle(), source, rtol=0.1),
             collapse.measure_failure_angle,
+            known=unconverged if cell == "2_5mm" else None,
             **kw,
         ),
         Case(
