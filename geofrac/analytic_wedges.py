@@ -146,10 +146,17 @@ def threshold_angle(
         omega: the interface's inclination from the vertical, degrees.
         tol: bisection tolerance in degrees.
     """
-    kw = dict(alpha_upper=alpha_upper, alpha_lower=alpha_lower, mu=mu, omega=omega)
 
     def stable(phi: float) -> bool:
-        return wedge_forces(w_upper, w_lower, phi=phi, **kw).stable  # type: ignore[arg-type]
+        return wedge_forces(
+            w_upper,
+            w_lower,
+            alpha_upper=alpha_upper,
+            alpha_lower=alpha_lower,
+            mu=mu,
+            phi=phi,
+            omega=omega,
+        ).stable
 
     if stable(0.0):
         return 0.0
