@@ -93,22 +93,18 @@ def weights(omega: float) -> tuple[float, float]:
 def scene_angle(phi_star: float, psi: float = 0.0) -> float:
     """The scene's φ (degrees) whose Davis equivalent is ``phi_star``, for dilatancy ψ.
 
-    Bisection of atan(β(φ, ψ) tan φ) = φ* on φ in [ψ, 90) (β of
+    The root of atan(β(φ, ψ) tan φ) = φ* on φ in [0, 90) (β of
     :func:`geofrac.plasticity.davis.davis_factor`); inf when no φ < 90° reaches it.
     """
+    from scipy.optimize import brentq
 
-    def star(phi: float) -> float:
-        return math.degrees(
-            math.atan(davis_factor(phi, min(psi, phi)) * math.tan(math.radians(phi)))
-        )
+    def gap(phi: float) -> float:
+        beta = davis_factor(phi, min(psi, phi))
+        return math.degrees(math.atan(beta * math.tan(math.radians(phi)))) - phi_star
 
-    lo, hi = 0.0, 89.999
-    if star(hi) < phi_star:
+    if gap(89.999) < 0:
         return math.inf
-    while hi - lo > 1e-6:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if star(mid) < phi_star else (lo, mid)
-    return hi
+    return float(brentq(gap, 0.0, 89.999, xtol=1e-9))
 
 
 def shortening(e: float = E_LAYER) -> float:
@@ -179,20 +175,14 @@ def main(argv: list[str] | None = None) -> None:
     exag = 3.0
     up = np.array([p["crown"], p["kink"], p["ground_at_kink"]])
     lo_ = np.array([p["kink"], p["toe"], p["ground_at_kink"]])
-    ax0.fill(
-        up[:, 0],
-        exag * up[:, 1],
-        color="tab:orange",
-        alpha=0.5,
-        label=f"upper wedge, {w1 / 1e6:.1f} MN/m",
-    )
-    ax0.fill(
-        lo_[:, 0],
-        exag * lo_[:, 1],
-        color="tab:blue",
-        alpha=0.5,
-        label=f"lower wedge, {w2 / 1e6:.1f} MN/m",
-    )
+    for poly, colour, name, w in ((up, "tab:orange", "upper", w1), (lo_, "tab:blue", "lower", w2)):
+        ax0.fill(
+            poly[:, 0],
+            exag * poly[:, 1],
+            color=colour,
+            alpha=0.5,
+            label=f"{name} wedge, {w / 1e6:.1f} MN/m",
+        )
     scarp_y = p["crown"][1] + 30 * (p["crown"][1] - p["kink"][1]) / p["kink"][0]
     bx = [-30, p["crown"][0], p["kink"][0], p["toe"][0], p["toe"][0] + 60]
     by = [scarp_y, p["crown"][1], p["kink"][1], 0, 0]
