@@ -179,5 +179,9 @@ def plot(summary: dict[str, Any], out: Path, path: Path) -> None:
     ax.set_ylim(0.0, 0.12)
     ax.set_xlabel("x from the wall (m)")
     ax.legend(fontsize=7, loc="upper right")
-    title = "Column collapse (Bui et al. 2008): deposit at t_end against the experiment"
+    spacing = float(np.sqrt(np.median(last["mass"]) / DENSITY))
+    title = (
+        "Column collapse (Bui et al. 2008): deposit at t_end against the experiment "
+        f"(particles {spacing * 1e3:g} mm apart)"
+    )
     save_figure(fig, [ax], path, title=title, ylabel="y (m)")
