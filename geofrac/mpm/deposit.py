@@ -4,9 +4,11 @@ Pure numpy, 2D (x along the floor, y up). What an experiment of a collapsing col
 measures, taken from the particles in a form that does not depend on how many particles
 there are:
 
-- the *thickness* t(x) of the deposit: the particles' current area in each x-bin divided
-  by the bin's width (the height of a dense layer of the same area; scattered single
-  particles give a thin t, not a full particle's height);
+- the *thickness* t(x) of the deposit: the particles' area in each x-bin divided by the
+  bin's width (the height of a dense layer of the same area; scattered single particles
+  give a thin t, not a full particle's height). The caller chooses the area: the current
+  one, or the mass over a reference density (a deposit whose particles stretched
+  without stress, as at a cohesionless material's apex);
 - the *run-out*: where t first falls below a stated thickness, going out from the
   deposit's start (an experiment sees the deposit end where it is about one grain thick;
   particles scattered ahead of it, beyond a gap, are not the deposit);
@@ -33,7 +35,8 @@ def thickness(
 
     Args:
         x: particle positions, shape=(num_particles, 2).
-        area: each particle's current area (volume per unit width), shape=(num_particles,).
+        area: each particle's area (volume per unit width): current, or its mass over a
+            reference density; shape=(num_particles,).
         bin_width: the bins' width (> 0).
         x_min: left edge of the first bin; particles left of it are ignored.
 

@@ -40,6 +40,7 @@ from geofrac.mpm.deposit import failure_line, runout, thickness
 
 __all__ = [
     "BIN",
+    "DENSITY",
     "FAILURE",
     "MOVED",
     "RUNOUT_THICKNESS",
