@@ -10,11 +10,11 @@ friction angle the layer would stand. That is the friction the interface mobilis
 scene's soil has no dilatancy (ψ = 0), and a non-associated soil's shear band carries
 Davis's (1968) tan φ* = cos φ cos ψ / (1 − sin φ sin ψ) tan φ (= sin φ for ψ = 0), so the
 scene's φ must reach asin(tan φ*) for the layer to stand. It prints the threshold for ω
-from −60° to 60°
-and draws ``docs/img/landslide_wedges.png``: the profile with the wedges and their
-forces, the interface force the upper wedge needs against the one the lower wedge can
-supply as functions of φ, and the runouts of the MPM sweeps, given with ``--runouts``
-(``phi:metres`` pairs; the defaults are the coarse runs of docs/mpm_landslide.md, 8-50°).
+from −60° to 60° and the soft layer's elastic shortening, and draws
+``docs/img/landslide_wedges.png``: the profile with the wedges, the interface force the
+upper wedge needs against the one the lower wedge can supply as functions of φ*, and
+the MPM runouts, given with ``--runouts`` (``phi:metres`` pairs; the defaults are the
+coarse runs of docs/mpm_landslide.md, 8-50°).
 """
 
 from __future__ import annotations
