@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from geofrac.analytic_wedges import threshold_angle, wedge_forces
+from geofrac.dfn.polygon import polygon_area
 from geofrac.plasticity.davis import davis_factor
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -68,13 +69,6 @@ def _clip(poly: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray
     return np.array(out) if out else np.zeros((0, 2))
 
 
-def _area(poly: np.ndarray) -> float:
-    if len(poly) < 3:
-        return 0.0
-    x, y = poly[:, 0], poly[:, 1]
-    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
-
-
 def weights(omega: float) -> tuple[float, float]:
     """Weights (N per metre) of the upper and lower wedge for an interface leaning ω (deg)."""
     p = layer()
@@ -84,8 +78,8 @@ def weights(omega: float) -> tuple[float, float]:
     n = np.array([t[1], -t[0]])  # points toward the toe
     out = []
     for side in (1.0, -1.0):
-        a = _area(_clip(whole, p["kink"], side * n))
-        aw = _area(_clip(weak, p["kink"], side * n))
+        a = polygon_area(_clip(whole, p["kink"], side * n))
+        aw = polygon_area(_clip(weak, p["kink"], side * n))
         out.append(G * (RHO * (a - aw) + RHO_WEAK * aw))
     return out[0], out[1]
 
