@@ -466,9 +466,9 @@ class _Nodes:
         v: the nodal velocity, shape=(N, dim).
         allow: the contact's allowed approaches (friction), or None.
         v_mapped: the nodal velocity before the contact acted (friction), or None.
-        held: the frictional rows the contact held in the grid update where the
-            material touches the boundary (friction), shape=(h,) int.
-        stuck: whether each of ``held`` stuck, shape=(h,) bool.
+
+    The rows the grid update's contact held, and whether they stuck, are the boundary's
+    memory (:attr:`Friction.held_vn`, ``held_stuck``), not kept here twice.
     """
 
     w: Weights
@@ -486,8 +486,6 @@ class _Nodes:
     v: np.ndarray = field(init=False, repr=False)
     allow: np.ndarray | None = field(default=None, init=False, repr=False)
     v_mapped: np.ndarray | None = field(default=None, init=False, repr=False)
-    held: np.ndarray | None = field(default=None, init=False, repr=False)
-    stuck: np.ndarray | None = field(default=None, init=False, repr=False)
 
 
 def step(
@@ -811,16 +809,14 @@ def _grid_update(
         trial = None if budget is None else v_new.copy()
         states = np.empty(len(fr.nodes), dtype=np.int8)
         apply_friction(v_new, fr, nodes.allow, tol=nodes.rest, states=states)
-        # the rows the contact held where the material touches the boundary (memory)
-        nodes.held = np.flatnonzero((states != FREE) & _touching(nodes, fr))
-        nodes.stuck = states[nodes.held] == STICK
         if budget is not None and trial is not None:
             _contact_work(budget, nodes, s, before=trial, after=v_new)
-        held = nodes.held
+        # the memory: the rows the contact held where the material touches the boundary
+        held = np.flatnonzero((states != FREE) & _touching(nodes, fr))
         fr.held_vn[:] = np.nan
         fr.held_vn[held] = np.einsum("ka,ka->k", v_new[fr.nodes[held]], fr.normals[held])
         fr.held_stuck[:] = False
-        fr.held_stuck[held] = nodes.stuck
+        fr.held_stuck[held] = states[held] == STICK
         # the particles take every change the contact made, the mapped velocity's too
         # (else the approach it removed stays in their velocity, step after step, and
         # its friction is lost: a launched block slid 8 % too far)
@@ -849,8 +845,9 @@ def _remap_velocity(nodes: _Nodes, p: Particles, s: StepSettings, *, moved: np.n
 
     With friction, the re-mapped velocity of a node on the boundary mixes in the
     material above it; the node itself moved as the grid update's contact left it. On
-    the rows that contact held where the material touches the boundary
-    (``nodes.held``), the strain therefore takes the node's held velocity: its normal
+    the rows that contact held where the material touches the boundary (the memory it
+    has just written, :attr:`Friction.held_vn`), the strain therefore takes the node's
+    held velocity: its normal
     component in both directions, and where the row stuck no tangential one. Elsewhere
     only an approach is removed (no friction: the particles took the update's).
 
@@ -882,11 +879,11 @@ def _remap_velocity(nodes: _Nodes, p: Particles, s: StepSettings, *, moved: np.n
     if s.friction is not None:
         from geofrac.mpm.friction import apply_friction, hold
 
-        fr, rows = s.friction, nodes.held
-        assert rows is not None and nodes.stuck is not None  # set by the grid update
+        fr = s.friction
+        rows = np.flatnonzero(np.isfinite(fr.held_vn))  # this step's grid update held them
         apply_friction(nodes.v, fr, nodes.allow, sliding_only=True, tol=nodes.rest)
         target = np.einsum("ka,ka->k", moved[fr.nodes[rows]], fr.normals[rows])
-        hold(nodes.v, fr, rows, target=target, stuck=nodes.stuck)
+        hold(nodes.v, fr, rows, target=target, stuck=fr.held_stuck[rows])
 
 
 def _outside(g: Grid, p: Particles, s: StepSettings) -> np.ndarray:
