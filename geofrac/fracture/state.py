@@ -56,6 +56,15 @@ class MlsSettings:
     gradient: str = "fit"
 
 
+def _ranges(starts: np.ndarray, stops: np.ndarray) -> np.ndarray:
+    """The concatenated ranges [starts[i], stops[i]), shape=(sum(stops - starts),)."""
+    lengths = stops - starts
+    if not len(lengths) or not lengths.sum():
+        return np.zeros(0, dtype=np.int64)
+    offsets = np.repeat(starts - np.concatenate([[0], np.cumsum(lengths)[:-1]]), lengths)
+    return np.arange(int(lengths.sum())) + offsets
+
+
 def segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance from points, shape=(n, 2), to the segment a–b."""
     d = b - a
@@ -95,6 +104,9 @@ class CrackState:
         order = np.argsort(m.cells.ravel(), kind="stable")
         self._star = order // 3  # cells around each node, grouped by node
         self._star_ptr = np.searchsorted(m.cells.ravel()[order], np.arange(n_nodes + 1))
+        # interior edges and their two cells, shape=(k,) and (k, 2)
+        self._inner_edges = np.flatnonzero((m.edge_cells >= 0).all(axis=1))
+        self._inner_cells = m.edge_cells[self._inner_edges]
         self.cracked = np.zeros(len(m.edges), dtype=bool)
         #: each MLS cell's own fit through its satellites (eq. 2.17), None when void; the
         #: faces of a crack take their jump from these.
@@ -168,24 +180,33 @@ class CrackState:
         elem = ~self.is_mls()
         if not self.cut or not elem.any():
             return np.zeros(0, dtype=np.int64)
-        ec = m.edge_cells
-        joined = (ec >= 0).all(axis=1) & ~self.cracked
-        joined[joined] = elem[ec[joined, 0]] & elem[ec[joined, 1]]
+        inner, ec = self._inner_edges, self._inner_cells
+        joined = ~self.cracked[inner] & elem[ec[:, 0]] & elem[ec[:, 1]]
         labels = components(m.num_cells, ec[joined, 0], ec[joined, 1])
         cells = np.flatnonzero(elem)
-        # the distinct (node, piece) pairs of the element cells' vertices
-        key = np.unique(m.cells[cells].ravel() * m.num_cells + np.repeat(labels[cells], 3))
-        node, piece = np.divmod(key, m.num_cells)
+        anchored = np.zeros(m.num_cells, dtype=bool)
+        anchored[labels[cells[self.frozen[cells]]]] = True
+        # only pieces without a frozen cell can hang: count the holds of those alone
+        loose = cells[~anchored[labels[cells]]]
+        if not len(loose):
+            return loose
+        nodes = np.unique(m.cells[loose].ravel())
+        # every element cell around those nodes, with its piece: the distinct
+        # (node, piece) pairs tell which nodes an element cell of another piece has
+        starts, stops = self._star_ptr[nodes], self._star_ptr[nodes + 1]
+        around = self._star[_ranges(starts, stops)]
+        owner = np.repeat(nodes, stops - starts)
+        keep = elem[around]
+        pair = np.unique(owner[keep] * m.num_cells + labels[around[keep]])
+        node, piece = np.divmod(pair, m.num_cells)
         used = np.zeros(len(m.coords), dtype=bool)
         for fit in self.own_fits.values():
             if fit is not None:
                 used[fit.nodes] = True
         holds = used[node] | (np.bincount(node, minlength=len(m.coords))[node] > 1)
         held_by = np.bincount(piece, weights=holds, minlength=m.num_cells)
-        anchored = np.zeros(m.num_cells, dtype=bool)
-        anchored[labels[cells[self.frozen[cells]]]] = True
-        hanging = (held_by <= 1) & ~anchored
-        return cells[hanging[labels[cells]]]
+        hanging = held_by <= 1
+        return loose[hanging[labels[loose]]]
 
     def _refit_hinged(self, changed: np.ndarray) -> np.ndarray:
         """Give MLS fits to :meth:`hinged_cells` until none is left; all changed cells."""

@@ -335,6 +335,7 @@ def components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     graph = coo_matrix(
         (np.ones(len(a), dtype=bool), (np.asarray(a), np.asarray(b))), shape=(n, n)
     ).tocsr()
-    _, labels = connected_components(graph, directed=False)
-    _, first = np.unique(labels, return_index=True)
+    k, labels = connected_components(graph, directed=False)
+    first = np.full(k, n, dtype=np.int64)
+    np.minimum.at(first, labels, np.arange(n, dtype=np.int64))
     return first[labels]

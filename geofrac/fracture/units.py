@@ -16,6 +16,7 @@ from typing import Protocol
 
 import numpy as np
 from mpi4py import MPI
+from scipy.sparse import csr_matrix
 
 from geofrac.elements.kinematics import KINDS, dofs_from_gradient, vertex_field
 from geofrac.errors import RunError
@@ -42,6 +43,7 @@ __all__ = [
     "Fit",
     "SiteState",
     "Units",
+    "cell_rows",
     "mls_settings",
     "penalty_of",
     "set_material",
@@ -75,20 +77,25 @@ GAUSS_6 = (
 )
 
 
-def _matvecs(M: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """One small matrix-vector product per cell, cells last (contiguous, vectorised).
+def cell_rows(blocks: np.ndarray, dofs: np.ndarray, n: int) -> csr_matrix:
+    """One CSR matrix of per-cell row blocks acting on the global vector.
+
+    Row block c holds ``blocks[c]`` on the columns ``dofs[c]``: the product with u gives
+    every cell's ``blocks[c] @ u[dofs[c]]`` in one sparse product. The CSR's values are
+    ``blocks`` itself (no copy), so writing into ``blocks`` changes the operator.
 
     Args:
-        M: the matrices, shape=(r, k, num_cells).
-        x: the vectors, shape=(k, num_cells).
+        blocks: the cells' matrices, shape=(num_cells, r, k), C-contiguous float.
+        dofs: their global columns, shape=(num_cells, k).
+        n: number of global DOFs.
 
     Returns:
-        M x per cell, shape=(r, num_cells).
+        shape=(num_cells * r, n).
     """
-    out = M[:, 0] * x[0]
-    for j in range(1, x.shape[0]):
-        out += M[:, j] * x[j]
-    return out
+    nc, r, k = blocks.shape
+    indices = np.repeat(dofs, r, axis=0).astype(np.int32 if n < 2**31 else np.int64).ravel()
+    indptr = np.arange(0, nc * r * k + 1, k, dtype=indices.dtype)
+    return csr_matrix((blocks.reshape(-1), indices, indptr), shape=(nc * r, n), copy=False)
 
 
 def unit_masks(
@@ -246,11 +253,13 @@ class EdgeUnits:
         self.fe_dofs = ctx.node_dofs(gm.cells[own].ravel()).reshape(len(own), 3 * ctx.bs)
         stress_op = np.einsum("ij,cqjp->cqip", ctx.D, strain_operator(spec, x, MIDPOINTS))
         nc, nd = self.fe_dofs.shape
-        # cells-last copies for measures(): the stress at the 3 edge midpoints,
-        # shape=(9, nd, n_own), K, shape=(nd, nd, n_own), and the DOFs, shape=(nd, n_own)
-        self._stress_op_t = np.ascontiguousarray(stress_op.reshape(nc, 9, nd).transpose(1, 2, 0))
-        self._K_fe_t = np.ascontiguousarray(self.K_fe.transpose(1, 2, 0))
-        self._fe_dofs_t = np.ascontiguousarray(self.fe_dofs.T)
+        # for measures(): the stress at the 3 edge midpoints, shape=(n_own * 9, n_global)
+        # (row 9c + 3q + i: cell c, midpoint q, component i), and K, shape=(n_own * nd,
+        # n_global); their values are these arrays (set_material writes into them)
+        self._stress_blocks = np.ascontiguousarray(stress_op.reshape(nc, 9, nd))
+        self._stress_rows = cell_rows(self._stress_blocks, self.fe_dofs, ctx.n_global)
+        self.K_fe = np.ascontiguousarray(self.K_fe)
+        self._K_rows = cell_rows(self.K_fe, self.fe_dofs, ctx.n_global)
         self.owned = np.zeros(len(gm.cells), dtype=bool)
         self.owned[own] = True
         # owned cells (positions in own) with a control DOF: the only ones whose forces
@@ -403,18 +412,18 @@ class EdgeUnits:
         is_mls = state.is_mls()
         s1 = np.zeros((len(ctx.gm.cells), 3))
         u_ext = np.append(u, 0.0)
-        ud = u[self._fe_dofs_t]  # shape=(nd, n_own)
         fe = ~is_mls[own]
-        stress = _matvecs(self._stress_op_t, ud).reshape(3, 3, -1)  # (midpoint, component, cell)
-        s1[own[fe]] = principal_max(np.moveaxis(stress, 1, 2)).T[fe]
+        nc, nd = self.fe_dofs.shape
+        stress = (self._stress_rows @ u).reshape(nc, 3, 3)  # (cell, midpoint, component)
+        s1[own[fe]] = principal_max(stress[fe])
         full = np.zeros((len(ctx.gm.cells), 3, 3)) if self.keep_stress else None
         if full is not None:
-            full[own[fe]] = np.moveaxis(stress, 2, 0)[fe]
-        ku = _matvecs(self._K_fe_t, ud)  # shape=(nd, n_own)
-        energy = 0.5 * float(np.sum(ud * ku, axis=0) @ fe)
+            full[own[fe]] = stress[fe]
+        ku = (self._K_rows @ u).reshape(nc, nd)
+        energy = 0.5 * float(np.einsum("cp,cp->c", u[self.fe_dofs], ku) @ fe)
         sign = ctx.control_sign
         r = self._reacting[fe[self._reacting]]
-        reaction = float(np.sum(ku[:, r] * sign[self._fe_dofs_t[:, r]]))
+        reaction = float(np.sum(ku[r] * sign[self.fe_dofs[r]]))
         self._sync_table()
         table = self._table
         assert table is not None
@@ -430,8 +439,10 @@ class EdgeUnits:
             ctx.comm.Allreduce(MPI.IN_PLACE, full, op=MPI.SUM)
             self.midpoint_stress = full
         energy += 0.5 * float(np.sum(table.weight * np.sum(eps * sig, axis=1)))
-        force = table.weight[:, None] * np.einsum("rip,ri->rp", table.B, sig)
-        reaction += float(np.sum(force * sign[table.dofs]))
+        signs = sign[table.dofs]  # shape=(rows, width)
+        r = np.flatnonzero(signs.any(axis=1))  # the rows with a control DOF
+        force = table.weight[r, None] * np.einsum("rip,ri->rp", table.B[r], sig[r])
+        reaction += float(np.sum(force * signs[r]))
         ctx.comm.Allreduce(MPI.IN_PLACE, s1, op=MPI.SUM)
         energy = ctx.comm.allreduce(energy, op=MPI.SUM)
         reaction = ctx.comm.allreduce(reaction, op=MPI.SUM)
@@ -512,5 +523,4 @@ def set_material(units: EdgeUnits, cells: np.ndarray, D: np.ndarray) -> None:
     x = gm.coords[gm.cells[units.own[mine]]]
     units.K_fe[mine] = fe_matrices(ctx.spec, x, D, thickness=ctx.t, penalty=penalty_of(ctx, D))
     op = np.einsum("ij,cqjp->cqip", D, strain_operator(ctx.spec, x, MIDPOINTS))
-    units._stress_op_t[:, :, mine] = op.reshape(len(mine), 9, -1).transpose(1, 2, 0)
-    units._K_fe_t[:, :, mine] = units.K_fe[mine].transpose(1, 2, 0)
+    units._stress_blocks[mine] = op.reshape(len(mine), 9, -1)  # the operators' values

@@ -210,3 +210,68 @@ def test_no_satellite_across_a_notch():
         assert fit is not None
         x, y = m.coords[fit.nodes].T
         assert np.all(x[y < 5.0] <= 4.0)
+
+
+def _hinged_by_definition(state):
+    """Hinged cells from the definition, cell by cell (union-find over uncracked edges)."""
+    m = state.mesh
+    elem = [c for c in range(m.num_cells) if c not in state.own_fits]
+    parent = {c: c for c in elem}
+
+    def root(c):
+        while parent[c] != c:
+            c = parent[c]
+        return c
+
+    for e, (c0, c1) in enumerate(m.edge_cells):
+        if c0 in parent and c1 in parent and not state.cracked[e]:
+            parent[root(c0)] = root(c1)
+    pieces = {}
+    for c in elem:
+        pieces.setdefault(root(c), []).append(c)
+    used = set()
+    for fit in state.own_fits.values():
+        if fit is not None:
+            used.update(int(v) for v in fit.nodes)
+    node_pieces = {}
+    for r, cs in pieces.items():
+        for c in cs:
+            for v in m.cells[c]:
+                node_pieces.setdefault(int(v), set()).add(r)
+    out = []
+    for r, cs in pieces.items():
+        if any(state.frozen[c] for c in cs):
+            continue
+        nodes = {int(v) for c in cs for v in m.cells[c]}
+        if sum(1 for v in nodes if v in used or len(node_pieces[v]) > 1) <= 1:
+            out += cs
+    return sorted(out)
+
+
+def test_hinged_cells_match_the_definition_on_random_crack_states():
+    """The vectorised search (loose pieces only) finds what the definition finds."""
+    from types import SimpleNamespace
+
+    coords, cells = grid_mesh(8)
+    m = edge_mesh(coords, cells)
+    n = len(cells)
+    rng = np.random.default_rng(7)
+    found = 0
+    for trial in range(40):
+        frozen = np.zeros(n, bool)
+        frozen[rng.choice(n, size=2, replace=False)] = True
+        state = CrackState(m, frozen, np.zeros(n, bool), MlsSettings(), cut=True)
+        mls = rng.choice(n, size=rng.integers(n // 2, 7 * n // 8), replace=False)
+        state.own_fits = state.fits = {
+            int(c): (
+                None
+                if rng.random() < 0.2
+                else SimpleNamespace(nodes=rng.choice(len(coords) // 4, size=2, replace=False))
+            )
+            for c in mls
+        }
+        state.cracked[rng.random(len(m.edges)) < rng.uniform(0.3, 0.9)] = True
+        expected = _hinged_by_definition(state)
+        found += len(expected)
+        np.testing.assert_array_equal(state.hinged_cells(), expected, err_msg=f"trial {trial}")
+    assert found > 20  # the trials do leave hanging pieces
