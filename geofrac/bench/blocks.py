@@ -23,13 +23,13 @@ Prints a table; ``--json F`` writes records with ``dim``, ``blocks``, ``ranks``,
 from __future__ import annotations
 
 import argparse
-import resource
 import time
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from geofrac.bench.args import number_list
+from geofrac.timing import peak_rss_mb
 
 if TYPE_CHECKING:
     import numpy as np
@@ -97,10 +97,6 @@ class _CubeBuilder:
         return {}, None
 
 
-def _peak_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-
-
 def _voronoi(points: np.ndarray, threads: int) -> float:
     """Seconds freud takes for the Voronoi cells (volumes and polytopes) of ``points``."""
     import freud
@@ -145,7 +141,7 @@ def run(args: argparse.Namespace, comm: MPI.Comm) -> dict[str, Any]:
         blocks = build_blocks(mesh)
         time_blocks = comm.allreduce(time.perf_counter() - start, op=MPI.MAX)
         count = comm.allreduce(blocks.num_blocks)
-        peak = comm.allreduce(_peak_mb(), op=MPI.MAX)
+        peak = comm.allreduce(peak_rss_mb(), op=MPI.MAX)
         seeds = comm.gather(blocks.seeds, root=0)
         record: dict[str, Any] = {
             "dim": 3,

@@ -1,11 +1,15 @@
 """``geofrac bench cracking``: events per second and time per phase of the crack driver.
 
 Cases (``--cases``): ``beam`` (jobs/notched_beam.toml at the size of Edo (2016), RGNT), ``model2``
-(jobs/crack_model2.toml: DFN Model 2 at the thesis's size, RGNT), ``plate`` (jobs/plate_hole.toml)
-and ``patch`` (the patch test over the thesis's node counts, error (2.22) per mesh). Each
-event case runs ``--events`` events on the ranks it is started with and reports events/s
-and the seconds of each phase (assemble, solve, criterion/stress, update) as the maximum
-over ranks. Run it under ``mpiexec -n 2`` for the 2-rank figures.
+(jobs/crack_model2.toml: DFN Model 2 at the thesis's size, RGNT, 115k DOFs),
+``model2_contact`` (the same with crack-face contact), ``model_1m`` (Model 2's network on a
+mesh of 0.285 mm instead of 0.84 mm: about 1.0M DOFs), ``plate`` (jobs/plate_hole.toml) and
+``patch`` (the patch test over the thesis's node counts, error (2.22) per mesh). Each event
+case runs ``--events`` events on the ranks it is started with and reports events/s, the
+seconds of each phase (assemble, solve, criterion/stress, update) as the maximum over
+ranks, the seconds of each part of the work per rank
+(:data:`geofrac.fracture.linear.PARTS`), factorisations and the peak memory per rank.
+Run it under ``mpiexec -n 2`` for the 2-rank figures.
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ _JOBS = Path(__file__).resolve().parents[2] / "jobs"
 CASES: dict[str, tuple[str, tuple[str, ...]]] = {
     "beam": ("notched_beam", ()),
     "model2": ("crack_model2", ()),
+    "model2_contact": ("crack_model2", ("cracking.contact=true",)),
+    "model_1m": ("crack_model2", ("dfn.mesh_size=0.285",)),
     "plate": ("plate_hole", ()),
 }
 
@@ -37,7 +43,9 @@ PATCH_H = (0.475, 0.26, 0.182, 0.128, 0.0904, 0.056)
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of this bench."""
     p.add_argument(
-        "--cases", default="beam,model2", help="comma-separated: beam, model2, plate, patch"
+        "--cases",
+        default="beam,model2",
+        help="comma-separated: beam, model2, model2_contact, model_1m, plate, patch",
     )
     p.add_argument("--events", type=int, default=30, help="events per case (default 30)")
     p.add_argument(
@@ -133,6 +141,9 @@ def event_case(
         "refinement_solves": res["refinement_solves"],
         "end_reason": res["end_reason"],
         **{f"{k}_s": v for k, v in res["phase_s"].items()},
+        "phase_s_per_rank": res["phase_s_per_rank"],
+        "part_s_per_rank": res["part_s_per_rank"],
+        "peak_rss_mb_per_rank": res["peak_rss_mb_per_rank"],
         "results": res,
     }
     contact = res.get("contact")
@@ -149,6 +160,18 @@ def event_case(
         f"{record['update_s']:.1f} s; {record['factorizations']} factorisations, "
         f"{record['cg_iterations']} CG iterations, "
         f"{record['refinement_solves']} refinement solves; end {record['end_reason']}",
+    )
+    parts = ", ".join(
+        f"{k} {'/'.join(f'{v:.1f}' for v in per_rank)}"
+        for k, per_rank in res["part_s_per_rank"].items()
+        if max(per_rank) > 0
+    )
+    echo(comm, f"{case}: seconds per part of the work (rank 0/1/...): {parts}")
+    echo(
+        comm,
+        f"{case}: peak memory per rank (MiB): "
+        + ", ".join(f"{v:.0f}" for v in res["peak_rss_mb_per_rank"])
+        + f"; {sum(res['peak_rss_mb_per_rank']) / 1024:.2f} GiB in all",
     )
     if contact is not None:
         echo(

@@ -21,6 +21,7 @@ residual check fails (a fragment cut free: the fresh factorisation finds and hol
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -93,6 +94,9 @@ class IncrementalSolver:
         x: a vector of A's layout to solve into (ghosted DOLFINx vector).
         gather: copies vectors of x's layout to every rank (the caller's; not owned).
         capacity: the largest |T|.
+        parts: seconds per part of the work (``inverse_entries``, ``dense_update``,
+            ``substitution``, ``residual``) are added here (the driver's
+            :attr:`~geofrac.fracture.linear.Timing.parts`); None: not measured.
         transposed: when A is unsymmetric (friction on slipping crack faces), makes a
             factorisation of Aᵀ: the new rows of A⁻¹ on T are its columns. Called when
             first needed (collective), so a reference that is replaced before it grows T
@@ -115,7 +119,9 @@ class IncrementalSolver:
         gather: Gather,
         capacity: int,
         transposed: Callable[[], LinearSolver] | None = None,
+        parts: dict[str, float] | None = None,
     ) -> None:
+        self.parts: dict[str, float] = {} if parts is None else parts
         self.A, self.b, self.solver = A, b, solver
         self._transposed = transposed
         self.solver_t: LinearSolver | None = None
@@ -164,6 +170,7 @@ class IncrementalSolver:
         new = lu.missing(touched[~bc[touched]])
         if lu.m + len(new) > lu.capacity:
             raise Stale("capacity", f"{lu.m + len(new)} changed DOFs exceed the update capacity")
+        t = time.perf_counter()
         if len(new):
             rows = np.concatenate([lu.dofs, new])
             transposed = None
@@ -175,7 +182,9 @@ class IncrementalSolver:
                         raise Stale("singular", f"the transposed system: {exc}") from None
                     self.factor_t = self.solver_t.factor()
                 transposed = mumps_inverse_entries(self.factor_t, lu.dofs, new).T
-            lu.grow(new, mumps_inverse_entries(self.factor, rows, new), transposed)
+            block = mumps_inverse_entries(self.factor, rows, new)
+            t = self._lap("inverse_entries", t)
+            lu.grow(new, block, transposed)
         for dofs, k in blocks:
             free = ~bc[dofs]
             lu.add(dofs[free], k[np.ix_(free, free)])
@@ -188,6 +197,7 @@ class IncrementalSolver:
             lu.add(np.array([j]), np.ones((1, 1)))
             lu.add_rhs(np.array([j]), np.array([v - self.b_full[j] - lu.db[p]]))
             self.held[j] = True
+        self._lap("dense_update", t)
 
     def solve(self, x: Vector) -> np.ndarray:
         """Solve the current system into ``x``; return the solution on every rank.
@@ -211,16 +221,19 @@ class IncrementalSolver:
             return self.y.copy()
         b_t = self.b_full[lu.dofs]
         b2 = max(self._b_norm2 + float(np.sum((b_t + lu.db) ** 2 - b_t**2)), 1e-300)
+        t = time.perf_counter()
         try:
             g = lu.correction(self.y[lu.dofs], atol=0.1 * REFINE_ABOVE * np.sqrt(b2))
         except np.linalg.LinAlgError as exc:
             raise Stale("singular", f"the changed system is singular ({exc})") from None
+        t = self._lap("dense_update", t)
         target2 = max(REFINE_ABOVE**2, 4.0 * self.floor2) * b2
         accept2 = max(MAX_RESIDUAL**2, 4.0 * self.floor2) * b2
         e, w, last = self.b.duplicate(), self.b.duplicate(), self.b.duplicate()
         try:
             self._solve_with(g, x)
             x.axpy(1.0, self.y_vec)
+            t = self._lap("substitution", t)
             r2_last, u_last = math.inf, None
             for step in range(REFINEMENTS + 1):
                 update_ghosts(x)
@@ -247,6 +260,7 @@ class IncrementalSolver:
         finally:
             for vec in (e, w, last):
                 vec.destroy()
+            self._lap("residual", t)
         if not r2 <= accept2:
             raise Stale("residual", f"relative residual {np.sqrt(r2 / b2):.1e}")
         return u
@@ -302,6 +316,12 @@ class IncrementalSolver:
         if not r2 <= accept2:
             raise Stale("residual", f"relative residual {np.sqrt(r2 / f_norm2):.1e}")
         return u
+
+    def _lap(self, name: str, t0: float) -> float:
+        """Add the seconds since ``t0`` to the part ``name``; returns now."""
+        t1 = time.perf_counter()
+        self.parts[name] = self.parts.get(name, 0.0) + t1 - t0
+        return t1
 
     def _solve_with(self, g: np.ndarray, out: Vector) -> None:
         """Solve A₀ out = E g; E g has nonzeros on T only (a sparse right-hand side)."""

@@ -36,6 +36,7 @@ from geofrac.fracture.units import Block, Fit
 from geofrac.solvers import LinearSolver, Matrix, PreconditionedCG, Vector, transposed
 
 __all__ = [
+    "PARTS",
     "PREFIX",
     "PiecesHeld",
     "RefactorSolver",
@@ -48,6 +49,25 @@ __all__ = [
 
 #: Options prefix of the crack solver.
 PREFIX = "geofrac_crack_"
+
+#: The parts of an event's work that :class:`Timing` measures inside its phases:
+#: ``factorise`` (a new reference: assembly, factorisation, its solve), and with the
+#: ``update`` solver ``inverse_entries`` (MUMPS's selected entries of A₀⁻¹ for new DOFs
+#: of T), ``dense_update`` (N⁻¹ and the correction g on T, replicated on every rank),
+#: ``substitution`` (the solve x = y + A₀⁻¹ E g) and ``residual`` (gathering x, the
+#: residual check and refinement); ``stresses`` (σ1, energy and reaction of the
+#: units), ``choose`` (the criterion and the event's sites) and ``crack`` (crack the
+#: sites, refit the MLS cells).
+PARTS = (
+    "factorise",
+    "inverse_entries",
+    "dense_update",
+    "substitution",
+    "residual",
+    "stresses",
+    "choose",
+    "crack",
+)
 
 
 class PiecesHeld(RunError):
@@ -71,11 +91,20 @@ class Timing:
     stale: dict[str, int] = field(default_factory=dict)
     #: refinement steps of the ``update`` solver that needed solves with the factor.
     refinements: int = 0
+    #: seconds of the work inside the phases, by what it is (:data:`PARTS`); each
+    #: part lies within one phase, and parts need not cover a phase.
+    parts: dict[str, float] = field(default_factory=lambda: dict.fromkeys(PARTS, 0.0))
 
     def add(self, phase: str, t0: float) -> float:
         """Add the time since ``t0`` to ``phase``; returns now."""
         t1 = time.perf_counter()
         self.seconds[phase] += t1 - t0
+        return t1
+
+    def part(self, name: str, t0: float) -> float:
+        """Add the time since ``t0`` to the part ``name`` (:data:`PARTS`); returns now."""
+        t1 = time.perf_counter()
+        self.parts[name] += t1 - t0
         return t1
 
 
@@ -140,6 +169,17 @@ class RefactorSolver:
     def __init__(self, ctx: CrackContext, assembler: Assembler, timing: Timing) -> None:
         self.ctx, self.assembler, self.timing = ctx, assembler, timing
         self.solver: LinearSolver | None = None
+        self._looked = False
+
+    def _first_look(self) -> None:
+        """Hold cut-free pieces before the run's first factorisation (collective).
+
+        Pre-cracked networks often leave pieces free from the start; finding them
+        first spares the factorisation of a singular system that would find them too.
+        """
+        if not self._looked:
+            self._looked = True
+            self.assembler.find_fragments()
 
     def _refactor(self, A: Matrix) -> LinearSolver:
         """A new direct factorisation of A (the previous one freed)."""
@@ -160,6 +200,7 @@ class RefactorSolver:
         """Assemble and solve; hold cut-free pieces once when the system is singular."""
         t = time.perf_counter()
         assembler = self.assembler
+        self._first_look()
         A, b, _ = assembler.assemble(u_prev)
         t = self.timing.add("assemble", t)
         try:
@@ -366,6 +407,8 @@ class UpdateSolver(RefactorSolver):
         """Assemble, factorise and solve the current state; it becomes the reference."""
         ctx, assembler = self.ctx, self.assembler
         bc = ctx.bc_mask
+        t_ref = time.perf_counter()
+        self._first_look()
         for attempt in range(2):
             t = time.perf_counter()
             A, b, held = assembler.assemble(u_prev)
@@ -387,6 +430,7 @@ class UpdateSolver(RefactorSolver):
                     gather=gather,
                     capacity=ctx.config.update_dofs,
                     transposed=partial(self._transposed, A) if unsymmetric else None,
+                    parts=self.timing.parts,
                 )
                 self.solver = None  # the reference owns it now
                 break
@@ -398,6 +442,7 @@ class UpdateSolver(RefactorSolver):
                     raise
             finally:
                 self.timing.add("solve", t)
+        self.timing.part("factorise", t_ref)
         state = assembler.units.state
         self._ref_fits = dict(state.fits)
         self._applied = {}

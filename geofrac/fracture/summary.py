@@ -13,6 +13,7 @@ from geofrac.fracture.faces import Faces, contact_summary
 from geofrac.fracture.linear import Timing
 from geofrac.fracture.output import Row
 from geofrac.fracture.units import Units
+from geofrac.timing import peak_rss_mb
 
 __all__ = ["FaceReport", "Summary"]
 
@@ -91,6 +92,10 @@ class Summary:
             "dofs": ctx.n_global,
             "events_per_s": done / elapsed if elapsed > 0 else float("nan"),
             "phase_s": {k: ctx.comm.allreduce(v, op=MPI.MAX) for k, v in t.seconds.items()},
+            # every rank's seconds per phase and per part of the work (rank order)
+            "phase_s_per_rank": {k: ctx.comm.allgather(v) for k, v in t.seconds.items()},
+            "part_s_per_rank": {k: ctx.comm.allgather(v) for k, v in t.parts.items()},
+            "peak_rss_mb_per_rank": ctx.comm.allgather(peak_rss_mb()),
             "factorizations": t.factorizations,
             "refactor_reasons": dict(sorted(t.stale.items())),
             "refinement_solves": t.refinements,

@@ -12,12 +12,12 @@ for intact cells, the MLS stiffness (2.19) for cracked ones.
 from __future__ import annotations
 
 import math
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from mpi4py import MPI
-from scipy.sparse import csr_matrix
 
+from geofrac import kernels
 from geofrac.elements.kinematics import KINDS, dofs_from_gradient, vertex_field
 from geofrac.errors import RunError
 from geofrac.fracture.cells import (
@@ -43,7 +43,8 @@ __all__ = [
     "Fit",
     "SiteState",
     "Units",
-    "cell_rows",
+    "cell_stresses",
+    "cell_stresses_numpy",
     "mls_settings",
     "penalty_of",
     "set_material",
@@ -77,25 +78,63 @@ GAUSS_6 = (
 )
 
 
-def cell_rows(blocks: np.ndarray, dofs: np.ndarray, n: int) -> csr_matrix:
-    """One CSR matrix of per-cell row blocks acting on the global vector.
-
-    Row block c holds ``blocks[c]`` on the columns ``dofs[c]``: the product with u gives
-    every cell's ``blocks[c] @ u[dofs[c]]`` in one sparse product. The CSR's values are
-    ``blocks`` itself (no copy), so writing into ``blocks`` changes the operator.
+def cell_stresses_numpy(
+    S: np.ndarray, K: np.ndarray, dofs: np.ndarray, *, u: np.ndarray, use: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """Midpoint stresses, σ1 and strain energy of the cells ``use`` (numpy reference).
 
     Args:
-        blocks: the cells' matrices, shape=(num_cells, r, k), C-contiguous float.
-        dofs: their global columns, shape=(num_cells, k).
-        n: number of global DOFs.
+        S: stress operators, shape=(num_cells, 9, nd) (row 3q + i: midpoint q,
+            component i of (σ_xx, σ_yy, σ_xy)).
+        K: stiffness matrices, shape=(num_cells, nd, nd).
+        dofs: the cells' global DOFs, shape=(num_cells, nd).
+        u: the global solution, shape=(n_global,).
+        use: the cells to evaluate, shape=(num_cells,) bool.
 
     Returns:
-        shape=(num_cells * r, n).
+        σ1 per cell and midpoint, shape=(num_cells, 3), the stresses, shape=(num_cells,
+        9) (zero for cells not used), and Σ ½ u_cᵀ K_c u_c over the cells used.
     """
-    nc, r, k = blocks.shape
-    indices = np.repeat(dofs, r, axis=0).astype(np.int32 if n < 2**31 else np.int64).ravel()
-    indptr = np.arange(0, nc * r * k + 1, k, dtype=indices.dtype)
-    return csr_matrix((blocks.reshape(-1), indices, indptr), shape=(nc * r, n), copy=False)
+    ud = u[dofs[use]]
+    sig = np.zeros((len(dofs), 9))
+    sig[use] = np.einsum("crp,cp->cr", S[use], ud)
+    s1 = np.zeros((len(dofs), 3))
+    s1[use] = principal_max(sig[use].reshape(-1, 3, 3))
+    energy = 0.5 * float(np.einsum("cp,cpq,cq->", ud, K[use], ud))
+    return s1, sig, energy
+
+
+def cell_stresses(
+    S: np.ndarray, K: np.ndarray, dofs: np.ndarray, *, u: np.ndarray, use: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """:func:`cell_stresses_numpy` by the compiled kernel ``cellstress`` (one pass)."""
+    lib, ffi = (module := kernels.load("cellstress")).lib, module.ffi
+    nc, _, nd = S.shape
+    S, K = np.ascontiguousarray(S, dtype=float), np.ascontiguousarray(K, dtype=float)
+    dofs = np.ascontiguousarray(dofs, dtype=np.int64)
+    u = np.ascontiguousarray(u, dtype=float)
+    flags = np.ascontiguousarray(use, dtype=np.uint8)
+    s1, sig = np.zeros((nc, 3)), np.zeros((nc, 9))
+    if not nc:
+        return s1, sig, 0.0
+
+    def buf(kind: str, a: np.ndarray) -> Any:
+        return ffi.from_buffer(kind, a)
+
+    energy = lib.cell_stresses(
+        nc,
+        nd,
+        buf("long[]", dofs),
+        buf("double[]", u),
+        buf("double[]", S),
+        buf("double[]", K),
+        buf("unsigned char[]", flags),
+        buf("double[]", s1),
+        buf("double[]", sig),
+    )
+    if not math.isfinite(energy):
+        raise RunError(f"cell_stresses: {nd} DOFs per cell exceed the kernel's 64")
+    return s1, sig, float(energy)
 
 
 def unit_masks(
@@ -253,13 +292,10 @@ class EdgeUnits:
         self.fe_dofs = ctx.node_dofs(gm.cells[own].ravel()).reshape(len(own), 3 * ctx.bs)
         stress_op = np.einsum("ij,cqjp->cqip", ctx.D, strain_operator(spec, x, MIDPOINTS))
         nc, nd = self.fe_dofs.shape
-        # for measures(): the stress at the 3 edge midpoints, shape=(n_own * 9, n_global)
-        # (row 9c + 3q + i: cell c, midpoint q, component i), and K, shape=(n_own * nd,
-        # n_global); their values are these arrays (set_material writes into them)
+        # for measures(): the stress at the 3 edge midpoints, shape=(n_own, 9, nd)
+        # (row 3q + i: midpoint q, component i)
         self._stress_blocks = np.ascontiguousarray(stress_op.reshape(nc, 9, nd))
-        self._stress_rows = cell_rows(self._stress_blocks, self.fe_dofs, ctx.n_global)
-        self.K_fe = np.ascontiguousarray(self.K_fe)
-        self._K_rows = cell_rows(self.K_fe, self.fe_dofs, ctx.n_global)
+        kernels.load("cellstress", ctx.comm)  # compiled once, rank 0 first (collective)
         self.owned = np.zeros(len(gm.cells), dtype=bool)
         self.owned[own] = True
         # owned cells (positions in own) with a control DOF: the only ones whose forces
@@ -413,17 +449,17 @@ class EdgeUnits:
         s1 = np.zeros((len(ctx.gm.cells), 3))
         u_ext = np.append(u, 0.0)
         fe = ~is_mls[own]
-        nc, nd = self.fe_dofs.shape
-        stress = (self._stress_rows @ u).reshape(nc, 3, 3)  # (cell, midpoint, component)
-        s1[own[fe]] = principal_max(stress[fe])
+        s1_fe, stress, energy = cell_stresses(
+            self._stress_blocks, self.K_fe, self.fe_dofs, u=u, use=fe
+        )
+        s1[own[fe]] = s1_fe[fe]
         full = np.zeros((len(ctx.gm.cells), 3, 3)) if self.keep_stress else None
         if full is not None:
-            full[own[fe]] = stress[fe]
-        ku = (self._K_rows @ u).reshape(nc, nd)
-        energy = 0.5 * float(np.einsum("cp,cp->c", u[self.fe_dofs], ku) @ fe)
+            full[own[fe]] = stress[fe].reshape(-1, 3, 3)
         sign = ctx.control_sign
         r = self._reacting[fe[self._reacting]]
-        reaction = float(np.sum(ku[r] * sign[self.fe_dofs[r]]))
+        ku = np.einsum("cpq,cq->cp", self.K_fe[r], u[self.fe_dofs[r]])
+        reaction = float(np.sum(ku * sign[self.fe_dofs[r]]))
         self._sync_table()
         table = self._table
         assert table is not None

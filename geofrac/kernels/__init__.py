@@ -17,6 +17,9 @@ Kernels:
 - ``cmulti``: the C-MultiMLSM fit A⁻¹C and stiffness of one node, with the order drop
   (a plain function ``cmulti_node``, not a ufcx kernel; wrapper and numpy reference in
   :mod:`geofrac.mls.cmulti`).
+- ``cellstress``: the element cells' midpoint stresses, largest principal stress and
+  strain energy of a crack state's solution in one pass (``cell_stresses``; wrapper
+  and numpy reference in :mod:`geofrac.fracture.units`).
 """
 
 from __future__ import annotations
