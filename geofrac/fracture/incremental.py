@@ -6,7 +6,7 @@ y = A₀⁻¹ b₀, and the changed block on the touched DOFs T. Each event cost
 
 - the entries of A₀⁻¹ on (T, new DOFs of T), from MUMPS's selected-inverse solve
   (:func:`geofrac.solvers.mumps_inverse_entries`);
-- the dense m×m correction solve (m = |T|, replicated);
+- the dense m×m correction solve (m = |T|, its rows shared among the ranks);
 - one solve with the factor, x = y + A₀⁻¹ E g (E g handed to MUMPS as a sparse right-hand
   side, :func:`geofrac.solvers.mumps_sparse_solve`), and a residual check against the current
   system ‖b − A x‖ ≤ max(:data:`MAX_RESIDUAL`, 2 ρ₀) ‖b‖, ρ₀ the reference solution's own
@@ -128,7 +128,7 @@ class IncrementalSolver:
         self.fixed, self.bc_mask, self.bc_values = fixed, bc_mask, bc_values
         self.comm = A.getComm().tompi4py()
         self.row0, self.row1 = A.getOwnershipRange()
-        self.update = LocalUpdate(A.getSize()[0], capacity)
+        self.update = LocalUpdate(A.getSize()[0], capacity, comm=self.comm)
         self.held = np.zeros_like(fixed)
         self.solver.solve(b, x)
         self.y_vec = x.copy()
@@ -302,7 +302,7 @@ class IncrementalSolver:
                 self.A.mult(x, e)
                 e.aypx(-1.0, f)
                 if lu.m:
-                    corr = -(lu.dC @ u[lu.dofs])
+                    corr = -lu.dC_matvec(u[lu.dofs])
                     mine = (lu.dofs >= self.row0) & (lu.dofs < self.row1)
                     add_values(e, lu.dofs[mine], corr[mine])
                 r2 = float(e.norm() ** 2)
@@ -333,7 +333,7 @@ class IncrementalSolver:
         mine = (lu.dofs >= self.row0) & (lu.dofs < self.row1)
         self.A.mult(x, e)
         e.aypx(-1.0, self.b)
-        corr = lu.db - lu.dC @ u[lu.dofs]
+        corr = lu.db - lu.dC_matvec(u[lu.dofs])
         add_values(e, lu.dofs[mine], corr[mine])
         return float(e.norm() ** 2)
 

@@ -239,7 +239,7 @@ def _hinged_by_definition(state):
             for v in m.cells[c]:
                 node_pieces.setdefault(int(v), set()).add(r)
     out = []
-    for r, cs in pieces.items():
+    for cs in pieces.values():
         if any(state.frozen[c] for c in cs):
             continue
         nodes = {int(v) for c in cs for v in m.cells[c]}

@@ -157,3 +157,47 @@ def test_singular_change_is_reported():
     lu.add(np.array([0]), np.array([[-2.0]]))
     with pytest.raises(np.linalg.LinAlgError):
         lu.correction(np.array([1.0]))
+
+
+def _events(lu: LocalUpdate, rng: np.random.Generator, n: int = 60, events: int = 10):
+    """Run random cell changes through ``lu``; the corrected solutions and exact ones."""
+    A0, b0, inv = _system(n, rng)
+    y = inv @ b0
+    A, b = A0.copy(), b0.copy()
+    got, exact = [], []
+    for _event in range(events):
+        dofs = np.sort(rng.choice(n, size=5, replace=False))
+        new = lu.missing(dofs)
+        if len(new):
+            rows = np.concatenate([lu.dofs, new])
+            lu.grow(new, inv[np.ix_(rows, new)])
+        k = _cell_change(rng, len(dofs))
+        lu.add(dofs, k)
+        A[np.ix_(dofs, dofs)] += k
+        f = rng.normal(size=len(dofs))
+        lu.add_rhs(dofs, f)
+        b[dofs] += f
+        e = np.zeros(n)
+        e[lu.dofs] = lu.correction(y[lu.dofs])
+        got.append(y + inv @ e)
+        exact.append(np.linalg.solve(A, b))
+    return np.array(got), np.array(exact)
+
+
+@pytest.mark.mpi(min_size=2)
+def test_rows_shared_among_ranks_give_the_serial_correction():
+    """S, ΔC and N⁻¹ split by rows over the ranks correct as the whole matrices do."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    shared = LocalUpdate(60, capacity=50, comm=comm)
+    got, exact = _events(shared, np.random.default_rng(13))
+    serial, _ = _events(LocalUpdate(60, capacity=50), np.random.default_rng(13))
+    np.testing.assert_allclose(got, exact, rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(got, serial, rtol=1e-12, atol=1e-13)
+    # each rank holds its rows only, and the gathered matrices are the serial ones
+    assert shared._loc(shared._Ninv).shape[0] == len(range(comm.rank, shared.m, comm.size))
+    N = np.eye(shared.m) + shared.S @ shared.dC
+    np.testing.assert_allclose(shared.Ninv @ N, np.eye(shared.m), atol=1e-9)
+    g = shared.homogeneous_correction(np.ones(shared.m))
+    assert np.allclose(comm.allgather(g)[0], g)  # the same on every rank
