@@ -200,9 +200,9 @@ class CrackState:
         pair = np.unique(owner[keep] * m.num_cells + labels[around[keep]])
         node, piece = np.divmod(pair, m.num_cells)
         used = np.zeros(len(m.coords), dtype=bool)
-        for fit in self.own_fits.values():
-            if fit is not None:
-                used[fit.nodes] = True
+        nodes_of_fits = [f.nodes for f in self.own_fits.values() if f is not None]
+        if nodes_of_fits:
+            used[np.concatenate(nodes_of_fits)] = True
         holds = used[node] | (np.bincount(node, minlength=len(m.coords))[node] > 1)
         held_by = np.bincount(piece, weights=holds, minlength=m.num_cells)
         hanging = held_by <= 1
