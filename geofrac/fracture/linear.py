@@ -91,8 +91,9 @@ class Timing:
     stale: dict[str, int] = field(default_factory=dict)
     #: refinement steps of the ``update`` solver that needed solves with the factor.
     refinements: int = 0
-    #: seconds of the work inside the phases, by what it is (:data:`PARTS`); each
-    #: part lies within one phase, and parts need not cover a phase.
+    #: seconds of the work inside the phases, by what it is (:data:`PARTS`): the parts
+    #: lie within the phases' time (``factorise`` spans assemble and solve), and need
+    #: not cover it.
     parts: dict[str, float] = field(default_factory=lambda: dict.fromkeys(PARTS, 0.0))
 
     def add(self, phase: str, t0: float) -> float:
@@ -409,6 +410,7 @@ class UpdateSolver(RefactorSolver):
         bc = ctx.bc_mask
         t_ref = time.perf_counter()
         self._first_look()
+        self.timing.add("assemble", t_ref)
         for attempt in range(2):
             t = time.perf_counter()
             A, b, held = assembler.assemble(u_prev)

@@ -35,3 +35,19 @@ def test_set_overrides_reach_the_case_and_contact_is_reported(tmp_path, jaeger_c
         assert rec["contact_iterations_per_event"] >= 0.0
         assert rec["contact_worst_gap"] <= 0.0
         assert rec["results"]["contact"]["pairs"] > 0
+
+
+def test_parts_and_memory_are_reported_per_rank(tmp_path, jaeger_case):
+    """Every part of the work has a time per rank; they lie within the phases' times."""
+    from geofrac.fracture.linear import PARTS
+
+    rec = _bench(tmp_path)
+    parts, phases = rec["part_s_per_rank"], rec["phase_s_per_rank"]
+    assert set(parts) == set(PARTS)
+    for per_rank in (*parts.values(), *phases.values(), rec["peak_rss_mb_per_rank"]):
+        assert len(per_rank) == rec["ranks"]
+    assert parts["factorise"][0] > 0.0  # the run's first reference
+    assert parts["stresses"][0] > 0.0 and parts["crack"][0] > 0.0
+    # the parts are measured inside the phases, so they cannot exceed them
+    assert sum(v[0] for v in parts.values()) <= sum(v[0] for v in phases.values()) + 1e-6
+    assert rec["peak_rss_mb_per_rank"][0] > 50.0  # a Python process with PETSc loaded
