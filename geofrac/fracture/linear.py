@@ -53,7 +53,7 @@ PREFIX = "geofrac_crack_"
 #: The parts of an event's work that :class:`Timing` measures inside its phases:
 #: ``factorise`` (a new reference: assembly, factorisation, its solve), and with the
 #: ``update`` solver ``inverse_entries`` (MUMPS's selected entries of A₀⁻¹ for new DOFs
-#: of T), ``dense_update`` (N⁻¹ and the correction g on T, replicated on every rank),
+#: of T), ``dense_update`` (N⁻¹ and the correction g on T, rows shared among the ranks),
 #: ``substitution`` (the solve x = y + A₀⁻¹ E g) and ``residual`` (gathering x, the
 #: residual check and refinement); ``stresses`` (σ1, energy and reaction of the
 #: units), ``choose`` (the criterion and the event's sites) and ``crack`` (crack the

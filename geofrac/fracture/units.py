@@ -124,7 +124,7 @@ def cell_stresses(
     energy = lib.cell_stresses(
         nc,
         nd,
-        buf("long[]", dofs),
+        buf("int64_t[]", dofs),
         buf("double[]", u),
         buf("double[]", S),
         buf("double[]", K),
@@ -295,7 +295,12 @@ class EdgeUnits:
         # for measures(): the stress at the 3 edge midpoints, shape=(n_own, 9, nd)
         # (row 3q + i: midpoint q, component i)
         self._stress_blocks = np.ascontiguousarray(stress_op.reshape(nc, 9, nd))
-        kernels.load("cellstress", ctx.comm)  # compiled once, rank 0 first (collective)
+        try:  # compiled once, rank 0 first (collective); numpy where it cannot be
+            kernels.load("cellstress", ctx.comm)
+            self._stresses = cell_stresses
+        except RuntimeError as exc:
+            ctx.say(f"cracking: element stresses by numpy ({exc})")
+            self._stresses = cell_stresses_numpy
         self.owned = np.zeros(len(gm.cells), dtype=bool)
         self.owned[own] = True
         # owned cells (positions in own) with a control DOF: the only ones whose forces
@@ -449,7 +454,7 @@ class EdgeUnits:
         s1 = np.zeros((len(ctx.gm.cells), 3))
         u_ext = np.append(u, 0.0)
         fe = ~is_mls[own]
-        s1_fe, stress, energy = cell_stresses(
+        s1_fe, stress, energy = self._stresses(
             self._stress_blocks, self.K_fe, self.fe_dofs, u=u, use=fe
         )
         s1[own[fe]] = s1_fe[fe]

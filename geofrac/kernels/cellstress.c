@@ -10,18 +10,19 @@
  * Returns the energy. The numpy reference is geofrac.fracture.units.cell_stresses_numpy.
  */
 #include <math.h>
+#include <stdint.h>
 
-double cell_stresses(long nc, int nd, const long *dofs, const double *u, const double *S,
+double cell_stresses(int64_t nc, int nd, const int64_t *dofs, const double *u, const double *S,
                      const double *K, const unsigned char *use, double *s1, double *stress)
 {
     double energy = 0.0;
     double uc[64];
     if (nd > 64)
         return NAN;
-    for (long c = 0; c < nc; ++c) {
+    for (int64_t c = 0; c < nc; ++c) {
         if (!use[c])
             continue;
-        const long *d = dofs + c * nd;
+        const int64_t *d = dofs + c * nd;
         for (int p = 0; p < nd; ++p)
             uc[p] = u[d[p]];
         const double *Sc = S + c * 9 * nd;

@@ -1,2 +1,2 @@
-double cell_stresses(long nc, int nd, const long *dofs, const double *u, const double *S,
+double cell_stresses(int64_t nc, int nd, const int64_t *dofs, const double *u, const double *S,
                      const double *K, const unsigned char *use, double *s1, double *stress);

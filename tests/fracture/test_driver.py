@@ -188,3 +188,21 @@ def test_piece_free_to_slide_is_pinned_not_singular():
         assert all(np.isfinite(r["strain_energy"]) for r in driver.rows)
     finally:
         driver.problem.destroy()
+
+
+def test_without_a_c_compiler_the_stresses_fall_back_to_numpy(tmp_path, monkeypatch):
+    """A machine that cannot compile the stress kernel still cracks, the same events."""
+    from geofrac import kernels
+    from geofrac.fracture.units import cell_stresses, cell_stresses_numpy
+
+    driver, compiled = run_beam("cracking.max_events=6")
+    assert driver.units._stresses is cell_stresses  # type: ignore[attr-defined]
+    monkeypatch.setenv("GEOFRAC_CACHE_DIR", str(tmp_path))
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-compiler"))
+    monkeypatch.setattr(kernels, "_LOADED", {})
+    driver, fallback = run_beam("cracking.max_events=6")
+    assert driver.units._stresses is cell_stresses_numpy  # type: ignore[attr-defined]
+    assert fallback["events"] == compiled["events"] == 6
+    assert fallback["final_strain_energy"] == pytest.approx(
+        compiled["final_strain_energy"], rel=1e-12
+    )
