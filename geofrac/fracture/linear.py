@@ -96,10 +96,15 @@ class Timing:
     #: not cover it.
     parts: dict[str, float] = field(default_factory=lambda: dict.fromkeys(PARTS, 0.0))
 
-    def add(self, phase: str, t0: float) -> float:
-        """Add the time since ``t0`` to ``phase``; returns now."""
+    def add(self, phase: str, t0: float, *, part: tuple[str, float] | None = None) -> float:
+        """Add the time since ``t0`` to ``phase``; returns now.
+
+        ``part``: (name, start) also adds the time since start to that part.
+        """
         t1 = time.perf_counter()
         self.seconds[phase] += t1 - t0
+        if part is not None:
+            self.parts[part[0]] += t1 - part[1]
         return t1
 
     def part(self, name: str, t0: float) -> float:

@@ -205,9 +205,8 @@ class EventLoop:
         row = None if replay else self._log(run, event, choice, solved=solved, energy=energy)
         if replay:
             self._check_replay(run, event, choice)
-        t = time.perf_counter()
         parts.crack.apply(choice)
-        parts.timing.part("crack", t)
+        parts.timing.part("crack", run.clock)  # from the criterion's end
         self._after_crack(run, event, choice, row=row, energy=energy)
         if row is None:  # a replayed event: in the log and the series already
             return True
@@ -246,9 +245,8 @@ class EventLoop:
     def _choose(self, run: _Run, event: int) -> Choice | None:
         """σ1 per site and the event of least r; None when the run ends here."""
         ctx, parts, scales = self.ctx, self.parts, self.ctx.scales
-        t = time.perf_counter()
         unit_s1, energy_unit, reaction_unit = parts.units.measures(run.u_unit)
-        t = parts.timing.part("stresses", t)
+        t = parts.timing.part("stresses", run.clock)  # from the solve's end
         run.unit = (energy_unit, *ctx.control.measure(run.u_unit, reaction_unit))
         sigma1 = parts.criterion.site_stress(unit_s1)
         first_r = run.rows[0]["load_factor"] if event > 1 and run.rows else None
@@ -259,8 +257,7 @@ class EventLoop:
             return None
         floor = TENSION_FLOOR * scales.rms_stress(energy_unit)
         choice = parts.chooser.choose(sigma1, floor=floor)
-        parts.timing.part("choose", t)
-        run.clock = parts.timing.add("criterion", run.clock)
+        run.clock = parts.timing.add("criterion", run.clock, part=("choose", t))
         if len(choice.sites) == 0:
             run.end = "no_tensile_edge"
             return None
