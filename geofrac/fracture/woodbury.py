@@ -100,7 +100,10 @@ class RowShare:
 
 
 class LocalUpdate:
-    """The changed block of a system on a growing DOF set T (replicated on every rank).
+    """The changed block of a system on a growing DOF set T.
+
+    T and Δb are the same on every rank; the rows of S, ΔC and N⁻¹ are shared among
+    the ranks of ``comm`` (:class:`RowShare`), and every result is the same on every rank.
 
     Args:
         n: number of DOFs of the whole system.
