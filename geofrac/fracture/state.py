@@ -226,10 +226,8 @@ class CrackState:
         if not self.cut or not len(nodes):
             return []
         nodes = np.asarray(nodes, dtype=np.int64)
-        out: list[int] = []
-        for v in nodes[self.is_cut(nodes)].tolist():
-            out += self._star[self._star_ptr[v] : self._star_ptr[v + 1]].tolist()
-        return out
+        cut = nodes[self.is_cut(nodes)]
+        return self._star[_ranges(self._star_ptr[cut], self._star_ptr[cut + 1])].tolist()
 
     def crack(self, edge: int) -> np.ndarray:
         """Crack one edge; refit; return the cells whose field changed, sorted, shape=(k,)."""

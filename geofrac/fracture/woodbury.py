@@ -204,16 +204,14 @@ class LocalUpdate:
         nT_dC = share.sum(S_nT[:, old_rows] @ dC_loc)  # shape=(k, m)
         border = -share.sum(nT_dC[:, old_rows] @ Ninv_loc)  # shape=(k, m)
         self.m = m + k
-        mine, at = share.local(np.arange(m + k))
-        pos = np.flatnonzero(mine)  # this rank's positions among the m + k
+        pos = share.rows(m + k)  # this rank's positions among the m + k
+        at = pos // share.size  # their local rows
         self._S[at, m : m + k] = block[pos]
         new_mine = pos >= m
         self._S[at[new_mine], :m] = S_nT[pos[new_mine] - m]
         self._Ninv[at, m : m + k] = 0.0
         self._Ninv[at[new_mine], :m] = border[pos[new_mine] - m]
         self._Ninv[at[new_mine], pos[new_mine]] = 1.0
-        self._dC[at[new_mine], : m + k] = 0.0
-        self._dC[at, m : m + k] = 0.0
 
     def add(self, dofs: np.ndarray, matrix: np.ndarray) -> None:
         """ΔC[dofs, dofs] += matrix for DOFs already in T.
@@ -277,11 +275,7 @@ class LocalUpdate:
         if self.m == 0:
             return np.zeros(0)
         self._fold()
-        S, dC, Ninv = self._S, self._dC, self._Ninv
-
-        def mul(a: np.ndarray, v: np.ndarray) -> np.ndarray:
-            return self._product(a, v)
-
+        S, dC, Ninv, mul = self._S, self._dC, self._Ninv, self._product
         rhs = self.db - mul(dC, y_t)
         g = self.db - mul(dC, mul(Ninv, y_t + mul(S, self.db)))
         for _ in range(steps):
