@@ -12,6 +12,10 @@ updates ran 2-3 times slower with 2 ranks × 2 threads on 2 cores).
 It also imports ``h5py`` before any DOLFINx or PETSc library loads: the PETSc wheel
 brings an HDF5 of its own, and an h5py imported after it finds no deflate filter, so
 the compressed output series could not be written (checked by tests/io/test_series.py).
+
+numba's on-disk cache of the jitted kernels goes to the per-user cache
+(:func:`geofrac.kernels.cache_root`, ``numba/``) unless ``NUMBA_CACHE_DIR`` is set: never
+into the installed package, which may be read-only or shared.
 """
 
 import os
@@ -31,6 +35,24 @@ def _single_threaded_blas_under_mpi() -> None:
 
 
 _single_threaded_blas_under_mpi()
+
+
+def _numba_cache_outside_the_package() -> None:
+    """Point numba's cache at the per-user cache unless the user chose one."""
+    import sys
+
+    from geofrac.kernels import cache_root  # standard library only
+
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    where = str(cache_root() / "numba")
+    os.environ["NUMBA_CACHE_DIR"] = where  # read when numba is imported
+    numba = sys.modules.get("numba")
+    if numba is not None:  # imported before geofrac: its config was read already
+        numba.config.CACHE_DIR = where
+
+
+_numba_cache_outside_the_package()
 
 import h5py  # noqa: E402, F401  (before the PETSc wheel's HDF5: see the module docstring)
 

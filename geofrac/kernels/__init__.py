@@ -7,9 +7,11 @@ source text with the system C compiler (``-O2``, no fast-math) into a cache dire
 and returns the cffi library; :func:`address` gives a function's address for
 ``dolfinx.cpp.fem.Form_float64``.
 
-Cache: ``$GEOFRAC_CACHE_DIR`` or ``$XDG_CACHE_HOME/geofrac`` (``~/.cache/geofrac``),
-in ``kernels/<name>-<hash of the source>/``. Under MPI rank 0 compiles and the other
-ranks wait for it, so ranks never race on one file.
+Cache: :func:`cache_root` (``$GEOFRAC_CACHE_DIR`` or ``$XDG_CACHE_HOME/geofrac``, i.e.
+``~/.cache/geofrac``), in ``kernels/<name>-<hash of the source>/``; numba's on-disk cache
+of the jitted kernels goes to ``numba/`` there (set by :mod:`geofrac` on import unless
+``NUMBA_CACHE_DIR`` is set), never into the installed package. Under MPI rank 0
+compiles and the other ranks wait for it, so ranks never race on one file.
 
 Kernels:
 - ``efmm``: the Enriched Free Mesh Method's node pieces of A_i and C_i per cell
@@ -34,19 +36,24 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-__all__ = ["address", "cache_dir", "load"]
+__all__ = ["address", "cache_dir", "cache_root", "load"]
 
 _HERE = Path(__file__).resolve().parent
 _LOADED: dict[str, ModuleType] = {}
 
 
-def cache_dir() -> Path:
-    """Directory of the compiled kernels."""
+def cache_root() -> Path:
+    """The per-user cache of geofrac: ``$GEOFRAC_CACHE_DIR``, else ``$XDG_CACHE_HOME/geofrac``."""
     root = os.environ.get("GEOFRAC_CACHE_DIR")
     if root:
-        return Path(root) / "kernels"
+        return Path(root)
     xdg = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(xdg) / "geofrac" / "kernels"
+    return Path(xdg) / "geofrac"
+
+
+def cache_dir() -> Path:
+    """Directory of the compiled kernels."""
+    return cache_root() / "kernels"
 
 
 def _build(name: str, source: str, header: str, target: Path) -> None:

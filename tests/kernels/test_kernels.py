@@ -62,3 +62,58 @@ def test_a_broken_compiler_is_a_clear_error(tmp_path, monkeypatch):
     monkeypatch.setattr(kernels, "_LOADED", {})
     with pytest.raises(RuntimeError, match="compiling the efmm kernel failed"):
         kernels.load("efmm")
+
+
+_NUMBA_PROBE = """
+import sys
+{first}
+import geofrac
+sys.path.insert(0, sys.argv[1])
+import jitted
+assert jitted.twice(21) == 42
+import numba
+print(numba.config.CACHE_DIR)
+"""
+
+
+@pytest.mark.parametrize("numba_first", [False, True])
+def test_numba_cache_goes_to_the_user_cache_not_the_package(tmp_path, numba_first):
+    """A cached jitted function's files land in geofrac's cache, none beside its source."""
+    import os
+    import subprocess
+    import sys
+
+    source = tmp_path / "src"
+    source.mkdir()
+    (source / "jitted.py").write_text(
+        "import numba\n\n@numba.njit(cache=True)\ndef twice(x):\n    return 2 * x\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["GEOFRAC_CACHE_DIR"] = str(tmp_path / "cache")
+    code = _NUMBA_PROBE.format(first="import numba" if numba_first else "")
+    done = subprocess.run(
+        [sys.executable, "-c", code, str(source)],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == str(tmp_path / "cache" / "numba")
+    assert list((tmp_path / "cache" / "numba").rglob("*.nbi"))
+    beside = [p for p in source.rglob("*") if p.suffix in (".nbi", ".nbc")]
+    assert beside == []
+
+
+def test_numba_cache_dir_set_by_the_user_is_kept(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "mine"))
+    code = "import geofrac, numba; print(numba.config.CACHE_DIR)"
+    done = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=False
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == str(tmp_path / "mine")
