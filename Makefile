@@ -15,7 +15,7 @@ LATEST := .venv-latest
 .PHONY: quickstart test lint typecheck test-serial test-mpi test-robust test-latest lock bench clean
 
 quickstart: $(STAMP)
-	$(VENV)/bin/geofrac run jobs/quickstart.toml
+	$(VENV)/bin/geofrac run jobs/quickstart.toml --overwrite
 
 test: lint typecheck test-serial test-mpi
 

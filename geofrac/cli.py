@@ -14,7 +14,7 @@ import time
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from geofrac import __version__
 from geofrac.bench import BENCHES, load_bench
@@ -25,7 +25,23 @@ from geofrac.scene import Scene, SceneError, load_scene_collective
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-__all__ = ["main"]
+__all__ = ["main", "quick_time"]
+
+
+
+def quick_time(root: Path | None = None) -> str:
+    """``geofrac validate --quick``'s wall time as measured and dated in docs/validation.json.
+
+    The README and docs/guide.md quote the same text (a test compares them).
+    """
+    import json
+
+    root = root or Path(__file__).resolve().parent.parent
+    try:
+        run = json.loads((root / "docs" / "validation.json").read_text())["quick_run"]
+        return f"about {run['seconds']:.0f} s on 2 cores, measured {run['date']}"
+    except (OSError, ValueError, KeyError, TypeError):
+        return "not measured yet"
 
 
 def _set_option(p: argparse.ArgumentParser, example: str) -> None:
@@ -62,7 +78,14 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "-q", "--quiet", action="store_true", help="print only errors and the output path"
     )
-    run.add_argument(
+    again = run.add_mutually_exclusive_group()
+    again.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the completed run in the output directory (only when this run "
+        "succeeds; without it a second run into a completed directory is refused)",
+    )
+    again.add_argument(
         "--resume",
         action="store_true",
         help="continue the interrupted run in the output directory from its newest checkpoint",
@@ -83,29 +106,38 @@ def _parser() -> argparse.ArgumentParser:
 
     validate = sub.add_parser(
         "validate",
-        help="run the validation suite and write docs/validation.md",
-        description="Run the validation cases (closed forms, the literature, Edo (2016)) "
-        "and rewrite the validation page from what they measure. Exit code 1 when a case "
-        "fails to run or differs from its reference for no known reason.",
+        help="run the validation suite and write its page under the output directory",
+        description="Run the validation cases (closed forms, experiments, the literature, "
+        "Edo (2016)) and write the validation page from what they measure: "
+        "OUT/validation.md, its data OUT/validation.json and its figures OUT/img/validation/. "
+        "Nothing in the source tree changes unless --update-docs is given. Exit code 1 when "
+        "a case fails to run or differs from its reference for no known reason.",
     )
     validate.add_argument(
         "--quick",
         action="store_true",
-        help="only the cases that finish in minutes (under 10 on 2 cores); the page keeps "
-        "the other cases' values from the last full run",
+        help=f"only the cases that finish in minutes ({quick_time()}); the page keeps the "
+        "other cases' values from the last full run",
     )
     validate.add_argument("--cases", help="comma-separated case names (default: all)")
     validate.add_argument(
         "--out",
         type=Path,
         default=Path("results/validation"),
-        help="where the runs write (default: results/validation)",
+        help="where the runs and the page are written (default: results/validation)",
     )
-    validate.add_argument(
+    page = validate.add_mutually_exclusive_group()
+    page.add_argument(
         "--page",
         type=Path,
-        help="the page to write (default: docs/validation.md of the repository; its data "
-        "goes beside it as .json, its figures to img/validation/)",
+        help="write the page here instead of OUT/validation.md (its data goes beside it as "
+        ".json, its figures to img/validation/)",
+    )
+    page.add_argument(
+        "--update-docs",
+        action="store_true",
+        help="for maintainers: rewrite the project's docs/validation.md, .json and "
+        "img/validation/ (commit them with the change that moved the numbers)",
     )
     validate.add_argument("--list", action="store_true", help="list the cases and exit")
     validate.set_defaults(func=_validate)
@@ -181,6 +213,11 @@ def _run(args: argparse.Namespace, comm: MPI.Comm) -> int:
     timings = Timings()
     with timings.phase("load"):
         scene = _load(args, comm, args.out)
+        from geofrac.io.outdir import preflight
+
+        where = "--out" if args.out else "output.dir"
+        again = {"overwrite": args.overwrite, "resume": args.resume}
+        preflight(scene.output.dir, comm, file=args.scene, key=where, **again)
     echo(comm, f"geofrac {__version__}: scene '{scene.name}' ({args.scene}) on {comm.size} rank(s)")
     quiet = args.quiet
     from geofrac import pipeline
@@ -247,8 +284,14 @@ def _validate(args: argparse.Namespace, comm: MPI.Comm) -> int:
         for c in cases:
             echo(comm, f"{c.name:22s} {c.chapter}: {c.title}{'' if c.quick else ' (full only)'}")
         return 0
-    page = args.page or root / "docs" / "validation.md"
+    docs_page = root / "docs" / "validation.md"
+    page = docs_page if args.update_docs else args.page or args.out / "validation.md"
     data_path = page.with_suffix(".json")
+    # the other cases' rows and the time left: this page's data if it exists (measured on
+    # this machine), else the project's page (the last full run, on the CI machine)
+    stored_path = data_path if data_path.exists() else docs_page.with_suffix(".json")
+    stored = _read_json(stored_path) if comm.rank == 0 else None
+    stored = comm.bcast(stored, root=0)
     command = ("" if comm.size == 1 else f"mpiexec -n {comm.size} ") + "geofrac validate"
     command += " --quick" if args.quick else ""
     if names:
@@ -265,6 +308,7 @@ def _validate(args: argparse.Namespace, comm: MPI.Comm) -> int:
             root=root,
             say=lambda text: echo(comm, text),
             figures=page.parent / "img" / "validation",
+            measured=_measured_seconds(stored),
         )
     except interrupt.Interrupted as exc:
         echo(comm, f"validate: {exc}; {page} was not rewritten", err=True)
@@ -273,10 +317,13 @@ def _validate(args: argparse.Namespace, comm: MPI.Comm) -> int:
         interrupt.uninstall()
     seconds = time.perf_counter() - start
     if comm.rank == 0:
-        stored = json.loads(data_path.read_text()) if data_path.exists() else None
         stamp = datetime.date.today().isoformat()
         full = not args.quick and not names
         data = merge(stored, results, command, seconds=seconds, full=full, stamp=stamp)
+        if args.quick and not names:  # the time --help, the README and the guide quote
+            data["quick_run"] = data["last_run"]
+        page.parent.mkdir(parents=True, exist_ok=True)
+        _point_at_existing_figures(data, page.parent, docs_page.parent)
         data_path.write_text(json.dumps(data, indent=1) + "\n")
         write_page(data, page)
     bad = [r for r in results if r.status.startswith(("failed", "differs: not explained"))]
@@ -285,6 +332,40 @@ def _validate(args: argparse.Namespace, comm: MPI.Comm) -> int:
     for r in bad:
         echo(comm, f"  {r.case.name}: {r.status}", err=True)
     return 1 if bad else 0
+
+
+def _read_json(path: Path) -> dict[str, Any] | None:
+    """A page's data, or None when it is missing or unreadable."""
+    import json
+
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def _point_at_existing_figures(data: dict[str, Any], here: Path, docs: Path) -> None:
+    """Rows kept from the project's page show the project's figures (relative links)."""
+    import os
+
+    for entry in data.get("cases", {}).values():
+        figure = entry.get("figure") if isinstance(entry, dict) else None
+        if not figure or (here / figure).exists() or not (docs / figure).exists():
+            continue
+        entry["figure"] = os.path.relpath(docs / figure, here.resolve())
+
+
+def _measured_seconds(stored: dict[str, Any] | None) -> dict[str, float]:
+    """Each case's measured wall time in a page's data (seconds; none where not run)."""
+    cases = (stored or {}).get("cases", {})
+    return {
+        name: float(entry["seconds"])
+        for name, entry in cases.items()
+        if isinstance(entry, dict)
+        and isinstance(entry.get("seconds"), int | float)
+        and entry["seconds"] > 0
+    }
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -13,7 +13,13 @@ files (listed in its ``summary.json`` under ``files``) are removed, ``summary.js
 first, the new files moved in and the new ``summary.json`` written last, so ``OUT``
 never holds one run's files beside another run's summary. A run that fails or is
 interrupted leaves ``OUT`` as it was. A second run into the same ``OUT`` while the first
-holds the lock is refused. The lock is an advisory ``flock``, released by the kernel
+holds the lock is refused.
+
+One rule for a new run (:func:`preflight`, before any work; the CLI exits 2): ``OUT``
+that holds a completed run (``OUT/summary.json``) is refused unless the run says
+``--overwrite`` (the old results are replaced only when the new run succeeds) or
+``--resume`` (continue the interrupted run in ``OUT/incomplete``); ``OUT`` that is a file,
+or that cannot be created, is refused too. The lock is an advisory ``flock``, released by the kernel
 when the process dies, so a killed run never leaves a stale lock.
 
 Collective functions return the same result or raise the same :class:`RunError` on
@@ -39,13 +45,14 @@ from geofrac.errors import RunError
 from geofrac.io.checkpoint import CheckpointPolicy, RunControl, latest
 from geofrac.io.summary import finish_summary, write_json
 from geofrac.log import sayer
+from geofrac.model.errors import SceneError
 from geofrac.model.scene import Scene
 from geofrac.timing import Timings
 
 if TYPE_CHECKING:
     from mpi4py import MPI
 
-__all__ = ["INCOMPLETE", "SUBDIRECTORIES", "OutputDir", "claim", "owned_run"]
+__all__ = ["INCOMPLETE", "SUBDIRECTORIES", "OutputDir", "claim", "owned_run", "preflight"]
 
 #: The staging directory's name inside the output directory.
 INCOMPLETE = "incomplete"
@@ -242,6 +249,65 @@ def _previous_status(stage: Path) -> str | None:
         return json.loads((stage / "summary.json").read_text()).get("status")
     except (OSError, ValueError, AttributeError):
         return None
+
+
+def _refusal(final: Path, *, overwrite: bool, resume: bool) -> str | None:
+    """Why a new run must not start in ``final`` (rank 0), or None."""
+    if final.exists() and not final.is_dir():
+        return f"{final} exists and is not a directory; choose another with --out"
+    existing = final
+    while not existing.exists():  # the nearest ancestor that exists must let us write
+        existing = existing.parent
+    if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
+        return f"cannot create or write {final}: {existing} is not writable"
+    if resume:
+        if latest(final / INCOMPLETE / _CHECKPOINT) is None:
+            return (
+                f"--resume: no complete checkpoint in {final / INCOMPLETE / _CHECKPOINT}; "
+                "nothing to resume (run without --resume to start afresh)"
+            )
+        return None
+    summary = final / "summary.json"
+    if overwrite or not summary.is_file():
+        return None
+    try:
+        done = json.loads(summary.read_text())
+        when = f" (scene '{done['scene']['name']}', finished {done['finished']})"
+    except (OSError, ValueError, KeyError, TypeError):
+        when = ""
+    return (
+        f"{final} holds a completed run{when}; a second run into it is refused. Pass "
+        "--overwrite to replace its results (only when the new run succeeds), --resume to "
+        "continue an interrupted run, or --out to choose another directory"
+    )
+
+
+def preflight(
+    final: Path,
+    comm: MPI.Comm,
+    *,
+    file: str | Path,
+    key: str = "output.dir",
+    overwrite: bool = False,
+    resume: bool = False,
+) -> None:
+    """Refuse an output directory a new run must not use, before any work (collective).
+
+    Args:
+        final: the output directory.
+        comm: the communicator (rank 0 looks, every rank raises).
+        file: the scene file, for the message.
+        key: what set the directory, for the message (``output.dir`` or ``--out``).
+        overwrite: ``--overwrite``: a completed run in ``final`` may be replaced.
+        resume: ``--resume``: ``final/incomplete`` must hold a complete checkpoint.
+
+    Raises:
+        SceneError: naming ``key`` (the CLI's exit code 2).
+    """
+    why = _refusal(final, overwrite=overwrite, resume=resume) if comm.rank == 0 else None
+    why = comm.bcast(why, root=0)
+    if why is not None:
+        raise SceneError(file, key, why)
 
 
 def claim(final: Path, comm: MPI.Comm, *, resume: bool = False) -> OutputDir:

@@ -101,6 +101,7 @@ def run_cases(
     root: Path,
     say: Callable[[str], None] = print,
     figures: Path | None = None,
+    measured: dict[str, float] | None = None,
 ) -> list[Result]:
     """Run ``cases``; return their results in the same order.
 
@@ -115,6 +116,8 @@ def run_cases(
         root: the repository (scene paths are relative to it).
         say: progress output (rank 0).
         figures: where case figures go (None: none drawn).
+        measured: each case's wall time in an earlier run (seconds, by case name), for
+            the time left; a case without one counts its :attr:`Case.estimate_s`.
     """
     from mpi4py import MPI
 
@@ -124,10 +127,12 @@ def run_cases(
     results = []
     t_start = time.perf_counter()
     keys = [(c.scene, c.bench, c.overrides) for c in cases]
-    # each distinct run's estimate (Case.estimate_s), scaled by this machine's pace so far
+    # each distinct run's time as measured before (else Case.estimate_s), scaled by this
+    # machine's pace so far
+    before = measured or {}
     estimates: dict[tuple[Any, ...], float] = {}
     for k, c in zip(keys, cases, strict=True):
-        estimates.setdefault(k, c.estimate_s)
+        estimates.setdefault(k, before.get(c.name, c.estimate_s))
     for i, case in enumerate(cases, 1):
         key = keys[i - 1]
         seconds = 0.0

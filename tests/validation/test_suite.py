@@ -162,5 +162,38 @@ def test_cli_lists_cases_refuses_unknown_ones_and_writes_a_page(cli, tmp_path):
     assert code == 0, out
     data = json.loads(page.with_suffix(".json").read_text())
     assert data["cases"]["patch_test"]["value"] < 1e-10
-    assert data["full_run"] is None  # a selection is not the full suite
+    # a selection is not the full suite: the full run stays the project's (its rows kept)
+    project = json.loads((REPO / "docs" / "validation.json").read_text())
+    assert data["full_run"] == project["full_run"] and data["last_run"]["cases"] == 1
     assert "patch_test" in page.read_text() or "patch test" in page.read_text()
+
+
+def test_validate_writes_its_page_under_the_output_directory_not_into_docs(cli, tmp_path):
+    docs = [REPO / "docs" / "validation.md", REPO / "docs" / "validation.json"]
+    before = [p.read_bytes() for p in docs]
+    code, out, _ = cli("validate", "--cases", "patch_test", "--out", tmp_path / "v")
+    assert code == 0, out
+    assert [p.read_bytes() for p in docs] == before  # the checkout is untouched
+    page = tmp_path / "v" / "validation.md"
+    assert f"wrote {page}" in out
+    data = json.loads(page.with_suffix(".json").read_text())
+    assert data["cases"]["patch_test"]["value"] < 1e-10
+    # the cases not run keep the project's last values, as the project's page shows them
+    stored = json.loads(docs[1].read_text())["cases"]
+    assert data["cases"]["cantilever_tip"]["value"] == stored["cantilever_tip"]["value"]
+    for entry in data["cases"].values():  # every figure link resolves from the page
+        if entry.get("figure"):
+            assert (page.parent / entry["figure"]).exists(), entry["figure"]
+
+
+def test_the_time_left_counts_each_case_as_measured_before(tmp_path):
+    cases = select(["patch_test", "cantilever_tip"], quick=False)
+    said: list[str] = []
+    slow = {"patch_test": 1.0, "cantilever_tip": 1e6}  # the second took a million times more
+    run_cases(cases, tmp_path, MPI.COMM_WORLD, root=REPO, say=said.append, measured=slow)
+    eta = next(line for line in said if line.startswith("validate [2/2]"))
+    assert eta.endswith("min left"), eta  # >= 0.1 s so far x 1e6: thousands of minutes
+    said.clear()
+    run_cases(cases, tmp_path / "again", MPI.COMM_WORLD, root=REPO, say=said.append)
+    eta = next(line for line in said if line.startswith("validate [2/2]"))
+    assert eta.endswith(" s left"), eta  # the cases' own estimates: seconds
