@@ -6,7 +6,9 @@
 # RANKS defaults to $GEOFRAC_NP or 2. The venv is .venv at the repository root unless
 # $VENV says otherwise (run `make quickstart` once to create it). Each scene writes its
 # own output directory (output.dir in the scene); a failing scene stops the batch with
-# its exit code, and its summary.json records the error.
+# its exit code, and its summary.json records the error. A scene whose output directory
+# holds a completed run is refused (exit 2): pass `-- --overwrite` to replace such
+# results (only when the new run succeeds).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 venv=${VENV:-$root/.venv}
