@@ -12,8 +12,24 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
-from geofrac.validation import CASES, CHAPTERS, Case, Reference, select
-from geofrac.validation.cases import jaeger_slip_stress, lame_inner_displacement, timoshenko_tip
+from geofrac.validation import (
+    CASES,
+    CHAPTERS,
+    CONSISTENCY,
+    REPRODUCTION,
+    SECTIONS,
+    VALIDATION,
+    Case,
+    Reference,
+    select,
+)
+from geofrac.validation.cases import (
+    GALVEZ_PEAK,
+    declared_units,
+    jaeger_slip_stress,
+    lame_inner_displacement,
+    timoshenko_tip,
+)
 from geofrac.validation.suite import merge, run_cases, status_of, write_page
 from tests.conftest import REPO
 
@@ -28,7 +44,15 @@ FRESH_RTOL = 1e-6
 
 def _case(reference: Reference, known: str | None = None) -> Case:
     return Case(
-        "x", "Elements", "t", "q", reference, lambda s, o: 0.0, scene="jobs/x.toml", known=known
+        "x",
+        "Elements",
+        "t",
+        "q",
+        reference,
+        lambda s, o: 0.0,
+        scene="jobs/x.toml",
+        known=known,
+        section=VALIDATION,
     )
 
 
@@ -101,6 +125,93 @@ def test_jobs_validation_holds_the_cases_scenes_and_nothing_else():
     }
     for link in folder.iterdir():
         assert link.is_symlink() and link.resolve() == (REPO / "jobs" / link.name).resolve()
+
+
+def test_every_case_declares_its_section():
+    """Each registry entry says what its reference is; none is left to the page to guess."""
+    for case in CASES:
+        assert case.section in SECTIONS, case.name
+        # a reference that is Edo (2016)'s own number cannot validate the physics
+        if case.section == VALIDATION:
+            assert case.reference.independent, case.name
+    by_name = {c.name: c for c in CASES}
+    # checked against the scene's own inputs: the DFN's sets and target P21, the block
+    # count the terrain was built to, the meshed cylinder's volume
+    for name in ("dfn_orientation", "dfn_p21", "terrain_blocks", "blocks_cylinder"):
+        assert by_name[name].section == CONSISTENCY, name
+    for name in ("cantilever_rate_rgnt", "efmm_table31", "efmm_spread", "landslide_8deg"):
+        assert by_name[name].section == REPRODUCTION, name
+    for name in ("notched_beam", "notched_beam_peak", "cantilever_tip", "mpm_impact"):
+        assert by_name[name].section == VALIDATION, name
+    with pytest.raises(ValueError, match="section"):
+        Case("x", "Elements", "t", "q", Reference(1.0, "s"), lambda s, o: 0.0, scene="x")
+
+
+def _sections(text: str) -> dict[str, str]:
+    """The page's text under each ``## `` heading, by heading."""
+    parts = text.split("\n## ")[1:]
+    return {p.split("\n", 1)[0]: p.split("\n", 1)[1] for p in parts}
+
+
+def test_the_page_puts_each_case_under_its_section(tmp_path):
+    data = json.loads(DATA.read_text())
+    page = tmp_path / "validation.md"
+    shown = write_page(data, page)
+    text = page.read_text()
+    headings = [line[3:] for line in text.splitlines() if line.startswith("## ")]
+    assert headings[:3] == list(SECTIONS)  # in this order, before "Not yet run"
+    sections = _sections(text)
+    rows = [f"| {r.case.title}<br>`{r.case.command()}` |" for r in shown]
+    assert len(set(rows)) == len(rows)  # a row names its case
+    for r, row in zip(shown, rows, strict=True):
+        assert row in sections[r.case.section], (r.case.name, r.case.section)
+        for other in set(SECTIONS) - {r.case.section}:
+            assert row not in sections[other], (r.case.name, other)
+
+
+def test_quantities_are_in_the_scenes_units(tmp_path):
+    by_name = {c.name: c for c in CASES}
+    # jobs/dfn_model1.toml is in millimetres; jobs/blocks_cylinder.toml declares no units
+    assert declared_units(by_name["dfn_p21"], REPO)["length"] == "mm"
+    assert by_name["dfn_p21"].quantity_in(declared_units(by_name["dfn_p21"], REPO)) == (
+        "P21 (1/mm)"
+    )
+    assert declared_units(by_name["blocks_cylinder"], REPO) == {}
+    assert by_name["blocks_cylinder"].quantity_in({}) == "volume"
+    assert by_name["blocks_cylinder"].quantity_in({"length": "m"}) == "volume (m³)"
+    assert by_name["jaeger_60"].quantity_in({"stress": "MPa"}) == "σ1 at slip (MPa)"
+    assert by_name["cantilever_rate_rgnt"].quantity_in({"length": "mm"}).endswith("R/2))")
+    # the page: the same cells
+    data = json.loads(DATA.read_text())
+    page = tmp_path / "validation.md"
+    write_page(data, page)
+    text = page.read_text()
+    assert "| P21 (1/mm) |" in text and "| volume |" in text
+    assert "(1/m)" not in text and "(m³)" not in text
+
+
+def test_the_peak_load_is_read_in_kn_from_the_scenes_force_unit():
+    case = {c.name: c for c in CASES}["notched_beam_peak"]
+    summary = {
+        "scene": {"input": {"units": {"force": "N"}}},
+        "results": {"cracking": {"peak_reaction": 1518.5}},
+    }
+    assert case.measure(summary, Path(".")) == pytest.approx(1.5185, rel=1e-12)
+    summary["scene"]["input"]["units"] = {"force": "kN"}
+    assert case.measure(summary, Path(".")) == pytest.approx(1518.5, rel=1e-12)
+    summary["scene"]["input"] = {}
+    with pytest.raises(ValueError, match="force unit"):
+        case.measure(summary, Path("."))
+    assert case.reference is GALVEZ_PEAK and "Gálvez" in case.reference.source
+    assert case.quantity_in({"force": "N"}).endswith("(kN)")
+
+
+def test_a_pending_reference_compares_nothing():
+    pending = Reference(math.nan, "s", kind="pending")
+    assert not pending.holds(1.0) and math.isnan(pending.difference(1.0))
+    assert pending.text() == "not yet transcribed"
+    assert status_of(_case(pending, "why"), 1.0) == "no reference: why"
+    assert status_of(_case(pending), math.nan).startswith("failed")
 
 
 def test_select_by_name_and_subset():
