@@ -28,7 +28,6 @@ if TYPE_CHECKING:
 __all__ = ["main", "quick_time"]
 
 
-
 def quick_time(root: Path | None = None) -> str:
     """``geofrac validate --quick``'s wall time as measured and dated in docs/validation.json.
 
@@ -158,7 +157,7 @@ def _check(args: argparse.Namespace, comm: MPI.Comm) -> int:
     scene = _load(args, comm)
     echo(comm, f"ok: {args.scene}: {_describe(scene)}")
     if scene.size is not None:
-        echo(comm, f"size: {scene.size.summary()} (estimate; caps in docs/scenes.md)")
+        echo(comm, f"size: {scene.size.summary()} ({scene.size.method}; caps in docs/scenes.md)")
     if scene.initial_stress is not None:
         return _check_balance(scene, comm)
     return 0
@@ -248,7 +247,7 @@ def _run(args: argparse.Namespace, comm: MPI.Comm) -> int:
     finally:
         interrupt.uninstall()
     if not quiet:
-        for line in pipeline.report(method, summary):
+        for line in pipeline.report(method, summary, scene):
             echo(comm, line)
     echo(comm, f"output: {scene.output.dir}")
     return 0

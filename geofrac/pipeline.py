@@ -12,9 +12,14 @@ A method gives only what is its own, through :class:`Method`:
 - ``head(scene)``: its entries of the summary's head;
 - ``run(scene, comm, timings, *, verbose, control)``: build and run in ``scene.output.dir``
   (the staged directory) and return its summary entries (``results``...);
-- ``report(summary)``: its lines for the terminal.
+- ``report(summary)``: its lines for the terminal before the result block (files
+  written...);
+- ``result(scene, summary)``: its lines of the result block, the headline numbers with
+  the scene's units and their differences from the references the scene names.
 
-A new method is one module with such an object and one line in :data:`METHODS`.
+A new method is one module with such an object and one line in :data:`METHODS`. The
+result block (:func:`report`) is the method's ``result`` lines, then each declared
+effect's (:func:`geofrac.effects.result_lines`).
 """
 
 from __future__ import annotations
@@ -61,7 +66,11 @@ class Method(Protocol):
         ...
 
     def report(self, summary: dict[str, Any]) -> list[str]:
-        """The method's lines about a finished run, for the terminal."""
+        """The method's lines about a finished run before the result block."""
+        ...
+
+    def result(self, scene: Scene, summary: dict[str, Any]) -> list[str]:
+        """The method's lines of the result block (:mod:`geofrac.headline` words them)."""
         ...
 
 
@@ -111,10 +120,16 @@ def run_scene(
     )
 
 
-def report(method: Method, summary: dict[str, Any]) -> list[str]:
-    """The lines about a finished run: the method's, then the timings."""
+def report(method: Method, summary: dict[str, Any], scene: Scene) -> list[str]:
+    """The lines about a finished run: the method's, the result block, then the timings.
+
+    The result block (``result:``, its lines indented) holds the method's headline
+    numbers and each declared effect's, in ``scene``'s units.
+    """
+    from geofrac.effects import result_lines
+
     t = summary["timings_s"]
-    return [
-        *method.report(summary),
-        "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items()),
-    ]
+    lines = list(method.report(summary))
+    block = [*method.result(scene, summary), *result_lines(scene, summary["results"])]
+    lines += ["result:", *(f"  {line}" for line in block)] if block else []
+    return [*lines, "time: " + ", ".join(f"{k} {format_seconds(v)}" for k, v in t.items())]

@@ -28,6 +28,7 @@ from geofrac.fem.post import (
     probe_fields,
 )
 from geofrac.fem.solution import Solution
+from geofrac.headline import numbers, quantity, versus_vector
 from geofrac.io.checkpoint import RunControl
 from geofrac.io.lines import write_line
 from geofrac.io.xdmf import write_fields, write_meshtags, write_steps
@@ -48,6 +49,7 @@ OUTPUT_FILES = (
     "fractures.xdmf",
     "fractures.h5",
     "network.csv",
+    "network.png",
     "events.csv",
     "load_displacement.png",
     "cracks.png",
@@ -369,6 +371,48 @@ def _write_fractures(solution: Solution) -> None:
     write_meshtags(solution.scene.output.dir / "fractures.xdmf", tagged.mesh, tags)
 
 
+def _write_network(solution: Solution, comm: MPI.Comm) -> None:
+    """``network.csv`` and ``network.png`` (the fractures by set over the mesh; collective).
+
+    Every rank sends its owned cells' edges to rank 0, which draws them faint under the
+    fractures.
+    """
+    from geofrac.dfn.io import save_network
+    from geofrac.io import pictures
+
+    scene = solution.scene
+    clean = solution.tagged.fractures
+    mesh = solution.tagged.mesh
+    tdim = mesh.topology.dim
+    owned = mesh.topology.index_map(tdim).size_local
+    corners = 3 if mesh.topology.cell_name() == "triangle" else 4
+    nodes = mesh.geometry.dofmaps[0][:owned, :corners]
+    xy = mesh.geometry.x[nodes][:, :, :2]  # (cells, corners, 2)
+    edges = np.stack([xy, np.roll(xy, -1, axis=1)], axis=2).reshape(-1, 2, 2)
+    parts = comm.gather(edges, root=0)
+    if parts is None:  # not rank 0
+        return
+    save_network(clean.network, scene.output.dir / "network.csv")
+    every = np.concatenate(parts)
+    swap = (every[:, 0, 0] > every[:, 1, 0]) | (
+        (every[:, 0, 0] == every[:, 1, 0]) & (every[:, 0, 1] > every[:, 1, 1])
+    )
+    every[swap] = every[swap][:, ::-1]
+    unique = np.unique(every.reshape(-1, 4), axis=0).reshape(-1, 2, 2)  # an edge of 2 cells once
+    network = clean.network
+    fig = pictures.network_figure(
+        domain=clean.domain,
+        fractures=clean.vertices[clean.edges],
+        sets=network.set_index[clean.edge_fracture],
+        set_names=network.set_names,
+        mesh_edges=unique,
+        regions=clean.constraints,
+        title=f"{scene.name}: {len(network.segments)} fractures and the mesh",
+        units=scene.units,
+    )
+    pictures.save(fig, scene.output.dir / "network.png")
+
+
 def _write_lines(solution: Solution, comm: MPI.Comm) -> dict[str, Any]:
     """Write each sampled line's CSV and PNG; the summary's ``lines`` entry."""
     scene = solution.scene
@@ -413,10 +457,9 @@ class FemMethod:
             if solution.lines:
                 with timings.phase("output"):
                     solution.results["lines"] = _write_lines(solution, comm)
-            if solution.tagged.fractures is not None and comm.rank == 0:
-                from geofrac.dfn.io import save_network
-
-                save_network(solution.tagged.fractures.network, scene.output.dir / "network.csv")
+            if solution.tagged.fractures is not None:
+                with timings.phase("output"):
+                    _write_network(solution, comm)
             return {
                 "mesh": solution.mesh_counts(),
                 "dofs": solution.problem.element.num_dofs,
@@ -426,40 +469,27 @@ class FemMethod:
             solution.problem.destroy()
 
     def report(self, summary: dict[str, Any]) -> list[str]:
-        """Probes (with the exact values and the probe fields), lines and the error norms."""
+        """The sampled lines' files (their numbers are in the CSVs)."""
+        lines = summary["results"].get("lines", {})
+        return [
+            f"line {n}: {e['points']} points -> {e['csv']}, {e['png']}" for n, e in lines.items()
+        ]
+
+    def result(self, scene: Scene, summary: dict[str, Any]) -> list[str]:
+        """Probes against the exact values, the initial state, the stages, the error norms.
+
+        The effects' lines (cracking, plasticity, dfn) follow from their own ``result``.
+        """
         results = summary["results"]
+        length = scene.units.of("length")
         exact = results.get("exact_probes", {})
-        exact_stress = results.get("exact_probe_stress", {})
-        fields = results.get("probe_fields", {})
-        concentration = results.get("stress_concentration", {})
-        nominal = results.get("nominal_stress")
         lines = []
         for name, value in results["probes"].items():
-            line = f"probe {name}: u = [{_numbers(value)}]"
+            line = f"probe {name}: u = {numbers(value, length)}"
             if name in exact:
-                line += f"  (exact [{_numbers(exact[name])}])"
-            lines.append(line)
-            for field, v in fields.get(name, {}).items():
-                if field == "displacement":
-                    continue
-                if isinstance(v, dict):
-                    text = ", ".join(f"{c} {x + 0.0:.6g}" for c, x in v.items())
-                elif isinstance(v, list):
-                    text = _numbers(v) + " (σ1 >= σ2 >= σ3)"
-                else:
-                    text = f"{v + 0.0:.6g}"
-                if field == "stress" and name in exact_stress:
-                    pairs = exact_stress[name].items()
-                    text += "  (exact " + ", ".join(f"{c} {x + 0.0:.6g}" for c, x in pairs) + ")"
-                lines.append(f"  {field.replace('_', ' ')}: {text}")
-            if name in concentration:
-                factors = concentration[name]
-                text = f"σ1/σ_nominal = {factors['principal']:.4f}"
-                for key, k in factors.items():
-                    if key != "principal":
-                        text += f", σ{key}/σ_nominal = {k:.4f}"
-                suffix = "" if nominal is None else f" (σ_nominal = {nominal:g})"
-                lines.append(f"  stress concentration: {text}{suffix}")
+                gap = versus_vector(value, exact[name], length)
+                line += f"  (exact {numbers(exact[name])}; {gap})"
+            lines += [line, *_probe_fields(scene, name, results)]
         if "initial_stress" in results:
             entry = results["initial_stress"]
             lines.append(
@@ -469,10 +499,9 @@ class FemMethod:
         for stage in results.get("stages", []):
             lines.append(
                 f"stage {stage['index']} '{stage['name']}': max |u| = "
-                f"{stage['max_displacement']:.6g}, out of balance {stage['out_of_balance']:.1e}"
+                f"{quantity(stage['max_displacement'], length, 6)}, out of balance "
+                f"{stage['out_of_balance']:.1e}"
             )
-        for name, entry in results.get("lines", {}).items():
-            lines.append(f"line {name}: {entry['points']} points -> {entry['csv']}, {entry['png']}")
         if "errors" in results:
             e = results["errors"]
             lines.append(
@@ -482,8 +511,38 @@ class FemMethod:
         return lines
 
 
-def _numbers(values: list[float]) -> str:
-    return ", ".join(f"{v + 0.0:.10g}" for v in values)  # + 0.0 turns -0 into 0
+def _probe_fields(scene: Scene, name: str, results: dict[str, Any]) -> list[str]:
+    """Probe ``name``'s other fields (the exact stress beside), its stress concentration."""
+    stress = scene.units.of("stress")
+    exact_stress = results.get("exact_probe_stress", {})
+    lines = []
+    for field, v in results.get("probe_fields", {}).get(name, {}).items():
+        if field == "displacement":
+            continue
+        unit = "" if field == "strain" else stress
+        if isinstance(v, dict):
+            text = ", ".join(f"{c} {x + 0.0:.6g}" for c, x in v.items())
+            text += f" {unit}" if unit else ""
+        elif isinstance(v, list):
+            text = numbers(v, unit, digits=6) + " (σ1 >= σ2 >= σ3)"
+        else:
+            text = quantity(v, unit, 6)
+        if field == "stress" and name in exact_stress:
+            pairs = exact_stress[name]
+            text += "  (exact " + ", ".join(f"{c} {x + 0.0:.6g}" for c, x in pairs.items())
+            text += f"; {versus_vector([v[c] for c in pairs], list(pairs.values()), unit)})"
+        lines.append(f"  {field.replace('_', ' ')}: {text}")
+    concentration = results.get("stress_concentration", {})
+    if name in concentration:
+        factors = concentration[name]
+        text = f"σ1/σ_nominal = {factors['principal']:.4f}"
+        for key, k in factors.items():
+            if key != "principal":
+                text += f", σ{key}/σ_nominal = {k:.4f}"
+        nominal = results.get("nominal_stress")
+        suffix = "" if nominal is None else f" (σ_nominal = {quantity(nominal, stress, 6)})"
+        lines.append(f"  stress concentration: {text}{suffix}")
+    return lines
 
 
 #: The FEM method (``method = "fem"``, the default).

@@ -137,3 +137,52 @@ def test_docs_link_only_inside_the_repository_and_cite_no_issue_numbers():
         if "shared/" in text:
             hits.append(f"{path.name}: names a path outside the repository")
     assert not hits, "\n".join(hits)
+
+
+#: The commands a picture's "made by" may start with (docs/output.md, "Pictures").
+ENTRY_POINTS = ("geofrac", "mpiexec", "python", "make")
+MADE_BY = re.compile(r"<!-- (\S+\.png) made by: (.+?) -->")
+IMAGE = re.compile(r"!\[[^\]]*\]\(([^)\s]+\.png)\)")
+
+
+def _entry_point_problem(command: str) -> str | None:
+    """Why ``command`` is not a known entry point of the repository, or None."""
+    words = command.split()
+    if words[0] == "mpiexec":  # mpiexec -n N geofrac ...
+        words = words[3:] if len(words) > 3 and words[1] == "-n" else []
+        return None if words[:1] == ["geofrac"] else "mpiexec does not run geofrac"
+    if words[0] == "python":
+        script = words[1] if len(words) > 1 else ""
+        if not script.endswith(".py") or not (REPO / script).is_file():
+            return f"no script {script!r} in the repository"
+        return None
+    if words[0] == "make":
+        target = words[1] if len(words) > 1 else ""
+        makefile = (REPO / "Makefile").read_text()
+        return None if re.search(rf"^{re.escape(target)}:", makefile, re.M) else "no make target"
+    return None if words[0] in ENTRY_POINTS else f"{words[0]!r} is no entry point"
+
+
+def test_every_picture_exists_and_names_the_command_that_made_it():
+    """Each image of README.md and docs/*.md exists and names the command that made it.
+
+    The comment ``<!-- PATH made by: CMD -->`` sits next to the image; PATH is the
+    image's link as written; CMD starts with an entry point of the repository
+    (``geofrac``, ``mpiexec -n N geofrac``, ``python SCRIPT.py`` with the script in the
+    repository, ``make TARGET``).
+    """
+    hits = []
+    for path in [REPO / "README.md", *sorted((REPO / "docs").glob("*.md"))]:
+        text = path.read_text()
+        made = {}
+        for name, command in MADE_BY.findall(text):
+            made.setdefault(name, command.strip())
+        for target in IMAGE.findall(text):
+            where = f"{path.relative_to(REPO)}: {target}"
+            if not (path.parent / target).is_file():
+                hits.append(f"{where}: no such file")
+            if target not in made:
+                hits.append(f"{where}: no '<!-- {target} made by: COMMAND -->'")
+            elif (problem := _entry_point_problem(made[target])) is not None:
+                hits.append(f"{where}: made by {made[target]!r}: {problem}")
+    assert not hits, "\n".join(hits)

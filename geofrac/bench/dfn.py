@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 
     from geofrac.dfn.sampling import FractureSet, Network
     from geofrac.meshing.distribute import TaggedMesh
+    from geofrac.model.scene import Units
 
 __all__ = ["add_arguments", "network_statistics", "run"]
 
@@ -115,8 +116,8 @@ def network_statistics(network: Network, sets: Sequence[FractureSet]) -> list[di
     return out
 
 
-def _case(comm: MPI.Comm, model: str, scale: float) -> tuple[dict[str, Any], Any]:
-    """Mesh one model at one scale; return (record, tagged mesh)."""
+def _case(comm: MPI.Comm, model: str, scale: float) -> tuple[dict[str, Any], Any, Units]:
+    """Mesh one model at one scale; return (record, tagged mesh, the scene's units)."""
     from geofrac.effects.dfn import DfnConfig
     from geofrac.meshing.distribute import build_mesh, check_fracture_cover
     from geofrac.scene import load_scene_collective
@@ -155,7 +156,7 @@ def _case(comm: MPI.Comm, model: str, scale: float) -> tuple[dict[str, Any], Any
         "time_total_s": total,
         "sets": network_statistics(tagged.fractures.network, config.sets),
     }
-    return record, tagged
+    return record, tagged, scene.units
 
 
 def _max() -> Any:
@@ -164,8 +165,11 @@ def _max() -> Any:
     return MPI.MAX
 
 
-def _plot(tagged: TaggedMesh, path: Path, title: str) -> None:
-    """The network coloured by set (left) and a close-up of the mesh around it (right)."""
+def _plot(tagged: TaggedMesh, path: Path, title: str, units: Units) -> None:
+    """The network coloured by set (left) and a close-up of the mesh around it (right).
+
+    ``units``: the scene's, for the axes.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -178,13 +182,17 @@ def _plot(tagged: TaggedMesh, path: Path, title: str) -> None:
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     fig, axes = plt.subplots(1, 2, figsize=(13, 4.2), width_ratios=[2, 1], constrained_layout=True)
     domain = np.vstack([clean.domain, clean.domain[:1]])
-    for ax in axes:
-        ax.plot(domain[:, 0], domain[:, 1], "k-", lw=0.8)
+    for i, ax in enumerate(axes):
+        ax.plot(domain[:, 0], domain[:, 1], "k-", lw=0.8, label="domain" if i == 0 else None)
         ax.set_aspect("equal")
+        ax.set_xlabel(units.label("x", "length"))
+        ax.set_ylabel(units.label("y", "length"))
     for k, name in enumerate(net.set_names):
         mask = net.set_index[clean.edge_fracture] == k
         axes[0].add_collection(
-            LineCollection(clean.segments[mask], colors=colors[k % len(colors)], lw=0.9, label=name)
+            LineCollection(
+                clean.segments[mask], colors=colors[k % len(colors)], lw=0.9, label=f"set {name}"
+            )
         )
     axes[0].legend(loc="upper right", fontsize=8)
     axes[0].set_title(title, fontsize=10)
@@ -199,12 +207,15 @@ def _plot(tagged: TaggedMesh, path: Path, title: str) -> None:
     near = np.all(np.abs(x[cells].mean(axis=1) - centre) < half, axis=1)
     tri = x[cells[near]]
     axes[1].add_collection(
-        LineCollection(np.concatenate([tri, tri[:, :1]], axis=1), colors="0.6", lw=0.4)
+        LineCollection(
+            np.concatenate([tri, tri[:, :1]], axis=1), colors="0.6", lw=0.4, label="mesh edges"
+        )
     )
-    axes[1].add_collection(LineCollection(clean.segments, colors="C3", lw=1.6))
+    axes[1].add_collection(LineCollection(clean.segments, colors="C3", lw=1.6, label="fractures"))
+    axes[1].legend(loc="lower right", fontsize=8, framealpha=0.9)
     axes[1].set_xlim(centre[0] - half, centre[0] + half)
     axes[1].set_ylim(centre[1] - half, centre[1] + half)
-    axes[1].set_title("mesh close-up: fractures (red) are chains of element edges", fontsize=10)
+    axes[1].set_title("close-up: fractures are chains of element edges", fontsize=10)
     fig.savefig(path, dpi=90)
     plt.close(fig)
 
@@ -220,7 +231,7 @@ def run(args: argparse.Namespace, comm: MPI.Comm) -> None:
     records = []
     for model in args.models:
         for scale in args.scales:
-            record, tagged = _case(comm, model, scale)
+            record, tagged, units = _case(comm, model, scale)
             records.append(record)
             echo(
                 comm,
@@ -232,7 +243,9 @@ def run(args: argparse.Namespace, comm: MPI.Comm) -> None:
                 _plot(
                     tagged,
                     args.out / f"dfn_{model}.png",
-                    f"{model}: {record['fractures']} fractures, P21 {record['p21']:.3f}/mm",
+                    f"{model}: {record['fractures']} fractures, P21 {record['p21']:.3f}"
+                    + (f"/{units.length}" if units.length else ""),
+                    units,
                 )
     echo(comm, format_table(records, COLUMNS))
     nan = float("nan")

@@ -200,13 +200,16 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
+    from matplotlib.ticker import FormatStrFormatter
 
     from geofrac.bench.report import save_figure
 
     ny = np.array([int(r["mesh"].split("x")[1]) for r in rows])
     sqrt_nodes = np.sqrt((4 * ny + 1) * (ny + 1))
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-    for ax, key, label in zip(axes, ("u", "energy"), ("||E||_u", "||E||_e"), strict=True):
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True)
+    panels = (("u", "||E||_u", "displacement error"), ("energy", "||E||_e", "energy error"))
+    for ax, (key, label, what) in zip(axes, panels, strict=True):
+        ax.set_title(f"{what} {label}", fontsize=10)
         means = [r[f"{key}_mean"] for r in rows]
         ax.errorbar(sqrt_nodes, means, [r[f"{key}_std"] for r in rows], fmt="o-", capsize=3,
                     label=f"geofrac {label}")  # fmt: skip
@@ -218,7 +221,9 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
                         label=f"Edo (2016), Table 3.1 {label}")  # fmt: skip
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("√nodes")
+        ax.set_xlabel("√(number of nodes)")
+        ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+        ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
     save_figure(
         fig,
         axes,

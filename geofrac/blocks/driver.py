@@ -35,6 +35,7 @@ OUTPUT_FILES = (
     "blocks.txt",
     "volume_histogram.png",
     "volume_histogram.csv",
+    "section.png",
     "summary.json",
 )
 
@@ -171,14 +172,23 @@ class BlocksMethod:
         return {"results": record}
 
     def report(self, summary: dict[str, Any]) -> list[str]:
-        """Count and volumes of the blocks, and the checks."""
+        """Nothing before the result block."""
+        return []
+
+    def result(self, scene: Scene, summary: dict[str, Any]) -> list[str]:
+        """Count and volumes of the blocks, their sum against the domain's, the checks."""
+        from geofrac.headline import quantity, versus
+
         q = summary["results"]["quality"]
-        v = q["volume"]
+        what = "area" if q["dim"] == 2 else "volume"  # a 2D block's volume is its area
+        v, unit = q["volume"], scene.units.of(what)
         checked = q["validator"]["checked"] if q["validator"] else 0
         return [
-            f"blocks: {q['count']}, volume min {v['min']:.4g} mean {v['mean']:.4g} "
-            f"max {v['max']:.4g}; volumes sum to the domain's within "
-            f"{abs(q['volume_rel_error']):.1e}",
+            f"blocks: {q['count']}, {what} min {quantity(v['min'])} mean {quantity(v['mean'])} "
+            f"max {quantity(v['max'], unit)}",
+            f"{what} check: the blocks sum to {quantity(q['total_volume'], unit, 10)}, the "
+            f"domain {quantity(q['domain_volume'], unit, 10)} "
+            f"({versus(q['total_volume'], q['domain_volume'], unit)})",
             f"checks: {q['invalid_blocks']} invalid, faces paired ({q['pairing']['matched']} "
             f"matched), validator on {checked} block(s)",
         ]
@@ -328,7 +338,7 @@ def _problems(report: dict[str, Any]) -> list[str]:
 
 
 def _write(scene: Scene, whole: Blocks, volumes: np.ndarray, verbose: bool = True) -> None:
-    """The VTU, the block file and the histogram of the whole set (rank 0).
+    """The VTU, the block file, the histogram and the section of the whole set (rank 0).
 
     ``volumes``: the blocks' volumes from the checks, shape=(num_blocks,).
     """
@@ -359,6 +369,15 @@ def _write(scene: Scene, whole: Blocks, volumes: np.ndarray, verbose: bool = Tru
             out / "volume_histogram.csv",
             volumes[moving],
             bins=scene.blocks.histogram_bins,
-            unit=f"{scene.units.length}{'³' if whole.dim == 3 else '²'}",
+            unit=scene.units.of("volume" if whole.dim == 3 else "area"),
             name=scene.name,
         )
+    if "section" in fields:
+        t0 = time.perf_counter()
+        from geofrac.io.pictures import save
+
+        save(
+            writers.section_figure(whole, volumes, name=scene.name, units=scene.units),
+            out / "section.png",
+        )
+        written(out / "section.png", t0)

@@ -1,6 +1,6 @@
 """Block sets on disk: VTU for ParaView, a text block file for DEM/DDA codes, a histogram.
 
-Pure numpy; matplotlib only for the histogram PNG.
+Pure numpy; matplotlib only for the histogram and section PNGs.
 
 VTU (``write_vtu``, ``write_pvtu``)
     XML ``UnstructuredGrid``, version 1.0, raw binary appended data, ``header_type="UInt64"``,
@@ -44,6 +44,9 @@ Block file (``write_block_file``, ``read_block_file``)
 Histogram (``write_histogram``)
     PNG of frequency against block volume (as in Edo (2016), Fig. 5.25) and CSV
     ``bin_lo,bin_hi,count``.
+
+Section (``section_figure``)
+    The blocks coloured by volume: 2D, all of them; 3D, their cut by a vertical plane.
 """
 
 from __future__ import annotations
@@ -55,14 +58,20 @@ import zlib
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from geofrac.blocks.model import Blocks
 from geofrac.blocks.quality import block_points, block_volumes
+from geofrac.model.scene import Units
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 __all__ = [
     "read_block_file",
+    "section_figure",
     "write_block_file",
     "write_histogram",
     "write_pvtu",
@@ -456,13 +465,67 @@ def read_block_file(path: str | os.PathLike) -> Blocks:
     )
 
 
+def section_figure(blocks: Blocks, volumes: np.ndarray, *, name: str, units: Units) -> Figure:
+    """``section.png``: the blocks coloured by volume; in 3D their cut by a vertical plane.
+
+    2D: every block's polygon, coloured by its area. 3D: the convex pieces cut by the
+    plane y = the median y of the moving blocks' seeds, seen from -y (x right, z up),
+    each cut coloured by its block's volume, the blocks' faces cut into their outlines.
+    Immobile blocks are grey (in 3D their cut outline), the picture framed on the moving
+    blocks.
+
+    Args:
+        blocks: the whole set (rank 0).
+        volumes: each block's volume (area in 2D), shape=(num_blocks,).
+        name: the scene's name, for the title.
+        units: the scene's units.
+    """
+    from geofrac.io import pictures
+
+    moving = blocks.kind == 0
+    if blocks.dim == 2:
+        rings = np.split(blocks.points[blocks.faces[:, 0]], blocks.face_offsets[1:-1])
+        polygons = [r for r, m in zip(rings, moving, strict=True) if m]
+        background = [r for r, m in zip(rings, moving, strict=True) if not m]
+        return pictures.section_figure(
+            polygons=polygons,
+            values=volumes[moving],
+            background=background,
+            axes_names=("x", "y"),
+            quantity="area",
+            title=f"{name}: {int(moving.sum())} blocks by area",
+            units=units,
+        )
+    seeds = blocks.seeds[moving] if moving.any() else blocks.seeds
+    at = float(np.median(seeds[:, 1]))
+    if abs(at) < 1e-9 * float(np.ptp(blocks.points[:, 1])):
+        at = 0.0  # the median of a symmetric set: round-off of 0
+    cuts, which = pictures.section_polygons(blocks.points, blocks.pieces, axis=1, at=at)
+    owner = blocks.piece_block[which]
+    mine = moving[owner]
+    face_moving = np.repeat(moving, np.diff(blocks.face_offsets))
+    faces = blocks.faces
+    return pictures.section_figure(
+        polygons=[c for c, m in zip(cuts, mine, strict=True) if m],
+        values=volumes[owner[mine]],
+        background_lines=pictures.section_segments(
+            blocks.points, faces[~face_moving], axis=1, at=at
+        ),
+        outlines=pictures.section_segments(blocks.points, faces[face_moving], axis=1, at=at),
+        axes_names=("x", "z"),
+        quantity="volume",
+        title=f"{name}: section at y = {at:.4g} {units.length}".rstrip(),
+        units=units,
+    )
+
+
 def write_histogram(
     path_png: str | os.PathLike,
     path_csv: str | os.PathLike,
     volumes: np.ndarray,
     *,
     bins: int | Sequence[float] | str = 30,
-    unit: str = "m³",
+    unit: str = "",
     name: str = "",
 ) -> tuple[np.ndarray, np.ndarray]:
     """The block volume histogram as a PNG (frequency against volume) and a CSV.
@@ -472,7 +535,7 @@ def write_histogram(
         path_csv: the table, columns ``bin_lo,bin_hi,count``.
         volumes: block volumes (areas in 2D), shape=(num_blocks,).
         bins: as ``numpy.histogram``.
-        unit: volume unit for the axis label.
+        unit: volume unit for the axis label (empty: none declared, no unit shown).
         name: the scene's name, for the title.
 
     Returns:
@@ -496,11 +559,11 @@ def write_histogram(
     )
     fig, ax = plt.subplots(figsize=(6, 4), constrained_layout=True)
     ax.stairs(counts, edges, fill=True, alpha=0.8, edgecolor="k", linewidth=0.5)
-    ax.set_xlabel(f"block volume [{unit}]")
+    ax.set_xlabel(f"block volume ({unit})" if unit else "block volume")
     ax.set_ylabel("frequency")
     head = f"{name}: " if name else ""
     ax.set_title(
-        f"{head}{len(volumes)} blocks, mean volume {volumes.mean():.3g} {unit}"
+        f"{head}{len(volumes)} blocks, mean volume {volumes.mean():.3g} {unit}".rstrip()
         if len(volumes)
         else f"{head}no blocks"
     )

@@ -18,6 +18,12 @@ An effect is a module named in :data:`REGISTRY` that provides
 - optionally ``STRAIGHT_CELLS = True``: the effect assumes straight cells (``cracking``:
   MLS-cracked cells); the loader refuses it on curved geometry
   (:attr:`geofrac.model.scene.Geometry.order` > 1).
+- optionally ``result(config, scene, results) -> list[str]``: the effect's lines of the
+  run's result block (:func:`geofrac.pipeline.report`) from the summary's ``results``:
+  its headline numbers in the scene's ``[units]`` (:attr:`geofrac.model.scene.Scene.units`)
+  and their differences from the references the scene names, worded by
+  :mod:`geofrac.headline`; empty when ``results`` hold nothing of it (an MPM scene's).
+  :func:`result_lines` collects them.
 - optionally ``driver(config, solution, say, write)``: the effect replaces the single
   elastic solve by its own loop (``cracking``: the sequentially linear event loop); see
   :func:`geofrac.effects.cracking.driver`. A scene declares at most one such effect
@@ -37,14 +43,23 @@ import importlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from types import ModuleType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
-from geofrac.model.scene import BoundaryCondition, EffectSpec, Load, Material
+from geofrac.model.scene import BoundaryCondition, EffectSpec, Load, Material, Scene
 
 if TYPE_CHECKING:
     from geofrac.fem.elastic import LinearTerm
 
-__all__ = ["REGISTRY", "ConfigureContext", "available", "driven", "drives", "linear_terms", "load"]
+__all__ = [
+    "REGISTRY",
+    "ConfigureContext",
+    "available",
+    "driven",
+    "drives",
+    "linear_terms",
+    "load",
+    "result_lines",
+]
 
 #: effect name -> module implementing it.
 REGISTRY: dict[str, str] = {
@@ -127,3 +142,17 @@ def linear_terms(effects: Sequence[EffectSpec[object]]) -> list[LinearTerm]:
         if hasattr(module, "linear_form"):
             terms.append(functools.partial(module.linear_form, spec.config))
     return terms
+
+
+def result_lines(scene: Scene, results: dict[str, Any]) -> list[str]:
+    """The declared effects' lines of the result block, in declaration order.
+
+    ``results``: the summary's ``results``. Each effect with a ``result`` hook gives its
+    own (see the module text); the others give none.
+    """
+    lines: list[str] = []
+    for spec in scene.effects:
+        module = load(spec.name)
+        if hasattr(module, "result"):
+            lines += module.result(spec.config, scene, results)
+    return lines

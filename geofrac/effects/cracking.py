@@ -66,6 +66,9 @@ Scene table ``[cracking]`` (all keys optional; docs/scenes.md has the reference)
 - ``face``, ``face_origin`` (0): report where the crack first reaches the facet group
   ``face``, as x minus ``face_origin`` (the notched beam's ``crack_top_x_mm``); on
   ``efmm`` only the crack joined to the notch (or to the first event's interface) counts.
+- ``face_band``: ``[low, high]`` (with ``face``): the range of that x a reference gives
+  (an experiment's band); the result block says whether the crack reached the face
+  inside it, or how far outside.
 - ``contact`` (false): the two faces of every cracked edge are in contact when they
   close: no interpenetration, Coulomb friction, joint slip events (docs/cracking.md,
   "Crack faces in contact"). Element edges only.
@@ -95,7 +98,8 @@ without it every run is brittle as before.
   group; element edges only; not with ``contact`` or ``fracture_energy``.
 
 The event loop is :class:`geofrac.fracture.driver.CrackDriver`, composed of the edge or
-grain variant by the element's ``cracking`` mode; this module only validates, and is
+grain variant by the element's ``cracking`` mode; this module only validates, words the
+run's result block (:func:`result`, the end reasons in :data:`END_SENTENCES`), and is
 cheap to import.
 """
 
@@ -124,6 +128,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CONTACT_KEYS",
+    "END_SENTENCES",
     "FORCE_LOADS",
     "KEYS",
     "LIMITS",
@@ -131,7 +136,9 @@ __all__ = [
     "CrackingConfig",
     "configure",
     "driver",
+    "end_sentence",
     "make_driver",
+    "result",
     "scene_driver",
 ]
 
@@ -161,6 +168,7 @@ KEYS = (
     "output_every",
     "face",
     "face_origin",
+    "face_band",
     "precracked_fraction",
     "precrack_seed",
     "switch",
@@ -224,6 +232,26 @@ def _number(
             file, f"cracking.{prefix}{key}", f"must be {what} {span}, got {short(value)}"
         )
     return kind(value)
+
+
+def _face_band(table: dict[str, Any], file: str, face: str | None) -> tuple[float, float] | None:
+    """``cracking.face_band``: ``[low, high]`` of the x where the crack reaches ``face``."""
+    band = table.get("face_band")
+    if band is None:
+        return None
+    if face is None:
+        raise SceneError(file, "cracking.face_band", "needs cracking.face (the group it is of)")
+    if (
+        not isinstance(band, list)
+        or len(band) != 2
+        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in band)
+        or not all(finite(v) for v in band)
+        or band[0] > band[1]
+    ):
+        raise SceneError(
+            file, "cracking.face_band", f"must be [low, high] with low <= high, got {short(band)}"
+        )
+    return float(band[0]), float(band[1])
 
 
 def _joint(file: str, prefix: str, table: Any, default: JointProperties) -> JointProperties:
@@ -535,6 +563,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
             "cracking.face",
             f"unknown group {face!r}" + did_you_mean(str(face), list(ctx.groups)),
         )
+    band = _face_band(table, file, face)
     switch = table.get("switch", "patch")
     if switch not in ("patch", "grain"):
         raise SceneError(
@@ -649,6 +678,7 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> CrackingConfig:
         output_every=_number(table, file, "output_every", max(1, max_events // 50), int, 1),
         face=face,
         face_origin=_number(table, file, "face_origin", 0.0, float, -float("inf")),
+        face_band=band,
         tensile_strength=float(ft),
         precracked_fraction=_number(table, file, "precracked_fraction", 0.0, float, 0.0, 1.0),
         precrack_seed=_number(table, file, "precrack_seed", 0, int, 0),
@@ -727,3 +757,87 @@ def scene_driver(
     problem = make_problem(tagged, element, scene, terms=linear_terms(scene.effects))
     problem.compile()
     return make_driver(config, Solution(scene, tagged, problem), say or (lambda msg: None))
+
+
+#: Each end reason of the event loop (:data:`geofrac.fracture.loop.END_REASONS`) in
+#: words, for the result block; ``{n}``: the events run, ``{next}``: the event that
+#: could not be.
+END_SENTENCES: dict[str, str] = {
+    "max_events": "max_events reached: {n} events (cracking.max_events)",
+    "energy_drop": (
+        "energy_drop: at event {n} the strain energy fell below (1 - cracking.energy_drop) "
+        "times its peak"
+    ),
+    "no_tensile_edge": "no_tensile_edge: after event {n} no edge is in tension, the load cracks "
+    "nothing more",
+    "separated": "separated: the specimen broke into two pieces at event {n}",
+    "singular": "singular: at event {next} the stiffness is singular (a piece is free to move)",
+    "contact": "contact: at event {next} the crack faces' contact did not settle within "
+    "cracking.contact_iterations",
+    "stages_done": "stages_done: every stage was applied ({n} events)",
+}
+
+
+def end_sentence(reason: str, events: int, detail: str | None = None) -> str:
+    """The end ``reason`` of a run of ``events`` events in words; an unknown one as is.
+
+    ``detail``: the results' ``end_detail``. A ``separated`` run whose unit load still
+    stores energy lost its load path another way (the next event would need a load
+    beyond reason), and one without events carried nothing from the start: the sentence
+    says so and gives the detail.
+    """
+    if reason == "separated" and events == 0:
+        return "separated: the specimen carries no load before the first event" + (
+            "" if detail is None else f" ({detail})"
+        )
+    if reason == "separated" and detail is not None and "strain energy" not in detail:
+        return f"separated: after event {events} the specimen no longer carries the load ({detail})"
+    return END_SENTENCES.get(reason, reason).format(n=events, next=events + 1)
+
+
+def result(config: CrackingConfig, scene: Scene, results: dict[str, Any]) -> list[str]:
+    """The result block's lines: events, the end, the peak load, where the crack reached.
+
+    The peak load is the largest control force of the event log (``peak_reaction``) in
+    the scene's force unit; with ``cracking.face`` the x where the crack reached it
+    (``crack_face``), in its length unit, and against ``face_band`` when given.
+    """
+    from geofrac.headline import band, quantity
+
+    crack = results.get("cracking")
+    if crack is None:
+        return []
+    units, n = scene.units, int(crack["events"])
+    modes = ", ".join(f"{k} {v}" for k, v in crack.get("events_by_mode", {}).items() if v)
+    lines = [f"cracking: {n} events" + (f" ({modes})" if modes else "")]
+    lines.append("end: " + end_sentence(crack["end_reason"], n, crack.get("end_detail")))
+    if "peak_reaction" in crack:
+        factor = crack.get("peak_load_factor")
+        lines.append(
+            f"peak load: {quantity(crack['peak_reaction'], units.of('force'))} at event "
+            f"{crack['peak_event']}" + ("" if factor is None else f" (load factor {factor:.4g})")
+        )
+    contact = crack.get("contact")
+    if contact:  # the crack faces' state at the end (cracking.contact)
+        lines.append(
+            f"contact: {contact['pairs']} face pairs at the end: {contact['stick']} stick, "
+            f"{contact['slip']} slip, {contact['open']} open"
+        )
+    face = crack.get("crack_face")
+    if face is not None:
+        origin = "" if config.face_origin == 0.0 else f" - {config.face_origin:g}"
+        if face["x_from_origin"] is None:
+            lines.append(f"crack reached '{face['group']}': not in {n} events")
+        else:
+            length = units.of("length")
+            x = quantity(face["x_from_origin"], length)
+            lines.append(
+                f"crack reached '{face['group']}' at x{origin} = {x} (event {face['event']})"
+            )
+            if config.face_band is not None:
+                low, high = config.face_band
+                where = band(face["x_from_origin"], low, high, unit=length)
+                lines.append(f"  against the band {low:g} to {quantity(high, length)}: {where}")
+    if "displacement_error_l2" in crack:
+        lines.append(f"displacement error (2.22): {crack['displacement_error_l2']:.4e}")
+    return lines

@@ -60,6 +60,7 @@ __all__ = [
     "DfnGeometry",
     "configure",
     "geometry",
+    "result",
 ]
 
 #: Keys of the ``[dfn]`` table and of each ``[[dfn.sets]]`` entry.
@@ -181,8 +182,76 @@ class DfnGeometry:
         """
         import time
 
-        from geofrac.dfn.clean import clean_network
         from geofrac.meshing.dfn import mesh_network
+
+        cfg = self.config
+        network, clean, times = self._network()
+        t2 = time.perf_counter()
+        quality = mesh_network(
+            gmsh, clean, cfg.sides, corners=cfg.corners, spec=cfg.mesh, regions=cfg.regions
+        )
+        t3 = time.perf_counter()
+        area = polygon_area(cfg.domain)
+        report = {
+            "fractures": len(network),
+            "fractures_meshed": int(np.count_nonzero(clean.length > 0)),
+            "p21": float(clean.clipped_length.sum() / area),
+            "p21_meshed": float(clean.length.sum() / area),
+            "cleaning": clean.report.counts(),
+            "max_moved": float(clean.moved[np.isfinite(clean.moved)].max(initial=0.0)),
+            "min_junction_angle_deg": clean.min_junction_angle(),
+            **times,
+            "time_mesh_s": t3 - t2,
+            "sets": _set_report(clean, area),
+            **quality,
+        }
+        return report, clean
+
+    def trial(self, gmsh: ModuleType, factor: float, *, cells: float) -> list[tuple[float, int]]:
+        """Triangles of coarse trial meshes of the model :meth:`build` makes (the size estimate).
+
+        The network is generated and cleaned as by :meth:`build` (the same seed or file),
+        the model built with the same sizes, fields and algorithm, and meshed with every
+        size multiplied by k >= 1 (:func:`geofrac.meshing.dfn.trial_network`): first
+        k = ``factor``, then finer until a mesh has about ``cells`` / 2 triangles or more.
+
+        Returns:
+            (k, triangles) of every mesh made, in order.
+
+        Raises:
+            DfnError: the network cannot be cleaned.
+            RuntimeError: gmsh failed.
+        """
+        from geofrac.meshing.dfn import trial_network
+        from geofrac.meshing.geo import failure_message
+
+        cfg = self.config
+        _, clean, _ = self._network()
+        try:
+            return trial_network(
+                gmsh,
+                clean,
+                cfg.sides,
+                corners=cfg.corners,
+                spec=cfg.mesh,
+                regions=cfg.regions,
+                factor=factor,
+                cells=cells,
+            )
+        except Exception as exc:
+            if type(exc) is not Exception:  # gmsh raises bare Exceptions; a bug stays a bug
+                raise
+            raise RuntimeError(failure_message(exc, gmsh) or "gmsh failed") from exc
+
+    def _network(self) -> tuple[Network, Any, dict[str, float]]:
+        """The network, cleaned (a ``CleanNetwork``), and the seconds each step took.
+
+        Raises:
+            DfnError: the network cannot be cleaned, or nothing of it is left in the domain.
+        """
+        import time
+
+        from geofrac.dfn.clean import clean_network
 
         cfg = self.config
         t0 = time.perf_counter()
@@ -197,25 +266,65 @@ class DfnGeometry:
                 f"domain after cleaning ({clean.report.summary()}); check the domain, region "
                 "and density"
             )
-        quality = mesh_network(
-            gmsh, clean, cfg.sides, corners=cfg.corners, spec=cfg.mesh, regions=cfg.regions
-        )
-        t3 = time.perf_counter()
-        area = polygon_area(cfg.domain)
-        report = {
-            "fractures": len(network),
-            "fractures_meshed": int(np.count_nonzero(clean.length > 0)),
-            "p21": float(clean.clipped_length.sum() / area),
-            "p21_meshed": float(clean.length.sum() / area),
-            "cleaning": clean.report.counts(),
-            "max_moved": float(clean.moved[np.isfinite(clean.moved)].max(initial=0.0)),
-            "min_junction_angle_deg": clean.min_junction_angle(),
-            "time_generate_s": t1 - t0,
-            "time_clean_s": t2 - t1,
-            "time_mesh_s": t3 - t2,
-            **quality,
+        return network, clean, {"time_generate_s": t1 - t0, "time_clean_s": t2 - t1}
+
+
+def _set_report(clean: Any, area: float) -> dict[str, dict[str, float | int | None]]:
+    """Per fracture set: its fractures, P21 (clipped to the domain) and mean orientation.
+
+    ``clean``: the :class:`~geofrac.dfn.clean.CleanNetwork`; ``area``: the domain's. The
+    mean is the axial mean of the traces' directions in degrees (None for a set without
+    fractures); what the result block compares with the set's ``p21`` and ``mean``.
+    """
+    from geofrac.dfn.stats import axial_mean_deg
+
+    network = clean.network
+    out: dict[str, dict[str, float | int | None]] = {}
+    for k, name in enumerate(network.set_names):
+        mine = network.set_index == k
+        angles = network.angles_deg[mine]
+        out[name] = {
+            "fractures": int(mine.sum()),
+            "p21": float(clean.clipped_length[mine].sum() / area),
+            "mean_deg": axial_mean_deg(angles) if len(angles) else None,
         }
-        return report, clean
+    return out
+
+
+def result(config: DfnConfig, scene: Any, results: dict[str, Any]) -> list[str]:
+    """The result block's lines: the fractures, and each set's P21 and mean orientation.
+
+    Each set's achieved values (the geometry report's ``sets``) against the set's
+    ``p21`` and ``mean`` when the scene gives them (a network read from a file has
+    none); P21 in 1/length of the scene's units.
+    """
+    from geofrac.headline import quantity, versus
+
+    geometry = results.get("geometry")
+    if geometry is None or "sets" not in geometry:
+        return []
+    length = scene.units.of("length")
+    per_length = f"1/{length}" if length else ""
+    lines = [
+        f"dfn: {geometry['fractures']} fractures ({geometry['fractures_meshed']} meshed), "
+        f"P21 {quantity(geometry['p21'], per_length)}"
+    ]
+    targets = {s.name: s for s in config.sets}
+    for name, got in geometry["sets"].items():
+        target = targets.get(name)
+        text = f"set {name}: {got['fractures']} fractures, P21 {quantity(got['p21'], per_length)}"
+        if target is not None and target.p21 is not None:
+            text += f" (target {target.p21:g}; {versus(got['p21'], target.p21, per_length)})"
+        lines.append(text)
+        if got["mean_deg"] is None:
+            continue
+        text = f"set {name}: mean orientation {quantity(got['mean_deg'], 'deg')}"
+        if target is not None:
+            # axial: the achieved mean taken to within 90° of the set's
+            mean = target.mean_deg + (got["mean_deg"] - target.mean_deg + 90.0) % 180.0 - 90.0
+            text += f" (set's {target.mean_deg:g} deg; {versus(mean, target.mean_deg, 'deg')})"
+        lines.append(text)
+    return lines
 
 
 def _error(file: str, key: str, message: str) -> SceneError:

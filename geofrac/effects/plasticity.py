@@ -81,6 +81,7 @@ from geofrac.model.errors import SceneError, did_you_mean
 from geofrac.model.table import Table
 
 __all__ = [
+    "END_SENTENCES",
     "FEM_ELEMENTS",
     "FEM_KEYS",
     "GROUND_REACTION_KEYS",
@@ -99,6 +100,7 @@ __all__ = [
     "configure",
     "driver",
     "make_law",
+    "result",
 ]
 
 #: Methods this effect serves.
@@ -534,3 +536,66 @@ def make_law(config: PlasticityConfig, *, E: float, nu: float) -> Any:
     if config.law == "mohr_coulomb":
         return MohrCoulomb(**common, tension=config.tension_cutoff)
     return DruckerPrager(**common, match=config.match)
+
+
+#: The plastic analysis's end reasons (``plasticity.end_reason``) in words; ``{f}``: the
+#: last converged factor.
+END_SENTENCES: dict[str, str] = {
+    "converged": "converged to load factor {f:.4g}",
+    "step_too_small": "NOT CONVERGED: the increment beyond load factor {f:.4g} diverged "
+    "(step_too_small)",
+    "gravity_step_too_small": "NOT CONVERGED: the body cannot carry its own weight "
+    "(gravity_step_too_small; the analysis was not run)",
+    "stage_step_too_small": "NOT CONVERGED: a stage could not be applied in full "
+    "(stage_step_too_small; the later stages were not run)",
+}
+
+
+def result(config: PlasticityConfig, scene: Any, results: dict[str, Any]) -> list[str]:
+    """The result block's lines of an FEM plastic analysis (none for MPM).
+
+    The factor of safety (strength reduction), or how far the load went, the plastic
+    points and yielded area; the ground reaction against its closed form; each stage's.
+    """
+    from geofrac.headline import quantity, versus
+
+    plastic = results.get("plasticity")
+    if plastic is None:
+        return []
+    units = scene.units
+    if "factor_of_safety" in plastic:
+        last = plastic["last_stable"]
+        return [
+            f"factor of safety: {plastic['factor_of_safety']:.4g} (stable at "
+            f"{plastic['stable']:.4g}, failed at {plastic['failed']:.4g}; tolerance "
+            f"{plastic['tolerance']:g})",
+            f"at the last stable factor: {last['plastic_points']} plastic points, yielded area "
+            f"{quantity(last['yielded_area'], units.of('area'))}",
+        ]
+    reason = plastic["end_reason"]
+    lines = [
+        f"plasticity ({plastic['law']}): "
+        + END_SENTENCES.get(reason, reason).format(f=plastic["factor"])
+        + f"; {plastic['plastic_points']} plastic points, yielded area "
+        f"{quantity(plastic['yielded_area'], units.of('area'))}"
+    ]
+    ground = plastic.get("ground_reaction")
+    if ground is not None:
+        final, length = ground["final"], units.of("length")
+        text = (
+            f"ground reaction at '{ground['probe']}': u_r {quantity(final['u_r'], length)} at "
+            f"p_i {quantity(final['p_i'], units.of('stress'))}"
+        )
+        exact = final.get("u_r_closed_form")
+        if exact is not None:
+            text += (
+                f" (closed form {quantity(exact, length)}, {versus(final['u_r'], exact, length)})"
+            )
+        lines.append(text)
+    for stage in plastic.get("stages", []):
+        state = "" if stage["converged"] else f", NOT CONVERGED at {stage['factor']:.4g} of it"
+        lines.append(
+            f"stage {stage['index']} '{stage['name']}': max |u| "
+            f"{quantity(stage['max_displacement'], units.of('length'))}{state}"
+        )
+    return lines

@@ -546,7 +546,8 @@ def _plot_mechanism(
         field, label = solution.fields["plastic_shear_strain"], "plastic shear strain γᵖ (−)"
         what = "plastic shear strain"
     else:
-        field, label = displacement_magnitude(solution.problem.uh), f"|u| ({length})"
+        field = displacement_magnitude(solution.problem.uh)
+        label = scene.units.label("|u|", "length")
         what = "|u| and joint states"
     plot_cell_field(
         field,
@@ -574,7 +575,7 @@ def _plot(result: Any, solution: Solution) -> None:
             ax.plot(*zip(*pts, strict=True), mark, label=label)
     ax.axvline(result.factor_of_safety, color="k", lw=0.8, ls="--", label="factor of safety")
     ax.set_xlabel("trial factor F")
-    ax.set_ylabel(f"monitor |u| ({scene.units.length})")
+    ax.set_ylabel(scene.units.label("monitor |u|", "length"))
     ax.set_title(f"{scene.name}: FoS {result.factor_of_safety:.3f}")
     ax.legend()
     fig.tight_layout()

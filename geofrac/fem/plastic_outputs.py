@@ -181,8 +181,8 @@ def plot_cell_field(
                 ax.plot(*joints[at, :2].T, "o", ms=3, color=colour, mec="k", mew=0.3, label=name)
         ax.legend(title="joint pairs", fontsize=8, loc="upper left", framealpha=0.8)
     fig.colorbar(art, ax=ax, label=label, orientation="horizontal" if wide else "vertical")
-    ax.set_xlabel(f"x ({length})")
-    ax.set_ylabel(f"y ({length})")
+    ax.set_xlabel(f"x ({length})" if length else "x")
+    ax.set_ylabel(f"y ({length})" if length else "y")
     ax.set_title(title, fontsize=10)
     fig.savefig(path, dpi=90)
     plt.close(fig)
@@ -404,8 +404,8 @@ class ProbeHistory:
             mfc="none",
             label="geofrac (load steps)",
         )
-        ax.set_xlabel(f"wall convergence −u_r ({units.length})")
-        ax.set_ylabel(f"internal pressure p_i ({units.stress})")
+        ax.set_xlabel(units.label("wall convergence −u_r", "length"))
+        ax.set_ylabel(units.label("internal pressure p_i", "stress"))
         ax.set_title(title)
         ax.legend()
         fig.tight_layout()

@@ -76,6 +76,9 @@ class CrackingConfig:
     control_kind: str = "displacement"
     #: force control: read the displacement at the mesh node nearest to this point.
     control_point: tuple[float, float] | None = None
+    #: ``[low, high]`` of the x where the crack reaches ``face`` that a reference gives
+    #: (``cracking.face_band``; the result block only), or None.
+    face_band: tuple[float, float] | None = None
     #: fracture energy G_f (material ``fracture_energy``): cracked edges soften over
     #: ``teeth`` saw-tooth steps (docs/cracking.md, "Fracture energy"); None: brittle.
     fracture_energy: float | None = None

@@ -22,11 +22,14 @@ import numpy as np
 
 from geofrac.fracture.contact import NO_PAIR, OPEN, SLIP, STATES, STICK
 from geofrac.fracture.context import CrackContext, Sites
+from geofrac.fracture.control import RELEASE, Control
 from geofrac.fracture.units import SiteState
 from geofrac.io.series import XdmfSeries
+from geofrac.model.scene import Units as SceneUnits
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = [
     "CHANGE_COLUMNS",
@@ -40,6 +43,7 @@ __all__ = [
     "OutputWriter",
     "Row",
     "SiteDrawing",
+    "load_displacement_figure",
 ]
 
 #: Columns of ``events.csv``.
@@ -374,31 +378,15 @@ class EventOutput:
         import matplotlib
 
         matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        from matplotlib.ticker import MaxNLocator
+        from geofrac.io.pictures import save
 
-        fig, ax = plt.subplots(figsize=(6, 4))
-        d = [0.0] + [r["control_displacement"] for r in rows]  # from the unloaded state
-        ax.plot(d, [0.0] + [r["reaction"] for r in rows], lw=0.8, marker=".", ms=2)
-        ax.xaxis.set_major_locator(MaxNLocator(6))
-        units = self.ctx.scene.units
-        control = self.ctx.control
-        group = control.group
-        if control.kind == "force":
-            along = "work-conjugate" if control.node is None else "control_point node"
-            ax.set_xlabel(f"displacement of the load on {group}, {along} ({units.length})")
-            ax.set_ylabel(f"force of the load on {group} ({units.force})")
-        else:
-            ax.set_xlabel(f"control displacement, {group} ({units.length})")
-            ax.set_ylabel(f"reaction on the control DOFs ({units.force})")
-        ax.set_title(f"{self.ctx.scene.name}: load against displacement, {len(rows)} events")
-        fig.tight_layout()
-        fig.savefig(self.out_dir / "load_displacement.png", dpi=90)
-        plt.close(fig)
-        self._plot_cracks(modes, faces, len(rows))
+        scene = self.ctx.scene
+        fig = load_displacement_figure(rows, self.ctx.control, name=scene.name, units=scene.units)
+        save(fig, self.out_dir / "load_displacement.png", dpi=90)
+        self._plot_cracks(modes, faces, rows)
         self.drawing.write_extra(self.out_dir)
 
-    def _plot_cracks(self, modes: np.ndarray, faces: np.ndarray | None, events: int) -> None:
+    def _plot_cracks(self, modes: np.ndarray, faces: np.ndarray | None, rows: list[Row]) -> None:
         """``cracks.png``: the outline, pre-existing cracks and joints, new cracks by mode.
 
         New cracks are red (tension) or blue (shear). Without contact, pre-existing
@@ -436,9 +424,10 @@ class EventOutput:
             axes = [ax]
         else:
             fig, axes = plt.subplots(1, 2, figsize=(width + height - 1.2, height))
-        length = self.ctx.scene.units.length
+        units = self.ctx.scene.units
         for i, ax in enumerate(axes):
             self._draw_cracks(ax, modes, faces, legend=i == 0)
+            _mark_slips(ax, rows, legend=i == 0)
             if i == 0:
                 ax.set_xlim(x0 - pad, x1 + pad)
                 ax.set_ylim(y0 - pad, y1 + pad)
@@ -450,18 +439,22 @@ class EventOutput:
                 (a, b), (c, d) = zoom
                 axes[0].plot([a, c, c, a, a], [b, b, d, d, b], color="k", lw=0.8, ls="--")
             ax.set_aspect("equal")
-            ax.set_xlabel(f"x ({length})")
-            ax.set_ylabel(f"y ({length})")
+            ax.set_xlabel(units.label("x", "length"))
+            ax.set_ylabel(units.label("y", "length"))
         new = int((state.cracked & ~self._precracked()).sum())
         axes[0].set_title(
-            f"{self.ctx.scene.name}: {new} new cracked edges after {events} events", fontsize=10
+            f"{self.ctx.scene.name}: {new} new cracked edges after {len(rows)} events"
+            + _pair_counts(faces),
+            fontsize=10,
         )
         handles, labels = axes[0].get_legend_handles_labels()
         if handles:  # below the axes: it hides nothing
             fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
         rows = (len(handles) + 1) // 2  # legend rows below the axes
-        fig.tight_layout(rect=(0.0, 0.03 + 0.03 * rows if handles else 0.0, 1.0, 0.98))
-        fig.savefig(self.out_dir / "cracks.png", dpi=110)
+        below = (0.15 + 0.17 * rows) / height if handles else 0.0  # inches -> figure share
+        fig.tight_layout(rect=(0.0, below, 1.0, 1.0))
+        # "tight": a long two-line title or the legend is never cut at the figure's edge
+        fig.savefig(self.out_dir / "cracks.png", dpi=110, bbox_inches="tight", pad_inches=0.1)
         plt.close(fig)
 
     def _precracked(self) -> np.ndarray:
@@ -527,6 +520,76 @@ class EventOutput:
                         segments, colors=colour, linewidths=width_, label=label if legend else None
                     )
                 )
+
+
+def _mark_slips(ax: Axes, rows: list[Row], *, legend: bool) -> None:
+    """Circle the sites of the slip events (a face pair starting to slip), numbered if few."""
+    slips = [r for r in rows if r.get("mode") == "slip"]
+    if not slips:
+        return
+    at = np.array([(r["x"], r["y"]) for r in slips], dtype=float)
+    label = f"slip event ({len(at)})" if legend else None
+    ax.plot(at[:, 0], at[:, 1], "o", mfc="none", mec="k", ms=8, mew=0.9, label=label, zorder=5)
+    if len(slips) <= 10:
+        for r, (x, y) in zip(slips, at, strict=True):
+            ax.annotate(f"{int(r['event'])}", (x, y), xytext=(5, -9), textcoords="offset points",
+                        fontsize=7)  # fmt: skip
+
+
+def _pair_counts(faces: np.ndarray | None) -> str:
+    """A second title line with contact: the face pairs' states at the end; else ``""``."""
+    if faces is None:
+        return ""
+    counts = [f"{int((faces == code).sum())} {name}" for code, name in
+              ((STICK, "stuck"), (SLIP, "slipping"), (OPEN, "open"))]  # fmt: skip
+    return "\nface pairs at the end: " + ", ".join(counts)
+
+
+def load_displacement_figure(
+    rows: list[Row], control: Control, *, name: str, units: SceneUnits
+) -> Figure:
+    """``load_displacement.png``: the control's force against its displacement, by event.
+
+    Displacement control: the mean prescribed displacement of the control group's DOFs
+    against the reaction on them; force control: the displacement work-conjugate to the
+    load (or the ``control_point`` node's along it) against its force; a staged release:
+    the load factor λ of the stage's release against the event.
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    from geofrac.io.pictures import new_figure
+
+    fig = new_figure(6.0, 4.0)
+    ax = fig.subplots()
+    group = control.group
+    if control.kind == RELEASE:
+        ax.plot([r["event"] for r in rows], [r["load_factor"] for r in rows], lw=0.8,
+                marker=".", ms=2)  # fmt: skip
+        ax.set_xlabel("event")
+        ax.set_ylabel("load factor λ of the stage's release")
+    else:
+        d = [0.0] + [r["control_displacement"] for r in rows]  # from the unloaded state
+        ax.plot(d, [0.0] + [r["reaction"] for r in rows], lw=0.8, marker=".", ms=2,
+                label="event")  # fmt: skip
+        slips = [r for r in rows if r.get("mode") == "slip"]
+        if slips:  # a joint's face pair starting to slip (Jaeger's σ1 is the first)
+            ax.plot([r["control_displacement"] for r in slips], [r["reaction"] for r in slips],
+                    "o", mfc="none", mec="k", ms=6, label="slip event")  # fmt: skip
+            ax.legend(fontsize=8)
+        if control.kind == "force":
+            along = "work-conjugate" if control.node is None else "at the control point"
+            ax.set_xlabel(units.label(f"displacement of the load on '{group}', {along}", "length"))
+            ax.set_ylabel(units.label(f"force of the load on '{group}'", "force"))
+        else:
+            ax.set_xlabel(units.label(f"prescribed displacement of '{group}'", "length"))
+            ax.set_ylabel(units.label(f"reaction on '{group}'", "force"))
+    release = control.kind == RELEASE
+    ax.xaxis.set_major_locator(MaxNLocator(6, integer=release))
+    ax.grid(True, alpha=0.3)
+    what = "the stages' release by event" if release else "load against displacement"
+    events = f"{len(rows)} event{'s' if len(rows) != 1 else ''}"
+    ax.set_title(f"{name}: {what}, {events}", fontsize=10)
+    return fig
 
 
 def _changes_until(path: Path, event: float) -> list[list[str]]:

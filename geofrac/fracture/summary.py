@@ -107,6 +107,7 @@ class Summary:
             out |= {
                 "peak_reaction": peak["reaction"],
                 "peak_event": peak["event"],
+                "peak_load_factor": peak["load_factor"],
                 "final_strain_energy": rows[-1]["strain_energy"],
             }
         if self.face is not None:

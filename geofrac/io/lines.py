@@ -132,13 +132,15 @@ def _plot(
     for ax, field in zip(axes, line.fields, strict=True):
         for k, label in enumerate(field_columns(field, gdim)):
             ax.plot(s, values[field][:, k], label=label, marker="." if len(s) <= 30 else None)
-        ax.set_ylabel(f"{field.replace('_', ' ')} ({_unit_of(field, units)})")
+        unit = _unit_of(field, units)
+        ax.set_ylabel(f"{field.replace('_', ' ')} ({unit})" if unit else field.replace("_", " "))
         ax.grid(True, alpha=0.3)
         ax.ticklabel_format(axis="y", useOffset=False)
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
     start = ", ".join(f"{c:g}" for c in line.start)
     end = ", ".join(f"{c:g}" for c in line.end)
-    axes[-1].set_xlabel(f"s ({units.length}): distance from ({start}) towards ({end})")
+    s_label = units.label("s", "length")
+    axes[-1].set_xlabel(f"{s_label}: distance from ({start}) towards ({end})")
     fig.suptitle(title)
     fig.savefig(path, dpi=110)
 

@@ -41,8 +41,10 @@ __all__ = [
     "DOMAIN_GROUP",
     "FRACTURE_GROUP",
     "OUTLINE_SUFFIX",
+    "TRIAL_INTEGRATION_PRECISION",
     "MeshSpec",
     "mesh_network",
+    "trial_network",
 ]
 
 #: Physical group names of the surface and of the fracture lines.
@@ -50,6 +52,8 @@ DOMAIN_GROUP = "domain"
 FRACTURE_GROUP = "fractures"
 #: A region's outline is the curve group ``<region name><OUTLINE_SUFFIX>``.
 OUTLINE_SUFFIX = "_outline"
+#: gmsh ``Mesh.LcIntegrationPrecision`` of the trial meshes (:func:`trial_network`).
+TRIAL_INTEGRATION_PRECISION = 1e-4
 
 
 @dataclass(frozen=True)
@@ -234,6 +238,59 @@ def mesh_network(
         RuntimeError: gmsh failed (its message), or a fracture line was left without mesh
             edges.
     """
+    fracture_lines, region_surfaces = _build_model(
+        gmsh, clean, sides, corners=corners, spec=spec, regions=regions
+    )
+    gmsh.model.mesh.generate(2)
+    return _report(gmsh, fracture_lines, region_surfaces)
+
+
+def trial_network(
+    gmsh: ModuleType,
+    clean: CleanNetwork,
+    sides: Sequence[str],
+    *,
+    corners: Sequence[str],
+    spec: MeshSpec,
+    regions: RegionLayout | None = None,
+    factor: float,
+    cells: float,
+) -> list[tuple[float, int]]:
+    """Cells of trial meshes of the model :func:`mesh_network` builds, every size times k >= 1.
+
+    The model (points, lines, size fields, options) is built as for the run, in an
+    initialised gmsh session with an empty model, and meshed in 2D by
+    :func:`geofrac.meshing.geo_worker.trial_meshes` (the stepping of the ``.geo`` trial):
+    first with ``Mesh.MeshSizeFactor`` = ``factor``, then finer until a mesh has about
+    ``cells`` / 2 triangles or more, or k = 1 (the full mesh), and the finest mesh at
+    k > 1 once more at 2k. The sizes along the curves are integrated to a precision of
+    :data:`TRIAL_INTEGRATION_PRECISION` rather than gmsh's 1e-9: the 1D meshing of many
+    fracture lines under a size field is then 30 times faster, the triangles about 1 %
+    different.
+
+    Returns:
+        (k, triangles) of every mesh made, in order.
+
+    Raises:
+        Exception: gmsh failed on every mesh it tried (a bare ``Exception`` from gmsh).
+    """
+    from geofrac.meshing.geo_worker import trial_meshes
+
+    _build_model(gmsh, clean, sides, corners=corners, spec=spec, regions=regions)
+    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", TRIAL_INTEGRATION_PRECISION)
+    return trial_meshes(gmsh, 2, factor, cells=cells)
+
+
+def _build_model(
+    gmsh: ModuleType,
+    clean: CleanNetwork,
+    sides: Sequence[str],
+    *,
+    corners: Sequence[str],
+    spec: MeshSpec,
+    regions: RegionLayout | None,
+) -> tuple[list[int], dict[str, int]]:
+    """The model of :func:`mesh_network`, not meshed: (fracture curves, region name -> surface)."""
     geo = gmsh.model.geo
     gmsh.model.add("dfn")
     chains = _boundary_chains(clean)
@@ -284,8 +341,7 @@ def mesh_network(
             for r, lines in zip(regions.regions, outlines, strict=True)
         ]
     _size_field(gmsh, spec, refined)
-    model.mesh.generate(2)
-    return _report(gmsh, fracture_lines, dict(zip(names, region_surfaces, strict=True)))
+    return fracture_lines, dict(zip(names, region_surfaces, strict=True))
 
 
 def _report(

@@ -12,8 +12,10 @@ meshed by gmsh in a child process (:mod:`geofrac.meshing.geo_worker`, a fresh Py
 that loads no MPI) under a time limit, so an endless loop cannot hang ``geofrac check``
 or a run, and an ``Exit`` ends only the child. A meshed ``.geo`` comes back as a binary
 ``.msh`` in a temporary directory (exact coordinates), which :func:`meshed_model` reads
-in-process (a ``.msh`` is data) and deletes. :func:`gmsh_session` is the in-process tool
-the worker and the Python-API builders (DFN, terrain) use.
+in-process (a ``.msh`` is data) and deletes. :func:`trial_counts` meshes a ``.geo`` file
+coarsely in the same child process, under a shorter limit, for the size estimate.
+:func:`gmsh_session` is the in-process tool the worker and the Python-API builders (DFN,
+terrain) use.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ __all__ = [
     "DEFAULT_MESH_TIME_LIMIT",
     "DEFAULT_READ_TIME_LIMIT",
     "MAX_TIME_LIMIT",
+    "TRIAL_TIME_LIMIT",
     "GeoInfo",
     "GmshTimeout",
     "MeshingFailed",
@@ -48,6 +51,7 @@ __all__ = [
     "inspect_geometry",
     "inspect_model",
     "meshed_model",
+    "trial_counts",
 ]
 
 #: gmsh 2D algorithms by name (``Mesh.Algorithm``): a scene's ``geometry.algorithm`` and
@@ -59,6 +63,9 @@ DEFAULT_READ_TIME_LIMIT = 60.0
 DEFAULT_MESH_TIME_LIMIT = 600.0
 #: Largest ``geometry.time_limit`` a scene may set (one day).
 MAX_TIME_LIMIT = 86400.0
+#: Seconds the trial meshes of the size estimate may take (less if the scene's
+#: ``geometry.time_limit`` is less).
+TRIAL_TIME_LIMIT = 20.0
 
 _DEFINE = re.compile(r"DefineConstant\s*\[(.*?)\]\s*;", re.DOTALL)
 _NAME = re.compile(r"(?:^|,)\s*([A-Za-z_]\w*)\s*=")
@@ -352,3 +359,48 @@ def meshed_model(
             ) from None
         with gmsh_session(out, {}) as gmsh:
             yield gmsh
+
+
+def trial_counts(
+    path: Path,
+    parameters: dict[str, float],
+    mesh_size: float | None,
+    *,
+    dim: int,
+    factor: float,
+    cells: float,
+    time_limit: float | None = None,
+    trusted: bool = False,
+    algorithm: str | None = None,
+) -> list[tuple[float, int]]:
+    """Cells of trial meshes of a ``.geo`` file with every mesh size multiplied by k >= 1.
+
+    Read as :func:`meshed_model` reads it (``parameters``, ``mesh_size``, ``algorithm``)
+    and meshed to dimension ``dim`` by gmsh in a child process, first at k = ``factor``,
+    then finer until a mesh has about ``cells`` / 2 cells or more, or k = 1 (the full
+    mesh); see :func:`geofrac.meshing.geo_worker.trial_meshes`. Within ``time_limit``
+    seconds, at most :data:`TRIAL_TIME_LIMIT`.
+
+    Returns:
+        (k, cells in the ``dim``-dimensional physical groups) of every mesh, in order.
+
+    Raises:
+        GeoRefused: the file does more than describe a geometry.
+        GmshTimeout: gmsh did not finish in time.
+        RuntimeError: gmsh failed (its message).
+    """
+    if not trusted:
+        scan_geo(path)
+    limit = min(TRIAL_TIME_LIMIT, DEFAULT_READ_TIME_LIMIT if time_limit is None else time_limit)
+    request = {
+        "mode": "trial",
+        "path": str(path),
+        "parameters": parameters,
+        "mesh_size": mesh_size,
+        "algorithm": None if algorithm is None else ALGORITHMS[algorithm],
+        "dim": dim,
+        "factor": factor,
+        "cells": cells,
+    }
+    result = _run_worker(request, limit, f"trial-meshing '{path.name}'", verbose=False)
+    return [(float(k), int(n)) for k, n in result["meshes"]]

@@ -335,19 +335,40 @@ class Units:
     """The units a scene's numbers are in (``[units]``): labels for pictures only.
 
     geofrac computes in whatever consistent units a scene uses; these name them on the
-    axes of the PNGs it writes. Default SI.
+    axes of the PNGs it writes. A unit the scene does not declare is empty, and a label
+    of that quantity then carries no unit (nothing is assumed: a scene without
+    ``[units]`` may be in any consistent system).
 
     Attributes:
-        length: e.g. ``"m"``, ``"mm"``.
-        force: e.g. ``"N"``, ``"kN"``.
-        stress: e.g. ``"Pa"``, ``"MPa"``.
-        time: e.g. ``"s"``.
+        length: e.g. ``"m"``, ``"mm"``; empty: not declared.
+        force: e.g. ``"N"``, ``"kN"``; empty: not declared.
+        stress: e.g. ``"Pa"``, ``"MPa"``; empty: not declared.
+        time: e.g. ``"s"``; empty: not declared.
     """
 
-    length: str = "m"
-    force: str = "N"
-    stress: str = "Pa"
-    time: str = "s"
+    length: str = ""
+    force: str = ""
+    stress: str = ""
+    time: str = ""
+
+    def of(self, quantity: str) -> str:
+        """The unit of ``quantity``, empty when the scene does not declare it.
+
+        ``quantity``: ``length``, ``force``, ``stress``, ``time``, or the derived
+        ``area`` (length²), ``volume`` (length³) and ``velocity`` (length/time).
+        """
+        if quantity in ("area", "volume"):
+            power = "²" if quantity == "area" else "³"
+            return f"{self.length}{power}" if self.length else ""
+        if quantity == "velocity":
+            return f"{self.length}/{self.time}" if self.length and self.time else ""
+        unit: str = getattr(self, quantity)
+        return unit
+
+    def label(self, text: str, quantity: str) -> str:
+        """``"text (unit)"``, or ``text`` alone when the unit is not declared."""
+        unit = self.of(quantity)
+        return f"{text} ({unit})" if unit else text
 
 
 @dataclass(frozen=True)

@@ -41,6 +41,7 @@ __all__ = [
     "ImpactResult",
     "impact_bar",
     "quasi_static_bar",
+    "self_weight_displacement",
     "self_weight_stress",
 ]
 
@@ -57,6 +58,22 @@ def self_weight_stress(x: np.ndarray, *, E: float, rho0: float, b: float, L0: fl
     """
     delta = L0 - rho0 * b * L0**2 / (2 * E)
     return E * (np.sqrt(1 - 2 * rho0 * b * (delta - x) / E) - 1)
+
+
+def self_weight_displacement(X: float, *, E: float, rho0: float, b: float, L0: float) -> float:
+    """The displacement at rest of the material point at height ``X`` of the bar of eq. 4.73.
+
+    u(X) = −ρ₀ b (L₀ X − X²/2) / E: the weight above X, ρ₀ b (L₀ − X), stretches dX by
+    λ − 1 = σ/E; at the top, u(L₀) = Δ − L₀ of eq. 4.74.
+
+    Args:
+        X: the point's height before loading, 0 <= X <= L0 (the base at 0).
+        E: Young's modulus.
+        rho0: initial density.
+        b: magnitude of the body force per mass (downwards).
+        L0: initial length.
+    """
+    return -rho0 * b * (L0 * X - X * X / 2.0) / E
 
 
 @dataclass(frozen=True)

@@ -67,7 +67,7 @@ from geofrac.timing import Timings
 __all__ = ["MPM", "OUTPUT_FILES", "MpmMethod", "MpmRun", "advance", "prepare", "simulate"]
 
 #: Files an MPM run writes into its output directory.
-OUTPUT_FILES = ("particles.xdmf", "particles.h5", "energies.csv", "summary.json")
+OUTPUT_FILES = ("particles.xdmf", "particles.h5", "energies.csv", "particles.png", "summary.json")
 #: Seconds between progress lines (rank 0).
 PROGRESS_EVERY_S = 10.0
 
@@ -469,6 +469,9 @@ def simulate(
         if csv is not None:
             csv.close()
     seconds = time.perf_counter() - t_wall
+    if write:
+        with timings.phase("output"):
+            _picture(run, comm, loop, scene)
     results = _results(run, comm, loop, seconds, scene)
     if resume is not None:
         results["resumed_at_step"] = resume.k
@@ -588,6 +591,27 @@ def _frame(
             probes[name].append(_probe(gathered, pid, x0))
         if series is not None:
             series.write(t, gathered.x, _fields(gathered, x0, fields))
+
+
+def _picture(run: MpmRun, comm: MPI.Comm, loop: dict[str, Any], scene: Scene) -> None:
+    """``particles.png``: the particles at the end by |displacement|, the initial outline.
+
+    Collective (the particles are gathered); rank 0 draws.
+    """
+    gathered = _gather(run, comm)
+    if comm.rank != 0 or gathered is None or loop["x0"] is None:
+        return
+    from geofrac.io import pictures
+
+    t = run.steps * run.settings.dt
+    fig = pictures.particles_figure(
+        x0=loop["x0"],
+        x=gathered.x,
+        cell=run.grid.spacing,
+        title=f"{scene.name}: {run.total} particles at t = {t:.4g} {scene.units.time}".rstrip(),
+        units=scene.units,
+    )
+    pictures.save(fig, scene.output.dir / "particles.png")
 
 
 def _poll(run: MpmRun, loop: dict[str, Any], k: int, control: RunControl, comm: MPI.Comm) -> None:
@@ -868,15 +892,14 @@ class MpmMethod:
         }
 
     def report(self, summary: dict[str, Any]) -> list[str]:
-        """The runout, the friction angle and the energy drift."""
-        r = summary["results"]
-        line = f"runout (front x moved): {r['runout_m']:.4g}"
-        if "friction_angle_deg" in r:
-            line += f" at friction angle {r['friction_angle_deg']:g} deg"
-        if r["energy_drift_max"] is not None:
-            line += f"; energy drift max {r['energy_drift_max']:.3g}"
-        # the contact's invariant broken: one line per bound (older summaries have none)
-        return [line, *r.get("energy_invariant_warnings", [])]
+        """The contact's invariant broken: one line per bound (older summaries have none)."""
+        return list(summary["results"].get("energy_invariant_warnings", []))
+
+    def result(self, scene: Scene, summary: dict[str, Any]) -> list[str]:
+        """A bar under its own weight against the closed form, else the runout."""
+        from geofrac.mpm.result import lines
+
+        return lines(scene, summary["results"])
 
 
 #: The MPM method (``method = "mpm"``).

@@ -31,7 +31,7 @@ BLOCKS_KEYS = (
     "terrain",
 )
 #: Keys of ``[output]`` in a block scene.
-BLOCKS_OUTPUT_KEYS = ("dir", "vtu", "block_file", "histogram")
+BLOCKS_OUTPUT_KEYS = ("dir", "vtu", "block_file", "histogram", "section")
 #: Tables of other methods that a block scene must not have.
 FEM_ONLY_TABLES = (
     "material",
@@ -182,7 +182,7 @@ def blocks_spec(
 def blocks_output(
     file: Path, raw: Any, name: str, *, out: Path | None, trusted: bool = False
 ) -> Output:
-    """``[output]`` of a block scene: ``vtu``, ``block_file`` and ``histogram`` switches.
+    """``[output]`` of a block scene: ``vtu``, ``block_file``, ``histogram``, ``section``.
 
     ``trusted``: ``output.dir`` was set on the command line (see
     :func:`~geofrac.model.table.output_directory`).
@@ -190,6 +190,6 @@ def blocks_output(
     t = Table(file, "output", raw, allowed=BLOCKS_OUTPUT_KEYS)
     directory = output_directory(t, name, out, trusted=trusted)
     # the plain block file is for DEM/DDA codes and large (555 MB for 100k blocks): asked for
-    defaults = {"vtu": True, "block_file": False, "histogram": True}
+    defaults = {"vtu": True, "block_file": False, "histogram": True, "section": True}
     fields = tuple(k for k, default in defaults.items() if t.boolean(k, default=default))
     return Output(directory, fields, "vtu" in fields, {})

@@ -53,7 +53,7 @@ from geofrac.scene.insitu import INITIAL_STRESS_KEYS, STAGE_KEYS
 from geofrac.scene.insitu import cracking_variable as _cracking_variable
 from geofrac.scene.insitu import initial_stress as _initial_stress
 from geofrac.scene.insitu import stages as _stages
-from geofrac.scene.size import Extent, check_size, estimate
+from geofrac.scene.size import TRIAL_CELLS, Extent, check_size, estimate, trial_factor
 from geofrac.scene.switches import SWITCH_KEYS
 from geofrac.scene.switches import stage_names as _stage_names
 from geofrac.scene.switches import switch_keys as _switch_keys
@@ -210,12 +210,16 @@ _UNIT = re.compile(r"[\w ./^·²³µ%()-]{1,12}")
 
 
 def _units(file: Path, raw: Any) -> Units:
-    """``[units]``: the labels of the scene's units on the pictures' axes (default SI)."""
+    """``[units]``: the labels of the scene's units on the pictures' axes.
+
+    A key the scene does not give stays empty: its quantity is labelled without a unit.
+    """
     t = _Table(file, "units", raw, allowed=SECTION_KEYS["units"])
-    default = Units()
     labels = {}
     for key in SECTION_KEYS["units"]:
-        value = t.string(key, default=getattr(default, key))
+        if not t.has(key):
+            continue
+        value = t.string(key)
         if not _UNIT.fullmatch(value):
             raise t.error(
                 key,
@@ -1003,6 +1007,78 @@ def _extent(geometry: Geometry | None) -> Extent | None:
     )
 
 
+def _with_trial(scene: Scene, extent: Extent | None) -> Extent | None:
+    """``extent`` with the cells of trial meshes of the scene's ``.geo`` file, if it takes one.
+
+    The trial (:func:`~geofrac.scene.size.trial_factor`,
+    :func:`~geofrac.meshing.geo.trial_counts`) runs in gmsh's child process under a time
+    limit of at most :data:`~geofrac.meshing.geo.TRIAL_TIME_LIMIT` seconds; when it fails
+    or does not finish, the extent says why and the estimate falls back on the bounding box.
+    A DFN scene (no file) gets the extent of its trial meshes (:func:`_dfn_trial`).
+    """
+    factor = trial_factor(scene, extent)
+    if factor is not None and hasattr(getattr(scene.geometry, "builder", None), "trial"):
+        return _dfn_trial(scene, factor)
+    if factor is None or extent is None:
+        return extent
+    from geofrac.meshing.geo import TRIAL_TIME_LIMIT, GmshTimeout, trial_counts
+    from geofrac.meshing.geo_guard import GeoRefused
+
+    geometry = scene.geometry
+    assert geometry is not None and geometry.file is not None  # trial_factor checked
+    try:
+        meshes = trial_counts(
+            geometry.file,
+            geometry.parameters,
+            geometry.mesh_size,
+            dim=geometry.dim,
+            factor=factor,
+            cells=TRIAL_CELLS,
+            time_limit=geometry.time_limit,
+            trusted=geometry.trusted,
+            algorithm=geometry.algorithm,
+        )
+    except GmshTimeout:
+        limit = min(TRIAL_TIME_LIMIT, geometry.time_limit or TRIAL_TIME_LIMIT)
+        failure = f"the trial mesh did not finish within {limit:g} s"
+        return dataclasses.replace(extent, trial_failure=failure)
+    except (RuntimeError, GeoRefused) as exc:
+        text = " ".join(str(exc).split())
+        failure = "gmsh failed on the trial mesh" + (f": {text[:80]}" if text else "")
+        return dataclasses.replace(extent, trial_failure=failure)
+    return dataclasses.replace(extent, trial=tuple(meshes))
+
+
+def _dfn_trial(scene: Scene, factor: float) -> Extent:
+    """The DFN domain's box with the cells of trial meshes of the scene's network.
+
+    The DFN builder (geofrac's own code, in this process, in a gmsh session that is
+    finalised whatever happens) generates and cleans the network as a run does and
+    meshes it coarsely, first at size factor ``factor``
+    (:meth:`~geofrac.effects.dfn.DfnGeometry.trial`). When it fails, the extent says why
+    and the estimate falls back on the domain's area.
+    """
+    from geofrac.dfn.errors import DfnError
+    from geofrac.meshing.geo import gmsh_session
+
+    geometry = scene.geometry
+    assert geometry is not None and geometry.builder is not None  # a DFN scene
+    builder: Any = geometry.builder
+    domain = builder.config.domain
+    extent = Extent(
+        lower=(*(float(v) for v in domain.min(axis=0)), 0.0),
+        upper=(*(float(v) for v in domain.max(axis=0)), 0.0),
+    )
+    try:
+        with gmsh_session(None, geometry.parameters, geometry.mesh_size) as gmsh:
+            meshes = builder.trial(gmsh, factor, cells=TRIAL_CELLS)
+    except (DfnError, RuntimeError) as exc:
+        text = " ".join(str(exc).split())
+        failure = "the trial mesh failed" + (f": {text[:80]}" if text else "")
+        return dataclasses.replace(extent, trial_failure=failure)
+    return dataclasses.replace(extent, trial=tuple(meshes))
+
+
 def load_scene(
     path: str | Path,
     overrides: Sequence[str] = (),
@@ -1047,7 +1123,7 @@ def load_scene(
         scene = dataclasses.replace(
             scene,
             allow_large=scene.allow_large or allow_large,
-            size=estimate(scene, _extent(scene.geometry)),
+            size=estimate(scene, _with_trial(scene, _extent(scene.geometry))),
             overrides=tuple(overrides),
             description=marked_description(scene.description, overrides),
             units=_units(file, data.get("units", {})),

@@ -765,9 +765,14 @@ def _plot_bar(summary: dict[str, Any], out: Path, path: Path) -> None:
     fig, ax = plt.subplots(figsize=(6.0, 4.0), constrained_layout=True)
     ax.plot(x[order], _self_weight(x[order]), "k-", label="Edo (2016), eq. 4.73")
     ax.plot(x[order], stress[order], "o", ms=3, mfc="none", label="geofrac (MPM, MUSL)")
-    ax.set_xlabel("x (m)")
+    units = summary["scene"]["input"].get("units", {})  # the scene's [units]: none declared
+    ax.set_xlabel(f"x ({units['length']})" if units.get("length") else "x")
     save_figure(
-        fig, [ax], path, title="mpm_bar_w1000: stress under self-weight at rest", ylabel="σxx (Pa)"
+        fig,
+        [ax],
+        path,
+        title="mpm_bar_w1000: stress under self-weight at rest",
+        ylabel=f"σxx ({units['stress']})" if units.get("stress") else "σxx",
     )
 
 

@@ -395,7 +395,8 @@ def _chapter_table(chapter: str, rows: list[tuple[Result, str]], root: Path) -> 
     lines.append("")
     for r, _ in rows:
         if r.figure:
-            lines += [f"![{r.case.title}]({r.figure})", ""]
+            made = f"<!-- {r.figure} made by: geofrac validate --cases {r.case.name} -->"
+            lines += [f"![{r.case.title}]({r.figure})", made, ""]
     return lines
 
 

@@ -42,6 +42,7 @@ def test_square_blocks_scene_writes_what_it_says(tmp_path):
         rows = list(csv.DictReader(f))
     assert sum(int(r["count"]) for r in rows) == q["count"]
     assert json.loads((out / "summary.json").read_text())["status"] == "ok"
+    assert "section.png" in summary["files"] and (out / "section.png").is_file()
 
 
 def test_cylinder_blocks_fill_the_meshed_cylinder(tmp_path):
@@ -133,3 +134,24 @@ def test_a_mesh_with_a_non_manifold_vertex_is_refused_with_a_clear_error(tmp_pat
         run_scene(load_scene(scene, out=tmp_path / "out"), MPI.COMM_SELF, verbose=False)
     summary = json.loads((tmp_path / "out" / "incomplete" / "summary.json").read_text())
     assert summary["status"].startswith("error: cannot build blocks")
+
+
+def test_the_result_block_checks_the_volumes_against_the_unit_square(tmp_path):
+    """blocks_square: the blocks of the unit square sum to its area 1 (in m² when declared)."""
+    from geofrac.blocks.driver import BLOCKS
+
+    summary, _ = _run(
+        tmp_path, "blocks_square.toml", ["geometry.parameters.h=0.2", "units.length=m"]
+    )
+    q = summary["results"]["quality"]
+    scene = load_scene(JOBS / "blocks_square.toml", ["units.length=m"])
+    lines = BLOCKS.result(scene, summary)
+    assert lines[0].startswith(f"blocks: {q['count']}, area min ") and lines[0].endswith(" m²")
+    gap = q["total_volume"] - 1.0
+    assert lines[1] == (
+        f"area check: the blocks sum to {q['total_volume']:.10g} m², the domain 1 m² "
+        f"(difference {gap:+.3g} m², {100 * gap:+.3g} %)"
+    )
+    assert lines[2].startswith("checks: 0 invalid, faces paired (")
+    bare = BLOCKS.result(load_scene(JOBS / "blocks_square.toml"), summary)
+    assert "m²" not in "".join(bare) and "the domain 1 (difference" in bare[1]

@@ -162,3 +162,35 @@ def test_histogram_png_and_csv(tmp_path, dual3d):
     assert table[:, 2].sum() == dual3d.num_blocks
     np.testing.assert_allclose(table[:, 0], edges[:-1], rtol=1e-9)
     np.testing.assert_array_equal(table[:, 2], counts)
+
+
+def _labels(fig):
+    ax, bar = fig.axes
+    return ax.get_xlabel(), ax.get_ylabel(), ax.get_title(), bar.get_ylabel()
+
+
+def test_section_of_3d_blocks_is_a_cut_in_the_scenes_units(dual3d):
+    from geofrac.io.pictures import section_polygons
+    from geofrac.model.scene import Units
+
+    vol = q.block_volumes(dual3d)
+    fig = io.section_figure(dual3d, vol, name="cube", units=Units(length="m"))
+    x, y, title, bar = _labels(fig)
+    assert (x, y, bar) == ("x (m)", "z (m)", "block volume (m³)")
+    assert title.startswith("cube: section at y = ") and title.endswith(" m")
+    x, y, title, bar = _labels(io.section_figure(dual3d, vol, name="cube", units=Units()))
+    assert (x, y, bar) == ("x", "z", "block volume") and "(" not in title  # no [units]
+    polygons, _ = section_polygons(dual3d.points, dual3d.pieces, axis=1, at=0.4)
+    area = sum(
+        0.5 * abs(np.dot(p[:, 0], np.roll(p[:, 1], -1)) - np.dot(p[:, 1], np.roll(p[:, 0], -1)))
+        for p in polygons
+    )
+    assert area == pytest.approx(1.0)  # the pieces fill the unit cube: the cut is its square
+
+
+def test_section_of_2d_blocks_colours_them_by_area():
+    from geofrac.model.scene import Units
+
+    blocks = median_dual_2d(4)
+    fig = io.section_figure(blocks, q.block_volumes(blocks), name="square", units=Units("mm"))
+    assert _labels(fig) == ("x (mm)", "y (mm)", "square: 25 blocks by area", "block area (mm²)")

@@ -1,5 +1,6 @@
 """Effect ``dfn``: scene validation, the models of Edo (2016), a mesh that follows the network."""
 
+import dataclasses
 import json
 import math
 
@@ -141,6 +142,7 @@ def test_dfn_run_writes_network_and_fracture_tags(tmp_path):
     assert geometry["max_length_error"] < 1e-12
     assert 0.09 < geometry["p21"] < 0.12  # the scenes ask for P21 = 0.1 in total
     assert json.loads((tmp_path / "summary.json").read_text())["status"] == "ok"
+    assert "network.png" in summary["files"] and (tmp_path / "network.png").is_file()
     network = load_network(tmp_path / "network.csv")
     np.testing.assert_array_equal(network.segments, _config(scene).make_network().segments)
     with meshio.xdmf.TimeSeriesReader(tmp_path / "fractures.xdmf") as reader:
@@ -184,9 +186,54 @@ def test_dfn_scene_imports_dfn_and_no_other_effect(tmp_path):
     assert "geofrac.effects.dfn" in modules and "geofrac.meshing.dfn" in modules
     assert "geofrac.effects.gravity" not in modules
     written = {p.name for p in (tmp_path / "out").iterdir() if not p.name.startswith(".")}
-    assert written == {"summary.json", "network.csv"}  # output.xdmf = false: no XDMF
+    assert written == {"summary.json", "network.csv", "network.png"}  # xdmf = false: no XDMF
 
 
 def test_elastic_scene_imports_no_dfn_code(tmp_path):
     modules = _run_and_list_modules(tmp_path, JOBS / "quickstart.toml")
     assert not [m for m in modules if m.startswith(("geofrac.dfn", "geofrac.meshing.dfn"))]
+
+
+def _clipped_length(x0, y0, x1, y1, box):
+    """Length of the segment inside the rectangle ``box`` = (xmin, ymin, xmax, ymax)."""
+    t0, t1 = 0.0, 1.0
+    dx, dy = x1 - x0, y1 - y0
+    for p, q in ((-dx, x0 - box[0]), (dx, box[2] - x0), (-dy, y0 - box[1]), (dy, box[3] - y0)):
+        if p == 0.0:
+            if q < 0.0:
+                return 0.0
+            continue
+        t = q / p
+        t0, t1 = (max(t0, t), t1) if p < 0.0 else (t0, min(t1, t))
+    return max(t1 - t0, 0.0) * math.hypot(dx, dy)
+
+
+def test_the_result_block_gives_each_sets_p21_and_orientation_against_its_targets(tmp_path):
+    """Model 1, coarse: P21 and the axial mean from network.csv, in 1/mm and degrees."""
+    from geofrac.effects.dfn import result
+    from geofrac.model.scene import Units
+
+    scene = load_scene(MODEL1, [*COARSE, "discretization.element=cst"], out=tmp_path)
+    summary = run_scene(scene, MPI.COMM_WORLD, verbose=False)
+    with open(tmp_path / "network.csv") as f:
+        rows = [line.split(",") for line in f.read().splitlines()[1:]]
+    segments = np.array([[float(v) for v in row[1:]] for row in rows])
+    p21 = sum(_clipped_length(*s, (0.0, 0.0, 200.0, 100.0)) for s in segments) / (200 * 100)
+    doubled = 2 * np.arctan2(segments[:, 3] - segments[:, 1], segments[:, 2] - segments[:, 0])
+    mean = math.degrees(math.atan2(np.sin(doubled).mean(), np.cos(doubled).mean())) / 2 % 180
+    lines = result(_config(scene), scene, summary["results"])
+    assert (
+        lines[0].startswith(f"dfn: {len(rows)} fractures (") and f"P21 {p21:.4g} 1/mm" in lines[0]
+    )
+    gap = p21 - 0.1  # the set's p21
+    assert lines[1] == (
+        f"set set1: {len(rows)} fractures, P21 {p21:.4g} 1/mm (target 0.1; difference "
+        f"{gap:+.3g} 1/mm, {100 * gap / 0.1:+.3g} %)"
+    )
+    turn = mean - 47.473  # the set's mean (Table 2.1)
+    assert lines[2] == (
+        f"set set1: mean orientation {mean:.4g} deg (set's 47.473 deg; difference "
+        f"{turn:+.3g} deg, {100 * turn / 47.473:+.3g} %)"
+    )
+    bare = result(_config(scene), dataclasses.replace(scene, units=Units()), summary["results"])
+    assert "1/mm" not in "".join(bare) and "1/" not in bare[0]

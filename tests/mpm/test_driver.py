@@ -33,6 +33,7 @@ def test_the_quasi_static_bar_scene_matches_eq_4_73(tmp_path):
     assert np.sqrt(np.mean((stress - exact) ** 2)) / 1000.0 < 0.02
     # the top particle has moved down by about the bar's static shortening ρ b L0²/(2E)
     assert summary["results"]["runout_m"] == pytest.approx(-0.025, rel=0.1)
+    assert "particles.png" in summary["files"] and (tmp_path / "particles.png").is_file()
 
 
 def test_the_translating_bar_scene_writes_consistent_energies(tmp_path):

@@ -4,6 +4,7 @@ from pathlib import Path
 import pytest
 
 from geofrac.model.errors import did_you_mean
+from geofrac.model.scene import Units
 from geofrac.scene import SceneError, load_scene
 from geofrac.scene.load import apply_overrides
 from tests.conftest import BROKEN, JOBS
@@ -136,10 +137,14 @@ def test_two_driver_owning_effects_are_refused_naming_both(monkeypatch):
 
 
 def test_units_label_the_pictures_and_refuse_markup():
-    assert load_scene(JOBS / "quickstart.toml").units.length == "m"  # SI by default
+    bare = load_scene(JOBS / "quickstart.toml").units  # no [units]: nothing is assumed
+    assert bare == Units() and bare.label("x", "length") == "x"
     units = load_scene(JOBS / "notched_beam.toml").units
     assert (units.length, units.force, units.stress) == ("mm", "N", "MPa")
-    assert load_scene(JOBS / "quickstart.toml", ['units.stress="kN/m²"']).units.stress == "kN/m²"
+    assert units.label("x", "length") == "x (mm)" and units.of("volume") == "mm³"
+    partial = load_scene(JOBS / "quickstart.toml", ['units.stress="kN/m²"']).units
+    assert partial.stress == "kN/m²" and partial.length == partial.force == ""  # only as given
+    assert partial.label("σ", "stress") == "σ (kN/m²)" and partial.label("u", "length") == "u"
     # matplotlib reads $...$ and backslashes as mathematics: not a unit label
     for bad in ['units.length="$\\\\alpha$"', 'units.length="a_very_long_unit"', "units.force=3"]:
         with pytest.raises(SceneError, match="units"):
