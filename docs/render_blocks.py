@@ -93,7 +93,7 @@ def render_3d(out: Path, run: Path, zoom: float = 1.0) -> None:
     if np.any(kind == 1):
         immobile = grid.extract_cells(np.flatnonzero(kind == 1)).extract_surface()
         plotter.add_mesh(immobile, color="lightgrey", opacity=0.35, label="immobile block")
-    plotter.show_bounds(
+    axes = plotter.show_bounds(
         bounds=moving.bounds,
         xtitle=_label("x", length),
         ytitle=_label("y", length),
@@ -105,6 +105,7 @@ def render_3d(out: Path, run: Path, zoom: float = 1.0) -> None:
         n_ylabels=3,
         font_size=12,
     )
+    axes.SetCornerOffset(0.08)  # the axes stand off the box's corner: its labels stay apart
     plotter.add_text(f"{name}: {moving.n_cells:,} moving blocks, each shrunk to 80 %",
                      position="upper_left", font_size=10)  # fmt: skip
     plotter.camera_position = "iso"
