@@ -537,12 +537,15 @@ def _mark_slips(ax: Axes, rows: list[Row], *, legend: bool) -> None:
 
 
 def _pair_counts(faces: np.ndarray | None) -> str:
-    """A second title line with contact: the face pairs' states at the end; else ``""``."""
+    """A second title line with contact: the cracked edges' face states at the end; else ``""``.
+
+    Counted per cracked edge (as drawn), not per node pair of the summary's ``contact``.
+    """
     if faces is None:
         return ""
     counts = [f"{int((faces == code).sum())} {name}" for code, name in
               ((STICK, "stuck"), (SLIP, "slipping"), (OPEN, "open"))]  # fmt: skip
-    return "\nface pairs at the end: " + ", ".join(counts)
+    return "\ncracked edges' faces at the end: " + ", ".join(counts)
 
 
 def load_displacement_figure(

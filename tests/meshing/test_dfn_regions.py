@@ -284,7 +284,7 @@ def test_the_tunnel_example_in_the_docs_is_a_valid_scene(tmp_path):
     section = text[text.index("## Regions: openings") :]
     example = section[section.index("```toml\n") + 8 : section.index("```\n", 10)]
     path = tmp_path / "tunnel.toml"
-    path.write_text('name = "tunnel"\n' + example)
+    path.write_text(example)  # the example names itself (its picture's title)
     scene = load_scene_collective(MPI.COMM_SELF, path)
     layout = scene.geometry.builder.config.regions
     assert layout.names == ("heading", "bench")
