@@ -65,7 +65,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         ),
     ),
     # meshes and the geometry they are made of (DFN networks, gmsh, distribution)
-    ("mesh", ("geofrac.meshing", "geofrac.dfn", "geofrac.geometry")),
+    ("mesh", ("geofrac.meshing", "geofrac.dfn", "geofrac.dfn3d", "geofrac.geometry")),
     # linear algebra: the one adapter to PETSc (matrices, vectors, KSP, MUMPS, assembly of
     # compiled forms); it imports the leaves only (test_linear_algebra_imports_only_leaves)
     ("linear algebra", ("geofrac.solvers",)),
