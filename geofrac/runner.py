@@ -67,6 +67,8 @@ OUTPUT_FILES = (
     "strength_reduction.csv",
     "strength_reduction.png",
     "failure_mechanism.png",
+    "joints.csv",
+    "fracture_faces.vtu",
 )
 
 

@@ -33,11 +33,13 @@ match):
   :mod:`geofrac.plasticity.davis`), in strength reduction with the factored angles
   (default false: the given ψ);
 - ``joints``: ``[plasticity.joints.NAME]`` tables with ``friction`` (μ, required) and
-  ``cohesion`` (c, default 0), the keys of ``[cracking.joints.NAME]``: the curve group
-  NAME is a joint (cut along when meshed, :mod:`geofrac.meshing.split`, unless drawn
-  twice in the geometry), its faces tied by Coulomb springs with no
-  tensile strength (:mod:`geofrac.fem.joints`; c and μ divided by the trial factor in
-  strength reduction);
+  ``cohesion`` (c, default 0), the keys of ``[cracking.joints.NAME]``, and optionally
+  ``normal_stiffness`` and ``shear_stiffness`` (kₙ, kₛ in stress per length, as a
+  3DEC user's jkn, jks; default ``contact_penalty`` · E / facet size): the curve (2D) or
+  surface (3D) group NAME is a joint (cut along when meshed,
+  :mod:`geofrac.meshing.split`, unless drawn twice in the geometry), its faces tied by
+  Coulomb springs with no tensile strength (:mod:`geofrac.fem.joints`; c and μ divided by
+  the trial factor in strength reduction; 3D joints need the P2 element);
 - ``contact_penalty``: the joints' spring stiffness in units of E / facet length
   (default 100, as ``cracking.contact_penalty``; needs ``joints``);
 - ``strength_reduction``: true: the factor of safety by shear strength reduction
@@ -144,7 +146,7 @@ FEM_ELEMENTS = ("p2", "p3")
 #: Largest cohesion (stress units; the bound of ``material.E``).
 MAX_COHESION = 1e15
 #: Keys of a ``[plasticity.joints.NAME]`` table (those of ``[cracking.joints.NAME]``).
-JOINT_KEYS = ("friction", "cohesion")
+JOINT_KEYS = ("friction", "cohesion", "normal_stiffness", "shear_stiffness")
 
 
 @dataclass(frozen=True)
@@ -152,14 +154,18 @@ class JointConfig:
     """One joint group of ``[plasticity.joints.NAME]``.
 
     Attributes:
-        name: the curve group (split in the geometry).
+        name: the curve (2D) or surface (3D) group (split in the geometry).
         friction: μ = tan φ of the joint.
         cohesion: c of the joint.
+        normal_stiffness: kₙ (stress per length), None: the penalty's.
+        shear_stiffness: kₛ (stress per length), None: the penalty's.
     """
 
     name: str
     friction: float
     cohesion: float
+    normal_stiffness: float | None = None
+    shear_stiffness: float | None = None
 
 
 @dataclass(frozen=True)
@@ -449,17 +455,22 @@ def _joints(t: Table, ctx: ConfigureContext) -> tuple[JointConfig, ...]:
         raise t.error("joints", "must be a table of [plasticity.joints.NAME]")
     out = []
     curves = [g for g, d in ctx.groups.items() if d == ctx.gdim - 1]
+    what = "curve" if ctx.gdim == 2 else "surface"
     for name, entry in raw.items():
         if ctx.groups and name not in curves:
             raise SceneError(
                 ctx.file,
                 f"plasticity.joints.{name}",
-                "names no curve group of the geometry" + did_you_mean(name, curves),
+                f"names no {what} group of the geometry" + did_you_mean(name, curves),
             )
         j = Table(ctx.file, f"plasticity.joints.{name}", entry, allowed=JOINT_KEYS)
         mu = float(j.number("friction", required=True, minimum=0.0, maximum=10.0))  # type: ignore[arg-type]
         cj = float(j.number("cohesion", default=0.0, minimum=0.0, maximum=MAX_COHESION))
-        out.append(JointConfig(str(name), mu, cj))
+        kn, ks = (
+            float(j.number(k, positive=True, maximum=MAX_COHESION)) if j.has(k) else None
+            for k in ("normal_stiffness", "shear_stiffness")
+        )
+        out.append(JointConfig(str(name), mu, cj, kn, ks))
     return tuple(out)
 
 

@@ -27,7 +27,7 @@ crack-face contact of the cracking work (docs/cracking.md). See docs/plasticity.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -38,8 +38,21 @@ import numpy as np
 from mpi4py import MPI
 
 from geofrac.errors import RunError
+from geofrac.fem.joint_facets3d import (
+    ROW,
+    face_facets_3d,
+    facet_faces_3d,
+    facet_pairs_3d,
+    tangent_frames,
+)
 from geofrac.meshing.distribute import TaggedMesh
-from geofrac.plasticity.interface import SLIP, JointReturn, JointStrength, coulomb_joint
+from geofrac.plasticity.interface import (
+    SLIP,
+    JointReturn,
+    JointStrength,
+    coulomb_joint,
+    coulomb_joint_3d,
+)
 
 __all__ = ["JointGeometry", "JointInterface"]
 
@@ -158,25 +171,35 @@ def _facet_pairs(rows: np.ndarray, key: str) -> np.ndarray:
     return out[out[:, 0] != out[:, 1]]
 
 
-def _merge(rows: np.ndarray) -> tuple[np.ndarray, ...]:
+def _merge(rows: np.ndarray, dim: int) -> tuple[np.ndarray, ...]:
     """One pair per (plus, minus) node: weights summed, normals weight-averaged.
 
     Args:
-        rows: the facet node pairs of :func:`_facet_pairs`, shape=(k, 8).
+        rows: the facet node pairs (plus, minus, x (dim), weight, n (dim), length) of
+            :func:`_facet_pairs` (dim 2) or
+            :func:`geofrac.fem.joint_facets3d.facet_pairs_3d` (dim 3), shape=(k, 4 + 2 dim).
+        dim: the geometric dimension.
 
     Returns:
-        plus, minus (global nodes), x (m, 2), normal (m, 2), weight (m,), length (m,)
+        plus, minus (global nodes), x (m, dim), normal (m, dim), weight (m,), length (m,)
         (the mean facet length), sorted by (plus, minus).
     """
     uniq, inverse = np.unique(rows[:, :2], axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
     m = len(uniq)
+    w_col, n_col, l_col = 2 + dim, 3 + dim, 3 + 2 * dim
     count = np.bincount(inverse, minlength=m).astype(float)
-    weight = np.bincount(inverse, weights=rows[:, 4], minlength=m)
-    x = np.stack([np.bincount(inverse, weights=rows[:, c], minlength=m) for c in (2, 3)], 1)
-    length = np.bincount(inverse, weights=rows[:, 7], minlength=m) / count
+    weight = np.bincount(inverse, weights=rows[:, w_col], minlength=m)
+    x = np.stack(
+        [np.bincount(inverse, weights=rows[:, c], minlength=m) for c in range(2, w_col)], 1
+    )
+    length = np.bincount(inverse, weights=rows[:, l_col], minlength=m) / count
     normal = np.stack(
-        [np.bincount(inverse, weights=rows[:, c] * rows[:, 4], minlength=m) for c in (5, 6)], 1
+        [
+            np.bincount(inverse, weights=rows[:, c] * rows[:, w_col], minlength=m)
+            for c in range(n_col, l_col)
+        ],
+        1,
     )
     normal /= np.linalg.norm(normal, axis=1)[:, None]
     return uniq[:, 0], uniq[:, 1], x / count[:, None], normal, weight, length
@@ -190,12 +213,17 @@ class JointGeometry:
         names: the joint groups, in the order of ``group``'s indices.
         plus: global node of the + face, shape=(m,).
         minus: global node of the − face, shape=(m,).
-        x: coordinates of the pairs, shape=(m, 2).
-        normal: unit normal n (from − to +), shape=(m, 2).
-        weight: tributary length w, shape=(m,).
-        length: the mean facet length ℓ at the pair, shape=(m,).
+        x: coordinates of the pairs, shape=(m, d) (d = 2 or 3).
+        normal: unit normal n (from − to +), shape=(m, d).
+        weight: tributary length (2D) or area (3D) w, shape=(m,).
+        length: the mean facet length (2D) or edge length (3D) ℓ at the pair, shape=(m,).
         group: index into ``names`` of each pair, shape=(m,).
-        fixed: the pair's four DOFs (u⁺_x, u⁺_y, u⁻_x, u⁻_y) are Dirichlet DOFs, shape=(m, 4).
+        fixed: the pair's DOFs (u⁺ then u⁻, d each) are Dirichlet DOFs, shape=(m, 2 d).
+        faces: 3D: the joints' faces (their + facets' vertices), shape=(k, 3, 3);
+            2D: none, shape=(0, 3, 3).
+        face_pairs: the pairs of each face's three middle nodes (−1 for an edge on the
+            joint's edge, not split), shape=(k, 3).
+        face_group: index into ``names`` of each face, shape=(k,).
     """
 
     names: tuple[str, ...]
@@ -207,6 +235,9 @@ class JointGeometry:
     length: np.ndarray
     group: np.ndarray
     fixed: np.ndarray
+    faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3)))
+    face_pairs: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
+    face_group: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @classmethod
     def build(
@@ -225,33 +256,69 @@ class JointGeometry:
                 do not pair one to one (the two curves not meshed alike).
         """
         comm = V.mesh.comm
+        dim = V.mesh.geometry.dim
+        find, pair, width = (
+            (_face_facets, _facet_pairs, 13) if dim == 2 else (face_facets_3d, facet_pairs_3d, ROW)
+        )
         parts: list[list[np.ndarray]] = [[] for _ in range(7)]
+        faces: list[tuple[np.ndarray, np.ndarray, int]] = []
+        offset = 0
         for g, name in enumerate(groups):
             where = f"{key}.{name}"
             if name not in tagged.groups:
                 known = ", ".join(sorted(tagged.groups))
                 raise RunError(f"{where}: no group '{name}' in the mesh (groups: {known})")
-            message, rows = None, np.zeros((0, 13))
+            message, rows = None, np.zeros((0, width))
             try:
-                rows = _face_facets(V, tagged, name, where)
+                rows = find(V, tagged, name, key=where)
             except RunError as exc:
                 message = str(exc)
             messages = [m for m in comm.allgather(message) if m]
             if messages:
                 raise RunError(messages[0])
-            pairs = _merge(_facet_pairs(np.concatenate(comm.allgather(rows)), where))
+            every = np.concatenate(comm.allgather(rows))
+            pairs = _merge(pair(every, where), dim)
             for part, value in zip(parts, (*pairs, np.full(len(pairs[0]), g)), strict=True):
                 part.append(value)
+            if dim == 3:
+                corners, keys = facet_faces_3d(every, where)
+                index = _pair_index(pairs[0], pairs[1], keys)
+                faces.append((corners, np.where(index >= 0, index + offset, -1), g))
+            offset += len(pairs[0])
         cat = [np.concatenate(p) if p else np.zeros(0) for p in parts]
         plus, minus = cat[0].astype(np.int64), cat[1].astype(np.int64)
-        x, normal = cat[2].reshape(-1, 2), cat[3].reshape(-1, 2)
+        x, normal = cat[2].reshape(-1, dim), cat[3].reshape(-1, dim)
         fixed = _fixed(V, bcs, plus, minus)
-        return cls(tuple(groups), plus, minus, x, normal, cat[4], cat[5], cat[6].astype(int), fixed)
+        out = cls(tuple(groups), plus, minus, x, normal, cat[4], cat[5], cat[6].astype(int), fixed)
+        if faces:
+            out.faces = np.concatenate([f[0] for f in faces])
+            out.face_pairs = np.concatenate([f[1] for f in faces])
+            out.face_group = np.concatenate([np.full(len(f[0]), f[2]) for f in faces])
+        return out
 
     @property
     def size(self) -> int:
         """The number of pairs."""
         return len(self.plus)
+
+
+def _pair_index(plus: np.ndarray, minus: np.ndarray, keys: np.ndarray) -> np.ndarray:
+    """Index of each (plus, minus) key among the sorted pairs, −1 where plus == minus.
+
+    Args:
+        plus: the pairs' + nodes of :func:`_merge` (sorted by (plus, minus)), shape=(m,).
+        minus: their − nodes, shape=(m,).
+        keys: (plus, minus) global nodes, shape=(k, 3, 2).
+
+    Returns:
+        shape=(k, 3).
+    """
+    width = int(max(plus.max(initial=0), minus.max(initial=0), keys.max(initial=0))) + 1
+    code = plus.astype(np.int64) * width + minus.astype(np.int64)
+    wanted = keys[..., 0] * width + keys[..., 1]
+    where = np.clip(np.searchsorted(code, wanted), 0, max(len(code) - 1, 0))
+    found = (len(code) > 0) & (code[where] == wanted) if len(code) else np.zeros(wanted.shape, bool)
+    return np.where(found & (keys[..., 0] != keys[..., 1]), where, -1)
 
 
 def _gather(V: dolfinx.fem.FunctionSpace, array: np.ndarray, nodes: np.ndarray) -> np.ndarray:
@@ -271,7 +338,7 @@ def _fixed(
     plus: np.ndarray,
     minus: np.ndarray,
 ) -> np.ndarray:
-    """Whether each pair DOF (u⁺_x, u⁺_y, u⁻_x, u⁻_y) is a Dirichlet DOF, shape=(m, 4)."""
+    """Whether each pair DOF (u⁺ then u⁻, bs each) is a Dirichlet DOF, shape=(m, 2 bs)."""
     bs = V.dofmap.index_map_bs
     imap = V.dofmap.index_map
     marker = np.zeros((imap.size_local + imap.num_ghosts) * bs)
@@ -285,12 +352,19 @@ def _fixed(
 class JointInterface:
     """The joints' springs at one strength, with their slips (the state).
 
+    In 2D the pair's frame is [n t] with t = (n_y, −n_x) and the law
+    :func:`~geofrac.plasticity.interface.coulomb_joint`; in 3D it is [n t₁ t₂]
+    (:func:`~geofrac.fem.joint_facets3d.tangent_frames`) and the law
+    :func:`~geofrac.plasticity.interface.coulomb_joint_3d`, the slip a vector in the plane.
+
     Args:
         geometry: the pairs.
         V: the displacement space (P2 vector).
         strengths: each group's strength (``geometry.names`` order), already reduced.
-        penalty: kₙ = kₛ = penalty · E / ℓ.
+        penalty: kₙ = kₛ = penalty · E / ℓ where a group gives no stiffness.
         E: Young's modulus of the rock.
+        stiffness: each group's (kₙ, kₛ) in stress per length, None for the penalty's
+            (``geometry.names`` order; empty: the penalty's for all).
     """
 
     def __init__(
@@ -301,38 +375,53 @@ class JointInterface:
         *,
         penalty: float,
         E: float,
+        stiffness: Sequence[tuple[float | None, float | None]] = (),
     ) -> None:
         self.geometry, self.V = geometry, V
         self.cohesion = np.array([s.cohesion for s in strengths])[geometry.group]
         self.friction = np.array([s.friction for s in strengths])[geometry.group]
         self.k = penalty * E / geometry.length
-        self.slip_n = np.zeros(geometry.size)
-        #: the jump (δₙ, δₛ) the displacement lost at a reset (a gravity phase's end),
-        #: added to the jump of u, shape=(m, 2), the same on every rank.
-        self.offset = np.zeros((geometry.size, 2))
+        self.kn, self.ks = self.k.copy(), self.k.copy()
+        for g, (kn, ks) in enumerate(stiffness):
+            mine = geometry.group == g
+            if kn is not None:
+                self.kn[mine] = kn
+            if ks is not None:
+                self.ks[mine] = ks
+        dim = geometry.x.shape[1]
+        self.dim = dim
+        #: the converged slip, shape=(m,) in 2D, (m, 2) in 3D (the tangent frame's t₁, t₂)
+        self.slip_n = np.zeros(geometry.size) if dim == 2 else np.zeros((geometry.size, 2))
+        #: the jump (δₙ, δₛ...) the displacement lost at a reset (a gravity phase's end),
+        #: added to the jump of u, shape=(m, d), the same on every rank.
+        self.offset = np.zeros((geometry.size, dim))
         self.ret: JointReturn | None = None
         bs = V.dofmap.index_map_bs
         comps = np.arange(bs)
         plus, minus = geometry.plus[:, None], geometry.minus[:, None]
-        #: the pairs' global scalar DOFs (u⁺_x, u⁺_y, u⁻_x, u⁻_y), shape=(m, 4)
+        #: the pairs' global scalar DOFs (u⁺ then u⁻, bs each), shape=(m, 2 bs)
         self._dofs = np.concatenate([bs * plus + comps, bs * minus + comps], axis=1)
         lo, hi = V.dofmap.index_map.local_range
         self._owned = (self._dofs >= bs * lo) & (self._dofs < bs * hi) & ~geometry.fixed
         n = geometry.normal
-        self._q = np.stack([n, np.stack([n[:, 1], -n[:, 0]], axis=1)], axis=2)  # (m, 2, 2): [n t]
+        if dim == 2:  # (m, 2, 2): [n t]
+            self._q = np.stack([n, np.stack([n[:, 1], -n[:, 0]], axis=1)], axis=2)
+        else:  # (m, 3, 3): [n t1 t2]
+            self._q = tangent_frames(n)
 
     def update(self, u: dolfinx.fem.Function) -> None:
         """The law at the jump of u plus :attr:`offset` (collective)."""
         g = self.geometry
         values = _gather(self.V, u.x.array, np.concatenate([g.plus, g.minus]))
         jump = values[: g.size] - values[g.size :]
-        local = np.einsum("mij,mi->mj", self._q, jump) + self.offset  # (δₙ, δₛ)
-        self.ret = coulomb_joint(
+        local = np.einsum("mij,mi->mj", self._q, jump) + self.offset  # (δₙ, δₛ...)
+        law = coulomb_joint if self.dim == 2 else coulomb_joint_3d
+        self.ret = law(
             local[:, 0],
-            local[:, 1],
+            local[:, 1] if self.dim == 2 else local[:, 1:],
             self.slip_n,
-            kn=self.k,
-            ks=self.k,
+            kn=self.kn,
+            ks=self.ks,
             cohesion=self.cohesion,
             friction=self.friction,
         )
@@ -351,12 +440,16 @@ class JointInterface:
         """
         self.offset = self._jump.copy()
 
+    def _traction(self) -> np.ndarray:
+        """(σₙ, τ...) per pair in its frame, shape=(m, d)."""
+        assert self.ret is not None
+        return np.column_stack([self.ret.normal, self.ret.shear])
+
     def residual_entries(self) -> tuple[np.ndarray, np.ndarray]:
         """(owned global rows, values): +w T on u⁺, −w T on u⁻, T = σₙ n + τ t."""
-        assert self.ret is not None
-        trac = np.einsum("mij,mj->mi", self._q, np.stack([self.ret.normal, self.ret.shear], 1))
+        trac = np.einsum("mij,mj->mi", self._q, self._traction())
         force = self.geometry.weight[:, None] * trac
-        values = np.concatenate([force, -force], axis=1)  # (m, 4)
+        values = np.concatenate([force, -force], axis=1)  # (m, 2 d)
         return self._dofs[self._owned], values[self._owned]
 
     def jacobian_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -366,11 +459,17 @@ class JointInterface:
         K = self.geometry.weight[:, None, None] * np.einsum(
             "mij,mjk,mlk->mil", q, self.ret.tangent, q
         )
-        block = np.block([[K, -K], [-K, K]])  # (m, 4, 4)
+        block = np.block([[K, -K], [-K, K]])  # (m, 2 d, 2 d)
         rows = np.broadcast_to(self._dofs[:, :, None], block.shape)
         cols = np.broadcast_to(self._dofs[:, None, :], block.shape)
         keep = self._owned[:, :, None] & ~self.geometry.fixed[:, None, :]
         return rows[keep], cols[keep], block[keep]
+
+    def _slip_size(self) -> np.ndarray:
+        """|s| per pair, shape=(m,)."""
+        assert self.ret is not None
+        slip = self.ret.slip
+        return np.abs(slip) if slip.ndim == 1 else np.linalg.norm(slip, axis=1)
 
     def summary(self) -> dict[str, object]:
         """Pairs, slipping and open pairs, the largest slip and opening (JSON-ready)."""
@@ -381,29 +480,89 @@ class JointInterface:
             "pairs": int(self.geometry.size),
             "slipping": int(np.count_nonzero(self.ret.state == SLIP)),
             "open": int(np.count_nonzero(self._jump[:, 0] > 0)),
-            "max_slip": float(np.abs(self.ret.slip).max(initial=0.0)),
+            "max_slip": float(self._slip_size().max(initial=0.0)),
             "max_opening": float(opening.max(initial=0.0)),
         }
 
     def write_csv(self, path: Path) -> None:
         """The :meth:`table` as CSV (one rank writes: the table is the same on every rank)."""
-        header = "x,y,normal_traction,shear_traction,opening,slip,state"
-        np.savetxt(path, self.table(), delimiter=",", header=header, comments="", fmt="%.10g")
+        np.savetxt(
+            path, self.table(), delimiter=",", header=self.header(), comments="", fmt="%.10g"
+        )
 
-    def table(self) -> np.ndarray:
-        """Per pair: x, y, σₙ, τ, opening δₙ, slip s, state (0 closed, 1 slip, 2 open).
+    def header(self) -> str:
+        """The :meth:`table`'s column names, comma-separated."""
+        if self.dim == 2:
+            return "x,y,normal_traction,shear_traction,opening,slip,state"
+        return (
+            "x,y,z,normal_traction,shear_traction_1,shear_traction_2,opening,"
+            "slip_x,slip_y,slip_z,slip,state,group"
+        )
 
-        Shape=(m, 7), the same on every rank.
+    def face_table(self) -> dict[str, np.ndarray]:
+        """3D: per joint face the mean over its split middle nodes' pairs (JSON-free arrays).
+
+        Returns:
+            ``opening`` δₙ, ``slip`` |s|, ``normal_traction`` σₙ, ``shear_traction`` |τ|,
+            ``state`` (the most frequent of its pairs' states, the higher on a tie: open
+            over slip over closed), ``set`` (the group index), shape=(k,) each; a face with
+            no split middle node (its three edges on the joint's edge) gets zeros and state
+            closed.
         """
         assert self.ret is not None
+        g = self.geometry
+        valid = g.face_pairs >= 0
+        index = np.where(valid, g.face_pairs, 0)
+        count = np.maximum(valid.sum(axis=1), 1)
+        shear = self.ret.shear
+        shear_size = np.abs(shear) if shear.ndim == 1 else np.linalg.norm(shear, axis=1)
+
+        def mean(values: np.ndarray) -> np.ndarray:
+            return np.where(valid, values[index], 0.0).sum(axis=1) / count
+
+        votes = np.stack(
+            [np.where(valid, self.ret.state[index] == k, False).sum(axis=1) for k in range(3)], 1
+        )
+        state = 2 - np.argmax(votes[:, ::-1], axis=1)  # the higher state on a tie
+        return {
+            "opening": mean(self._jump[:, 0]),
+            "slip": mean(self._slip_size()),
+            "normal_traction": mean(self.ret.normal),
+            "shear_traction": mean(shear_size),
+            "state": state.astype(np.int8),
+            "set": g.face_group.astype(np.int32),
+        }
+
+    def table(self) -> np.ndarray:
+        """Per pair: position, σₙ, τ, opening δₙ, slip, state (0 closed, 1 slip, 2 open).
+
+        2D: x, y, σₙ, τ, δₙ, s, state, shape=(m, 7). 3D: x, y, z, σₙ, τ₁, τ₂, δₙ, the
+        slip vector s₁ t₁ + s₂ t₂ (x, y, z), |s|, state, group index, shape=(m, 13).
+        The same on every rank.
+        """
+        assert self.ret is not None
+        if self.dim == 2:
+            return np.column_stack(
+                [
+                    self.geometry.x,
+                    self.ret.normal,
+                    self.ret.shear,
+                    self._jump[:, 0],
+                    self.ret.slip,
+                    self.ret.state,
+                ]
+            )
+        slip = np.einsum("mij,mj->mi", self._q[:, :, 1:], self.ret.slip)
         return np.column_stack(
             [
                 self.geometry.x,
                 self.ret.normal,
                 self.ret.shear,
                 self._jump[:, 0],
-                self.ret.slip,
+                slip,
+                self._slip_size(),
                 self.ret.state,
+                self.geometry.group,
             ]
         )
 
@@ -416,6 +575,7 @@ def joint_springs(
     bcs: Sequence[dolfinx.fem.DirichletBC],
     rock: Any,
     penalty: float,
+    stiffness: Sequence[tuple[float | None, float | None]] = (),
 ) -> Callable[[Any], JointInterface]:
     """The map reduced rock law ↦ the joints' springs at the same trial factor (collective).
 
@@ -430,6 +590,7 @@ def joint_springs(
         bcs: the Dirichlet conditions (their DOFs get no spring rows or columns).
         rock: the rock's law at full strength (its E sets the springs).
         penalty: kₙ = kₛ = penalty · E / ℓ.
+        stiffness: each joint's (kₙ, kₛ), None for the penalty's (empty: all the penalty's).
     """
     from geofrac.plasticity.strength_reduction import trial_factor
 
@@ -439,6 +600,8 @@ def joint_springs(
     def make(law: Any) -> JointInterface:
         factor = 1.0 if law is rock else trial_factor(rock, law)
         reduced = [s.reduced(factor) for s in strengths]
-        return JointInterface(geometry, V, reduced, penalty=penalty, E=float(rock.E))
+        return JointInterface(
+            geometry, V, reduced, penalty=penalty, E=float(rock.E), stiffness=stiffness
+        )
 
     return make

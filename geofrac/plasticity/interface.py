@@ -22,6 +22,13 @@ Consistent tangent, per pair, d(σₙ, τ)/d(δₙ, δₛ) = [[kₙ χ, 0], [−
 with χ = 1 where closed (δₙ <= 0; the closed branch at δₙ = 0, so that a fresh joint
 has its stiffness) and ς = 1 where slipping. Not symmetric where slipping (ψ = 0).
 See docs/plasticity.md, "Joints in the strength reduction".
+
+In 3D (:func:`coulomb_joint_3d`) the sliding and the slip are vectors in the joint's plane
+(two components in a tangent frame t₁, t₂) and the shear is returned radially: with the
+trial τ* = kₛ (δₛ − s) and e = τ*/|τ*|, slip where |τ*| > τ_max gives τ = τ_max e and
+s ← δₛ − τ/kₛ; the tangent is dτ/dδₛ = kₛ (τ_max/|τ*|) (I − e eᵀ), dτ/dδₙ = −μ kₙ χ e. The
+slip keeps the trial's direction (isotropic friction), so the law is the same in any
+tangent frame, and with one tangent component it is :func:`coulomb_joint`.
 """
 
 from __future__ import annotations
@@ -30,7 +37,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["CLOSED", "OPEN", "SLIP", "JointReturn", "JointStrength", "coulomb_joint"]
+__all__ = [
+    "CLOSED",
+    "OPEN",
+    "SLIP",
+    "JointReturn",
+    "JointStrength",
+    "coulomb_joint",
+    "coulomb_joint_3d",
+]
 
 #: State of a pair: closed and sticking.
 CLOSED = 0
@@ -124,4 +139,64 @@ def coulomb_joint(
     tangent[:, 0, 0] = np.where(closed, kn_a, 0.0)
     tangent[:, 1, 0] = np.where(slipping & closed, -mu * kn_a * sign, 0.0)
     tangent[:, 1, 1] = np.where(slipping, 0.0, ks_a)
+    return JointReturn(normal, shear, new_slip, state.astype(np.int8), tangent)
+
+
+def coulomb_joint_3d(
+    opening: np.ndarray,
+    sliding: np.ndarray,
+    slip: np.ndarray,
+    *,
+    kn: np.ndarray | float,
+    ks: np.ndarray | float,
+    cohesion: np.ndarray | float,
+    friction: np.ndarray | float,
+) -> JointReturn:
+    """Return-map n pairs of a 3D joint: the shear returned radially in the joint's plane.
+
+    Args:
+        opening: δₙ, shape=(n,).
+        sliding: δₛ in the tangent frame, shape=(n, 2).
+        slip: the converged plastic slip s in that frame, shape=(n, 2).
+        kn: normal stiffness (stress/length), scalar or shape=(n,), > 0.
+        ks: shear stiffness, scalar or shape=(n,), > 0.
+        cohesion: c, scalar or shape=(n,).
+        friction: μ, scalar or shape=(n,).
+
+    Returns:
+        normal σₙ shape=(n,), shear τ shape=(n, 2), slip shape=(n, 2), state shape=(n,)
+        (an open pair is :data:`SLIP` only when it has a cohesion to slip against),
+        tangent d(σₙ, τ₁, τ₂)/d(δₙ, δₛ₁, δₛ₂) shape=(n, 3, 3).
+    """
+    d_n = np.asarray(opening, dtype=float)
+    n = d_n.shape[0]
+    d_s = np.asarray(sliding, dtype=float).reshape(n, 2)
+    kn_a = np.broadcast_to(np.asarray(kn, dtype=float), (n,))
+    ks_a = np.broadcast_to(np.asarray(ks, dtype=float), (n,))
+    mu = np.broadcast_to(np.asarray(friction, dtype=float), (n,))
+    c = np.broadcast_to(np.asarray(cohesion, dtype=float), (n,))
+    closed = d_n <= 0.0
+    normal = np.where(closed, kn_a * d_n, 0.0)
+    trial = ks_a[:, None] * (d_s - np.asarray(slip, dtype=float).reshape(n, 2))
+    size = np.linalg.norm(trial, axis=1)
+    limit = c - mu * normal
+    slipping = size > limit
+    e = np.zeros((n, 2))
+    np.divide(trial, size[:, None], out=e, where=size[:, None] > 0)
+    shear = np.where(slipping[:, None], limit[:, None] * e, trial)
+    new_slip = np.where(slipping[:, None], d_s - shear / ks_a[:, None], slip)
+    # an open cohesionless pair has nothing to slip against (τ_max = 0): OPEN, whatever
+    # round-off its shear trial carries (the decision is on c, an input, not on a jump)
+    sliding_state = slipping & (closed | (c > 0))
+    state = np.where(sliding_state, SLIP, np.where(closed, CLOSED, OPEN))
+    tangent = np.zeros((n, 3, 3))
+    tangent[:, 0, 0] = np.where(closed, kn_a, 0.0)
+    tangent[:, 1:, 0] = np.where(
+        (slipping & closed)[:, None], -mu[:, None] * kn_a[:, None] * e, 0.0
+    )
+    ratio = np.zeros(n)
+    np.divide(limit, size, out=ratio, where=slipping)
+    scale = np.where(slipping, ks_a * ratio, ks_a)
+    proj = np.eye(2)[None] - np.where(slipping[:, None, None], e[:, :, None] * e[:, None, :], 0.0)
+    tangent[:, 1:, 1:] = scale[:, None, None] * proj
     return JointReturn(normal, shear, new_slip, state.astype(np.int8), tangent)
