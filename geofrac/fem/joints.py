@@ -460,10 +460,22 @@ class JointInterface:
             "mij,mjk,mlk->mil", q, self.ret.tangent, q
         )
         block = np.block([[K, -K], [-K, K]])  # (m, 2 d, 2 d)
-        rows = np.broadcast_to(self._dofs[:, :, None], block.shape)
-        cols = np.broadcast_to(self._dofs[:, None, :], block.shape)
-        keep = self._owned[:, :, None] & ~self.geometry.fixed[:, None, :]
+        rows, cols, keep = self._block_pattern()
         return rows[keep], cols[keep], block[keep]
+
+    def _block_pattern(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Rows, columns and which to keep of the pairs' blocks, shape=(m, 2 d, 2 d) each."""
+        size = self._dofs.shape[1]
+        shape = (len(self._dofs), size, size)
+        rows = np.broadcast_to(self._dofs[:, :, None], shape)
+        cols = np.broadcast_to(self._dofs[:, None, :], shape)
+        keep = self._owned[:, :, None] & ~self.geometry.fixed[:, None, :]
+        return rows, cols, keep
+
+    def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, cols) of every entry :meth:`jacobian_entries` gives (the solver's pattern)."""
+        rows, cols, keep = self._block_pattern()
+        return rows[keep], cols[keep]
 
     def _slip_size(self) -> np.ndarray:
         """|s| per pair, shape=(m,)."""

@@ -57,3 +57,8 @@ class StageRelease:
         """None: r is fixed during the stage."""
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty, np.zeros(0)
+
+    def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """None: r adds no Jacobian entries."""
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty

@@ -25,6 +25,7 @@ __all__ = [
     "orthonormal_nullspace",
     "rigid_body_modes",
     "transposed",
+    "widened",
     "zero_rows_columns",
 ]
 
@@ -192,3 +193,51 @@ def orthonormal_nullspace(modes: list[np.ndarray], comm: MPI.Comm) -> PETSc.Null
     for v in vecs:  # the null space holds its own references
         v.destroy()
     return nullspace
+
+
+def widened(J: Any, rows: np.ndarray, cols: np.ndarray) -> PETSc.Mat:
+    """The matrix of the bilinear form J with the entries (rows, cols) added to its pattern.
+
+    A form's matrix refuses entries outside its pattern, and letting PETSc grow it entry
+    by entry copies the whole matrix at every row that grows (minutes for a 3D joint's
+    pairs). The union of the form's sparsity pattern and the entries is preallocated
+    exactly (the form's pattern read from one assembly of it), with the sizes, block size
+    and local-to-global map DOLFINx gives the form's matrix, so DOLFINx assembles into it
+    as into its own.
+
+    Args:
+        J: a compiled DOLFINx bilinear form.
+        rows: global scalar rows owned by this rank, shape=(k,).
+        cols: global scalar columns, shape=(k,).
+
+    Returns:
+        The matrix (zeros in its pattern), assembled.
+    """
+    import dolfinx.fem.petsc
+
+    A = dolfinx.fem.petsc.create_matrix(J)
+    try:
+        # the form's pattern: the entries one assembly inserts (zeros included)
+        A.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(A, J)
+        A.assemble()
+        lo, hi = A.getOwnershipRange()
+        indptr, indices, _ = A.getValuesCSR()
+        local = np.repeat(np.arange(hi - lo, dtype=np.int64), np.diff(indptr))
+        r = np.concatenate([local, np.asarray(rows, dtype=np.int64) - lo])
+        c = np.concatenate([np.asarray(indices, dtype=np.int64), np.asarray(cols, dtype=np.int64)])
+        if len(r) and (r.min() < 0 or r.max() >= hi - lo):
+            raise ValueError("widened: a row is not owned by this rank")
+        pairs = np.unique(np.stack([r, c], axis=1), axis=0)
+        counts = np.bincount(pairs[:, 0], minlength=hi - lo)
+        ptr = np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType)
+        B = PETSc.Mat().create(comm=A.getComm())
+        B.setSizes(A.getSizes(), bsize=A.getBlockSizes())
+        B.setType(A.getType())
+        B.setPreallocationCSR((ptr, pairs[:, 1].astype(PETSc.IntType)))
+        B.setLGMap(*A.getLGMap())
+        B.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+        B.assemble()
+    finally:
+        A.destroy()
+    return B

@@ -29,6 +29,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from geofrac.errors import RunError
+from geofrac.solvers.matrices import widened
 
 __all__ = ["ExtraTerms", "NewtonReport", "NewtonSolver", "snes_reason_name"]
 
@@ -46,6 +47,10 @@ class ExtraTerms(Protocol):
 
     def jacobian_entries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(rows, cols, values), shape=(k,) each (summed where repeated)."""
+        ...
+
+    def jacobian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        """(rows, cols) of every entry :meth:`jacobian_entries` may give, shape=(k,) each."""
         ...
 
 
@@ -136,9 +141,10 @@ class NewtonSolver:
         self.options.update(options or {})
         self.residuals: list[float] = []
         self._last: np.ndarray | None = None
-        self.A = dolfinx.fem.petsc.create_matrix(J)
-        if extra is not None:  # its entries couple DOFs of no common cell
-            self.A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        if extra is None:
+            self.A = dolfinx.fem.petsc.create_matrix(J)
+        else:  # its entries couple DOFs of no common cell: preallocated with the form's
+            self.A = widened(J, *extra.jacobian_pattern())
         self.b = dolfinx.fem.petsc.create_vector(u.function_space)
         self.x = dolfinx.fem.petsc.create_vector(u.function_space)
         self.snes = PETSc.SNES().create(u.function_space.mesh.comm)
