@@ -35,6 +35,11 @@ BENCHES: dict[str, tuple[str, str]] = {
         "DFN Models 1 and 2 (Edo (2016), §2.5.1): generation and meshing wall times, "
         "mesh statistics",
     ),
+    "dfn3d": (
+        "geofrac.bench.dfn3d",
+        "3D disc networks in a cube: cleaning, OCC fragment and tetrahedral meshing wall times, "
+        "mesh quality",
+    ),
     "efmm-qrand": (
         "geofrac.bench.efmm_qrand",
         "EFMM integration domains (Edo (2016), Table 3.1): error mean and spread over q_rand "
