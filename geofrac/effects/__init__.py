@@ -65,6 +65,7 @@ __all__ = [
 REGISTRY: dict[str, str] = {
     "cracking": "geofrac.effects.cracking",
     "dfn": "geofrac.effects.dfn",
+    "dfn3d": "geofrac.effects.dfn3d",
     "friction": "geofrac.effects.friction",
     "gravity": "geofrac.effects.gravity",
     "mls_smoothing": "geofrac.effects.mls_smoothing",

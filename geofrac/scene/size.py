@@ -243,8 +243,9 @@ def _cells_key(scene: Scene, extent: Extent | None) -> str:
             if r.mesh_size:
                 sizes.append((r.mesh_size, 2, f"dfn.regions.{r.name}.mesh_size"))
         return min(sizes)[2]
-    if getattr(scene.geometry, "builder", None) is not None:
-        return "dfn.mesh_size"
+    builder = getattr(scene.geometry, "builder", None)
+    if builder is not None:
+        return str(getattr(builder, "size_key", "dfn.mesh_size"))
     if extent is None or extent.cells is not None:
         return "geometry.file"
     h_key = _mesh_size(scene, extent)[1]
@@ -368,6 +369,9 @@ def _fem_cells(scene: Scene, extent: Extent | None) -> tuple[float, str]:
     if dfn is not None:
         why = f" ({extent.trial_failure})" if extent is not None and extent.trial_failure else ""
         return _area_cells(dfn, dfn.mesh.size), f"estimate from the DFN domain's area{why}"
+    builder = getattr(geometry, "builder", None)
+    if hasattr(builder, "estimate_cells"):  # a 3D DFN: its box and fracture area
+        return float(builder.estimate_cells()), "estimate from the box and the fractures' area"
     if extent is None:
         return 0.0, "estimate"
     if extent.cells is not None:
