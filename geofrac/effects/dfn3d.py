@@ -208,11 +208,13 @@ class Dfn3dGeometry:
         return report, None
 
     def estimate_cells(self) -> float:
-        """Tetrahedra expected: 6√2 per h³ in the box, plus the graded band at the fractures.
+        """Tetrahedra expected: 6√2 per h³, with the fractures' band at the finer sizes.
 
-        The fractures' area A (the sets' P32 times the volume, or the discs' area) with
-        the size growing linearly from h_f to h over the transition t on both sides adds
-        A t (1/h_f² − 1/h²) / (h − h_f) cells per 6√2 (A/h_f³ times 2 h_f where h_f = h).
+        The mesher's size (:mod:`geofrac.meshing.dfn3d`) is h_f within h_f of a fracture,
+        growing linearly to h over the transition t beyond: per unit of fracture area
+        (A: the sets' P32 times the volume, or the discs' area) that band holds
+        2/h_f² + t (1/h_f² − 1/h²)/(h − h_f) cells per 6√2 on its two sides, in place
+        of the 2 (h_f + t)/h³ the coarse size would give.
         """
         cfg = self.settings
         lo, hi = cfg.box[:3], cfg.box[3:]
@@ -223,12 +225,12 @@ class Dfn3dGeometry:
             if s.p32 is not None:
                 area += s.p32 * volume
             else:
-                mean_r2 = _mean_square_radius(s)
-                area += (s.count or 0) * math.pi * mean_r2
+                area += (s.count or 0) * math.pi * _mean_square_radius(s)
         if cfg.network is not None:
             area = float(np.sum(cfg.network.area()))
-        band = 2.0 * t / h**2 if h - hf <= 1e-12 * h else t * (1 / hf**2 - 1 / h**2) / (h - hf)
-        return 6.0 * math.sqrt(2.0) * (volume / h**3 + area * band)
+        growth = 2.0 * t / h**2 if h - hf <= 1e-12 * h else t * (1 / hf**2 - 1 / h**2) / (h - hf)
+        band = 2.0 / hf**2 + growth - 2.0 * (hf + t) / h**3
+        return 6.0 * math.sqrt(2.0) * max(volume / h**3 + area * band, 1.0)
 
 
 def _mean_square_radius(s: DiscSet) -> float:

@@ -566,7 +566,8 @@ def result(config: PlasticityConfig, scene: Any, results: dict[str, Any]) -> lis
     """The result block's lines of an FEM plastic analysis (none for MPM).
 
     The factor of safety (strength reduction), or how far the load went, the plastic
-    points and yielded area; the ground reaction against its closed form; each stage's.
+    points and yielded area; the joints' states (pairs slipping and open, the largest
+    slip and opening); the ground reaction against its closed form; each stage's.
     """
     from geofrac.headline import quantity, versus
 
@@ -590,6 +591,15 @@ def result(config: PlasticityConfig, scene: Any, results: dict[str, Any]) -> lis
         + f"; {plastic['plastic_points']} plastic points, yielded area "
         f"{quantity(plastic['yielded_area'], units.of('area'))}"
     ]
+    joints = plastic.get("joints")
+    if joints is not None:
+        length = units.of("length")
+        lines.append(
+            f"joints ({', '.join(joints['groups'])}): {joints['pairs']} node pairs, "
+            f"{joints['slipping']} slipping, {joints['open']} open; largest slip "
+            f"{quantity(joints['max_slip'], length)}, largest opening "
+            f"{quantity(joints['max_opening'], length)}"
+        )
     ground = plastic.get("ground_reaction")
     if ground is not None:
         final, length = ground["final"], units.of("length")
