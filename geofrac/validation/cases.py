@@ -49,6 +49,7 @@ CHAPTERS = (
     "MPM dynamics",
     "MPM under gravity and friction",
     "Blocks",
+    "3D rock masses",
 )
 
 #: What a case checks geofrac against: the physics (closed forms, experiments, the
@@ -355,6 +356,140 @@ def jaeger_slip_stress(beta_deg: float, c: float, mu: float) -> float:
     if math.tan(b) <= mu:
         return math.inf
     return 2.0 * c / ((1.0 - mu / math.tan(b)) * math.sin(2.0 * b))
+
+
+def _top_stress(step: int) -> Callable[[dict[str, Any], Path], float]:
+    """The axial stress on the 1 x 1 top of a 3D prism (compression positive) at a step."""
+
+    def measure(summary: dict[str, Any], out: Path) -> float:
+        steps = summary["results"]["plasticity"]["steps"]
+        return -float(steps[step]["reactions"]["top"][2])
+
+    return measure
+
+
+def _joint_set_modulus(summary: dict[str, Any], out: Path) -> float:
+    """E_eff of jobs/joint_set_3d.toml: the top's stress over the strain 0.001 / 1."""
+    return _top_stress(-1)(summary, out) / 0.001
+
+
+#: Sneddon's penny crack of jobs/penny_crack.toml: σ = 1, E = 1000, ν = 0.25, a = 1.
+PENNY_W0 = 8.0 * (1.0 - 0.25**2) * 1.0 * 1.0 / (math.pi * 1000.0)
+
+
+def _penny_opening(out: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(r, opening) of the crack's node pairs (``joints.csv``), shape=(m,) each."""
+    table = np.loadtxt(out / "joints.csv", delimiter=",", skiprows=1, ndmin=2)
+    return np.hypot(table[:, 0], table[:, 1]), table[:, 6]
+
+
+def _penny_centre(summary: dict[str, Any], out: Path) -> float:
+    """The opening at the centre: w² is linear in r² (Sneddon), fitted over r <= 0.5a."""
+    r, w = _penny_opening(out)
+    inner = r <= 0.5
+    slope, w0_squared = np.polyfit(r[inner] ** 2, w[inner] ** 2, 1)
+    del slope
+    return float(np.sqrt(w0_squared))
+
+
+def _penny_profile(summary: dict[str, Any], out: Path) -> float:
+    """The largest |w − w_exact| / w(0) over the node pairs with r <= 0.95a."""
+    r, w = _penny_opening(out)
+    inner = r <= 0.95
+    exact = PENNY_W0 * np.sqrt(np.clip(1.0 - r[inner] ** 2, 0.0, None))
+    return float(np.max(np.abs(w[inner] - exact)) / PENNY_W0)
+
+
+#: The coarse jointed cube: jobs/dfn3d_triaxial.toml's network (seed 3) on a mesh of
+#: sizes 5 and 2 with two load steps (the statistics are the drawn network's).
+DFN3D_COARSE = (
+    "dfn3d.mesh_size=5.0",
+    "dfn3d.fracture_mesh_size=2.0",
+    "dfn3d.transition=2.0",
+    "plasticity.load_steps=2",
+)
+#: jobs/dfn3d_triaxial.toml's sets: (name, target P32, κ, rmax); the box is 10 m.
+DFN3D_SETS = (("J1", 0.15, 40.0, 5.0), ("J2", 0.15, 25.0, 5.0), ("J3", 0.15, 25.0, 5.0))
+
+
+def _dfn3d_set(name: str, key: str) -> Callable[[dict[str, Any], Path], float]:
+    """A set's statistic from the geometry report's ``sets`` (network_summary)."""
+
+    def measure(summary: dict[str, Any], out: Path) -> float:
+        return float(summary["results"]["geometry"]["sets"][name][key])
+
+    return measure
+
+
+def _dfn3d_kappa_quantile(name: str, kappa: float) -> Callable[[dict[str, Any], Path], float]:
+    """F(2κ(N − R)) of the χ²(2(N − 1)) law (Fisher 1953): uniform on [0, 1] for a set of κ.
+
+    N − R = (N − 1)/κ̂ from Fisher's estimator κ̂ = (N − 1)/(N − R).
+    """
+    from geofrac.dfn.stats import chi2_cdf
+
+    def measure(summary: dict[str, Any], out: Path) -> float:
+        got = summary["results"]["geometry"]["sets"][name]
+        n = int(got["count"])
+        return chi2_cdf(2.0 * kappa * (n - 1) / float(got["kappa_hat"]), 2.0 * (n - 1))
+
+    return measure
+
+
+def _dfn3d_cases() -> tuple[Case, ...]:
+    """Per set of the jointed cube: P32, Fisher κ and the radius law against their bands."""
+    out = []
+    for name, p32, kappa, rmax in DFN3D_SETS:
+        common = {
+            "scene": "jobs/validation/dfn3d_triaxial.toml",
+            "overrides": DFN3D_COARSE,
+            "section": CONSISTENCY,
+            "estimate_s": 8.0,
+        }
+        out += [
+            Case(
+                f"dfn3d_p32_{name}",
+                "3D rock masses",
+                f"jointed cube (seed 3), set {name}: P32 drawn until the target is reached",
+                "P32",
+                Reference(
+                    p32,
+                    "the set's target; it stops at the first disc that reaches it, so it "
+                    "exceeds it by less than one disc's area π rmax² / V",
+                    kind="range",
+                    high=p32 + math.pi * rmax**2 / 1000.0,
+                ),
+                _dfn3d_set(name, "p32"),
+                unit="1/{length}",
+                **common,  # type: ignore[arg-type]
+            ),
+            Case(
+                f"dfn3d_kappa_{name}",
+                "3D rock masses",
+                f"jointed cube (seed 3), set {name} (κ = {kappa:g}): Fisher's κ̂ as the "
+                "quantile of 2κ(N − R) in χ²(2(N − 1))",
+                "quantile",
+                Reference(
+                    0.005,
+                    "the 99 % sampling band of Fisher's (1953) estimator: 2κ(N − R) ~ χ²(2(N − 1))",
+                    kind="range",
+                    high=0.995,
+                ),
+                _dfn3d_kappa_quantile(name, kappa),
+                **common,  # type: ignore[arg-type]
+            ),
+            Case(
+                f"dfn3d_radius_{name}",
+                "3D rock masses",
+                f"jointed cube (seed 3), set {name}: radii against the truncated power law "
+                "(Kolmogorov-Smirnov)",
+                "KS p-value",
+                Reference(0.01, "the 1 % level of the KS test", kind="range", high=1.0),
+                _dfn3d_set(name, "radius_ks_p"),
+                **common,  # type: ignore[arg-type]
+            ),
+        ]
+    return tuple(out)
 
 
 #: Jaeger's slip stress of the validation joint (β = 60°, c = 1, μ = 0.5).
@@ -1516,6 +1651,77 @@ CASES: tuple[Case, ...] = (
         estimate_s=25.0,
         section=CONSISTENCY,
     ),
+    Case(
+        "joint_set_compliance",
+        "3D rock masses",
+        "a 1 x 1 x 1 prism cut by four horizontal joints 0.25 apart (k_n = 4e4) under a "
+        "uniaxial stress normal to them: its modulus",
+        "E_eff",
+        Reference(
+            1.0 / (1.0 / 10000.0 + 1.0 / (40000.0 * 0.25)),
+            "closed form: 1/E_eff = 1/E + 1/(k_n s) (Goodman (1976); Priest (1993))",
+            rtol=0.01,
+        ),
+        _joint_set_modulus,
+        scene="jobs/validation/joint_set_3d.toml",
+        ci=True,
+        section=VALIDATION,
+        unit="{stress}",
+        estimate_s=15.0,
+    ),
+    Case(
+        "jaeger_3d_60",
+        "3D rock masses",
+        "a prism crossed by one joint at β = 60° (c = 1, μ = 0.5) in uniaxial compression, "
+        "P2, h = 0.25: the axial stress while the joint slips",
+        "σ1 at slip",
+        _JAEGER_60,
+        _top_stress(-1),
+        scene="jobs/validation/jaeger_joint_3d.toml",
+        overrides=("geometry.parameters.beta=60",),
+        ci=True,
+        section=VALIDATION,
+        unit="{stress}",
+        estimate_s=15.0,
+    ),
+    Case(
+        "penny_crack_centre",
+        "3D rock masses",
+        "Sneddon's penny crack, a quarter with the far boundary at 6a, P2, h = 0.05a on "
+        "the crack: its opening at the centre (w² fitted linear in r² over r ≤ 0.5a)",
+        "w(0)",
+        Reference(
+            PENNY_W0,
+            "closed form: Sneddon (1946), w(0) = 8 (1 − ν²) σ a / (π E)",
+            rtol=0.03,
+        ),
+        _penny_centre,
+        scene="jobs/validation/penny_crack.toml",
+        overrides=("geometry.parameters.h=0.05",),
+        quick=False,
+        section=VALIDATION,
+        unit="{length}",
+        estimate_s=60.0,
+    ),
+    Case(
+        "penny_crack_profile",
+        "3D rock masses",
+        "the same crack's opening profile: the largest difference from Sneddon's "
+        "w(r) = w(0) sqrt(1 − r²/a²) over r ≤ 0.95a, over w(0)",
+        "max |w − w_exact| / w(0)",
+        Reference(
+            0.03,
+            "closed form: Sneddon (1946); the issue's 3 % of the maximum opening",
+            kind="at_most",
+        ),
+        _penny_profile,
+        scene="jobs/validation/penny_crack.toml",
+        overrides=("geometry.parameters.h=0.05",),
+        quick=False,
+        section=VALIDATION,
+        estimate_s=60.0,
+    ),
+    *_dfn3d_cases(),
 )
 
 
