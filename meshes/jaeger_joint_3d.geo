@@ -6,7 +6,8 @@
 // (conforming internal faces, not joints) so that the axis's points on the bottom are mesh
 // nodes: "pin_xy" (0, 0, -H/2) and "pin_y" (W/2, 0, -H/2) hold the rigid motions without
 // restraining the uniform Poisson expansion about the axis. Groups: "rock" (volume),
-// "bottom", "top", "joint" (surfaces; the joint is cut when meshed: [plasticity.joints]),
+// "bottom", "top", "sides" (the four lateral faces), "joint" (surfaces; the joint is cut
+// when meshed: [plasticity.joints]),
 // "pin_xy", "pin_y" (points). The joint must end on the sides: W/2 tan(beta) < H/2.
 // OpenCASCADE kernel; uniform size h (first-order tetrahedra).
 // gmsh's 3D algorithm is the parameter algorithm3d (1 Delaunay, 4 Frontal, 10 HXT).
@@ -35,8 +36,14 @@ BooleanFragments{ Volume{1}; Delete; }{ Surface{j(), a(), b()}; Delete; }
 e = 1e-6 * H;
 outer() = CombinedBoundary{ Volume{:}; };
 Physical Volume("rock") = Volume{:};
-Physical Surface("bottom") = Surface In BoundingBox{-W, -W, -H/2 - e, W, W, -H/2 + e};
-Physical Surface("top") = Surface In BoundingBox{-W, -W, H/2 - e, W, W, H/2 + e};
+bottom() = Surface In BoundingBox{-W, -W, -H/2 - e, W, W, -H/2 + e};
+top() = Surface In BoundingBox{-W, -W, H/2 - e, W, W, H/2 + e};
+sides() = outer();
+sides() -= bottom();
+sides() -= top();
+Physical Surface("bottom") = bottom();
+Physical Surface("top") = top();
+Physical Surface("sides") = sides();
 c = Cos(beta * Pi / 180);
 s = Sin(beta * Pi / 180);
 inner() = Surface In BoundingBox{-W, -W, -H, W, W, H};

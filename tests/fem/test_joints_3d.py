@@ -124,6 +124,31 @@ def test_jaeger_plane_of_weakness_in_3d(beta: float, algorithm3d: int) -> None:
     assert r["joints"]["slipping"] == r["joints"]["pairs"]
 
 
+def test_jaeger_under_an_in_situ_confining_stress() -> None:
+    """σ0 = −p I in place, then the top lowered: the joint slips at Jaeger's confined σ1.
+
+    σ1 − σ3 = 2 (c + μ σ3) / ((1 − μ cot β) sin 2β) with σ3 = p (compression positive;
+    Jaeger et al. 2007, §4.7). The joint starts stress-free and closes under σ0 in the
+    first step, as a 3DEC model is stepped to equilibrium under its in-situ stress.
+    """
+    beta, p = 60.0, 1.0
+    sigma1 = p + (jaeger(beta) / 1.0) * (1.0 + 0.5 * p)  # 2(c + μ p)/(...) with c = 1
+    slip_d = (sigma1 - p) / E * 2.5 * 1.2  # beyond the elastic shortening at slip
+    r = _solve(
+        "jaeger_joint_3d",
+        f"geometry.parameters.beta={beta}",
+        "geometry.parameters.h=0.5",
+        "plasticity.load_steps=4",
+        "initial_stress={kind='constant', stress=[-1.0, -1.0, -1.0, 0.0, 0.0, 0.0], "
+        "loaded=['sides']}",
+        _bcs(-2.0 * slip_d, top_pins=False),
+    )
+    stresses = [_top(r, k) for k in range(4)]
+    assert stresses[0] < sigma1  # sticking at first
+    for s in stresses[2:]:
+        assert s == pytest.approx(sigma1, rel=1e-6)
+
+
 def test_penny_crack_opening_coarse(tmp_path: Path) -> None:
     """At h = 0.1a: w within 3 % of w(0) for r <= 0.8 a (Sneddon 1946); the crack opens only."""
     _solve("penny_crack", "geometry.parameters.h=0.1", out=tmp_path)
