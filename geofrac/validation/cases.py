@@ -1711,7 +1711,7 @@ CASES: tuple[Case, ...] = (
         "max |w − w_exact| / w(0)",
         Reference(
             0.03,
-            "closed form: Sneddon (1946); the issue's 3 % of the maximum opening",
+            "closed form: Sneddon (1946); 3 % of the largest opening w(0)",
             kind="at_most",
         ),
         _penny_profile,
