@@ -68,6 +68,7 @@ REGISTRY: dict[str, str] = {
     "dfn3d": "geofrac.effects.dfn3d",
     "friction": "geofrac.effects.friction",
     "gravity": "geofrac.effects.gravity",
+    "joints": "geofrac.effects.joints",
     "mls_smoothing": "geofrac.effects.mls_smoothing",
     "plasticity": "geofrac.effects.plasticity",
 }

@@ -378,7 +378,9 @@ def _configure(table: dict[str, Any], file: str) -> Dfn3dConfig:
     seed = t.get("seed", 0)
     if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed <= MAX_INTEGER:
         raise _error(file, "seed", f"must be an integer in [0, 2^63), got {short(seed)}")
-    network, path, sets = None, None, ()
+    network: DiscNetwork | None = None
+    path: Path | None = None
+    sets: tuple[DiscSet, ...] = ()
     if "file" in t:
         if "sets" in t:
             raise _error(file, "file", "give either 'file' or 'sets', not both")

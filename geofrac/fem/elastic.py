@@ -299,6 +299,17 @@ class ElasticProblem:
         self._add_point_forces(self.b)
         set_bc(self.b, self.bcs)
 
+    def stiffness(self) -> Matrix:
+        """The stiffness on the unknowns without the Dirichlet conditions (a new matrix).
+
+        For a nonlinear driver that imposes the conditions itself (the joints' Newton of
+        :mod:`geofrac.fem.joints_elastic`); the caller destroys it.
+        """
+        if self.a is None or self.L is None:
+            self.compile()
+        assert self.a is not None
+        return assemble_matrix(self.a)
+
     def _constrain(self) -> None:
         """Impose :meth:`dirichlet` on an assembled ``A`` and ``b`` by elimination.
 
@@ -632,18 +643,26 @@ class GradientDofProblem(ElasticProblem):
             self.compile()
         assert self.a is not None and self.L is not None
         self._free_operators()
+        self.A = self.stiffness()
+        self.b = self.load_vector()
+        self._constrain()
+
+    def stiffness(self) -> Matrix:
+        """Qᵀ (Tᵀ A T + penalty) Q on the unknowns, without the Dirichlet conditions (new)."""
+        if self.a is None:
+            self.compile()
+        assert self.a is not None and self.a_wv is not None and self.a_ww is not None
         mats = [assemble_matrix(f) for f in (self.a, self.a_wv, self.a_ww)]
         try:
-            self.A = self.element.reduce(*mats)
+            K = self.element.reduce(*mats)
         finally:
             for M in mats:
                 M.destroy()
         if self._Q is not None:
-            K = self.A
-            self.A = K.ptap(self._Q)
-            K.destroy()
-        self.b = self.load_vector()
-        self._constrain()
+            reduced = K
+            K = reduced.ptap(self._Q)
+            reduced.destroy()
+        return K
 
     def load_vector(self) -> Vector:
         """Qᵀ Tᵀ b_P2: the load vector on the unknowns, without Dirichlet conditions."""

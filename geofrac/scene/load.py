@@ -1274,7 +1274,9 @@ def _validate(
             bcs=bcs,
             loads=loads,
         )
-    joints = tuple(j.name for e in specs if e.name == "plasticity" for j in e.config.joints)
+    joints = tuple(
+        j.name for e in specs if e.name in ("plasticity", "joints") for j in e.config.joints
+    )
     if joints:  # the mesh is cut along the joints before it is distributed
         geometry = dataclasses.replace(geometry, split=joints)
     return Scene(

@@ -369,7 +369,7 @@ def _fem_cells(scene: Scene, extent: Extent | None) -> tuple[float, str]:
     if dfn is not None:
         why = f" ({extent.trial_failure})" if extent is not None and extent.trial_failure else ""
         return _area_cells(dfn, dfn.mesh.size), f"estimate from the DFN domain's area{why}"
-    builder = getattr(geometry, "builder", None)
+    builder: Any = getattr(geometry, "builder", None)
     if hasattr(builder, "estimate_cells"):  # a 3D DFN: its box and fracture area
         return float(builder.estimate_cells()), "estimate from the box and the fractures' area"
     if extent is None:
