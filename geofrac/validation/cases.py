@@ -368,6 +368,12 @@ def _top_stress(step: int) -> Callable[[dict[str, Any], Path], float]:
     return measure
 
 
+def _joints_top_stress(summary: dict[str, Any], out: Path) -> float:
+    """The top's axial stress at the last step of a ``joints`` effect run (1 x 1 top)."""
+    steps = summary["results"]["joints"]["steps"]
+    return -float(steps[-1]["reactions"]["top"][2])
+
+
 def _joint_set_modulus(summary: dict[str, Any], out: Path) -> float:
     """E_eff of jobs/joint_set_3d.toml: the top's stress over the strain 0.001 / 1."""
     return _top_stress(-1)(summary, out) / 0.001
@@ -1683,6 +1689,21 @@ CASES: tuple[Case, ...] = (
         section=VALIDATION,
         unit="{stress}",
         estimate_s=15.0,
+    ),
+    Case(
+        "jaeger_3d_60_rgnq",
+        "3D rock masses",
+        "the same prism and joint with RGNQ (three rotations per vertex) and the joints "
+        "effect (elastic rock): the axial stress while the joint slips",
+        "σ1 at slip",
+        _JAEGER_60,
+        _joints_top_stress,
+        scene="jobs/validation/jaeger_joint_3d_rgnq.toml",
+        overrides=("geometry.parameters.beta=60",),
+        ci=True,
+        section=VALIDATION,
+        unit="{stress}",
+        estimate_s=10.0,
     ),
     Case(
         "penny_crack_centre",
