@@ -467,7 +467,7 @@ def _joints(t: Table, ctx: ConfigureContext) -> tuple[JointConfig, ...]:
         mu = float(j.number("friction", required=True, minimum=0.0, maximum=10.0))  # type: ignore[arg-type]
         cj = float(j.number("cohesion", default=0.0, minimum=0.0, maximum=MAX_COHESION))
         kn, ks = (
-            float(j.number(k, positive=True, maximum=MAX_COHESION)) if j.has(k) else None
+            j.number(k, positive=True, maximum=MAX_COHESION) if j.has(k) else None
             for k in ("normal_stiffness", "shear_stiffness")
         )
         out.append(JointConfig(str(name), mu, cj, kn, ks))
