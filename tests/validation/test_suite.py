@@ -187,7 +187,11 @@ def test_quantities_are_in_the_scenes_units(tmp_path):
     write_page(data, page)
     text = page.read_text()
     assert "| P21 (1/mm) |" in text and "| volume |" in text
-    assert "(1/m)" not in text and "(m³)" not in text
+    # no metre where the scene has millimetres or nothing (the 3D DFN's P32 is in 1/m:
+    # its scene declares metres)
+    assert all("(1/m)" not in line for line in text.splitlines() if "P21" in line)
+    assert "(m³)" not in text
+    assert "| P32 (1/m) |" in text
 
 
 def test_the_peak_load_is_read_in_kn_from_the_scenes_force_unit():
