@@ -329,7 +329,7 @@ def _disc_set(file: str, i: int, raw: Any) -> DiscSet:
             name=t["name"],
             trend=_number(file, f"{key}.trend", t["trend"]),
             plunge=_number(file, f"{key}.plunge", t["plunge"]),
-            kappa=_number(file, f"{key}.kappa", t.get("kappa", math.inf), positive=True)
+            kappa=_number(file, f"{key}.kappa", t["kappa"], positive=True)
             if "kappa" in t
             else math.inf,
             radius_min=rmin,

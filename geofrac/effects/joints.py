@@ -28,30 +28,17 @@ from dataclasses import dataclass
 from typing import Any
 
 from geofrac.effects import ConfigureContext
-from geofrac.model.errors import SceneError, did_you_mean
+from geofrac.effects.plasticity import JointConfig, joint_tables
+from geofrac.model.errors import SceneError
 from geofrac.model.table import Table
 
-__all__ = ["ELEMENTS", "JOINT_KEYS", "KEYS", "JointsConfig", "configure", "driver", "result"]
+__all__ = ["ELEMENTS", "KEYS", "JointsConfig", "configure", "driver", "result"]
 
-#: Scalar keys of ``[joints]``; every table in it is a joint.
+#: Scalar keys of ``[joints]``; every table in it is a joint (the keys of
+#: :data:`geofrac.effects.plasticity.JOINT_KEYS`).
 KEYS = ("contact_penalty", "load_steps", "max_iterations")
-#: Keys of a ``[joints.NAME]`` table.
-JOINT_KEYS = ("friction", "cohesion", "normal_stiffness", "shear_stiffness")
 #: Elements whose displacement is a P2 field on tetrahedra.
 ELEMENTS = ("p2", "rgnq")
-#: Largest cohesion or stiffness (stress units).
-MAX_VALUE = 1e15
-
-
-@dataclass(frozen=True)
-class Joint:
-    """One ``[joints.NAME]`` table (the attributes of the plasticity effect's JointConfig)."""
-
-    name: str
-    friction: float
-    cohesion: float
-    normal_stiffness: float | None
-    shear_stiffness: float | None
 
 
 @dataclass(frozen=True)
@@ -65,7 +52,7 @@ class JointsConfig:
         max_iterations: Newton iterations per increment.
     """
 
-    joints: tuple[Joint, ...]
+    joints: tuple[JointConfig, ...]
     contact_penalty: float
     load_steps: int
     max_iterations: int
@@ -88,30 +75,9 @@ def configure(table: dict[str, Any], ctx: ConfigureContext) -> JointsConfig:
     t = Table(ctx.file, "joints", scalars, allowed=KEYS)
     if not tables:
         raise SceneError(ctx.file, "joints", "give at least one [joints.NAME] table")
-    surfaces = [g for g, d in ctx.groups.items() if d == 2]
-    joints = []
-    for name, entry in tables.items():
-        if ctx.groups and name not in surfaces:
-            raise SceneError(
-                ctx.file,
-                f"joints.{name}",
-                "names no surface group of the geometry" + did_you_mean(name, surfaces),
-            )
-        j = Table(ctx.file, f"joints.{name}", entry, allowed=JOINT_KEYS)
-        stiffness = [
-            j.number(k, positive=True, maximum=MAX_VALUE) if j.has(k) else None
-            for k in ("normal_stiffness", "shear_stiffness")
-        ]
-        joints.append(
-            Joint(
-                str(name),
-                float(j.number("friction", required=True, minimum=0.0, maximum=10.0)),  # type: ignore[arg-type]
-                float(j.number("cohesion", default=0.0, minimum=0.0, maximum=MAX_VALUE)),
-                *stiffness,
-            )
-        )
+    joints = joint_tables(tables, ctx, prefix="joints")
     return JointsConfig(
-        tuple(joints),
+        joints,
         float(t.number("contact_penalty", default=100.0, positive=True, maximum=1e8)),
         int(t.number("load_steps", default=10, integer=True, minimum=1, maximum=10000)),
         int(t.number("max_iterations", default=25, integer=True, minimum=1, maximum=1000)),
@@ -138,13 +104,7 @@ def driver(
     )
     springs = out.pop("springs")
     if write and solution.tagged.mesh.comm.rank == 0:
-        from geofrac.io.fractures import write_fracture_faces
-
-        directory = scene.output.dir
-        springs.write_csv(directory / "joints.csv")
-        write_fracture_faces(
-            directory / "fracture_faces.vtu", springs.geometry.faces, springs.face_table()
-        )
+        springs.write_outputs(scene.output.dir)
     return out
 
 

@@ -101,6 +101,7 @@ __all__ = [
     "check_scene",
     "configure",
     "driver",
+    "joint_tables",
     "make_law",
     "result",
 ]
@@ -449,10 +450,23 @@ def check_scene(
 
 
 def _joints(t: Table, ctx: ConfigureContext) -> tuple[JointConfig, ...]:
-    """The ``[plasticity.joints.NAME]`` tables: curve groups of the geometry, μ and c."""
+    """The ``[plasticity.joints.NAME]`` tables."""
     raw = t.data.get("joints", {})
     if not isinstance(raw, dict):
         raise t.error("joints", "must be a table of [plasticity.joints.NAME]")
+    return joint_tables(raw, ctx, prefix="plasticity.joints")
+
+
+def joint_tables(
+    raw: dict[str, Any], ctx: ConfigureContext, *, prefix: str
+) -> tuple[JointConfig, ...]:
+    """Joint tables ``[PREFIX.NAME]``: curve (2D) or surface (3D) groups, μ, c, kₙ, kₛ.
+
+    Shared with the ``joints`` effect (``prefix = "joints"``).
+
+    Raises:
+        SceneError: a NAME that is no group of dimension gdim − 1, or a bad value.
+    """
     out = []
     curves = [g for g, d in ctx.groups.items() if d == ctx.gdim - 1]
     what = "curve" if ctx.gdim == 2 else "surface"
@@ -460,10 +474,10 @@ def _joints(t: Table, ctx: ConfigureContext) -> tuple[JointConfig, ...]:
         if ctx.groups and name not in curves:
             raise SceneError(
                 ctx.file,
-                f"plasticity.joints.{name}",
+                f"{prefix}.{name}",
                 f"names no {what} group of the geometry" + did_you_mean(name, curves),
             )
-        j = Table(ctx.file, f"plasticity.joints.{name}", entry, allowed=JOINT_KEYS)
+        j = Table(ctx.file, f"{prefix}.{name}", entry, allowed=JOINT_KEYS)
         mu = float(j.number("friction", required=True, minimum=0.0, maximum=10.0))  # type: ignore[arg-type]
         cj = float(j.number("cohesion", default=0.0, minimum=0.0, maximum=MAX_COHESION))
         kn, ks = (

@@ -380,8 +380,8 @@ class JointInterface:
         self.geometry, self.V = geometry, V
         self.cohesion = np.array([s.cohesion for s in strengths])[geometry.group]
         self.friction = np.array([s.friction for s in strengths])[geometry.group]
-        self.k = penalty * E / geometry.length
-        self.kn, self.ks = self.k.copy(), self.k.copy()
+        spring = penalty * E / geometry.length
+        self.kn, self.ks = spring.copy(), spring.copy()
         for g, (kn, ks) in enumerate(stiffness):
             mine = geometry.group == g
             if kn is not None:
@@ -501,6 +501,18 @@ class JointInterface:
         np.savetxt(
             path, self.table(), delimiter=",", header=self.header(), comments="", fmt="%.10g"
         )
+
+    def write_outputs(self, directory: Path) -> list[Path]:
+        """3D: ``joints.csv`` (per node pair) and ``fracture_faces.vtu`` (per face); rank 0.
+
+        The VTU's cell data are :meth:`face_table`'s; docs/output.md.
+        """
+        from geofrac.io.fractures import write_fracture_faces
+
+        self.write_csv(directory / "joints.csv")
+        faces = directory / "fracture_faces.vtu"
+        write_fracture_faces(faces, self.geometry.faces, self.face_table())
+        return [directory / "joints.csv", faces]
 
     def header(self) -> str:
         """The :meth:`table`'s column names, comma-separated."""

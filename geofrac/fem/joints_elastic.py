@@ -121,9 +121,14 @@ class _Newton:
         bs = problem.element.space.dofmap.index_map_bs
         self._start = problem.element.space.dofmap.index_map.local_range[0] * bs
         self.comm = problem.mesh.comm
+        #: per ``[[bc]]`` group the reaction by component at the last converged step
+        self.reactions: dict[str, list[float]] = {}
 
-    def residual(self, factor: float) -> Any:
-        """R = K w − λ b + Tᵀ f(T w) (unconstrained, a new vector); the springs updated."""
+    def residual(self, factor: float) -> tuple[Any, float]:
+        """R = K w − λ b + Tᵀ f(T w) (unconstrained, a new vector) and ‖K w‖.
+
+        The springs are updated at u = T w.
+        """
         self.map.field()
         self.springs.update(self.map.u)
         rows, values = self.springs.residual_entries()
@@ -132,11 +137,12 @@ class _Newton:
         w = function_vector(self.map.w)
         R = self.K.createVecLeft()
         self.K.mult(w, R)
+        internal = R.norm()
         R.axpy(-factor, self.b)
         spring = self.map.restrict(self.f)
         R.axpy(1.0, spring)
         spring.destroy()
-        return R
+        return R, internal
 
     def jacobian(self) -> Any:
         """J = K + Tᵀ K_f T (a new matrix, the Dirichlet rows not yet eliminated)."""
@@ -156,7 +162,7 @@ class _Newton:
         return J
 
     def step(self, factor: float) -> tuple[bool, int, float]:
-        """Newton at the load factor: (converged, iterations, final ‖R‖).
+        """Newton at the load factor: (converged, iterations, final ‖R‖); :attr:`reactions`.
 
         Converged at ‖R‖ <= 1e-14 ‖K w‖ (round-off in R's terms), or once ‖R‖ <= 1e-9
         of the step's first residual has stopped falling tenfold an iteration (Newton is
@@ -168,16 +174,15 @@ class _Newton:
         w.ghostUpdate()
         first, previous = None, math.inf
         for k in range(self.max_iterations + 1):
-            R = self.residual(factor)
-            internal = self.K.createVecLeft()
-            self.K.mult(w, internal)
-            floor = ROUND_OFF * internal.norm()
-            internal.destroy()
+            R, internal = self.residual(factor)
+            held = R.array[owned].copy()  # the reactions' rows
             R.array[owned] = 0.0
             norm = R.norm()
             first = norm if first is None else first
             stalled = norm <= RTOL * first and norm > 0.1 * previous
-            if norm <= floor or stalled:
+            if norm <= ROUND_OFF * internal or stalled:
+                R.array[owned] = held
+                self.reactions = self._reactions(R)
                 R.destroy()
                 return True, k, norm
             if k == self.max_iterations or not np.isfinite(norm):
@@ -200,24 +205,16 @@ class _Newton:
                         obj.destroy()
         return False, self.max_iterations, float("nan")
 
-    def reactions(self, factor: float) -> dict[str, list[float]]:
+    def _reactions(self, R: Any) -> dict[str, list[float]]:
         """Per ``[[bc]]`` group the sum of R = K w − λ b + Tᵀ f over its rows, by component."""
-        scene = self.problem.scene
         gdim = self.problem.mesh.geometry.dim
         bs = self.map.w.function_space.dofmap.index_map_bs
-        R = self.residual(factor)
         lo = R.getOwnershipRange()[0]
         out: dict[str, list[float]] = {}
-        try:
-            for bc, rows in zip(scene.bcs, _bc_rows(self.problem), strict=True):
-                sums = np.zeros(gdim)
-                for c in range(gdim):
-                    mine = rows[rows % bs == c]
-                    sums[c] = float(np.sum(R.array[mine - lo]))
-                total = self.comm.allreduce(sums, op=MPI.SUM)
-                out[bc.group] = [float(v) for v in total]
-        finally:
-            R.destroy()
+        for bc, rows in zip(self.problem.scene.bcs, _bc_rows(self.problem), strict=True):
+            sums = np.array([np.sum(R.array[rows[rows % bs == c] - lo]) for c in range(gdim)])
+            total = self.comm.allreduce(sums, op=MPI.SUM)
+            out[bc.group] = [float(v) for v in total]
         return out
 
     def destroy(self) -> None:
@@ -279,7 +276,7 @@ def run_elastic_joints(
                 break
             # the reactions and states of the converged iterate, before its slips are
             # committed (after, each slipping pair's trial sits on its limit to round-off)
-            reactions = newton.reactions(trial)
+            reactions = newton.reactions
             summary = springs.summary()
             springs.commit()
             factor = trial

@@ -36,7 +36,6 @@ fields left in the scene's outputs are those of the last stable F, re-solved.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import Any
 
 import dolfinx_solver  # noqa: F401  (orders MPI before the DOLFINx bindings)
@@ -325,7 +324,7 @@ def run(
         plastic.destroy()
     directory = scene.output.dir if write and comm.rank == 0 else None
     if directory is not None and plastic.joints is not None and len(plastic.joints.geometry.faces):
-        _write_joint_faces(plastic.joints, directory)
+        plastic.joints.write_outputs(directory)
     if ground is not None:
         title = f"{scene.name}: ground reaction curve"
         out["ground_reaction"] = history.ground_reaction(directory, title=title, units=scene.units)
@@ -534,21 +533,6 @@ def run_reduction(
     if not out["last_stable"]["converged"]:  # type: ignore[index]
         say("strength reduction: WARNING: the last stable factor did not converge when re-solved")
     return out
-
-
-def _write_joint_faces(joints: JointInterface, directory: Path) -> None:
-    """3D joints (rank 0): ``joints.csv`` per node pair and ``fracture_faces.vtu`` per face.
-
-    The VTU's cell data: opening, slip, normal and shear traction, the contact state
-    (0 closed, 1 slip, 2 open) and the set (the joint group's index in ``joints.csv``'s
-    ``group`` column and the summary's ``joints.groups``).
-    """
-    from geofrac.io.fractures import write_fracture_faces
-
-    joints.write_csv(directory / "joints.csv")
-    write_fracture_faces(
-        directory / "fracture_faces.vtu", joints.geometry.faces, joints.face_table()
-    )
 
 
 def _plot_mechanism(

@@ -99,6 +99,11 @@ class JointReturn:
     tangent: np.ndarray
 
 
+def _per_pair(n: int, *values: np.ndarray | float) -> list[np.ndarray]:
+    """Each scalar or per-pair value as an array of shape=(n,)."""
+    return [np.broadcast_to(np.asarray(v, dtype=float), (n,)) for v in values]
+
+
 def coulomb_joint(
     opening: np.ndarray,
     sliding: np.ndarray,
@@ -122,10 +127,7 @@ def coulomb_joint(
     """
     d_n = np.asarray(opening, dtype=float)
     n = d_n.shape[0]
-    kn_a = np.broadcast_to(np.asarray(kn, dtype=float), (n,))
-    ks_a = np.broadcast_to(np.asarray(ks, dtype=float), (n,))
-    mu = np.broadcast_to(np.asarray(friction, dtype=float), (n,))
-    c = np.broadcast_to(np.asarray(cohesion, dtype=float), (n,))
+    kn_a, ks_a, mu, c = _per_pair(n, kn, ks, friction, cohesion)
     closed = d_n <= 0.0
     normal = np.where(closed, kn_a * d_n, 0.0)
     trial = ks_a * (np.asarray(sliding, dtype=float) - slip)
@@ -171,10 +173,7 @@ def coulomb_joint_3d(
     d_n = np.asarray(opening, dtype=float)
     n = d_n.shape[0]
     d_s = np.asarray(sliding, dtype=float).reshape(n, 2)
-    kn_a = np.broadcast_to(np.asarray(kn, dtype=float), (n,))
-    ks_a = np.broadcast_to(np.asarray(ks, dtype=float), (n,))
-    mu = np.broadcast_to(np.asarray(friction, dtype=float), (n,))
-    c = np.broadcast_to(np.asarray(cohesion, dtype=float), (n,))
+    kn_a, ks_a, mu, c = _per_pair(n, kn, ks, friction, cohesion)
     closed = d_n <= 0.0
     normal = np.where(closed, kn_a * d_n, 0.0)
     trial = ks_a[:, None] * (d_s - np.asarray(slip, dtype=float).reshape(n, 2))
