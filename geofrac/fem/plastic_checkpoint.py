@@ -55,6 +55,7 @@ def _records(records: list[StepRecord]) -> list[dict[str, Any]]:
             "reason_name": r.report.reason_name,
             "iterations": r.report.iterations,
             "residuals": list(r.report.residuals),
+            "watchdog_steps": r.report.watchdog_steps,
             "observed": r.observed,
         }
         for r in records
@@ -71,6 +72,7 @@ def _read_records(rows: list[dict[str, Any]]) -> list[StepRecord]:
                 str(r["reason_name"]),
                 int(r["iterations"]),
                 [float(x) for x in r["residuals"]],
+                int(r.get("watchdog_steps", 0)),
             ),
             bool(r["accepted"]),
             int(r["plastic_points"]),

@@ -12,6 +12,19 @@ is not symmetric), under the solver's own options prefix; user
 options are applied after and then removed from the global database. Every residual norm
 is recorded (the SNES monitor) and the converged reason is returned with its name; the
 caller decides what a negative reason means (never a silent result).
+
+A stalled line search is not the end of a solve (:meth:`NewtonSolver.solve`). The
+residual of a return mapping or of joint springs is piecewise smooth: at a kink (a
+spring on the edge of slipping or of opening) the Newton direction of the branch the
+law picks can fail to decrease ||F|| for any step length, and the monotone line search
+gives up (DIVERGED_LINE_SEARCH) although the equilibrium is near (measured on the DFN
+slope: the same five spring states switched back and forth for 14 line-search trials,
+||F|| stuck at 7.1 while the other round-off of another machine converged). The solver
+then takes one full Newton step, which changes the springs' states, and resumes the
+monotone search from there (a watchdog step, as in non-monotone semismooth Newton
+methods), within the same iteration budget. It does so only while each stall is at a
+smaller ||F|| than the one before, so a true loss of equilibrium still ends in
+DIVERGED_LINE_SEARCH, after one more step.
 """
 
 from __future__ import annotations
@@ -83,12 +96,15 @@ class NewtonReport:
         iterations: Newton iterations taken.
         residuals: ||F|| before each iteration and at the end (the SNES monitor),
             shape=(iterations + 1,).
+        watchdog_steps: full Newton steps taken after a stalled line search (counted
+            in ``iterations``; :meth:`NewtonSolver.solve`).
     """
 
     reason: int
     reason_name: str
     iterations: int
     residuals: list[float] = field(default_factory=list)
+    watchdog_steps: int = 0
 
     @property
     def converged(self) -> bool:
@@ -202,19 +218,49 @@ class NewtonSolver:
     def solve(self) -> NewtonReport:
         """Newton from the current u; u holds the last iterate whatever the reason.
 
+        A stalled line search is followed by a watchdog step and a restart (module
+        docstring), counted in the iterations and in :attr:`watchdog_steps`; the restart
+        keeps the first solve's relative criterion (rtol of its first ||F||).
+
         Raises:
             RunError: PETSc raised (e.g. a singular factorisation).
         """
         self.residuals = []
         self._last = None
+        self.watchdog_steps = 0
         owned = self.x.getLocalSize()
         self.x.array[:] = self.u.x.array[:owned]
+        atol, rtol, _stol, max_it = self.snes.getTolerances()
+        iterations, stalled_at = 0, np.inf
         try:
-            self.snes.solve(None, self.x)
+            while True:
+                self.snes.setTolerances(max_it=max_it - iterations)
+                start = len(self.residuals)
+                self.snes.solve(None, self.x)
+                if start:  # the restart's first norm is the watchdog step's, recorded
+                    del self.residuals[start]
+                else:  # a restart keeps the first solve's criterion: rtol of the first ||F||
+                    first = self.residuals[0] if self.residuals else 0.0
+                    self.snes.setTolerances(atol=max(atol, rtol * first), rtol=0.0)
+                iterations += int(self.snes.getIterationNumber())
+                reason = int(self.snes.getConvergedReason())
+                stall = self.residuals[-1] if self.residuals else np.inf
+                if (
+                    reason != PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
+                    or iterations >= max_it
+                    or not stall < stalled_at
+                ):
+                    break
+                stalled_at = stall
+                if not self._full_step():
+                    break
+                iterations += 1
+                self.watchdog_steps += 1
         except PETSc.Error as exc:
             raise RunError(f"Newton solver '{self.prefix}' failed ({exc})") from None
+        finally:
+            self.snes.setTolerances(atol=atol, rtol=rtol, max_it=max_it)
         self._set_u(self.x)
-        reason = int(self.snes.getConvergedReason())
         ksp = self.snes.getKSP()
         self.linear_failure = ""
         if reason == PETSc.SNES.ConvergedReason.DIVERGED_LINEAR_SOLVE:
@@ -229,8 +275,30 @@ class NewtonSolver:
         if reason > 0 and not np.isfinite(self.x.norm()):
             reason = int(PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN)
         return NewtonReport(
-            reason, snes_reason_name(reason), int(self.snes.getIterationNumber()), self.residuals
+            reason, snes_reason_name(reason), iterations, self.residuals, self.watchdog_steps
         )
+
+    def _full_step(self) -> bool:
+        """One full Newton step x ← x − J(x)⁻¹ F(x), no line search.
+
+        The new ||F|| is appended to :attr:`residuals`. Returns False, x unchanged, when
+        the linear solve fails.
+        """
+        ksp = self.snes.getKSP()
+        dx = self.x.duplicate()
+        try:
+            self._residual(self.snes, self.x, self.b)
+            self._jacobian(self.snes, self.x, self.A, self.A)
+            ksp.setOperators(self.A)
+            ksp.solve(self.b, dx)
+            if ksp.getConvergedReason() < 0:
+                return False
+            self.x.axpy(-1.0, dx)
+            self._residual(self.snes, self.x, self.b)
+            self.residuals.append(float(self.b.norm()))
+            return True
+        finally:
+            dx.destroy()
 
     def describe(self) -> dict[str, object]:
         """Prefix, SNES, line search, KSP and PC types (for summary.json)."""

@@ -14,8 +14,9 @@ path; docs/plasticity.md).
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import dolfinx_solver  # noqa: F401
 
@@ -37,17 +38,35 @@ from tests.fem.helpers import JOBS
 from tests.fem.test_joint_interface import _space_and_bcs
 
 JOB = JOBS / "slope_dfn.toml"
+
+
+class TrialResult(NamedTuple):
+    """One trial: verdict, crest |u| (m), Newton iterations, increments tried, watchdogs."""
+
+    converged: bool
+    crest: float
+    iterations: int
+    attempts: int
+    watchdog_steps: int
+
+
 #: the job's rock (strong: it never yields) and unit weight γ = ρ g (kN/m³).
 ROCK = MohrCoulomb(E=1e6, nu=0.25, cohesion=1e5, friction_angle=45.0, dilatancy_angle=0.0)
 GAMMA = 26.0
 #: the trial whose verdict flipped with the ranks under the old budget of 25 iterations.
 FLIPPED = 1.8
 
+#: relative changes of E (round-off of another machine) with which Newton's line search
+#: stalled at load factor 1.0 before the watchdog step (geofrac.solvers.snes): the
+#: increment was cut, the load path changed and the crest displacement with it (by
+#: 2.9e-6 and 1.4e-6 of itself, the first as CI's 2-rank run measured).
+STALLED = (5e-12, 15e-12)
+
 pytestmark = pytest.mark.robust
 
 
-def dfn_trial(comm: MPI.Comm, factor: float) -> tuple[bool, float, int]:
-    """(converged, crest |u|, Newton iterations) of the job's trial ``factor`` on ``comm``.
+def dfn_trial(comm: MPI.Comm, factor: float, *, rock: MohrCoulomb = ROCK) -> TrialResult:
+    """The job's trial ``factor`` on ``comm`` with the rock ``rock``.
 
     The job's mesh (cut along its fractures), supports, joints, load steps, cuts and
     Newton budget, gravity ramped from a stress-free start, as ``geofrac run`` does.
@@ -59,13 +78,13 @@ def dfn_trial(comm: MPI.Comm, factor: float) -> tuple[bool, float, int]:
     tagged = build_mesh(scene.geometry, comm)
     V, bcs = _space_and_bcs(tagged, base_group="side_1", back_group="side_2")
     joints = [(j.name, JointStrength(j.cohesion, j.friction)) for j in config.joints]
-    springs = joint_springs(V, tagged, joints, bcs=bcs, rock=ROCK, penalty=config.contact_penalty)
+    springs = joint_springs(V, tagged, joints, bcs=bcs, rock=rock, penalty=config.contact_penalty)
     mesh = tagged.mesh
 
     def external(f: Any, v: Any) -> Any:
         return ufl.inner(f * ufl.as_vector([0.0, -GAMMA]), v) * ufl.dx(domain=mesh)
 
-    law: Law = reduce_strength(ROCK, factor)
+    law: Law = reduce_strength(rock, factor)
     problem = PlasticProblem(
         V,
         law,
@@ -81,8 +100,13 @@ def dfn_trial(comm: MPI.Comm, factor: float) -> tuple[bool, float, int]:
     finally:
         problem.destroy()
     assert result.monitor is not None
-    its = sum(s.report.iterations for s in result.steps)
-    return result.converged, float(np.linalg.norm(result.monitor)), its
+    return TrialResult(
+        result.converged,
+        float(np.linalg.norm(result.monitor)),
+        sum(s.report.iterations for s in result.steps),
+        len(result.steps),
+        sum(s.report.watchdog_steps for s in result.steps),
+    )
 
 
 def test_job_states_its_budget() -> None:
@@ -101,8 +125,25 @@ def test_job_states_its_budget() -> None:
 def test_two_ranks_same_dfn_verdict() -> None:
     """F = 1.8 holds on 2 ranks and on each rank alone, with one crest displacement."""
     world = MPI.COMM_WORLD
-    (ok_n, u_n, _), (ok_1, u_1, _) = (dfn_trial(c, FLIPPED) for c in (world, MPI.COMM_SELF))
+    (ok_n, u_n, *_), (ok_1, u_1, *_) = (dfn_trial(c, FLIPPED) for c in (world, MPI.COMM_SELF))
     assert ok_n and ok_1
     # the same equilibrium: the displacement agrees to far below its size (about 1 mm)
     assert abs(u_n - u_1) <= 1e-6 * u_1
     assert world.allreduce(int(ok_1), op=MPI.SUM) == world.size
+
+
+@pytest.mark.parametrize("change", STALLED)
+def test_stalled_line_search_keeps_the_load_path(change: float) -> None:
+    """E changed by round-off: the five increments hold uncut, the crest as unperturbed.
+
+    Without the watchdog step the line search stalled at load factor 1.0 (||F|| stuck at
+    7.1, five springs switching back and forth), the increment was cut and the crest
+    moved by 1e-6 of itself: a load path chosen by round-off. The crest scales as 1/E,
+    so the two agree to the change of E, far below 1e-9.
+    """
+    rock = dataclasses.replace(ROCK, E=ROCK.E * (1.0 + change))
+    base, changed = dfn_trial(MPI.COMM_SELF, FLIPPED), dfn_trial(MPI.COMM_SELF, FLIPPED, rock=rock)
+    assert base.converged and changed.converged
+    assert base.attempts == changed.attempts == 5  # the job's load steps, none cut
+    assert changed.watchdog_steps >= 1  # the stall happened and was left
+    assert abs(changed.crest - base.crest) <= 1e-9 * base.crest
