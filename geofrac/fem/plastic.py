@@ -376,6 +376,7 @@ class PlasticProblem:
             rtol=rtol,
             max_it=max_it,
             extra=joints if self.release is None else self.release,
+            watchdog=joints is not None,
         )
 
     def _initial(self, initial_stress: Any, n: int, cell: Any, qdeg: int) -> np.ndarray:

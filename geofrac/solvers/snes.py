@@ -13,15 +13,15 @@ options are applied after and then removed from the global database. Every resid
 is recorded (the SNES monitor) and the converged reason is returned with its name; the
 caller decides what a negative reason means (never a silent result).
 
-A stalled line search is not the end of a solve (:meth:`NewtonSolver.solve`). The
-residual of a return mapping or of joint springs is piecewise smooth: at a kink (a
-spring on the edge of slipping or of opening) the Newton direction of the branch the
-law picks can fail to decrease ||F|| for any step length, and the monotone line search
-gives up (DIVERGED_LINE_SEARCH) although the equilibrium is near (measured on the DFN
-slope: the same five spring states switched back and forth for 14 line-search trials,
-||F|| stuck at 7.1 while the other round-off of another machine converged). The solver
-then takes one full Newton step, which changes the springs' states, and resumes the
-monotone search from there (a watchdog step, as in non-monotone semismooth Newton
+With ``watchdog`` (the joint springs' solves), a stalled line search is not the end of a
+solve (:meth:`NewtonSolver.solve`). The residual of joint springs is piecewise smooth:
+at a kink (a spring on the edge of slipping or of opening) the Newton direction of the
+branch the law picks can fail to decrease ||F|| for any step length, and the monotone
+line search gives up (DIVERGED_LINE_SEARCH) although the equilibrium is near (measured
+on the DFN slope: the same five spring states switched back and forth for 14 line-search
+trials, ||F|| stuck at 7.1 while the other round-off of another machine converged). The
+solver then takes one full Newton step, which changes the springs' states, and resumes
+the monotone search from there (a watchdog step, as in non-monotone semismooth Newton
 methods), within the same iteration budget. It does so only while each stall is at a
 smaller ||F|| than the one before, so a true loss of equilibrium still ends in
 DIVERGED_LINE_SEARCH, after one more step.
@@ -127,6 +127,8 @@ class NewtonSolver:
         rtol: relative tolerance on ||F|| / ||F₀||.
         max_it: the most Newton iterations.
         extra: terms added to F and J after their assembly (None: none).
+        watchdog: after a stalled line search, take a full step and go on (module
+            docstring); False: the stall ends the solve.
     """
 
     def __init__(
@@ -143,8 +145,9 @@ class NewtonSolver:
         rtol: float = 1e-9,
         max_it: int = 25,
         extra: ExtraTerms | None = None,
+        watchdog: bool = False,
     ) -> None:
-        self.extra = extra
+        self.extra, self.watchdog = extra, watchdog
         self.F, self.J, self.u, self.bcs, self.update = F, J, u, list(bcs), update
         self.prefix = prefix
         self.options = {
@@ -218,8 +221,8 @@ class NewtonSolver:
     def solve(self) -> NewtonReport:
         """Newton from the current u; u holds the last iterate whatever the reason.
 
-        A stalled line search is followed by a watchdog step and a restart (module
-        docstring), counted in the iterations and in :attr:`watchdog_steps`; the restart
+        With ``watchdog``, a stalled line search is followed by a full step and a restart
+        (module docstring), counted in the iterations and in :attr:`watchdog_steps`; the restart
         keeps the first solve's relative criterion (rtol of its first ||F||).
 
         Raises:
@@ -246,7 +249,8 @@ class NewtonSolver:
                 reason = int(self.snes.getConvergedReason())
                 stall = self.residuals[-1] if self.residuals else np.inf
                 if (
-                    reason != PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
+                    not self.watchdog
+                    or reason != PETSc.SNES.ConvergedReason.DIVERGED_LINE_SEARCH
                     or iterations >= max_it
                     or not stall < stalled_at
                 ):
