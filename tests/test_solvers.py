@@ -192,3 +192,26 @@ def test_newton_solvers_one_after_another_whatever_the_garbage_collector(comm):
         if comm.rank == 0:
             gc.collect()
     assert converged == [True, True]
+
+
+def test_newton_keeps_its_tolerances_from_solve_to_solve():
+    """Each solve ends with the SNES tolerances it was built with.
+
+    A solve changes them for its restarts (after a watchdog step the relative criterion
+    becomes an absolute one, rtol of the first ||F||); a later solve, e.g. the next load
+    step, must again stop at its own rtol and atol.
+    """
+    from geofrac.plasticity import MohrCoulomb
+    from tests.fem.plastic_ring import ring_mesh, ring_problem
+
+    tagged = ring_mesh(MPI.COMM_SELF, a=1.0, b=10.0, h=0.5)
+    law = MohrCoulomb(E=1e4, nu=0.3, cohesion=1.0, friction_angle=30.0, dilatancy_angle=30.0)
+    problem = ring_problem(tagged, law, p0=10.0, pi=1.0, atol=3e-10, rtol=2e-9, max_it=17)
+    try:
+        given = (2e-9, 3e-10, 0.0, 17)  # PETSc's order: rtol, atol, stol, max_it
+        assert problem.solve_steps(1).converged  # one solve
+        assert problem.newton.snes.getTolerances() == given
+        assert problem.newton.solve().converged  # and the next
+        assert problem.newton.snes.getTolerances() == given
+    finally:
+        problem.destroy()

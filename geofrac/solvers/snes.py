@@ -233,7 +233,7 @@ class NewtonSolver:
         self.watchdog_steps = 0
         owned = self.x.getLocalSize()
         self.x.array[:] = self.u.x.array[:owned]
-        atol, rtol, _stol, max_it = self.snes.getTolerances()
+        rtol, atol, _stol, max_it = self.snes.getTolerances()
         iterations, stalled_at = 0, np.inf
         try:
             while True:
