@@ -416,7 +416,8 @@ class ProbeHistory:
 def step_rows(records: Sequence[Any], *, probes: bool = False) -> list[dict[str, Any]]:
     """The results' rows of a phase's attempted steps (:class:`~geofrac.fem.plastic.StepRecord`).
 
-    Factor, verdict, SNES reason, iterations, final residual, plastic points and the
+    Factor, verdict, SNES reason, iterations (with the watchdog steps among them, joints
+    only: :mod:`geofrac.solvers.snes`), final residual, plastic points and the
     reactions the step observed (None where nothing was observed); with ``probes`` the
     accepted steps' probe values too.
     """
@@ -426,6 +427,7 @@ def step_rows(records: Sequence[Any], *, probes: bool = False) -> list[dict[str,
             "accepted": s.accepted,
             "reason": s.report.reason_name,
             "iterations": s.report.iterations,
+            "watchdog_steps": s.report.watchdog_steps,
             "residual": s.report.residuals[-1] if s.report.residuals else None,
             "plastic_points": s.plastic_points,
             "reactions": None if s.observed is None else s.observed["reactions"],

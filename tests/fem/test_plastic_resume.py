@@ -231,6 +231,8 @@ def test_a_stopped_plastic_run_resumes_to_the_whole_run(tmp_path, monkeypatch, a
     plastic = results["plasticity"]
     assert plastic["converged"] and len(plastic["steps"]) == 5
     assert plastic["plastic_points"] > 0  # the comparison covers the plastic state
+    # every step row counts its watchdog steps: none without joints (the checkpoint too)
+    assert [s["watchdog_steps"] for s in plastic["steps"]] == [0] * 5
 
 
 def test_resuming_another_scene_or_loop_is_refused(tmp_path, monkeypatch):
