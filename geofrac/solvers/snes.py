@@ -238,11 +238,9 @@ class NewtonSolver:
         try:
             while True:
                 self.snes.setTolerances(max_it=max_it - iterations)
-                start = len(self.residuals)
+                first_solve = not self.residuals
                 self.snes.solve(None, self.x)
-                if start:  # the restart's first norm is the watchdog step's, recorded
-                    del self.residuals[start]
-                else:  # a restart keeps the first solve's criterion: rtol of the first ||F||
+                if first_solve:  # a restart keeps this criterion: rtol of the first ||F||
                     first = self.residuals[0] if self.residuals else 0.0
                     self.snes.setTolerances(atol=max(atol, rtol * first), rtol=0.0)
                 iterations += int(self.snes.getIterationNumber())
@@ -285,8 +283,8 @@ class NewtonSolver:
     def _full_step(self) -> bool:
         """One full Newton step x ← x − J(x)⁻¹ F(x), no line search.
 
-        The new ||F|| is appended to :attr:`residuals`. Returns False, x unchanged, when
-        the linear solve fails.
+        The new ||F|| is the restart's first monitored norm. Returns False, x unchanged,
+        when the linear solve fails.
         """
         ksp = self.snes.getKSP()
         dx = self.x.duplicate()
@@ -298,8 +296,6 @@ class NewtonSolver:
             if ksp.getConvergedReason() < 0:
                 return False
             self.x.axpy(-1.0, dx)
-            self._residual(self.snes, self.x, self.b)
-            self.residuals.append(float(self.b.norm()))
             return True
         finally:
             dx.destroy()
